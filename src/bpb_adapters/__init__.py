@@ -1,0 +1,1 @@
+"""Built-in model adapters: the offline baselines and the litellm provider adapter."""

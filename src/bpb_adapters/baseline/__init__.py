@@ -1,0 +1,1 @@
+"""Offline baseline adapters that answer through the same parse path as real models."""

@@ -1,0 +1,18 @@
+"""Registers the ``baseline`` adapter family."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from bpb_core.hookspecs import hookimpl
+from bpb_core.records import AdapterInfo, lazy
+
+
+@hookimpl
+def bpb_adapters() -> Iterator[AdapterInfo]:
+    yield AdapterInfo(
+        "baseline",
+        lazy("bpb_adapters.baseline.adapter:make_adapter"),
+        "Offline reference answers, no network: stasis",
+        models=("stasis",),
+    )

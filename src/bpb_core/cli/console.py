@@ -1,0 +1,41 @@
+"""The rich console the CLI writes to, and how registry warnings reach the user."""
+
+from __future__ import annotations
+
+import functools
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from bpb_core.registry import Registry
+
+
+@functools.cache
+def stdout() -> Console:
+    """Console on standard output."""
+    from rich.console import Console
+
+    return Console()
+
+
+@functools.cache
+def stderr() -> Console:
+    """Console on standard error (progress, warnings)."""
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def load_registry() -> Registry:
+    """Build the registry and show each plugin warning on stderr as one line."""
+    import warnings
+
+    from bpb_core.registry import PluginWarning, make_registry
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PluginWarning)
+        registry = make_registry()
+    for line in registry.warnings:
+        stderr().print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+    return registry

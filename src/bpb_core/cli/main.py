@@ -1,0 +1,89 @@
+"""Entry point of the ``bpb`` command.
+
+Subcommands live in their own modules and are imported only when invoked, so ``bpb --help`` does
+not pay for pydantic, numpy or litellm. Errors become one line on stderr and an exit code:
+0 ok, 1 finished with errors, 2 usage or bad input, 3 internal error.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from typing import Any
+
+import click
+
+from bpb_core import __version__
+
+# name -> (module, attribute, one-line help); the help is here so listing needs no import.
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    "plugins": ("bpb_core.cli.plugins_cmd", "plugins", "List installed plugins and versions."),
+    "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
+}
+
+
+class LazyGroup(click.Group):
+    """A group whose subcommands are imported on first use."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        entry = COMMANDS.get(cmd_name)
+        if entry is None:
+            return None
+        module, attribute, _ = entry
+        command = getattr(importlib.import_module(module), attribute)
+        assert isinstance(command, click.Command)
+        return command
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        rows = [(name, COMMANDS[name][2]) for name in self.list_commands(ctx)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="bpb")
+def cli() -> None:
+    """bpb: BilliardPhys-Bench. Generate billiards scenes with exact physics ground truth, ask
+    multimodal LLMs what happens, score them and report where they fail."""
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the CLI and exit with bpb's exit codes."""
+    try:
+        code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        code = 130
+    except click.ClickException as exc:
+        exc.show()
+        code = 2 if exc.exit_code == 2 or isinstance(exc, click.UsageError) else exc.exit_code
+    except click.exceptions.Exit as exc:
+        code = exc.exit_code
+    except Exception as exc:  # every failure leaves as one line and an exit code
+        code = _report_error(exc)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def _report_error(exc: BaseException) -> int:
+    from bpb_core.errors import BpbError
+
+    if os.environ.get("BPB_DEBUG"):
+        import traceback
+
+        traceback.print_exception(exc)
+    if isinstance(exc, BpbError):
+        click.echo(f"error: {exc}", err=True)
+        return exc.exit_code
+    click.echo(
+        f"internal error: {type(exc).__name__}: {exc} (set BPB_DEBUG=1 for a traceback)", err=True
+    )
+    return 3
+
+
+def command_help(name: str) -> Any:
+    """One-line help registered for ``name`` (used in docs tests)."""
+    return COMMANDS[name][2]

@@ -1,0 +1,86 @@
+"""Exception types shared by the core, the plugins and the CLI.
+
+Every error a user can cause carries a one-line message that names the file or field at fault.
+The CLI maps them to exit codes: :class:`BadInput` is 2, anything else unexpected is 3.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+class BpbError(Exception):
+    """Base class of every error bpb raises on purpose."""
+
+    exit_code = 3
+
+
+class BadInput(BpbError):
+    """The user gave something bpb cannot use: a file, a field, an option (exit code 2)."""
+
+    exit_code = 2
+
+
+class UnknownName(BadInput):
+    """A task, adapter, simulator, scorer or scene family name that no plugin registered."""
+
+    def __init__(self, kind: str, name: str, known: Iterable[str]) -> None:
+        self.kind = kind
+        self.name = name
+        self.known = sorted(known)
+        listed = ", ".join(self.known) or "none installed"
+        super().__init__(f"unknown {kind} {name!r}; known {kind}s: {listed}")
+
+
+class PluginError(BpbError):
+    """The plugin set is inconsistent (two plugins claim one name, a misspelt hook)."""
+
+    exit_code = 2
+
+
+class ParseFailure(BpbError):
+    """A model reply holds no answer that validates against the task's schema."""
+
+    def __init__(self, message: str, *, truncated: bool = False) -> None:
+        self.truncated = truncated
+        super().__init__(message)
+
+
+class ModelError(BpbError):
+    """A model call failed for a reason that is not the content of the answer."""
+
+    retryable = False
+
+
+class RetryableModelError(ModelError):
+    """Infrastructure trouble worth another try: rate limit, 5xx, timeout, dropped connection."""
+
+    retryable = True
+
+    def __init__(self, message: str, *, retry_after: float | None = None) -> None:
+        self.retry_after = retry_after
+        super().__init__(message)
+
+
+class RateLimited(RetryableModelError):
+    """HTTP 429; ``retry_after`` carries the server's Retry-After in seconds when it sent one."""
+
+
+class ServerError(RetryableModelError):
+    """HTTP 5xx or a body that is not a valid response."""
+
+
+class ModelTimeout(RetryableModelError):
+    """The call did not finish within its timeout."""
+
+
+class ConnectionFailure(RetryableModelError):
+    """The connection could not be made or broke off."""
+
+
+class AuthenticationFailed(ModelError):
+    """401/403: the key is missing or wrong. The runner stops the whole run on this."""
+
+
+class RequestRejected(ModelError):
+    """Any other 4xx: the request itself is wrong, so retrying cannot help."""
