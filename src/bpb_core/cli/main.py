@@ -20,6 +20,7 @@ from bpb_core import __version__
 COMMANDS: dict[str, tuple[str, str, str]] = {
     "plugins": ("bpb_core.cli.plugins_cmd", "plugins", "List installed plugins and versions."),
     "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
+    "bench": ("bpb_core.cli.bench_cmd", "bench", "Benchmarks (speed against error)."),
 }
 
 
