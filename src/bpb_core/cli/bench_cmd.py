@@ -26,8 +26,10 @@ class _LazyBench(click.Group):
         return command
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
-        with formatter.section("Benchmarks"):
-            formatter.write_dl([(n, BENCH_COMMANDS[n][2]) for n in self.list_commands(ctx)])
+        rows = [(n, BENCH_COMMANDS[n][2]) for n in self.list_commands(ctx)]
+        if rows:
+            with formatter.section("Benchmarks"):
+                formatter.write_dl(rows)
 
 
 @click.group("bench", cls=_LazyBench)
