@@ -10,7 +10,9 @@ import importlib
 import click
 
 # name -> (module, attribute, one-line help)
-BENCH_COMMANDS: dict[str, tuple[str, str, str]] = {}
+BENCH_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "startup": ("bpb_core.cli.bench_startup_cmd", "startup", "Start-up time of the bpb command."),
+}
 
 
 class _LazyBench(click.Group):

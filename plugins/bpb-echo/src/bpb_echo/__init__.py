@@ -1,0 +1,3 @@
+"""bpb-echo: the example adapter plugin that docs/plugins.md walks through."""
+
+__version__ = "0.1.0"

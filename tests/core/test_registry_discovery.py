@@ -1,0 +1,158 @@
+"""Plugin discovery through real entry points: third-party plugins, broken ones, clashes."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bpb_core import AdapterInfo, hookimpl, lazy, make_registry
+from bpb_core.errors import PluginError, UnknownName
+from bpb_core.registry import PluginSource, PluginWarning
+
+GOOD_PLUGIN = """
+from bpb_core import AdapterInfo, hookimpl, lazy
+
+@hookimpl
+def bpb_adapters():
+    yield AdapterInfo("shout", lazy("shout_impl:make"), "Shouts", models=("loud",))
+"""
+GOOD_IMPL = """
+import sys
+sys.modules.setdefault("shout_impl_loaded", sys)
+
+def make(model, options):
+    return ("shout", model)
+"""
+
+
+def test_installed_plugin_is_listed_with_distribution_and_version(
+    install: Any, run_bpb: Any
+) -> None:
+    install(
+        "bpb-shout",
+        "2.3.1",
+        {"shout_hooks": GOOD_PLUGIN, "shout_impl": GOOD_IMPL},
+        {"shout": "shout_hooks"},
+    )
+    result = run_bpb("plugins", "--json")
+    assert result.returncode == 0, result.stderr
+    rows = {(r["kind"], r["name"]): r for r in json.loads(result.stdout)}
+    shout = rows[("adapter", "shout")]
+    assert (shout["distribution"], shout["version"], shout["models"]) == (
+        "bpb-shout",
+        "2.3.1",
+        ["loud"],
+    )
+    assert rows[("adapter", "baseline")]["distribution"] == "bpb"
+
+
+def test_builtins_are_found_through_our_own_entry_points() -> None:
+    registry = make_registry()
+    baseline = registry.get("adapter", "baseline")
+    assert baseline.distribution == "bpb"
+    assert baseline.plugin == "baseline"
+
+
+def test_load_is_lazy_until_the_component_is_used(
+    install: Any, site: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    install(
+        "bpb-shout",
+        "1.0",
+        {"shout_hooks": GOOD_PLUGIN, "shout_impl": GOOD_IMPL},
+        {"shout": "shout_hooks"},
+    )
+    monkeypatch.syspath_prepend(str(site))
+    registry = make_registry()
+    assert "shout_impl" not in sys.modules
+    assert registry.adapter("shout:loud") == ("shout", "loud")
+    assert "shout_impl" in sys.modules
+    for name in ("shout_hooks", "shout_impl", "shout_impl_loaded"):
+        sys.modules.pop(name, None)
+
+
+def test_broken_plugin_warns_and_the_rest_keeps_working(install: Any, run_bpb: Any) -> None:
+    install(
+        "bpb-broken",
+        "0.1",
+        {"broken_hooks": "import does_not_exist_anywhere\n"},
+        {"broken": "broken_hooks"},
+    )
+    result = run_bpb("plugins", "--json")
+    assert result.returncode == 0
+    assert "bpb-broken" in result.stderr and "failed to import" in result.stderr
+    assert "does_not_exist_anywhere" in result.stderr
+    names = {r["name"] for r in json.loads(result.stdout)}
+    assert "baseline" in names
+
+
+def test_a_hook_that_raises_is_a_warning(recwarn: pytest.WarningsRecorder) -> None:
+    class Exploding:
+        @hookimpl
+        def bpb_tasks(self) -> Any:
+            raise RuntimeError("boom")
+
+    registry = make_registry([Exploding()], entry_points=False)
+    assert registry.names("task") == []
+    assert any("boom" in line for line in registry.warnings)
+    assert any(issubclass(w.category, PluginWarning) for w in recwarn.list)
+
+
+def test_name_clash_is_an_error_naming_both_distributions(install: Any, run_bpb: Any) -> None:
+    clash = """
+from bpb_core import AdapterInfo, hookimpl, lazy
+
+@hookimpl
+def bpb_adapters():
+    yield AdapterInfo("baseline", lazy("os:getcwd"), "Impostor")
+"""
+    install("bpb-impostor", "9.9", {"impostor_hooks": clash}, {"impostor": "impostor_hooks"})
+    result = run_bpb("plugins")
+    assert result.returncode == 2
+    line = result.stderr.strip()
+    assert len(line.splitlines()) == 1
+    assert "baseline" in line and "bpb-impostor" in line and "bpb " in line + " "
+
+
+def test_misspelt_hook_is_caught() -> None:
+    class Misspelt:
+        @hookimpl
+        def bpb_adapter(self) -> list[AdapterInfo]:  # missing the final s
+            return []
+
+    with pytest.raises(PluginError, match="bpb_adapter"):
+        make_registry([Misspelt()], entry_points=False)
+
+
+def test_record_of_the_wrong_kind_is_rejected() -> None:
+    class Wrong:
+        @hookimpl
+        def bpb_tasks(self) -> list[AdapterInfo]:
+            return [AdapterInfo("x", lazy("os:getcwd"))]
+
+    with pytest.raises(PluginError, match="expected a task record"):
+        make_registry([(Wrong(), PluginSource("wrong", "bpb-wrong", "1"))], entry_points=False)
+
+
+def test_unknown_name_lists_the_known_ones() -> None:
+    registry = make_registry()
+    with pytest.raises(UnknownName) as info:
+        registry.adapter("nosuch:model")
+    message = str(info.value)
+    assert "nosuch" in message and "baseline" in message
+
+
+def test_fresh_registries_do_not_share_state() -> None:
+    class Extra:
+        @hookimpl
+        def bpb_adapters(self) -> list[AdapterInfo]:
+            return [AdapterInfo("extra", lazy("os:getcwd"))]
+
+    with_extra = make_registry([Extra()], entry_points=False)
+    plain = make_registry(entry_points=False)
+    assert with_extra.names("adapter") == ["extra"]
+    assert plain.names("adapter") == []
