@@ -1,0 +1,1 @@
+"""The built-in ``billiards`` scene family: sampling, speed calibration, rendering and stats."""

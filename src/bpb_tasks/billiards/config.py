@@ -1,0 +1,178 @@
+"""The dataset configuration: every knob of the billiards generator, with its default.
+
+A config file (JSON or TOML, ``bpb generate --config FILE``) holds any subset of
+:class:`DatasetConfig`'s fields; missing fields take the defaults below, and the full resolved
+config is recorded in the dataset manifest. The default per-horizon cue-speed ranges were
+calibrated by :func:`bpb_tasks.billiards.calibrate.calibrate_ranges` so that about half the
+scenes at each horizon have a cue-ball collision.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from bpb_core.errors import BadInput
+from bpb_core.scene import Physics, Pockets, Table
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SpeedRange(_Strict):
+    """Cue speeds (m/s) are drawn uniformly from ``[low, high]``."""
+
+    low: float = Field(ge=0)
+    high: float = Field(gt=0)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> SpeedRange:
+        if self.low > self.high:
+            raise ValueError(f"low {self.low} is above high {self.high}")
+        return self
+
+
+class ImageConfig(_Strict):
+    """Canvas geometry of the rendered PNGs (all three images share it).
+
+    Attributes:
+        px_per_m: Pixels per metre of table (600 makes the 2 m x 1 m table 1200 x 600 px).
+        margin_left, margin_right, margin_top, margin_bottom: Space around the table for the
+            rails, axis ticks and labels, in pixels.
+        compress_level: zlib level of the PNG encoder (1 is fast; the palette images stay small).
+    """
+
+    px_per_m: float = Field(600.0, ge=100, le=3000)
+    margin_left: int = Field(84, ge=40)
+    margin_right: int = Field(36, ge=20)
+    margin_top: int = Field(64, ge=20)
+    margin_bottom: int = Field(76, ge=40)
+    compress_level: int = Field(1, ge=0, le=9)
+
+
+class CalibrationConfig(_Strict):
+    """How :func:`~bpb_tasks.billiards.calibrate.calibrate_ranges` searches speed ranges.
+
+    Attributes:
+        target: Wanted share of scenes with a cue-ball collision.
+        samples: Scenes per horizon in the fixed calibration sample.
+        low_ratio: The range's lower bound as a fraction of its upper bound.
+        seed: Seed of the calibration sample (independent of the dataset seed).
+        iterations: Bisection steps on the upper bound.
+    """
+
+    target: float = Field(0.5, gt=0, lt=1)
+    samples: int = Field(400, ge=20)
+    low_ratio: float = Field(0.2, ge=0, lt=1)
+    seed: int = 20260101
+    iterations: int = Field(14, ge=4, le=40)
+
+
+# Calibrated with the defaults below (see docs/dataset-card.md, "Calibration").
+DEFAULT_SPEED_RANGES: dict[str, SpeedRange] = {
+    "1": SpeedRange(low=0.5, high=2.5),
+    "2": SpeedRange(low=0.25, high=1.25),
+    "3": SpeedRange(low=0.17, high=0.85),
+    "4": SpeedRange(low=0.13, high=0.65),
+    "5": SpeedRange(low=0.1, high=0.5),
+}
+
+
+class DatasetConfig(_Strict):
+    """Everything that shapes a generated dataset.
+
+    Attributes:
+        family: Scene family plugin that samples the scenes.
+        simulator: Simulator plugin that computes the ground truth.
+        table, physics, pockets: The scene's world (defaults of SPEC section 2).
+        balls: Number of balls, ids ``0..balls-1``; ball 0 is the cue ball.
+        min_gap: Smallest gap (m) between two balls and between a ball and a wall at t = 0.
+        pocket_margin: Extra distance (m) beyond the pocket radius that starting centres keep.
+        decimals: Positions and velocities in ``init.json`` are rounded to this many decimals.
+        speed_ranges: Cue-speed range per horizon, keyed by the horizon in seconds (``"3"``).
+        image: Canvas of the rendered PNGs.
+        stability_delta: Perturbation size of the stability annotation (m).
+        calibration: Settings of the speed-range calibration.
+    """
+
+    family: str = "billiards"
+    simulator: str = "analytic"
+    table: Table = Field(default_factory=Table)
+    physics: Physics = Field(default_factory=Physics)
+    pockets: Pockets = Field(default_factory=Pockets)
+    balls: int = Field(7, ge=1, le=16)
+    min_gap: float = Field(0.001, ge=0)
+    pocket_margin: float = Field(0.01, ge=0)
+    decimals: int = Field(4, ge=3, le=12)
+    speed_ranges: dict[str, SpeedRange] = Field(default_factory=lambda: dict(DEFAULT_SPEED_RANGES))
+    image: ImageConfig = Field(default_factory=ImageConfig)
+    stability_delta: float = Field(1e-4, gt=0)
+    calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
+
+    def speed_range(self, horizon: float) -> SpeedRange:
+        """The cue-speed range for ``horizon``; raises :class:`BadInput` if none is set."""
+        key = horizon_key(horizon)
+        found = self.speed_ranges.get(key)
+        if found is None:
+            known = ", ".join(sorted(self.speed_ranges, key=float)) or "none"
+            raise BadInput(
+                f"config: speed_ranges: no cue-speed range for horizon {key} s (have {known}); "
+                "add one or run `bpb generate --calibrate`"
+            )
+        return found
+
+    def with_ranges(self, ranges: Mapping[str, SpeedRange]) -> DatasetConfig:
+        """A copy whose speed ranges are updated with ``ranges``."""
+        return self.model_copy(update={"speed_ranges": {**self.speed_ranges, **ranges}})
+
+
+def horizon_key(horizon: float) -> str:
+    """The ``speed_ranges`` key of a horizon: ``"3"`` for 3.0, ``"2.5"`` for 2.5."""
+    return f"{horizon:g}"
+
+
+def config_from_mapping(data: Mapping[str, Any], source: str = "config") -> DatasetConfig:
+    """Validate ``data`` into a :class:`DatasetConfig`.
+
+    Raises:
+        BadInput: ``"<source>: <field>: what is wrong"`` for the first invalid field.
+    """
+    try:
+        return DatasetConfig.model_validate(dict(data))
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(part) for part in first["loc"]) or "(top level)"
+        raise BadInput(f"{source}: {field}: {first['msg']}") from None
+
+
+def load_config(path: str | Path | None) -> DatasetConfig:
+    """Read a JSON or TOML config file (``None`` gives the defaults).
+
+    Raises:
+        BadInput: The file is missing, unparsable, or a field is invalid; the message names the
+            file and the field.
+    """
+    if path is None:
+        return DatasetConfig()
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read config: {exc.strerror or exc}") from None
+    try:
+        data = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise BadInput(f"{path}: not valid {_format(path)}: {exc}") from None
+    if not isinstance(data, dict):
+        raise BadInput(f"{path}: (top level): expected an object of config fields")
+    return config_from_mapping(data, str(path))
+
+
+def _format(path: Path) -> str:
+    return "TOML" if path.suffix.lower() == ".toml" else "JSON"
