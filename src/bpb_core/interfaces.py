@@ -6,16 +6,19 @@ attributes and methods.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     import random
 
+    import pandas as pd
+
     from bpb_core.adapters import Message, ModelRequest, ModelResponse
     from bpb_core.outcome import Outcome
     from bpb_core.scene import FinalState, Scene
+    from bpb_core.units import UnitRow
 
 InputMode = Literal["image", "image+state", "state"]
 
@@ -109,17 +112,37 @@ class ModelAdapter(Protocol):
 
 @runtime_checkable
 class Scorer(Protocol):
-    """Scores one task's answers against ground truth.
+    """Scores one task's answers against ground truth, in two steps.
+
+    1. :meth:`units` cuts one answer into scored units (:class:`~bpb_core.units.UnitRow`: one
+       per object ball, wall or ball position), pairing each with its true label. It is called
+       once per (run, scene, task) while :func:`bpb_core.results.load_frame` reads the files.
+    2. :meth:`score` marks a whole frame of units at once, vectorised: it must score one
+       million rows in well under two seconds. Its input has the columns of
+       :data:`bpb_core.units.SCORER_INPUT`; it returns a frame with the same index and the
+       columns ``correct`` (bool) and ``distance`` (float64, NaN when not a position task).
+
+    A unit can only be correct when the call's ``status`` is ``ok``. Units the answer does not
+    mention, and units it mentions more than once (duplicate ids), are wrong; entries naming
+    units the truth does not have, and extra keys inside entries, are ignored.
 
     Attributes:
+        name: Scorer name (``q1``).
         task: Name of the task it scores.
+        scene_rule: How unit results make a scene's score: ``mean`` (share of correct units,
+            Q1 and Q3) or ``all`` (1 only when every unit is correct, Q2's exact set match).
     """
 
     name: str
     task: str
+    scene_rule: Literal["mean", "all"]
 
-    def score(
+    def units(
         self, answer: Mapping[str, Any] | None, final: FinalState, scene: Scene
-    ) -> Sequence[Mapping[str, Any]]:
-        """Rows of scored units (one per ball or per scene) for one answer; ``None`` = missing."""
+    ) -> list[UnitRow]:
+        """The scored units of one answer (``None`` = no answer), in a fixed order."""
+        ...
+
+    def score(self, units: pd.DataFrame) -> pd.DataFrame:
+        """Columns ``correct`` and ``distance`` for every row of ``units``."""
         ...
