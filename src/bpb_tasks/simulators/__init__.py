@@ -1,0 +1,1 @@
+"""Physics simulators: the exact event-driven ``analytic`` one and fixed-step ``pymunk``."""
