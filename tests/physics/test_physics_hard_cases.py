@@ -1,0 +1,188 @@
+"""SPEC section 3 hard cases for the analytic simulator, each with a worked-out expectation."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from phys_helpers import R, kinds, scene, state_at
+
+from bpb_core.outcome import final_state
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+
+SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]
+IDS = ["float64", "mpmath50"]
+
+
+@pytest.fixture(params=SIMS, ids=IDS)
+def sim(request: pytest.FixtureRequest) -> AnalyticSimulator:
+    return request.param  # type: ignore[no-any-return]
+
+
+@pytest.mark.parametrize(("factor", "touches"), [(1 - 1e-9, True), (1 + 1e-9, False)])
+def test_grazing_contact(sim: AnalyticSimulator, factor: float, touches: bool) -> None:
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5 + 2 * R * factor, 0.0, 0.0)], horizon=2)
+    out = sim.run(s)
+    assert (1 in out.cue_contacts()) is touches
+    assert final_state(s, out).q1[0].answer == ("T" if touches else "F")
+
+
+def test_exact_head_on_cue_stops_target_takes_velocity(sim: AnalyticSimulator) -> None:
+    a = 0.05 * 9.8
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0)], mu=0.05, horizon=10)
+    out = sim.run(s)
+    travelled = 0.5 - 2 * R
+    v_contact2 = 1.0 - 2 * a * travelled
+    assert out.positions[0] == pytest.approx((1.0 - 2 * R, 0.5), abs=1e-12)
+    assert out.positions[1] == pytest.approx((1.0 + v_contact2 / (2 * a), 0.5), abs=1e-12)
+    hit = out.events[0]
+    assert hit.kind == "ball" and hit.ids == (0, 1)
+    assert hit.t == pytest.approx(2 * travelled / (1.0 + math.sqrt(v_contact2)), abs=1e-12)
+    after = state_at(out, 0, hit.t)
+    assert after is not None and after[2:] == (0.0, 0.0)
+
+
+def test_newtons_cradle(sim: AnalyticSimulator) -> None:
+    row = [(1.0 + 2 * R * k, 0.5, 0.0, 0.0) for k in range(3)]
+    s = scene([(0.5, 0.5, 1.0, 0.0), *row], mu=0.05, horizon=10)
+    out = sim.run(s)
+    assert kinds(out)[:3] == [
+        ("ball", (0, 1), None),
+        ("ball", (1, 2), None),
+        ("ball", (2, 3), None),
+    ]
+    assert len({e.t for e in out.events[:3]}) <= 3 and out.events[2].t - out.events[0].t < 1e-9
+    assert out.cue_contacts() == {1}
+    for ball, start in ((1, row[0]), (2, row[1])):
+        pos = out.positions[ball]
+        assert pos is not None and math.dist(pos, start[:2]) < 1e-9
+    last = out.positions[3]
+    assert last is not None and last[0] > row[2][0] + 0.1
+
+
+@pytest.mark.parametrize(("vx", "event"), [(1.0, False), (-1.0, True)])
+def test_ball_starting_against_a_wall(sim: AnalyticSimulator, vx: float, event: bool) -> None:
+    s = scene([(R, 0.5, vx, 0.0)], horizon=0.5)
+    out = sim.run(s)
+    walls = [e for e in out.events if e.kind == "wall"]
+    assert bool(walls) is event
+    if event:
+        assert walls[0].wall == "LEFT" and walls[0].t == 0.0
+        assert final_state(s, out).q2[2].answer == "T"
+
+
+def test_ball_at_rest_against_a_wall_has_not_hit_it(sim: AnalyticSimulator) -> None:
+    out = sim.run(scene([(0.5, 0.5, 0.0, 0.0), (R, 0.3, 0.0, 0.0)], horizon=1))
+    assert out.events == ()
+
+
+@pytest.mark.parametrize(("vx", "event"), [(-1.0, False), (1.0, True)])
+def test_ball_starting_in_contact_with_a_ball(
+    sim: AnalyticSimulator, vx: float, event: bool
+) -> None:
+    s = scene([(0.5, 0.5, vx, 0.0), (0.5 + 2 * R, 0.5, 0.0, 0.0)], horizon=0.2)
+    out = sim.run(s)
+    assert (1 in out.cue_contacts()) is event
+    if event:
+        assert out.events[0].t == pytest.approx(0.0, abs=1e-12)
+
+
+def test_two_balls_hit_at_the_same_instant(sim: AnalyticSimulator) -> None:
+    side = math.sqrt(3) * R
+    s = scene(
+        [(0.5, 0.5, 1.0, 0.0), (1.0 + side, 0.5 + R, 0.0, 0.0), (1.0 + side, 0.5 - R, 0.0, 0.0)],
+        horizon=1,
+    )
+    out = sim.run(s)
+    hits = [e for e in out.events if e.kind == "ball"]
+    assert [e.ids for e in hits[:2]] == [(0, 1), (0, 2)]
+    assert hits[1].t - hits[0].t < 1e-12
+    assert out.cue_contacts() == {1, 2}
+
+
+def test_exact_corner_hit_records_both_walls_top_first(sim: AnalyticSimulator) -> None:
+    v = 1.0 / math.sqrt(2)
+    s = scene([(1.25, 0.25, v, v)], radius=0.25, mu=0.0, horizon=1.0, pockets=[])
+    out = sim.run(s)
+    assert kinds(out)[:2] == [("wall", (0,), "TOP"), ("wall", (0,), "RIGHT")]
+    assert out.events[1].t - out.events[0].t < 1e-12
+    assert out.events[0].t == pytest.approx(0.5 * math.sqrt(2), abs=1e-12)
+    assert out.cue_walls() == {"TOP", "RIGHT"}
+
+
+def test_ball_stopping_exactly_at_contact_distance_is_no_collision(sim: AnalyticSimulator) -> None:
+    # a = 0.0625 * 8 = 0.5, v = 1: the cue stops after exactly 1.0 m, touching ball 1.
+    s = scene(
+        [(0.25, 0.5, 1.0, 0.0), (1.75, 0.5, 0.0, 0.0)],
+        radius=0.25,
+        mu=0.0625,
+        g=8.0,
+        width=2.0,
+        horizon=5,
+        pockets=[],
+    )
+    out = sim.run(s)
+    assert out.cue_contacts() == set()
+    assert out.positions == {0: (1.25, 0.5), 1: (1.75, 0.5)}
+
+
+@pytest.mark.parametrize(("horizon", "counted"), [(2.0, True), (1.999999, False)])
+def test_event_exactly_at_the_horizon_counts(
+    sim: AnalyticSimulator, horizon: float, counted: bool
+) -> None:
+    # a = 0.5, v = 1.5: s(2) = 3 - 1 = 2 m, exactly the distance to the RIGHT wall.
+    s = scene([(1.75, 0.5, 1.5, 0.0)], radius=0.25, mu=0.0625, g=8.0, width=4.0, pockets=[])
+    out = sim.run(s, horizon)
+    assert ("RIGHT" in out.cue_walls()) is counted
+    if counted:
+        assert out.events[-1].t == 2.0
+
+
+def test_fast_ball_bounces_over_a_hundred_times_and_stays_on_the_table() -> None:
+    s = scene([(0.3, 0.4, 41.0, 17.0)], mu=0.0, horizon=5.0, pockets=[])
+    out = AnalyticSimulator().run(s)
+    ref = AnalyticSimulator(precision=50).run(s)
+    walls = [e for e in out.events if e.kind == "wall"]
+    assert len(walls) >= 100
+    for e in walls:
+        x, y = e.positions[0]
+        assert R - 1e-12 <= x <= 2 - R + 1e-12 and R - 1e-12 <= y <= 1 - R + 1e-12
+    pos, ref_pos = out.positions[0], ref.positions[0]
+    assert pos is not None and ref_pos is not None and math.dist(pos, ref_pos) < 1e-9
+    assert kinds(out) == kinds(ref)
+
+
+@pytest.mark.parametrize(("factor", "pocketed"), [(1 - 1e-9, True), (1 + 1e-9, False)])
+def test_pocket_edge_graze(sim: AnalyticSimulator, factor: float, pocketed: bool) -> None:
+    s = scene([(0.5, 0.06 * factor, 1.0, 0.0)], horizon=1)
+    out = sim.run(s)
+    assert (out.positions[0] is None) is pocketed
+    assert final_state(s, out).predictions[0].pos is None or not pocketed
+
+
+def test_two_moving_balls_head_on_meet_in_the_middle(sim: AnalyticSimulator) -> None:
+    a = 0.002 * 9.8
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.5, 0.5, -1.0, 0.0)], horizon=1)
+    out = sim.run(s)
+    hit = out.events[0]
+    travelled = 0.5 - R
+    assert hit.ids == (0, 1)
+    assert hit.t == pytest.approx(2 * travelled / (1 + math.sqrt(1 - 2 * a * travelled)), abs=1e-12)
+    assert hit.positions[0][0] == pytest.approx(1.0 - R, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    "balls",
+    [
+        [(0.5, 0.5, 0.3, 0.1), (0.5, 0.8, 0.3, 0.1)],  # equal velocities: the quartic is constant
+        [(0.5, 0.5, 0.3, 0.0), (0.5, 0.6, 0.5, 0.0)],  # parallel motion, different speeds
+        [(0.5, 0.5, 0.0, 0.0), (1.5, 0.5, 0.0, 0.0)],  # nothing moves
+        [(0.5, 0.2, 0.4, 0.0), (1.0, 0.5, 0.0, 0.0)],  # parallel to a wall
+    ],
+)
+def test_degenerate_motion_never_crashes(balls: list[tuple[float, float, float, float]]) -> None:
+    for mu in (0.002, 0.0):
+        s = scene(balls, mu=mu, horizon=3)
+        out, ref = AnalyticSimulator().run(s), AnalyticSimulator(precision=50).run(s)
+        assert 1 not in out.cue_contacts()
+        assert kinds(out) == kinds(ref)
