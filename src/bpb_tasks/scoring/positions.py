@@ -77,7 +77,7 @@ class Q3Scorer:
     def score(self, units: pd.DataFrame) -> pd.DataFrame:
         """``distance`` between predicted and true centres; ``correct`` by the radius rule."""
         ok = (units["status"] == "ok").to_numpy(dtype=bool)
-        ok &= ~units["duplicate"].to_numpy(dtype=bool)
+        ok = ok & ~units["duplicate"].to_numpy(dtype=bool)
         dx = units["pred_x"].to_numpy(dtype=float) - units["truth_x"].to_numpy(dtype=float)
         dy = units["pred_y"].to_numpy(dtype=float) - units["truth_y"].to_numpy(dtype=float)
         distance = np.hypot(dx, dy)

@@ -1,0 +1,80 @@
+"""Accuracy tables and leaderboards of the hand-made runs, checked against hand-worked numbers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from bpb_core.errors import BadInput
+from bpb_core.results import CALL_DTYPES, UNIT_DTYPES, load_results, summary
+from bpb_core.results_tables import accuracy, by_horizon, leaderboard
+
+
+def board(runs: Path, **kwargs: object) -> pd.DataFrame:
+    return leaderboard(load_results(runs).units, **kwargs).set_index("run")  # type: ignore[arg-type]
+
+
+def test_frames_have_the_documented_dtypes(runs: Path) -> None:
+    res = load_results(runs)
+    assert {k: str(v) for k, v in res.units.dtypes.items()} == UNIT_DTYPES
+    assert {k: str(v) for k, v in res.calls.dtypes.items()} == CALL_DTYPES
+    # 3 runs x 4 scenes x (6 + 4 + 7) units; 3 runs x 4 scenes x 3 tasks calls
+    assert len(res.units) == 3 * 4 * 17 and len(res.calls) == 3 * 4 * 3
+
+
+def test_oracle_scores_100_percent_everywhere(runs: Path) -> None:
+    row = board(runs).loc["baseline_oracle"]
+    assert row[["q1", "q2", "q3", "total"]].tolist() == [1.0, 1.0, 1.0, 1.0]
+    assert row["completeness"] == 1.0 and bool(row["baseline"])
+
+
+def test_stasis_scores_match_the_hand_worked_numbers(runs: Path) -> None:
+    units = load_results(runs).units
+    wide = by_horizon(units).set_index(["run", "task"]).loc["baseline_stasis"]
+    # Q1: h1 (5/6 + 6/6)/2, h2 (4/6 + 6/6)/2; Q2: one wall-free scene per horizon;
+    # Q3: h1 (5/7 + 6/7)/2, h2 (4/7 + 6/7)/2 (ball 3's 0.01 m move is within R)
+    assert wide.loc["q1", ["h1", "h2"]].tolist() == pytest.approx([11 / 12, 10 / 12])
+    assert wide.loc["q2", ["h1", "h2"]].tolist() == [0.5, 0.5]
+    assert wide.loc["q3", ["h1", "h2"]].tolist() == pytest.approx([11 / 14, 10 / 14])
+    row = board(runs).loc["baseline_stasis"]
+    assert row["q1"] == pytest.approx(0.875) and row["q3"] == pytest.approx(0.75)
+    assert row["total"] == pytest.approx(0.3 * 0.875 + 0.3 * 0.5 + 0.4 * 0.75)
+
+
+def test_strict_and_answered_views_and_completeness(runs: Path) -> None:
+    strict = board(runs).loc["litellm_model"]
+    answered = board(runs, view="answered").loc["litellm_model"]
+    assert strict[["q1", "q2", "q3"]].tolist() == pytest.approx([0.5, 0.5, 5 / 7])
+    # answered: q1 drops the api_error and the missing scene; the parse error stays wrong
+    assert answered[["q1", "q2", "q3"]].tolist() == pytest.approx([1.0, 0.75, 27 / 28])
+    assert strict["completeness"] == pytest.approx(8 / 12)
+    acc = accuracy(load_results(runs).units).set_index(["run", "task", "horizon"])
+    assert acc.loc[("litellm_model", "q1", 1.0), "completeness"] == 0.5
+
+
+def test_stable_subset_drops_unstable_scenes(runs: Path) -> None:
+    row = board(runs, stable_only=True).loc["baseline_stasis"]
+    assert row["q1"] == pytest.approx((11 / 12 + 1.0) / 2)  # h2 keeps only h2_0001
+
+
+def test_summary_lists_best_first_with_answered_total(runs: Path) -> None:
+    table = summary(load_results(runs).units)
+    assert table["run"].tolist() == ["baseline_oracle", "baseline_stasis", "litellm_model"]
+    model = table.set_index("run").loc["litellm_model"]
+    assert model["total_answered"] == pytest.approx(0.3 + 0.3 * 0.75 + 0.4 * 27 / 28)
+
+
+def test_bad_run_folders_are_reported_by_file(tmp_path: Path, runs: Path) -> None:
+    with pytest.raises(BadInput, match="no such run folder"):
+        load_results(tmp_path / "nope")
+    (runs / "litellm_model" / "h1" / "scene_0000" / "q1.json").write_text("{not json")
+    with pytest.raises(BadInput, match=r"q1\.json: cannot read answer file"):
+        load_results(runs)
+
+
+def test_relative_dataset_path_is_resolved_from_the_run_folder(runs: Path) -> None:
+    manifest = runs / "baseline_oracle" / "run.json"
+    manifest.write_text(manifest.read_text().replace(str(runs.parent / "data"), "../../data"))
+    assert board(runs / "baseline_oracle").loc["baseline_oracle", "total"] == 1.0
