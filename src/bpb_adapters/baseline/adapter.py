@@ -1,53 +1,57 @@
 """The baseline adapters: predicted outcomes rendered as JSON text answers.
 
 Each baseline predicts a :class:`~bpb_core.scene.FinalState` for the scene and answers a task with
-the part of it that the task asks for, as JSON text, so its answers take the same parse path as a
-real model's.
+the part the task's ``expected()`` cuts from it, as JSON text, so its answers take the same parse
+path as a real model's.
 """
 
 from __future__ import annotations
 
 import json
+import random
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
+from bpb_adapters.baseline.predictors import PREDICTORS, Predictor
 from bpb_core.adapters import AdapterOptions, ModelRequest, ModelResponse, Usage
 from bpb_core.errors import BadInput, RequestRejected
-from bpb_core.scene import WALLS, BallPosition, FinalState, Q1Label, Q2Label, Scene
-from bpb_core.truth import answer_for_task
-
-Predictor = Callable[[Scene], FinalState]
 
 
-def predict_stasis(scene: Scene) -> FinalState:
-    """Nothing moves and nothing is hit."""
-    return FinalState(
-        scene_id=scene.scene_id,
-        horizon=scene.horizon,
-        q1=[Q1Label(id=b.id, answer="F") for b in scene.balls if b.id != 0],
-        q2=[Q2Label(wall=w, answer="F") for w in WALLS],
-        predictions=[BallPosition(id=b.id, pos=b.pos) for b in scene.balls],
-        simulator="baseline:stasis",
-    )
+def _task(name: str) -> Any:
+    from bpb_core.registry import make_registry
 
-
-PREDICTORS: dict[str, Predictor] = {"stasis": predict_stasis}
+    return make_registry().task(name)
 
 
 @dataclass
 class BaselineAdapter:
-    """Answers every request from ``predict(scene)``, offline and instantly."""
+    """Answers every request from ``predict(scene, rng)``, offline and instantly.
+
+    Attributes:
+        name: ``baseline:<model>``.
+        predict: The predictor.
+        seed: Seed of the per-(scene, task) generator (``baseline:random``).
+    """
 
     name: str
     predict: Predictor
+    seed: int = 0
+    _tasks: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def _expected(self, task: str) -> Any:
+        if task not in self._tasks:
+            self._tasks[task] = _task(task)
+        return self._tasks[task]
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
+        """Answer from the scene in ``request`` (baselines never read the prompt)."""
         started = time.perf_counter()
         if request.scene is None:
             raise RequestRejected(f"{self.name} needs the scene in the request")
-        final = self.predict(request.scene)
-        text = json.dumps(answer_for_task(request.task, final))
+        rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
+        final = self.predict(request.scene, rng)
+        text = json.dumps(self._expected(request.task).expected(final))
         return ModelResponse(
             text=text,
             usage=Usage(0, 0, 0, 0),
@@ -59,9 +63,9 @@ class BaselineAdapter:
 
 
 def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter:
-    """Build ``baseline:<model>``."""
-    predictor = PREDICTORS.get(model)
-    if predictor is None:
+    """Build ``baseline:<model>`` (stasis, straight, random or oracle)."""
+    factory = PREDICTORS.get(model)
+    if factory is None:
         known = ", ".join(f"baseline:{m}" for m in sorted(PREDICTORS))
-        raise BadInput(f"unknown baseline {model!r}; known: {known}")
-    return BaselineAdapter(f"baseline:{model}", predictor)
+        raise BadInput(f"--adapter baseline:{model}: unknown baseline; known: {known}")
+    return BaselineAdapter(f"baseline:{model}", factory(), options.seed)

@@ -13,6 +13,6 @@ def bpb_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "baseline",
         lazy("bpb_adapters.baseline.adapter:make_adapter"),
-        "Offline reference answers, no network: stasis",
-        models=("stasis",),
+        "Offline reference answers, no network: stasis, straight, random, oracle",
+        models=("stasis", "straight", "random", "oracle"),
     )

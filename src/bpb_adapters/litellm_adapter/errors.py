@@ -1,0 +1,100 @@
+"""Mapping litellm and HTTP exceptions onto :mod:`bpb_core.errors`, with secrets redacted.
+
+The runner decides what to retry from the bpb error class alone: 429 becomes
+:class:`RateLimited` carrying the server's Retry-After, 5xx and unreadable bodies
+:class:`ServerError`, timeouts :class:`ModelTimeout`, dropped connections
+:class:`ConnectionFailure`, 401/403 :class:`AuthenticationFailed` and other 4xx
+:class:`RequestRejected`.
+"""
+
+from __future__ import annotations
+
+import email.utils
+import os
+import re
+import time
+from typing import Any
+
+from bpb_core.errors import (
+    AuthenticationFailed,
+    ConnectionFailure,
+    ModelError,
+    ModelTimeout,
+    RateLimited,
+    RequestRejected,
+    ServerError,
+)
+
+_SECRET_NAME = re.compile(r"(KEY|TOKEN|SECRET|PASSWORD)", re.IGNORECASE)
+_KEY_SHAPE = re.compile(r"\b(sk|pk|key|AIza)[-_A-Za-z0-9]{16,}")
+_MAX_MESSAGE = 500
+
+
+def redact(text: str) -> str:
+    """Remove secret environment values and key-shaped tokens from ``text``."""
+    for name, value in os.environ.items():
+        if _SECRET_NAME.search(name) and len(value) >= 8 and value in text:
+            text = text.replace(value, "***")
+    return _KEY_SHAPE.sub("***", text)
+
+
+def retry_after(exc: BaseException) -> float | None:
+    """Seconds from the Retry-After header of the failed response, if any."""
+    headers: Any = getattr(exc, "litellm_response_headers", None)
+    if not headers:
+        response = getattr(exc, "response", None)
+        headers = getattr(response, "headers", None)
+    if not headers:
+        return None
+    value = headers.get("retry-after") or headers.get("Retry-After")
+    if value is None:
+        return None
+    try:
+        return max(0.0, float(value))
+    except ValueError:
+        pass
+    try:
+        when = email.utils.parsedate_to_datetime(str(value))
+    except (TypeError, ValueError):
+        return None
+    return max(0.0, when.timestamp() - time.time())
+
+
+def _message(exc: BaseException) -> str:
+    text = f"{type(exc).__name__}: {exc}"
+    return redact(" ".join(text.split()))[:_MAX_MESSAGE]
+
+
+def _status(exc: BaseException) -> int | None:
+    status = getattr(exc, "status_code", None)
+    return status if isinstance(status, int) else None
+
+
+def map_error(exc: BaseException) -> ModelError:
+    """The bpb model error for an exception raised by ``litellm.acompletion``."""
+    from litellm.exceptions import (
+        APIConnectionError,
+        AuthenticationError,
+        PermissionDeniedError,
+        RateLimitError,
+        Timeout,
+    )
+
+    message = _message(exc)
+    if isinstance(exc, RateLimitError) or _status(exc) == 429:
+        return RateLimited(message, retry_after=retry_after(exc))
+    if isinstance(exc, Timeout | TimeoutError):
+        return ModelTimeout(message)
+    if isinstance(exc, AuthenticationError | PermissionDeniedError):
+        return AuthenticationFailed(message)
+    if isinstance(exc, APIConnectionError):
+        return ConnectionFailure(message)
+    status = _status(exc)
+    if status is not None and 400 <= status < 500:
+        if status in (401, 403):
+            return AuthenticationFailed(message)
+        if status in (408, 409):
+            return ServerError(message)  # request timeout / conflict: transient by definition
+        return RequestRejected(message)
+    # 5xx, invalid bodies and anything unexpected from the HTTP stack: transient, bounded retries
+    return ServerError(message)

@@ -1,0 +1,17 @@
+"""Registers the ``litellm`` adapter family (litellm itself is imported only when used)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from bpb_core.hookspecs import hookimpl
+from bpb_core.records import AdapterInfo, lazy
+
+
+@hookimpl
+def bpb_adapters() -> Iterator[AdapterInfo]:
+    yield AdapterInfo(
+        "litellm",
+        lazy("bpb_adapters.litellm_adapter.adapter:make_adapter"),
+        "Any litellm model string (openai/..., anthropic/..., gemini/...) or a known alias",
+    )

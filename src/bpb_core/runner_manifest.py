@@ -1,0 +1,129 @@
+"""``run.json``: what a run was asked to do, with what software, and when.
+
+Resuming a run folder with different answer-shaping settings (adapter, dataset, input mode,
+chain of thought, force-numeric) would mix incomparable answers, so it is refused as bad input.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import platform
+import sys
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core import __version__
+from bpb_core.errors import BadInput
+from bpb_core.layout import RUN_MANIFEST
+from bpb_core.runner_data import dataset_hash
+from bpb_core.runner_types import RunOptions
+from bpb_core.storage import read_manifest, write_manifest
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+    from bpb_core.runner_call import RunState
+
+_GUARDED = ("adapter", "dataset_hash", "input_mode", "cot", "force_numeric")
+
+
+def now() -> str:
+    """The current UTC time in ISO 8601."""
+    return datetime.now(UTC).isoformat(timespec="seconds")
+
+
+def _version(distribution: str) -> str | None:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def versions() -> dict[str, Any]:
+    """Versions of bpb, Python and the libraries that shape answers or costs."""
+    found = {name: _version(name) for name in ("litellm", "pydantic", "numpy", "pluggy")}
+    return {
+        "bpb": __version__,
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        **{k: v for k, v in found.items() if v},
+    }
+
+
+def _plugins(registry: Registry) -> list[dict[str, str]]:
+    return [
+        {
+            "kind": e.info.kind,
+            "name": e.info.name,
+            "distribution": e.distribution,
+            "version": e.version,
+        }
+        for e in registry
+    ]
+
+
+def _options(options: RunOptions, registry: Registry) -> dict[str, Any]:
+    data = dataclasses.asdict(options)
+    data["cot"] = {t: options.cot.get(t, registry.task(t).default_cot) for t in options.tasks}
+    data["horizons"] = None if options.horizons is None else list(options.horizons)
+    data["tasks"] = list(options.tasks)
+    return data
+
+
+def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> None:
+    for key in _GUARDED:
+        before = old.get(key, old.get("options", {}).get(key))
+        after = new.get(key, new["options"].get(key))
+        if before is not None and before != after:
+            raise BadInput(
+                f"{run_dir / RUN_MANIFEST}: {key}: this folder holds a run with {before!r}, not "
+                f"{after!r}; use another --out to keep answers comparable"
+            )
+
+
+def start_manifest(
+    run_dir: Path, spec: str, data: Path, options: RunOptions, registry: Registry, scenes: int
+) -> dict[str, Any]:
+    """Write ``run.json`` at the start (or resume) of a run and return its content.
+
+    Raises:
+        BadInput: The folder holds a run with other answer-shaping settings.
+    """
+    manifest: dict[str, Any] = {
+        "adapter": spec,
+        "model_id": None,
+        "tasks": list(options.tasks),
+        "options": _options(options, registry),
+        "dataset": str(data.resolve()),
+        "dataset_hash": dataset_hash(data),
+        "scenes": scenes,
+        "versions": versions(),
+        "plugins": _plugins(registry),
+        "started": now(),
+        "finished": None,
+    }
+    old = read_manifest(run_dir)
+    if old is not None:
+        _check_resume(run_dir, old, manifest)
+        manifest["started"] = old.get("started", manifest["started"])
+        manifest["model_id"] = old.get("model_id")
+        manifest["sessions"] = [*old.get("sessions", []), now()]
+    else:
+        manifest["sessions"] = [manifest["started"]]
+    write_manifest(run_dir, manifest)
+    return manifest
+
+
+def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) -> None:
+    """Record the end of this session: time, model id, totals and why it stopped."""
+    manifest["finished"] = now()
+    manifest["model_id"] = state.model_id or manifest.get("model_id")
+    manifest["stopped"] = state.stop_reason
+    manifest["last_session"] = {
+        "statuses": state.statuses,
+        "cost": None if state.unpriced else state.spent,
+        "tokens": state.tokens,
+        "error": None if state.auth_error is None else str(state.auth_error),
+    }
+    write_manifest(run_dir, manifest)

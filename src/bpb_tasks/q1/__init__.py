@@ -1,0 +1,1 @@
+"""Task Q1: which object balls does the cue ball touch by the horizon."""

@@ -1,0 +1,1 @@
+"""Task Q3: where is every ball at the horizon (null once pocketed)."""
