@@ -1,0 +1,190 @@
+"""Uncertainty: bootstrap confidence intervals over scenes and paired comparisons of two runs.
+
+Scenes are resampled with replacement within each horizon (the leaderboard score is a mean
+over horizons, so each horizon keeps its size), and the same resampled scenes are used for every
+task, so the total score's interval accounts for scenes being shared by the tasks. Resampling is
+done with multinomial weights and one matrix product per horizon: fully vectorised. Generators
+are seeded from ``seed`` and the run label, so results do not depend on the order of runs.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+import zlib
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from bpb_core.results_tables import (
+    METRICS,
+    RUN_COLUMNS,
+    TOTAL_WEIGHTS,
+    UNANSWERED,
+    View,
+    scene_scores,
+)
+
+FloatArray = np.ndarray[tuple[int, ...], np.dtype[np.float64]]
+
+
+def _rng(seed: int, *labels: str) -> np.random.Generator:
+    return np.random.default_rng([seed, *(zlib.crc32(label.encode()) for label in labels)])
+
+
+def score_matrix(units: pd.DataFrame, run: str, view: View = "strict") -> pd.DataFrame:
+    """Scene scores of one run: index (horizon, scene_id), one column per task (NaN = left out
+    of the view) plus ``total`` (NaN unless all of q1, q2 and q3 are present)."""
+    scenes = scene_scores(units[units["run"] == run])
+    if view == "answered":
+        scenes.loc[scenes["status"].isin(UNANSWERED), "score"] = np.nan
+    wide = scenes.pivot_table(
+        index=["horizon", "scene_id"], columns="task", values="score", observed=True, dropna=False
+    )
+    for task in TOTAL_WEIGHTS:
+        if task not in wide.columns:
+            wide[task] = np.nan
+    wide["total"] = sum(w * wide[t] for t, w in TOTAL_WEIGHTS.items())
+    wide.columns.name = None
+    return wide[list(METRICS)]
+
+
+def _horizon_means(
+    matrix: pd.DataFrame, rng: np.random.Generator | None, n_boot: int
+) -> tuple[FloatArray, FloatArray]:
+    """(point estimate per metric, bootstrap replicates B x metrics): means over horizons.
+
+    ``total`` is the weighted sum of the task means (as in the leaderboard), not a mean of
+    per-scene totals, so both views agree with :func:`~bpb_core.results_tables.leaderboard`.
+    """
+    tasks = matrix[list(TOTAL_WEIGHTS)]
+    points, reps = [], []
+    for _, block in tasks.groupby(level="horizon", sort=True):
+        values = block.to_numpy(dtype=float)
+        present = ~np.isnan(values)
+        filled = np.where(present, values, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            points.append(filled.sum(0) / present.sum(0))
+            if rng is not None:
+                n = len(values)
+                weights = rng.multinomial(n, np.full(n, 1.0 / n), size=n_boot).astype(float)
+                reps.append((weights @ filled) / (weights @ present.astype(float)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a task absent from a horizon
+        point = np.nanmean(np.stack(points), axis=0) if points else np.full(3, np.nan)
+        rep = np.nanmean(np.stack(reps), axis=0) if reps else np.full((1, 3), np.nan)
+    weights_vec = np.array(list(TOTAL_WEIGHTS.values()))
+    point = np.append(point, point @ weights_vec)
+    rep = np.column_stack([rep, rep @ weights_vec])
+    return point, rep
+
+
+def _interval(reps: FloatArray, level: float) -> tuple[FloatArray, FloatArray]:
+    alpha = (1 - level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lo, hi = np.nanquantile(reps, [alpha, 1 - alpha], axis=0)
+    return lo, hi
+
+
+def bootstrap_ci(
+    units: pd.DataFrame,
+    *,
+    view: View = "strict",
+    n_boot: int = 2000,
+    seed: int = 0,
+    level: float = 0.95,
+) -> pd.DataFrame:
+    """Leaderboard scores with bootstrap confidence intervals over scenes.
+
+    Returns:
+        Columns ``run, adapter, model, baseline, metric, estimate, lo, hi, scenes``; ``metric``
+        is q1, q2, q3 or total.
+    """
+    rows = []
+    runs = units[RUN_COLUMNS].drop_duplicates().to_dict(orient="records")
+    for info in runs:
+        matrix = score_matrix(units, str(info["run"]), view)
+        point, reps = _horizon_means(matrix, _rng(seed, str(info["run"])), n_boot)
+        lo, hi = _interval(reps, level)
+        for j, metric in enumerate(METRICS):
+            rows.append({**info, "metric": metric, "estimate": point[j], "lo": lo[j], "hi": hi[j]})
+            rows[-1]["scenes"] = int(matrix[metric].notna().sum())
+    return pd.DataFrame(rows).astype({"estimate": "float64", "lo": "float64", "hi": "float64"})
+
+
+def sign_test(wins: int, losses: int) -> float:
+    """Two-sided exact sign test p-value (ties dropped); McNemar's exact test for 0/1 scores."""
+    n = wins + losses
+    if n == 0:
+        return 1.0
+    k = min(wins, losses)
+    log_half = n * math.log(0.5)
+    terms = [math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) for i in range(k + 1)]
+    tail = sum(math.exp(t + log_half) for t in terms)
+    return min(1.0, 2 * tail)
+
+
+def paired_comparison(
+    units: pd.DataFrame,
+    a: str,
+    b: str,
+    *,
+    view: View = "strict",
+    n_boot: int = 2000,
+    seed: int = 0,
+    level: float = 0.95,
+) -> pd.DataFrame:
+    """Run ``a`` minus run ``b`` on the scenes both answered, per metric.
+
+    Returns:
+        One row per metric: ``a, b, metric, a_score, b_score, diff, lo, hi, scenes, wins,
+        losses, ties, p_value`` (``diff`` = a - b as a mean over horizons; ``lo``/``hi`` its
+        bootstrap interval; ``wins``/``losses`` count scenes where a scored higher/lower;
+        ``p_value`` from the exact sign test on them).
+    """
+    left, right = score_matrix(units, a, view), score_matrix(units, b, view)
+    shared = left.index.intersection(right.index)
+    diff = left.loc[shared] - right.loc[shared]
+    left, right = left.loc[shared].where(diff.notna()), right.loc[shared].where(diff.notna())
+    point, reps = _horizon_means(diff, _rng(seed, a, b), n_boot)
+    a_point, _ = _horizon_means(left, None, 0)
+    b_point, _ = _horizon_means(right, None, 0)
+    lo, hi = _interval(reps, level)
+    rows = []
+    for j, metric in enumerate(METRICS):
+        column = diff[metric].dropna()
+        wins, losses = int((column > 0).sum()), int((column < 0).sum())
+        rows.append(
+            {
+                "a": a,
+                "b": b,
+                "metric": metric,
+                "a_score": a_point[j],
+                "b_score": b_point[j],
+                "diff": point[j],
+                "lo": lo[j],
+                "hi": hi[j],
+                "scenes": len(column),
+                "wins": wins,
+                "losses": losses,
+                "ties": len(column) - wins - losses,
+                "p_value": sign_test(wins, losses),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def all_pairs(
+    units: pd.DataFrame, runs: Sequence[str] | None = None, **kwargs: object
+) -> pd.DataFrame:
+    """:func:`paired_comparison` of every pair of ``runs`` (default: the non-baseline runs)."""
+    if runs is None:
+        runs = sorted(units.loc[~units["baseline"], "run"].unique().tolist())
+    frames = [
+        paired_comparison(units, a, b, **kwargs)  # type: ignore[arg-type]
+        for i, a in enumerate(runs)
+        for b in runs[i + 1 :]
+    ]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
