@@ -49,10 +49,10 @@ class ImageConfig(_Strict):
     """
 
     px_per_m: float = Field(600.0, ge=100, le=3000)
-    margin_left: int = Field(84, ge=40)
-    margin_right: int = Field(36, ge=20)
-    margin_top: int = Field(64, ge=20)
-    margin_bottom: int = Field(76, ge=40)
+    margin_left: int = Field(116, ge=40)
+    margin_right: int = Field(48, ge=20)
+    margin_top: int = Field(84, ge=20)
+    margin_bottom: int = Field(96, ge=40)
     compress_level: int = Field(1, ge=0, le=9)
 
 

@@ -1,0 +1,167 @@
+"""Scheduling of generation jobs on a process pool, and the progress protocol.
+
+Results come back in job order (``imap``), so the streamed index and checksums are in scene
+order however many workers run.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from multiprocessing.pool import Pool
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+
+from bpb_core.dataset_worker import (
+    Job,
+    WorkerSetup,
+    calibrate_job,
+    init_worker,
+    remove_scene,
+    run_job,
+)
+from bpb_core.dataset_writer import DatasetWriter, plugin_label
+from bpb_core.errors import BpbError
+
+if TYPE_CHECKING:
+    from bpb_tasks.billiards.calibrate import Calibration
+    from bpb_tasks.billiards.config import DatasetConfig
+
+CHUNK = 4
+MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
+
+
+class GenerateProgress(Protocol):
+    """Receives generation progress (the CLI draws a bar; the library never prints)."""
+
+    def phase(self, name: str, total: int) -> None:
+        """A new phase (``calibrate``, ``scenes``, ``stats``) with ``total`` steps begins."""
+        ...
+
+    def advance(self, count: int = 1) -> None:
+        """``count`` steps of the current phase are done."""
+        ...
+
+
+class NoProgress:
+    """Ignores progress."""
+
+    def phase(self, name: str, total: int) -> None:
+        return None
+
+    def advance(self, count: int = 1) -> None:
+        return None
+
+
+def worker_setup(root: Path, seed: int, cfg: DatasetConfig, images: bool) -> WorkerSetup:
+    """Resolve the config's scene family and simulator plugins into a picklable setup."""
+    registry = _registry()
+    family = registry.get("scene_family", cfg.family)
+    simulator = registry.get("simulator", cfg.simulator)
+    plugins = (("scene_family", plugin_label(family)), ("simulator", plugin_label(simulator)))
+    return WorkerSetup(
+        root=root,
+        seed=seed,
+        config=cfg,
+        family_cls=family.info.load(),
+        simulator_cls=simulator.info.load(),
+        simulator_name=cfg.simulator,
+        images=images,
+        plugins=plugins,
+    )
+
+
+def _registry() -> Any:
+    from bpb_core.registry import PluginWarning, make_registry
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
+        return make_registry()
+
+
+class InProcess:
+    """The part of :class:`multiprocessing.pool.Pool` used here, run in this process."""
+
+    def __init__(self, setup: WorkerSetup) -> None:
+        init_worker(setup)
+
+    def imap(
+        self, func: Callable[[Any], Any], items: Iterable[Any], chunksize: int = 1
+    ) -> Iterator[Any]:
+        return map(func, items)
+
+    def __enter__(self) -> InProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
+    """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1)."""
+    if n_workers == 1:
+        return InProcess(setup)
+    return Pool(n_workers, initializer=init_worker, initargs=(setup,))
+
+
+def run_calibration(
+    pool: Pool | InProcess, hs: list[float], progress: GenerateProgress
+) -> dict[str, Calibration]:
+    """Calibrate each horizon's speed range, one horizon per job."""
+    from bpb_tasks.billiards.config import horizon_key
+
+    progress.phase("calibrate", len(hs))
+    found: dict[str, Calibration] = {}
+    for result in pool.imap(calibrate_job, hs):
+        found[horizon_key(result.horizon)] = result
+        progress.advance()
+    return found
+
+
+def run_scenes(
+    pool: Pool | InProcess,
+    setup: WorkerSetup,
+    writer: DatasetWriter,
+    hs: list[float],
+    per_horizon: int,
+    stable_only: bool,
+    progress: GenerateProgress,
+) -> None:
+    """Produce every scene and stream the results to ``writer`` in scene order."""
+    progress.phase("scenes", per_horizon * len(hs))
+    if not stable_only:
+        jobs = (Job(h, i) for h in hs for i in range(per_horizon))
+        for result in pool.imap(run_job, jobs, chunksize=CHUNK):
+            writer.add(result)
+            progress.advance()
+        return
+    for h in hs:
+        _run_stable(pool, setup, writer, h, per_horizon, progress)
+
+
+def _run_stable(
+    pool: Pool | InProcess,
+    setup: WorkerSetup,
+    writer: DatasetWriter,
+    h: float,
+    per_horizon: int,
+    progress: GenerateProgress,
+) -> None:
+    """Keep the first ``per_horizon`` stable indices of horizon ``h`` (drawn in batches)."""
+    kept, start = 0, 0
+    while kept < per_horizon:
+        if start > MAX_DRAWS_FACTOR * per_horizon + 100:
+            raise BpbError(f"horizon {h:g} s: too few stable scenes ({kept} in {start} draws)")
+        size = max(8, 2 * (per_horizon - kept))
+        batch = [Job(h, i, keep_unstable=False) for i in range(start, start + size)]
+        start += size
+        for result in pool.imap(run_job, batch, chunksize=CHUNK):
+            if kept >= per_horizon:
+                if result.written:
+                    remove_scene(setup.root, h, result.row.index)
+            elif result.row.stable is False:
+                writer.drop(h)
+            else:
+                writer.add(result)
+                kept += 1
+                progress.advance()

@@ -1,0 +1,185 @@
+"""The canvas shared by every scene image: geometry, the static table background, the palette.
+
+The background (page, rails, cloth, grid, pockets, axes with ticks and labels) is drawn once per
+process and copied per image. Images are drawn in RGB and stored as 8-bit palette PNGs: the
+palette is fixed per canvas (derived once from the background and the sprites), which makes
+encoding several times faster than RGB and keeps the files small and deterministic.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+from PIL import Image, ImageDraw
+
+from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards.config import DatasetConfig
+
+TICK_MAJOR = 0.25  # metres between labelled ticks
+TICK_MINOR = 0.05
+
+
+@dataclass(frozen=True)
+class CanvasSpec:
+    """Canvas geometry in pixels; ``to_px`` maps table metres to pixel coordinates."""
+
+    width_m: float
+    height_m: float
+    ppm: float
+    left: int
+    right: int
+    top: int
+    bottom: int
+    radius_m: float
+    pocket_radius_m: float
+    pockets: tuple[tuple[float, float], ...]
+
+    @classmethod
+    def from_config(cls, config: DatasetConfig) -> CanvasSpec:
+        """The canvas of ``config``'s table, pockets, ball radius and image settings."""
+        im = config.image
+        return cls(
+            config.table.width,
+            config.table.height,
+            im.px_per_m,
+            im.margin_left,
+            im.margin_right,
+            im.margin_top,
+            im.margin_bottom,
+            config.physics.ball_radius,
+            config.pockets.radius,
+            tuple(config.pockets.centers),
+        )
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Image size (width, height) in pixels."""
+        w = self.left + round(self.width_m * self.ppm) + self.right
+        return w, self.top + round(self.height_m * self.ppm) + self.bottom
+
+    @property
+    def radius_px(self) -> float:
+        """Ball radius in pixels."""
+        return self.radius_m * self.ppm
+
+    @property
+    def scale(self) -> float:
+        """Font and stroke scale relative to the default 600 px per metre."""
+        return self.ppm / 600.0
+
+    def to_px(self, x: float, y: float) -> tuple[float, float]:
+        """Pixel coordinates of table point ``(x, y)`` (y up on the table, down in the image)."""
+        return self.left + x * self.ppm, self.top + (self.height_m - y) * self.ppm
+
+
+def _ticks(limit: float, step: float) -> list[float]:
+    return [i * step for i in range(math.floor(limit / step + 1e-9) + 1)]
+
+
+@functools.cache
+def background(spec: CanvasSpec) -> Image.Image:
+    """The static table image (RGB); copy it before drawing on it."""
+    img = Image.new("RGB", spec.size, st.PAGE)
+    draw = ImageDraw.Draw(img)
+    x0, y1 = spec.to_px(0, 0)
+    x1, y0 = spec.to_px(spec.width_m, spec.height_m)
+    rail = max(8, round(0.03 * spec.ppm))
+    draw.rectangle((x0 - rail, y0 - rail, x1 + rail, y1 + rail), fill=st.RAIL)
+    draw.rectangle((x0, y0, x1, y1), fill=st.CLOTH)
+    for x in _ticks(spec.width_m, TICK_MAJOR)[1:-1]:
+        px = spec.to_px(x, 0)[0]
+        draw.line((px, y0, px, y1), fill=st.GRID, width=1)
+    for y in _ticks(spec.height_m, TICK_MAJOR)[1:-1]:
+        py = spec.to_px(0, y)[1]
+        draw.line((x0, py, x1, py), fill=st.GRID, width=1)
+    draw.rectangle((x0, y0, x1, y1), outline=st.CUSHION, width=max(2, rail // 5))
+    _pockets(draw, spec)
+    _axes(draw, spec, max(rail, round(spec.pocket_radius_m * spec.ppm)) + round(6 * spec.scale))
+    return img
+
+
+def _pockets(draw: ImageDraw.ImageDraw, spec: CanvasSpec) -> None:
+    r = spec.pocket_radius_m * spec.ppm
+    for cx, cy in spec.pockets:
+        px, py = spec.to_px(cx, cy)
+        draw.ellipse((px - r, py - r, px + r, py + r), fill=st.POCKET)
+
+
+def _axes(draw: ImageDraw.ImageDraw, spec: CanvasSpec, offset: int) -> None:
+    s = spec.scale
+    label_font = st.font(round(15 * s))
+    x0, y1 = spec.to_px(0, 0)
+    x1 = spec.to_px(spec.width_m, 0)[0]
+    draw.line((x0, y1 + offset, x1, y1 + offset), fill=st.INK, width=1)
+    y0 = spec.to_px(0, spec.height_m)[1]
+    draw.line((x0 - offset, y0, x0 - offset, y1), fill=st.INK, width=1)
+    bottom, left = y1 + offset, x0 - offset
+    for x in _ticks(spec.width_m, TICK_MINOR):
+        px = spec.to_px(x, 0)[0]
+        major = _is_major(x)
+        draw.line((px, bottom, px, bottom + (9 if major else 4) * s), fill=st.INK, width=1)
+        if major:
+            draw.text((px, bottom + 11 * s), f"{x:g}", fill=st.INK, font=label_font, anchor="mt")
+    for y in _ticks(spec.height_m, TICK_MINOR):
+        py = spec.to_px(0, y)[1]
+        major = _is_major(y)
+        draw.line((left - (9 if major else 4) * s, py, left, py), fill=st.INK, width=1)
+        if major:
+            draw.text((left - 12 * s, py), f"{y:g}", fill=st.INK, font=label_font, anchor="rm")
+    title_font = st.font(round(16 * s), bold=True)
+    xmid = spec.to_px(spec.width_m / 2, 0)[0]
+    draw.text((xmid, bottom + 36 * s), "x (m)", fill=st.INK, font=title_font, anchor="mt")
+    ymid = spec.to_px(0, spec.height_m / 2)[1]
+    _vertical_text(draw, (left - 62 * s, ymid), "y (m)", title_font)
+
+
+def _is_major(value: float) -> bool:
+    ratio = value / TICK_MAJOR
+    return abs(ratio - round(ratio)) < 1e-6
+
+
+def _vertical_text(
+    draw: ImageDraw.ImageDraw, centre: tuple[float, float], text: str, font: st.Font
+) -> None:
+    box = draw.textbbox((0, 0), text, font=font)
+    w, h = int(box[2] - box[0] + 4), int(box[3] - box[1] + 6)
+    patch = Image.new("RGB", (w, h), st.PAGE)
+    ImageDraw.Draw(patch).text((w / 2, h / 2), text, fill=st.INK, font=font, anchor="mm")
+    rotated = patch.rotate(90, expand=True)
+    target = draw._image  # the image this ImageDraw draws on
+    target.paste(
+        rotated, (round(centre[0] - rotated.width / 2), round(centre[1] - rotated.height / 2))
+    )
+
+
+@functools.cache
+def palette(spec: CanvasSpec, ball_ids: tuple[int, ...]) -> Image.Image:
+    """A fixed 256-colour palette image for ``spec``: every colour the renderer draws with.
+
+    Derived from the background plus every sprite and stroke colour, so quantising a scene image
+    to it is exact for flat colours and close for antialiased edges.
+    """
+    base = background(spec).copy()
+    strip = Image.new("RGB", (base.width, 120), st.CLOTH)
+    x = 4
+    for ball_id in ball_ids:
+        for alpha in (255, 110):
+            sprite = st.ball_sprite(ball_id, spec.radius_px, alpha)
+            strip.paste(sprite, (x, 4), sprite)
+            x += sprite.width + 2
+    sample = ImageDraw.Draw(strip)
+    colours = [st.ARROW, st.HALO, st.MARK_BALL, st.MARK_WALL, st.MARK_POCKET, st.MUTED, st.PAGE]
+    colours += [st.ball_colour(i) for i in ball_ids]
+    for i, colour in enumerate(colours):
+        sample.rectangle((4 + 30 * i, 70, 30 + 30 * i, 116), fill=colour)
+    combined = Image.new("RGB", (base.width, base.height + strip.height))
+    combined.paste(base, (0, 0))
+    combined.paste(strip, (0, base.height))
+    return combined.quantize(colors=256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+
+
+def to_palette(img: Image.Image, spec: CanvasSpec, ball_ids: tuple[int, ...]) -> Image.Image:
+    """``img`` mapped to the canvas's fixed palette (no dithering: flat areas stay flat)."""
+    return img.quantize(palette=palette(spec, ball_ids), dither=Image.Dither.NONE)

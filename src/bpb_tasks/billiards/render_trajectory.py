@@ -1,0 +1,108 @@
+"""Paths and event markers of the trajectory image, drawn from an :class:`Outcome`.
+
+Each :class:`~bpb_core.outcome.Segment` is straight (friction acts along the velocity), so a path
+is a polyline through the segment end points. Ball-ball contacts are marked by a red ring at the
+contact point, wall contacts by a blue diamond at the centre, pocketings by a white cross.
+"""
+
+from __future__ import annotations
+
+import math
+
+from PIL import Image, ImageDraw
+
+from bpb_core.outcome import Event, Outcome, Segment
+from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards.render_canvas import CanvasSpec
+
+Point = tuple[float, float]
+
+
+def segment_end(seg: Segment) -> Point:
+    """Where the ball of ``seg`` is at ``seg.t1`` (or where it stopped, if earlier)."""
+    speed = math.hypot(*seg.vel)
+    dt = seg.t1 - seg.t0
+    if speed == 0 or dt <= 0:
+        return seg.pos
+    if seg.decel > 0:
+        dt = min(dt, speed / seg.decel)
+    dist = speed * dt - 0.5 * seg.decel * dt * dt
+    return seg.pos[0] + seg.vel[0] / speed * dist, seg.pos[1] + seg.vel[1] / speed * dist
+
+
+def path_points(segments: tuple[Segment, ...]) -> list[Point]:
+    """Table points of a ball's path: the start of each moving segment and the final end."""
+    points: list[Point] = []
+    for seg in segments:
+        end = segment_end(seg)
+        if end == seg.pos:
+            continue
+        if not points or points[-1] != seg.pos:
+            points.append(seg.pos)
+        points.append(end)
+    return points
+
+
+def draw_trajectories(img: Image.Image, spec: CanvasSpec, outcome: Outcome) -> None:
+    """Draw every moving ball's path (cue ball last, on top), then the event markers."""
+    draw = ImageDraw.Draw(img)
+    s = spec.scale
+    order = sorted(outcome.segments, key=lambda i: (i == 0, i))
+    for ball_id in order:
+        pts = [spec.to_px(*p) for p in path_points(outcome.segments[ball_id])]
+        if len(pts) < 2:
+            continue
+        draw.line(pts, fill=st.HALO, width=round(6 * s), joint="curve")
+        draw.line(pts, fill=st.ball_colour(ball_id), width=round(3 * s), joint="curve")
+    for event in outcome.events:
+        _mark(draw, spec, event)
+    _legend(img, spec)
+
+
+def _mark(draw: ImageDraw.ImageDraw, spec: CanvasSpec, event: Event) -> None:
+    if not event.positions:
+        return
+    s = spec.scale
+    if event.kind == "ball" and len(event.positions) >= 2:
+        (ax, ay), (bx, by) = event.positions[:2]
+        x, y = spec.to_px((ax + bx) / 2, (ay + by) / 2)
+        r = 7 * s
+        draw.ellipse(
+            (x - r - 2, y - r - 2, x + r + 2, y + r + 2), outline=st.HALO, width=round(5 * s)
+        )
+        draw.ellipse((x - r, y - r, x + r, y + r), outline=st.MARK_BALL, width=round(3 * s))
+    elif event.kind == "wall":
+        x, y = spec.to_px(*event.positions[0])
+        r = 7 * s
+        diamond = [(x, y - r), (x + r, y), (x, y + r), (x - r, y)]
+        draw.polygon(diamond, fill=st.MARK_WALL, outline=st.HALO, width=max(1, round(2 * s)))
+    elif event.kind == "pocket":
+        x, y = spec.to_px(*event.positions[0])
+        r = 8 * s
+        for dx in (-r, r):
+            draw.line(((x - dx, y - r), (x + dx, y + r)), fill=st.HALO, width=round(6 * s))
+        for dx in (-r, r):
+            draw.line(((x - dx, y - r), (x + dx, y + r)), fill=st.MARK_POCKET, width=round(3 * s))
+
+
+def _legend(img: Image.Image, spec: CanvasSpec) -> None:
+    draw = ImageDraw.Draw(img)
+    s = spec.scale
+    font = st.font(round(14 * s))
+    y = spec.top / 2 - 14 * s
+    x = float(img.width - spec.right)
+    items = (("wall contact", "wall"), ("ball contact", "ball"), ("faded: start", ""))
+    for text, kind in items:
+        x -= draw.textlength(text, font=font)
+        draw.text((x, y), text, fill=st.MUTED, font=font, anchor="lm")
+        x -= 10 * s
+        r = 7 * s
+        if kind == "ball":
+            draw.ellipse((x - 2 * r, y - r, x, y + r), outline=st.MARK_BALL, width=round(3 * s))
+            x -= 2 * r
+        elif kind == "wall":
+            c = x - r
+            diamond = [(c, y - r), (c + r, y), (c, y + r), (c - r, y)]
+            draw.polygon(diamond, fill=st.MARK_WALL, outline=st.HALO)
+            x -= 2 * r
+        x -= 24 * s
