@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "plugins": ("bpb_core.cli.plugins_cmd", "plugins", "List installed plugins and versions."),
     "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
     "bench": ("bpb_core.cli.bench_cmd", "bench", "Benchmarks (speed against error)."),
+    "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
 }
 
 

@@ -1,0 +1,142 @@
+"""``bpb generate``: a thin wrapper over :func:`bpb_core.dataset.generate_dataset`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING
+
+import click
+
+from bpb_core.cli import console
+from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
+    from bpb_core.dataset_manifest import DatasetManifest
+
+PHASES = {"calibrate": "calibrating speeds", "scenes": "scenes", "stats": "stats figures"}
+
+
+def parse_horizons(text: str) -> list[float]:
+    """``"1,2,3"`` to ``[1.0, 2.0, 3.0]``; raises :class:`BadInput` naming ``--horizons``."""
+    values = []
+    for part in text.split(","):
+        try:
+            value = float(part.strip())
+        except ValueError:
+            raise BadInput(f"--horizons: {part.strip()!r} is not a number of seconds") from None
+        if not value > 0 or value != value or value == float("inf"):
+            raise BadInput(f"--horizons: {part.strip()!r} must be a positive number of seconds")
+        values.append(value)
+    return values
+
+
+class RichProgress:
+    """Draws :class:`~bpb_core.dataset_jobs.GenerateProgress` events as rich progress bars."""
+
+    def __init__(self) -> None:
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self._bar: Progress = Progress(
+            TextColumn("{task.description:<20}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console.stderr(),
+        )
+        self._task: TaskID | None = None
+
+    def phase(self, name: str, total: int) -> None:
+        self._task = self._bar.add_task(PHASES.get(name, name), total=total)
+
+    def advance(self, count: int = 1) -> None:
+        if self._task is not None:
+            self._bar.advance(self._task, count)
+
+    def __enter__(self) -> RichProgress:
+        self._bar.start()
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self._bar.stop()
+
+
+def show_summary(root: Path, manifest: DatasetManifest) -> None:
+    """Print the realised cue-ball collision rate per horizon."""
+    from rich.table import Table
+
+    table = Table(title=f"{root}: {manifest.scenes} scenes, seed {manifest.seed}")
+    for column in ("horizon", "scenes", "cue collisions", "rate", "speed range (m/s)", "unstable"):
+        table.add_column(column, justify="right")
+    for label, s in manifest.summary.items():
+        unstable = str(s.unstable) if not manifest.stable_only else f"{s.dropped_unstable} dropped"
+        low, high = s.speed_range
+        table.add_row(
+            label,
+            str(s.scenes),
+            str(s.cue_collisions),
+            f"{s.collision_rate:.1%}",
+            f"{low:g} to {high:g}",
+            unstable,
+        )
+    console.stdout().print(table)
+
+
+@click.command("generate")
+@click.option("--out", "out", required=True, type=click.Path(path_type=Path), help="Folder.")
+@click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon.")
+@click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma-separated.")
+@click.option("--seed", default=0, show_default=True, help="Dataset seed.")
+@click.option("--config", "config_path", type=click.Path(path_type=Path), help="JSON/TOML config.")
+@click.option("--stable-only", is_flag=True, help="Draw until N stable scenes per horizon.")
+@click.option("--workers", type=int, default=None, help="Processes [default: all cores].")
+@click.option("--no-images", is_flag=True, help="Skip the PNGs (JSON and stats only).")
+@click.option("--calibrate", is_flag=True, help="Recompute the cue-speed ranges first.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing dataset at --out.")
+def generate(
+    out: Path,
+    per_horizon: int,
+    horizons: str,
+    seed: int,
+    config_path: Path | None,
+    stable_only: bool,
+    workers: int | None,
+    no_images: bool,
+    calibrate: bool,
+    overwrite: bool,
+) -> None:
+    """Generate a dataset: scenes, ground truth, images, index, stats and manifest."""
+    from bpb_core.dataset import generate_dataset, load_dataset
+
+    if per_horizon < 1:
+        raise BadInput(f"--per-horizon: must be at least 1, got {per_horizon}")
+    if workers is not None and workers < 1:
+        raise BadInput(f"--workers: must be at least 1, got {workers}")
+    hs = parse_horizons(horizons)
+    with RichProgress() as progress:
+        root = generate_dataset(
+            out,
+            per_horizon,
+            hs,
+            seed,
+            config=config_path,
+            progress=progress,
+            stable_only=stable_only,
+            workers=workers,
+            images=not no_images,
+            calibrate=calibrate,
+            overwrite=overwrite,
+        )
+    show_summary(root, load_dataset(root).manifest)
