@@ -23,7 +23,14 @@ from bpb_core.runner_call import RunState, answer
 from bpb_core.runner_data import SceneRef, select_scenes
 from bpb_core.runner_limits import RateLimiter
 from bpb_core.runner_manifest import finish_manifest, start_manifest
-from bpb_core.runner_types import NoProgress, Progress, ProgressEvent, RunOptions, RunResult
+from bpb_core.runner_types import (
+    NoProgress,
+    Progress,
+    ProgressEvent,
+    RetryPolicy,
+    RunOptions,
+    RunResult,
+)
 from bpb_core.storage import AttemptLog, completed
 
 if TYPE_CHECKING:
@@ -56,7 +63,7 @@ def _plan(
 async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
     if not state.may_send():
         for task in todo:
-            state.count(task, "not_sent")
+            state.not_sent(task)
         return
     scene = ref.load()
     image = None if state.options.input_mode == "state" else ref.image()
@@ -84,16 +91,27 @@ async def _drive(state: RunState, plan: list[tuple[SceneRef, list[str]]]) -> Non
 
 
 def _state(
-    adapter: ModelAdapter, spec: str, tasks: dict[str, Task], options: RunOptions,
-    run_dir: Path, progress: Progress,
-) -> RunState:  # fmt: skip
+    adapter: ModelAdapter,
+    spec: str,
+    tasks: dict[str, Task],
+    options: RunOptions,
+    run_dir: Path,
+    progress: Progress,
+) -> RunState:
     if options.concurrency < 1:
         raise BadInput(f"--concurrency: must be at least 1, got {options.concurrency}")
     return RunState(
-        adapter=adapter, spec=spec, tasks=tasks, options=options, run_dir=run_dir,
-        log=AttemptLog(run_dir), progress=progress, limiter=RateLimiter(options.rpm),
-        slots=asyncio.Semaphore(options.concurrency), rng=random.Random(options.seed),
-    )  # fmt: skip
+        adapter=adapter,
+        spec=spec,
+        tasks=tasks,
+        options=options,
+        run_dir=run_dir,
+        log=AttemptLog(run_dir),
+        progress=progress,
+        limiter=RateLimiter(options.rpm),
+        slots=asyncio.Semaphore(options.concurrency),
+        rng=random.Random(options.seed),
+    )
 
 
 async def run_eval_async(
@@ -131,9 +149,11 @@ async def run_eval_async(
 
 
 def _adapter(
-    registry: Registry, adapter: str | ModelAdapter, options: AdapterOptions | None,
+    registry: Registry,
+    adapter: str | ModelAdapter,
+    options: AdapterOptions | None,
     run: RunOptions,
-) -> ModelAdapter:  # fmt: skip
+) -> ModelAdapter:
     if not isinstance(adapter, str):
         return adapter
     built: ModelAdapter = registry.adapter(adapter, options or AdapterOptions(seed=run.seed))
@@ -141,9 +161,11 @@ def _adapter(
 
 
 def _announce(
-    state: RunState, refs: list[SceneRef], plan: list[tuple[SceneRef, list[str]]],
+    state: RunState,
+    refs: list[SceneRef],
+    plan: list[tuple[SceneRef, list[str]]],
     done: set[tuple[str, str]],
-) -> None:  # fmt: skip
+) -> None:
     ids = {ref.scene_id for ref in refs}
     for task in state.options.tasks:
         before = sum(1 for scene_id, t in done if t == task and scene_id in ids)
@@ -166,6 +188,7 @@ def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str]]) -
         cost=None if state.unpriced else state.spent,
         tokens=state.tokens,
         stopped=state.stop_reason,
+        error=None if state.auth_error is None else str(state.auth_error),
     )
 
 
@@ -204,3 +227,16 @@ def evaluate(
     An adapter stopped by an authentication failure does not stop the others.
     """
     return [run_eval(data, spec, out / slug(spec), options, **kwargs) for spec in adapters]
+
+
+__all__ = [
+    "Progress",
+    "ProgressEvent",
+    "RetryPolicy",
+    "RunOptions",
+    "RunResult",
+    "evaluate",
+    "run_eval",
+    "run_eval_async",
+    "slug",
+]

@@ -57,6 +57,11 @@ class RunState:
             self.stop_reason = "max-cost"
         return self.stop_reason is None
 
+    def not_sent(self, task: str) -> None:
+        """Record a pair left unsent (cost cap or auth stop); it stays resumable."""
+        self.count(task, "not_sent")
+        self.progress.update(ProgressEvent(self.spec, task, "done", status="not_sent"))
+
     def count(self, task: str, status: str) -> None:
         by_status = self.statuses.setdefault(task, {})
         by_status[status] = by_status.get(status, 0) + 1
@@ -141,7 +146,7 @@ async def answer(
     tally, attempt = _Tally(), _Attempt(timeout=state.options.timeout)
     while True:
         if not state.may_send():
-            state.count(task_name, "not_sent")
+            state.not_sent(task_name)
             return
         prompt = replace(base, escalation=attempt.escalation)
         request = ModelRequest(

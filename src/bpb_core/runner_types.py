@@ -116,6 +116,7 @@ class RunResult:
         cost: USD spent in this invocation (``None`` if any reply had no price).
         tokens: Input + output tokens in this invocation.
         stopped: Why the run stopped early (``max-cost``, ``auth``), or ``None``.
+        error: The authentication error message when ``stopped`` is ``auth``.
     """
 
     run_dir: Path
@@ -124,6 +125,7 @@ class RunResult:
     cost: float | None = 0.0
     tokens: int = 0
     stopped: str | None = None
+    error: str | None = None
 
     @property
     def api_errors(self) -> int:

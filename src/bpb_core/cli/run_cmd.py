@@ -1,0 +1,288 @@
+"""``bpb run``: ask models the benchmark's questions (a thin wrapper over bpb_core.runner).
+
+Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``); 1 the run finished with
+``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the same command to resume);
+2 bad input, or an authentication failure (the run stops at once: fix the key and re-run).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from bpb_core.adapters import AdapterOptions
+    from bpb_core.registry import Registry
+    from bpb_core.runner_types import RunOptions, RunResult
+
+BASELINES = ("baseline:stasis", "baseline:straight", "baseline:random", "baseline:oracle")
+DEFAULT_OUT = "bpb-runs"
+QUICK_PER_HORIZON = 10
+
+
+def _csv(value: str | None, option: str) -> list[str]:
+    if value is None:
+        return []
+    items = [v.strip() for v in value.split(",") if v.strip()]
+    if not items:
+        raise BadInput(f"{option}: empty list")
+    return items
+
+
+def _horizons(value: str | None) -> tuple[float, ...] | None:
+    if value is None:
+        return None
+    try:
+        return tuple(float(h) for h in _csv(value, "--horizons"))
+    except ValueError:
+        raise BadInput(f"--horizons: expected numbers like 1,2,3, got {value!r}") from None
+
+
+def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[str, bool]:
+    if per_task is not None:
+        chosen = set(_csv(per_task, "--cot")) if per_task.strip().lower() != "none" else set()
+        unknown = chosen - set(tasks)
+        if unknown:
+            raise BadInput(f"--cot: {sorted(unknown)} not among --tasks {tasks}")
+        return {t: t in chosen for t in tasks}
+    return {} if enable is None else {t: enable for t in tasks}
+
+
+def _adapter_options(
+    api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
+) -> AdapterOptions:
+    from bpb_core.adapters import AdapterOptions
+
+    price_table: dict[str, dict[str, float]] = {}
+    if prices is not None:
+        try:
+            price_table = json.loads(prices.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise BadInput(f"{prices}: --prices: not a JSON price table ({exc})") from None
+    alias_table = {}
+    for item in aliases:
+        name, sep, target = item.partition("=")
+        if not sep or not name or not target:
+            raise BadInput(f"--alias {item!r}: expected NAME=LITELLM_MODEL")
+        alias_table[name] = target
+    return AdapterOptions(api_base=api_base, seed=seed, prices=price_table, aliases=alias_table)
+
+
+def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> None:
+    from bpb_core.adapters import split_spec
+
+    for task in tasks:
+        registry.get("task", task)
+    for spec in adapters:
+        registry.get("adapter", split_spec(spec)[0])
+
+
+def _data(data: Path | None, out: Path, seed: int) -> Path:
+    if data is not None:
+        return data
+    quick = out / "data"
+    if (quick / "dataset.json").exists():
+        return quick
+    from bpb_core.cli.console import stderr
+    from bpb_core.dataset import generate_dataset
+
+    stderr().print(
+        f"no --data: generating a small dataset ({QUICK_PER_HORIZON} scenes per horizon, "
+        f"seed {seed}) in {quick}"
+    )
+    return generate_dataset(quick, QUICK_PER_HORIZON, [1, 2, 3, 4, 5], seed)
+
+
+@click.command("run")
+@click.option(
+    "--data",
+    type=click.Path(path_type=Path),
+    help="Dataset folder (default: a small generated one in OUT/data).",
+)
+@click.option("--tasks", default="q1,q2,q3", show_default=True, help="Comma-separated tasks.")
+@click.option(
+    "--adapter",
+    "adapters",
+    multiple=True,
+    help="NAME:MODEL, repeatable (default: the four baselines).",
+)
+@click.option("--horizons", help="Comma-separated horizons to include (default: all).")
+@click.option("--limit", type=click.IntRange(min=1), help="First N scenes per horizon.")
+@click.option("--concurrency", type=click.IntRange(min=1), default=8, show_default=True)
+@click.option("--rpm", type=click.FloatRange(min=0, min_open=True), help="Requests per minute cap.")
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=Path(DEFAULT_OUT),
+    show_default=True,
+    help="Writes OUT/<adapter slug>/ per adapter.",
+)
+@click.option(
+    "--enable-cot/--no-cot",
+    "enable_cot",
+    default=None,
+    help="Chain of thought for every task (default: on for q1, q2; off for q3).",
+)
+@click.option(
+    "--cot",
+    "cot_tasks",
+    help="Tasks with chain of thought, e.g. q1,q2 (or 'none'); overrides --enable-cot/--no-cot.",
+)
+@click.option("--max-tokens", type=click.IntRange(min=1), help="Output token cap per call.")
+@click.option(
+    "--timeout",
+    type=click.FloatRange(min=0, min_open=True),
+    default=120.0,
+    show_default=True,
+    help="Seconds per call (grows on retries).",
+)
+@click.option("--force-numeric", is_flag=True, help="Ask Q3 for numbers instead of null.")
+@click.option(
+    "--input-mode",
+    type=click.Choice(["image", "image+state", "state"]),
+    default="image",
+    show_default=True,
+)
+@click.option("--api-base", help="Base URL of an OpenAI-compatible or provider endpoint.")
+@click.option("--dry-run", is_flag=True, help="Count calls and estimate tokens; send nothing.")
+@click.option("--max-cost", type=click.FloatRange(min=0), help="Stop sending once USD spent.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option(
+    "--retries",
+    type=click.IntRange(min=0),
+    default=6,
+    show_default=True,
+    help="Retries after 429/5xx/timeouts/connection errors.",
+)
+@click.option(
+    "--reasks",
+    type=click.IntRange(min=0),
+    default=2,
+    show_default=True,
+    help="Escalating re-asks after a malformed answer.",
+)
+@click.option(
+    "--prices",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help='JSON {"model": {"input": usd_per_token, "output": usd_per_token}}.',
+)
+@click.option("--alias", "aliases", multiple=True, help="NAME=LITELLM_MODEL, repeatable.")
+def run(**kw: Any) -> None:
+    """Ask each adapter every task about every selected scene; resume by re-running."""
+    from bpb_core.cli.console import load_registry
+    from bpb_core.runner_types import RetryPolicy, RunOptions
+
+    registry = load_registry()
+    tasks = _csv(kw["tasks"], "--tasks")
+    adapters = list(kw["adapters"]) or list(BASELINES)
+    _check_names(registry, tasks, adapters)
+    options = RunOptions(
+        tasks=tuple(tasks),
+        horizons=_horizons(kw["horizons"]),
+        limit=kw["limit"],
+        concurrency=kw["concurrency"],
+        rpm=kw["rpm"],
+        cot=_cot(tasks, kw["enable_cot"], kw["cot_tasks"]),
+        max_tokens=kw["max_tokens"],
+        timeout=kw["timeout"],
+        force_numeric=kw["force_numeric"],
+        input_mode=kw["input_mode"],
+        max_cost=kw["max_cost"],
+        seed=kw["seed"],
+        retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
+    )
+    adapter_options = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
+    out: Path = kw["out"]
+    data = _data(kw["data"], out, kw["seed"])
+    if kw["dry_run"]:
+        _show_dry_run(data, out, adapters, options, registry)
+        return
+    results = _run_all(data, out, adapters, options, adapter_options, registry)
+    raise click.exceptions.Exit(_finish(results))
+
+
+def _run_all(
+    data: Path,
+    out: Path,
+    adapters: list[str],
+    options: RunOptions,
+    adapter_options: AdapterOptions,
+    registry: Registry,
+) -> list[RunResult]:
+    from bpb_core.cli.run_display import RichProgress, make_bar
+    from bpb_core.runner import run_eval, slug
+
+    results = []
+    with make_bar() as bar:
+        display = RichProgress(bar)
+        for spec in adapters:
+            results.append(
+                run_eval(
+                    data,
+                    spec,
+                    out / slug(spec),
+                    options,
+                    registry=registry,
+                    adapter_options=adapter_options,
+                    progress=display,
+                )
+            )
+    return results
+
+
+def _finish(results: list[RunResult]) -> int:
+    from bpb_core.cli.console import stderr
+    from bpb_core.cli.run_summary import show_summary
+
+    show_summary([r.run_dir for r in results])
+    code = 0
+    for result in results:
+        if result.stopped == "auth":
+            stderr().print(
+                f"[red]error:[/] {result.adapter}: authentication failed, run stopped "
+                f"(check the provider key in the environment): {result.error}"
+            )
+            code = 2
+        elif result.api_errors or result.not_sent:
+            why = "max cost reached; " if result.stopped == "max-cost" else ""
+            stderr().print(
+                f"[yellow]{result.adapter}:[/] {why}{result.api_errors} api errors, "
+                f"{result.not_sent} not sent; re-run the same command to resume"
+            )
+            code = max(code, 1)
+    return code
+
+
+def _show_dry_run(
+    data: Path, out: Path, adapters: list[str], options: RunOptions, registry: Registry
+) -> None:
+    from rich.table import Table
+
+    from bpb_core.cli.console import stdout
+    from bpb_core.runner import slug
+    from bpb_core.runner_plan import dry_run
+
+    table = Table(
+        "adapter",
+        "task",
+        "calls",
+        "already done",
+        "est. input tokens",
+        title="bpb run --dry-run (nothing sent)",
+    )
+    for spec in adapters:
+        plan = dry_run(data, out / slug(spec), options, registry)
+        for task in options.tasks:
+            table.add_row(
+                spec,
+                task,
+                str(plan.calls.get(task, 0)),
+                str(plan.done.get(task, 0)),
+                f"{plan.input_tokens.get(task, 0):,}",
+            )
+    stdout().print(table)

@@ -1,0 +1,195 @@
+"""A local OpenAI-compatible chat server with fault injection, for tests and ``bpb bench run``.
+
+It answers ``POST /v1/chat/completions`` the way a model would: it reads the scene id and task
+from the prompt (``scene h3_0007``; the JSON format names the task), answers correctly from the
+dataset's ``final.json`` when pointed at one, and otherwise injects the faults it was told to:
+
+- ``ok``: a correct answer (``cot``: reasoning with braces, then the answer);
+- ``429`` (with Retry-After), ``500``, ``401``, ``400``: HTTP errors;
+- ``hang``: no reply for ``hang`` seconds (past the client's timeout), then a correct one;
+- ``truncated``: the body stops before its Content-Length and the connection drops;
+- ``nonjson``: a 200 whose body is HTML; ``malformed``: prose with no JSON;
+- ``partial``: JSON missing items; ``length``: an answer cut off with finish_reason ``length``.
+
+Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/q1":
+["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
+``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``).
+Run it with ``python -m bpb_core.runner_fakeserver --port 0``; it prints ``PORT <n>`` when ready.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import re
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from aiohttp import web
+
+from bpb_core.runner_fakereplies import answer_text, fault_reply, model_reply
+
+_SCENE = re.compile(r"\(scene (h[0-9.]+_\d+)\)")
+
+
+def task_of(prompt: str) -> str:
+    """Which built-in task a prompt asks (by its JSON format)."""
+    if '"predictions"' in prompt:
+        return "q3"
+    if '"wall"' in prompt:
+        return "q2"
+    return "q1"
+
+
+def prompt_text(body: dict[str, Any]) -> tuple[str, int]:
+    """All text of the request's messages and how many images they carry."""
+    texts, images = [], 0
+    for message in body.get("messages", []):
+        content = message.get("content")
+        if isinstance(content, str):
+            texts.append(content)
+            continue
+        for part in content or []:
+            if part.get("type") == "text":
+                texts.append(part.get("text", ""))
+            elif part.get("type") == "image_url":
+                images += 1
+    return "\n".join(texts), images
+
+
+class FakeOpenAI:
+    """State and handlers of the fake server."""
+
+    def __init__(self, config: dict[str, Any]) -> None:
+        self.data = Path(config["data"]) if config.get("data") else None
+        self.latency = float(config.get("latency", 0.0))
+        self.configure(config)
+        self.counts: Counter[str] = Counter()
+        self.total = 0
+        self.images = 0
+        self.auth_seen = 0
+        self.phase = "default"
+        self.phases: dict[str, dict[str, Any]] = {}
+
+    def configure(self, config: dict[str, Any]) -> None:
+        """Replace the fault plan (keys ``faults``, ``schedule``, ``retry_after``, ``hang``)."""
+        self.faults: dict[str, list[str]] = config.get("faults", {})
+        self.schedule: list[str] = config.get("schedule", [])
+        self.retry_after = float(config.get("retry_after", 0.2))
+        self.hang = float(config.get("hang", 30.0))
+        self.latency = float(config.get("latency", self.latency))
+
+    def _fault(self, key: str, seen: int) -> str:
+        plan = self.faults.get(key) or self.faults.get("*/" + key.split("/")[-1]) or []
+        if seen < len(plan):
+            return plan[seen]
+        if self.schedule and key not in self.faults:
+            return self.schedule[(self.total - 1) % len(self.schedule)]
+        return "ok"
+
+    def _arrive(self) -> None:
+        now = time.time()
+        phase = self.phases.setdefault(self.phase, {"count": 0, "first": now, "last": now})
+        phase["count"] += 1
+        phase["last"] = now
+
+    async def chat(self, request: web.Request) -> web.StreamResponse:
+        """``POST /v1/chat/completions``."""
+        body = await request.json()
+        self._arrive()
+        if request.headers.get("Authorization"):
+            self.auth_seen += 1
+        text, images = prompt_text(body)
+        self.images += images
+        match = _SCENE.search(text)
+        key = f"{match.group(1) if match else 'unknown'}/{task_of(text)}"
+        seen = self.counts[key]
+        self.counts[key] += 1
+        self.total += 1
+        fault = self._fault(key, seen)
+        if self.latency:
+            await asyncio.sleep(self.latency)
+        if fault == "hang":
+            await asyncio.sleep(self.hang)
+        answer = answer_text(self.data, key, text)
+        special = await fault_reply(request, fault, self.retry_after)
+        if special is not None:
+            return special
+        return web.json_response(model_reply(body.get("model", "fake"), fault, answer))
+
+    async def stats(self, request: web.Request) -> web.Response:
+        """``GET /stats``: counts per key, totals and phases."""
+        return web.json_response(
+            {
+                "counts": dict(self.counts),
+                "total": self.total,
+                "images": self.images,
+                "auth_seen": self.auth_seen,
+                "phases": self.phases,
+            }
+        )
+
+    async def set_phase(self, request: web.Request) -> web.Response:
+        """``POST /phase`` with ``{"name": ...}``: label the following arrivals."""
+        self.phase = str((await request.json()).get("name", "default"))
+        return web.json_response({"phase": self.phase})
+
+    async def set_config(self, request: web.Request) -> web.Response:
+        """``POST /config``: replace the fault plan."""
+        self.configure(await request.json())
+        return web.json_response({"ok": True})
+
+    def app(self) -> web.Application:
+        """The aiohttp application."""
+        app = web.Application(client_max_size=64 * 1024 * 1024)
+        app.router.add_post("/v1/chat/completions", self.chat)
+        app.router.add_post("/chat/completions", self.chat)
+        app.router.add_get("/stats", self.stats)
+        app.router.add_post("/phase", self.set_phase)
+        app.router.add_post("/config", self.set_config)
+        return app
+
+
+async def serve(
+    config: dict[str, Any], port: int = 0, on_ready: Callable[[int], None] | None = None
+) -> None:
+    """Serve forever on 127.0.0.1; call ``on_ready(port)`` once listening."""
+    runner = web.AppRunner(FakeOpenAI(config).app(), access_log=None)
+    await runner.setup()
+    site = web.TCPSite(runner, "127.0.0.1", port, backlog=1024)
+    await site.start()
+    server: Any = site._server
+    sockets = server.sockets if server is not None else []
+    if on_ready is not None:
+        on_ready(sockets[0].getsockname()[1])
+    await asyncio.Event().wait()
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Command line: ``--port``, ``--data``, ``--latency``, ``--config FILE`` (fault plan)."""
+    parser = argparse.ArgumentParser(prog="python -m bpb_core.runner_fakeserver")
+    parser.add_argument("--port", type=int, default=0)
+    parser.add_argument("--data", default=None)
+    parser.add_argument("--latency", type=float, default=0.0)
+    parser.add_argument("--config", default=None)
+    args = parser.parse_args(argv)
+    config: dict[str, Any] = {}
+    if args.config:
+        config = json.loads(Path(args.config).read_text(encoding="utf-8"))
+    config.setdefault("data", args.data)
+    config.setdefault("latency", args.latency)
+
+    def ready(port: int) -> None:
+        sys.stdout.write(f"PORT {port}\n")
+        sys.stdout.flush()
+
+    asyncio.run(serve(config, args.port, ready))
+
+
+if __name__ == "__main__":
+    main()
