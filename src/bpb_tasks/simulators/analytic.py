@@ -94,7 +94,8 @@ class _Simulation:
             num(scene.table.height) - radius,
         )
         self.restitution = num(phys.wall_restitution)
-        self.pocket_r2 = num(scene.pockets.radius) ** 2
+        self.pocket_r = num(scene.pockets.radius)
+        self.pocket_r2 = self.pocket_r * self.pocket_r
         self.pockets = [(num(cx), num(cy)) for cx, cy in scene.pockets.centers]
         balls = sorted(scene.balls, key=lambda b: b.id)
         self.bodies = [Body(i, b.id, num(b.pos[0]), num(b.pos[1])) for i, b in enumerate(balls)]
@@ -136,8 +137,13 @@ class _Simulation:
 
     def predict_pocket(self, b: Body, reach: Number) -> None:
         best: tuple[Number, int] | None = None
+        x, y, r2 = b.x, b.y, self.pocket_r2
+        far = (reach + self.pocket_r) ** 2 if reach < self.motion.inf else reach
         for k, (cx, cy) in enumerate(self.pockets):
-            s = circle_entry(b.x - cx, b.y - cy, b.ux, b.uy, self.pocket_r2, self.sqrt)
+            dx, dy = x - cx, y - cy
+            if dx * dx + dy * dy > far:
+                continue  # out of reach: cannot enter this pocket before stopping
+            s = circle_entry(dx, dy, b.ux, b.uy, r2, self.sqrt)
             if s is not None and s <= reach and (best is None or s < best[0]):
                 best = (s, k)
         if best is not None:
@@ -148,6 +154,8 @@ class _Simulation:
         """Queue the next contact of ``p`` and ``q`` after ``t``, if any."""
         if p.index > q.index:
             p, q = q, p
+        if (p.speed == 0 or p.tstop <= t) and (q.speed == 0 or q.tstop <= t):
+            return  # neither moves
         motion = self.motion
         px, py, ps = motion.state(p, t)
         qx, qy, qs = motion.state(q, t)
@@ -206,11 +214,30 @@ class _Simulation:
         return bool(dist - reach <= self.two_r)
 
     def predict_all(self, b: Body, t: Number, skip: Body | None = None) -> None:
-        """Re-predict everything involving ``b`` (pairs with ``skip`` are left to the caller)."""
+        """Re-predict everything involving ``b``, which changed at ``t`` (pairs with ``skip`` are
+        left to the caller)."""
         self.predict_single(b)
+        self.predict_pairs(b, t, skip)
+
+    def predict_pairs(self, b: Body, t: Number, skip: Body | None = None) -> None:
+        """Queue ``b``'s contacts with every other ball; ``b`` is at its state at ``t``."""
+        moving = b.speed > 0
+        x, y, ux, uy, contact2 = b.x, b.y, b.ux, b.uy, self.contact2
         for other in self.bodies:
-            if other is not b and other is not skip and other.alive:
-                self.predict_pair(b, other, t)
+            if other is b or other is skip or not other.alive:
+                continue
+            if other.speed == 0:
+                if not moving:
+                    continue
+                # Fast rejection against a resting ball: moving away, or the line misses it.
+                dx, dy = x - other.x, y - other.y
+                along = ux * dx + uy * dy
+                if along >= 0:
+                    continue
+                c = dx * dx + dy * dy - contact2
+                if c > 0 and along * along <= c:
+                    continue
+            self.predict_pair(b, other, t)
 
     # --- processing ----------------------------------------------------------------------------
     def changed(self, b: Body, t: Number, vx: Number, vy: Number) -> None:
@@ -263,9 +290,7 @@ class _Simulation:
         self.motion.advance(b, t)
         self.changed(b, t, b.speed * 0, b.speed * 0)
         self.log(t, STOP, (b,))
-        for other in self.bodies:
-            if other is not b and other.alive:
-                self.predict_pair(b, other, t)
+        self.predict_pairs(b, t)
 
     def log(self, t: Number, kind: int, bodies: tuple[Body, ...], wall: str | None = None) -> None:
         self.events.append(
@@ -285,9 +310,9 @@ class _Simulation:
             b.seg.append((zero, b.x, b.y, vx, vy))
         for b in self.bodies:
             self.predict_single(b)
-        for i, b in enumerate(self.bodies):
-            for other in self.bodies[i + 1 :]:
-                self.predict_pair(b, other, zero)
+        for b in self.bodies:
+            if b.speed > 0:
+                self.predict_pairs(b, zero, None)
         self.loop(horizon)
         return self.outcome(horizon_in, horizon)
 
@@ -318,22 +343,27 @@ class _Simulation:
         positions: dict[int, tuple[float, float] | None] = {}
         segments: dict[int, tuple[Segment, ...]] = {}
         decel = float(self.motion.decel)
+        cast = float if self.numeric.num is not float else _same
         for b in self.bodies:
             if b.alive:
                 x, y, _ = self.motion.state(b, horizon)
-                positions[b.id] = (float(x), float(y))
+                positions[b.id] = (cast(x), cast(y))
             else:
                 positions[b.id] = None
             end = self.ended.get(b.index, horizon)
             starts = [*b.seg[1:], (end,)]
             segments[b.id] = tuple(
                 Segment(
-                    float(s[0]),
-                    float(n[0]),
-                    (float(s[1]), float(s[2])),
-                    (float(s[3]), float(s[4])),
+                    cast(s[0]),
+                    cast(n[0]),
+                    (cast(s[1]), cast(s[2])),
+                    (cast(s[3]), cast(s[4])),
                     decel,
                 )
                 for s, n in zip(b.seg, starts, strict=True)
             )
         return Outcome(horizon_in, positions, tuple(self.events), segments)
+
+
+def _same(value: float) -> float:
+    return value

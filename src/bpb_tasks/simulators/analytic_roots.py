@@ -77,7 +77,7 @@ def refine(
     return lo if not rising else hi
 
 
-def _critical_points(coeffs: Sequence[Number], t_max: Number, numeric: Numeric) -> list[Number]:
+def critical_points(coeffs: Sequence[Number], t_max: Number, numeric: Numeric) -> list[Number]:
     """Points in ``(0, t_max)`` where the quartic's derivative changes sign, sorted."""
     slope = derivative(coeffs)
     curve = derivative(slope)
@@ -106,7 +106,7 @@ def first_contact(coeffs: Sequence[Number], t_max: Number, numeric: Numeric) -> 
         return numeric.num(0.0)
     if t_max <= 0:
         return None
-    edges = [numeric.num(0.0), *_critical_points(coeffs, t_max, numeric), t_max]
+    edges = [numeric.num(0.0), *critical_points(coeffs, t_max, numeric), t_max]
     slope = derivative(coeffs)
     for lo, hi in itertools.pairwise(edges):
         g_lo, g_hi = horner(coeffs, lo), horner(coeffs, hi)

@@ -1,0 +1,40 @@
+"""``bpb simulate``: print each scene's ground truth (final.json content) as one JSON line."""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import click
+
+
+@click.command("simulate")
+@click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=str))
+@click.option("--horizon", type=float, default=None, help="Override each scene's own horizon (s).")
+@click.option("--simulator", "simulator", default="analytic", show_default=True, help="Simulator.")
+@click.option("--dt", type=float, default=None, help="Time step (s) of fixed-step simulators.")
+@click.option(
+    "--precision", default=None, help="analytic only: 'float64' (default) or digits for mpmath."
+)
+@click.option("--stability", is_flag=True, help="Add the stability annotation (slower).")
+def simulate(
+    paths: tuple[str, ...],
+    horizon: float | None,
+    simulator: str,
+    dt: float | None,
+    precision: str | None,
+    stability: bool,
+) -> None:
+    """Simulate init.json files, scene folders or dataset folders, in input order."""
+    from bpb_core.simulate import simulate_paths
+
+    options: dict[str, Any] = {}
+    if dt is not None:
+        options["dt"] = dt
+    if precision is not None:
+        options["precision"] = precision
+    out = sys.stdout
+    for final in simulate_paths(
+        paths, horizon=horizon, simulator=simulator, stability=stability, options=options
+    ):
+        out.write(final.model_dump_json() + "\n")
