@@ -67,10 +67,11 @@ _USAGE = ("input_tokens", "output_tokens", "reasoning_tokens", "cached_tokens")
 
 @dataclass(frozen=True)
 class Results:
-    """The two frames every table and report is derived from."""
+    """The two frames every table and report is derived from, and the run folders read."""
 
     units: pd.DataFrame
     calls: pd.DataFrame
+    runs: tuple[RunFolder, ...] = ()
 
 
 def load_results(
@@ -98,7 +99,7 @@ def load_results(
                 scorers[task] = _scorer_for(registry, task, run)
         _read_one(run, scorers, units, calls)
     unit_frame = _score(units.frame(), scorers)
-    return Results(unit_frame, calls.frame())
+    return Results(unit_frame, calls.frame(), tuple(runs))
 
 
 def load_frame(

@@ -1,0 +1,211 @@
+"""PNG charts of a report, drawn with matplotlib (imported lazily, Agg backend).
+
+Each function takes a derived frame and returns PNG bytes. Baseline runs are drawn in grey with
+hatching (bars) or dashed lines and their names carry a ``[baseline]`` mark, so models are read
+against the floors and the ceiling.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+TASK_TITLES = {
+    "q1": "Q1 ball collisions",
+    "q2": "Q2 wall contacts",
+    "q3": "Q3 final positions",
+    "total": "Total (0.3 Q1 + 0.3 Q2 + 0.4 Q3)",
+}
+_MODEL_COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
+_BASELINE_GREYS = ["#555555", "#888888", "#aaaaaa", "#333333"]
+
+
+def label(run: str, baseline: bool) -> str:
+    """Display name of a run; baselines are marked."""
+    return f"{run} [baseline]" if baseline else run
+
+
+def names_of(frame: pd.DataFrame) -> list[str]:
+    """Display names of the rows of a frame with columns run, baseline."""
+    pairs = zip(frame["run"], frame["baseline"], strict=True)
+    return [label(str(run), bool(baseline)) for run, baseline in pairs]
+
+
+def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, Any]:
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, dpi=110, layout="constrained")
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    return fig, axes
+
+
+def _png(fig: Figure) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    return buffer.getvalue()
+
+
+def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
+    """Colour, line style and hatch per run (``runs`` has columns run, baseline)."""
+    styles: dict[str, dict[str, Any]] = {}
+    models = baselines = 0
+    for row in runs.drop_duplicates("run").itertuples():
+        if row.baseline:
+            colour = _BASELINE_GREYS[baselines % len(_BASELINE_GREYS)]
+            styles[str(row.run)] = {"color": colour, "ls": "--", "hatch": "//", "marker": "s"}
+            baselines += 1
+        else:
+            colour = _MODEL_COLOURS[models % len(_MODEL_COLOURS)]
+            styles[str(row.run)] = {"color": colour, "ls": "-", "hatch": "", "marker": "o"}
+            models += 1
+    return styles
+
+
+def accuracy_vs_horizon(accuracy: pd.DataFrame, leaderboard_order: list[str]) -> bytes:
+    """One panel per task (and the total): accuracy against horizon, one line per run."""
+    frame = accuracy.copy()
+    totals = _total_by_horizon(frame)
+    panels = (
+        [*sorted(frame["task"].unique()), "total"]
+        if len(totals)
+        else sorted(frame["task"].unique())
+    )
+    ncols = min(len(panels), 2)
+    nrows = (len(panels) + ncols - 1) // ncols
+    fig, axes = _figure(nrows, ncols, (6.2 * ncols, 3.6 * nrows))
+    styles = run_styles(frame[["run", "baseline"]])
+    for ax, task in zip(axes.flat, panels, strict=False):
+        data = totals if task == "total" else frame[frame["task"] == task]
+        for run in leaderboard_order:
+            rows = data[data["run"] == run].sort_values("horizon")
+            if rows.empty:
+                continue
+            style = styles[run]
+            ax.plot(
+                rows["horizon"], 100 * rows["accuracy"], color=style["color"], ls=style["ls"],
+                marker=style["marker"], label=label(run, bool(rows["baseline"].iloc[0])),
+            )  # fmt: skip
+        ax.set_title(TASK_TITLES.get(task, task))
+        ax.set_xlabel("horizon (s)")
+        ax.set_ylabel("accuracy (%)")
+        ax.set_ylim(-3, 103)
+        ax.set_xticks(sorted(frame["horizon"].unique()))
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(panels) :]:
+        ax.set_visible(False)
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
+    return _png(fig)
+
+
+def _total_by_horizon(accuracy: pd.DataFrame) -> pd.DataFrame:
+    from bpb_core.results_tables import TOTAL_WEIGHTS
+
+    wide = accuracy.pivot_table(
+        index=["run", "baseline", "horizon"], columns="task", values="accuracy", observed=True
+    )
+    if not set(TOTAL_WEIGHTS) <= set(wide.columns):
+        return pd.DataFrame(columns=["run", "baseline", "horizon", "accuracy"])
+    wide["accuracy"] = sum(w * wide[t] for t, w in TOTAL_WEIGHTS.items())
+    return wide[["accuracy"]].reset_index()
+
+
+def leaderboards(board: pd.DataFrame, ci: pd.DataFrame | None = None) -> bytes:
+    """The paper's four leaderboards (Q1, Q2, Q3, total): horizontal bars, best on top."""
+    fig, axes = _figure(2, 2, (12.4, 1.6 + 0.42 * len(board) * 2))
+    styles = run_styles(board[["run", "baseline"]])
+    for ax, metric in zip(axes.flat, ("q1", "q2", "q3", "total"), strict=True):
+        ranked = board.dropna(subset=[metric]).sort_values(metric)
+        values = 100 * ranked[metric].to_numpy(dtype=float)
+        ys = range(len(ranked))
+        colours = [styles[str(r)]["color"] for r in ranked["run"]]
+        hatches = [styles[str(r)]["hatch"] for r in ranked["run"]]
+        bars = ax.barh(list(ys), values, color=colours, edgecolor="white")
+        for bar, hatch in zip(bars, hatches, strict=True):
+            bar.set_hatch(hatch)
+        if ci is not None:
+            _error_bars(ax, ranked, ci, metric)
+        for y, value in zip(ys, values, strict=True):
+            ax.text(min(value + 1, 88), y, f"{value:.1f}%", va="center", fontsize=8)
+        names = [
+            label(str(r), bool(b)) for r, b in zip(ranked["run"], ranked["baseline"], strict=True)
+        ]
+        ax.set_yticks(list(ys), names, fontsize=8)
+        ax.set_xlim(0, 100)
+        ax.set_xlabel("mean accuracy over horizons (%)")
+        ax.set_title(TASK_TITLES[metric] + " leaderboard", fontsize=10)
+        ax.grid(axis="x", alpha=0.3)
+    return _png(fig)
+
+
+def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> None:
+    rows = ci[ci["metric"] == metric].set_index("run")
+    lo = 100 * rows["lo"].reindex(ranked["run"]).to_numpy(dtype=float)
+    hi = 100 * rows["hi"].reindex(ranked["run"]).to_numpy(dtype=float)
+    mid = 100 * ranked[metric].to_numpy(dtype=float)
+    err = [mid - lo, hi - mid]
+    ax.errorbar(mid, range(len(ranked)), xerr=err, fmt="none", ecolor="black", capsize=3, lw=1)
+
+
+def stasis(table: pd.DataFrame) -> bytes:
+    """Stasis index per run: share of true contacts predicted absent and of moved balls
+    predicted unmoved (higher = more 'nothing happens' bias)."""
+    fig, axes = _figure(1, 1, (9.0, 1.8 + 0.5 * len(table)))
+    ax = axes[0, 0]
+    ranked = table.sort_values("contact_stasis", na_position="first")
+    ys = list(range(len(ranked)))
+    height = 0.38
+    contact = 100 * ranked["contact_stasis"].fillna(0).to_numpy(dtype=float)
+    motion = 100 * ranked["motion_stasis"].fillna(0).to_numpy(dtype=float)
+    ax.barh(
+        [y + height / 2 for y in ys],
+        contact,
+        height,
+        color="#d62728",
+        label="true contacts predicted absent",
+    )
+    ax.barh(
+        [y - height / 2 for y in ys],
+        motion,
+        height,
+        color="#1f77b4",
+        label="moved balls predicted unmoved",
+    )
+    names = [label(str(r), bool(b)) for r, b in zip(ranked["run"], ranked["baseline"], strict=True)]
+    ax.set_yticks(ys, names, fontsize=8)
+    ax.set_xlim(0, 100)
+    ax.set_xlabel("share (%)")
+    ax.set_title("Stasis index (answered units only)")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(axis="x", alpha=0.3)
+    return _png(fig)
+
+
+def tolerance(curve: pd.DataFrame) -> bytes:
+    """Q3 accuracy against the tolerance (in ball radii), one line per run."""
+    fig, axes = _figure(1, 1, (8.0, 4.2))
+    ax = axes[0, 0]
+    styles = run_styles(curve[["run", "baseline"]])
+    for run, rows in curve.groupby("run", observed=True, sort=False):
+        style = styles[str(run)]
+        ax.plot(
+            rows["tolerance"], 100 * rows["accuracy"], color=style["color"], ls=style["ls"],
+            marker=style["marker"], ms=3, label=label(str(run), bool(rows["baseline"].iloc[0])),
+        )  # fmt: skip
+    ax.axvline(1.0, color="black", lw=0.8, ls=":")
+    ax.text(1.05, 2, "Q3 rule (1 R)", fontsize=8)
+    ax.set_xlabel("tolerance (ball radii)")
+    ax.set_ylabel("Q3 accuracy (%)")
+    ax.set_ylim(-3, 103)
+    ax.set_title("Q3 tolerance curve")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return _png(fig)
