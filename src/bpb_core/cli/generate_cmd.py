@@ -97,7 +97,7 @@ def show_summary(root: Path, manifest: DatasetManifest) -> None:
 @click.command("generate")
 @click.option("--out", "out", required=True, type=click.Path(path_type=Path), help="Folder.")
 @click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon.")
-@click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma-separated.")
+@click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma list.")
 @click.option("--seed", default=0, show_default=True, help="Dataset seed.")
 @click.option("--config", "config_path", type=click.Path(path_type=Path), help="JSON/TOML config.")
 @click.option("--stable-only", is_flag=True, help="Draw until N stable scenes per horizon.")

@@ -68,7 +68,7 @@ class CalibrationConfig(_Strict):
     """
 
     target: float = Field(0.5, gt=0, lt=1)
-    samples: int = Field(400, ge=20)
+    samples: int = Field(1000, ge=20)
     low_ratio: float = Field(0.2, ge=0, lt=1)
     seed: int = 20260101
     iterations: int = Field(14, ge=4, le=40)
@@ -76,11 +76,11 @@ class CalibrationConfig(_Strict):
 
 # Calibrated with the defaults below (see docs/dataset-card.md, "Calibration").
 DEFAULT_SPEED_RANGES: dict[str, SpeedRange] = {
-    "1": SpeedRange(low=0.5, high=2.5),
-    "2": SpeedRange(low=0.25, high=1.25),
-    "3": SpeedRange(low=0.17, high=0.85),
-    "4": SpeedRange(low=0.13, high=0.65),
-    "5": SpeedRange(low=0.1, high=0.5),
+    "1": SpeedRange(low=0.842, high=4.21),
+    "2": SpeedRange(low=0.405, high=2.025),
+    "3": SpeedRange(low=0.256, high=1.282),
+    "4": SpeedRange(low=0.202, high=1.008),
+    "5": SpeedRange(low=0.161, high=0.804),
 }
 
 

@@ -68,7 +68,8 @@ def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Imag
             pocketed.append(str(ball.id))
         else:
             paste_ball(img, spec, ball.id, pos)
-    note = f"pocketed: {', '.join(pocketed)}" if pocketed else "no ball pocketed"
+    noun = "ball" if len(pocketed) == 1 else "balls"
+    note = f"pocketed: {noun} {', '.join(pocketed)}" if pocketed else "no ball pocketed"
     title(img, spec, f"State at t = {outcome.horizon:g} s", note)
     return img
 

@@ -91,7 +91,12 @@ def _legend(img: Image.Image, spec: CanvasSpec) -> None:
     font = st.font(round(14 * s))
     y = spec.top / 2 - 14 * s
     x = float(img.width - spec.right)
-    items = (("wall contact", "wall"), ("ball contact", "ball"), ("faded: start", ""))
+    items = (
+        ("pocketed", "pocket"),
+        ("wall contact", "wall"),
+        ("ball contact", "ball"),
+        ("faded: start", ""),
+    )
     for text, kind in items:
         x -= draw.textlength(text, font=font)
         draw.text((x, y), text, fill=st.MUTED, font=font, anchor="lm")
@@ -104,5 +109,10 @@ def _legend(img: Image.Image, spec: CanvasSpec) -> None:
             c = x - r
             diamond = [(c, y - r), (c + r, y), (c, y + r), (c - r, y)]
             draw.polygon(diamond, fill=st.MARK_WALL, outline=st.HALO)
+            x -= 2 * r
+        elif kind == "pocket":
+            c = x - r
+            for dx in (-r, r):
+                draw.line(((c - dx, y - r), (c + dx, y + r)), fill=st.HALO, width=round(3 * s))
             x -= 2 * r
         x -= 24 * s
