@@ -1,0 +1,187 @@
+"""The ``pymunk`` simulator: fixed-step Chipmunk2D, to show what a general engine costs and errs.
+
+Same scene format and conventions as ``analytic`` where a fixed-step engine can follow them:
+
+* Balls are pymunk circles of mass 1 with infinite moment (no spin), elasticity 1 and no surface
+  friction; walls are static segments on the table edges with elasticity ``wall_restitution``.
+  Gravity is off; the collision slop is scaled to metres (``1e-4 R``) instead of pixels.
+* Sliding friction is applied exactly between steps: each moving ball's speed drops by
+  ``mu g dt`` along its velocity, to zero without reversal (a ``stop`` event).
+* Pockets are checked after every step: a ball whose centre is within the pocket radius is
+  removed and a ``pocket`` event recorded.
+* Contacts come from pymunk's ``begin`` collision callback; like ``analytic``, a ball-ball contact
+  counts only while the pair approaches and a wall contact only while the ball moves towards the
+  wall. Event times are the end of the step in which pymunk saw them, so they carry an error of
+  up to ``dt``; the last step is shortened to land exactly on the horizon.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from bpb_core.outcome import Event, Outcome, Segment
+from bpb_core.scene import Scene
+
+_WALL_NORMALS = {"TOP": (0.0, 1.0), "BOTTOM": (0.0, -1.0), "LEFT": (-1.0, 0.0), "RIGHT": (1.0, 0.0)}
+
+
+class PymunkSimulator:
+    """Fixed-step simulator, registered as ``pymunk``.
+
+    Args:
+        dt: Time step in seconds (default 1e-3).
+    """
+
+    name = "pymunk"
+
+    def __init__(self, dt: float = 1e-3) -> None:
+        if not dt > 0:
+            from bpb_core.errors import BadInput
+
+            raise BadInput(f"--dt: must be positive, got {dt}")
+        self.dt = dt
+
+    def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
+        """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
+        end = scene.horizon if horizon is None else horizon
+        return _PymunkRun(scene, self.dt).run(end)
+
+
+class _PymunkRun:
+    def __init__(self, scene: Scene, dt: float) -> None:
+        import pymunk
+
+        self.scene, self.dt, self.t = scene, dt, 0.0
+        phys = scene.physics
+        self.decel = phys.mu * phys.g
+        self.space = pymunk.Space()
+        self.space.collision_slop = 1e-4 * phys.ball_radius
+        self.bodies: dict[int, Any] = {}
+        self.owner: dict[Any, tuple[str, Any]] = {}
+        self.events: list[Event] = []
+        self.touched: set[int] = set()
+        self.active: set[int] = set()  # balls that may be moving
+        self.segments: dict[int, list[tuple[float, tuple[float, float], tuple[float, float]]]] = {}
+        self.ended: dict[int, float] = {}
+        self._add_balls(pymunk)
+        self._add_walls(pymunk)
+        self.space.on_collision(begin=self._begin)
+
+    def _add_balls(self, pymunk: Any) -> None:
+        radius = self.scene.physics.ball_radius
+        for ball in sorted(self.scene.balls, key=lambda b: b.id):
+            body = pymunk.Body(1.0, math.inf)
+            body.position = ball.pos
+            body.velocity = ball.vel
+            shape = pymunk.Circle(body, radius)
+            shape.elasticity, shape.friction = 1.0, 0.0
+            self.space.add(body, shape)
+            self.bodies[ball.id] = body
+            self.owner[shape] = ("ball", ball.id)
+            self.segments[ball.id] = [(0.0, ball.pos, ball.vel)]
+            self.active.add(ball.id)  # resting ones leave after the first step
+
+    def _add_walls(self, pymunk: Any) -> None:
+        w, h = self.scene.table.width, self.scene.table.height
+        corners = {
+            "TOP": ((0.0, h), (w, h)),
+            "BOTTOM": ((0.0, 0.0), (w, 0.0)),
+            "LEFT": ((0.0, 0.0), (0.0, h)),
+            "RIGHT": ((w, 0.0), (w, h)),
+        }
+        for name, (a, b) in corners.items():
+            shape = pymunk.Segment(self.space.static_body, a, b, 0.0)
+            shape.elasticity = self.scene.physics.wall_restitution
+            shape.friction = 0.0
+            self.space.add(shape)
+            self.owner[shape] = ("wall", name)
+
+    def _begin(self, arbiter: Any, space: Any, data: Any) -> None:
+        first, second = (self.owner[s] for s in arbiter.shapes)
+        self.active.update(o[1] for o in (first, second) if o[0] == "ball")
+        if first[0] == "wall":
+            first, second = second, first
+        if second[0] == "wall":
+            self._wall_contact(first[1], second[1])
+        else:
+            self._ball_contact(first[1], second[1])
+
+    def _wall_contact(self, ball: int, wall: str) -> None:
+        body = self.bodies[ball]
+        nx, ny = _WALL_NORMALS[wall]
+        if body.velocity.x * nx + body.velocity.y * ny > 0:
+            self._log("wall", (ball,), wall)
+
+    def _ball_contact(self, a: int, b: int) -> None:
+        a, b = min(a, b), max(a, b)
+        pa, pb = self.bodies[a], self.bodies[b]
+        rel = pa.velocity - pb.velocity
+        if rel.dot(pb.position - pa.position) > 0:
+            self._log("ball", (a, b), None)
+
+    def _log(self, kind: str, ids: tuple[int, ...], wall: str | None) -> None:
+        positions = tuple((self.bodies[i].position.x, self.bodies[i].position.y) for i in ids)
+        self.events.append(Event(self.t, kind, ids, wall, positions))
+        self.touched.update(ids)
+
+    def run(self, horizon: float) -> Outcome:
+        steps = max(math.floor(horizon / self.dt + 1e-9), 0)
+        last = horizon - steps * self.dt
+        sizes = [self.dt] * steps + ([last] if last > 1e-12 else [])
+        for size in sizes:
+            self.t += size
+            self.space.step(size)
+            self._friction(size)
+            self._pockets()
+            self._new_segments()
+        return self._outcome(horizon)
+
+    def _friction(self, size: float) -> None:
+        drop = self.decel * size
+        for ball in list(self.active):
+            body = self.bodies[ball]
+            vx, vy = body.velocity
+            speed = math.hypot(vx, vy)
+            if speed <= drop:
+                body.velocity = (0.0, 0.0)
+                self.active.discard(ball)
+                if speed > 0:
+                    self._log("stop", (ball,), None)
+            else:
+                scale = (speed - drop) / speed
+                body.velocity = (vx * scale, vy * scale)
+
+    def _pockets(self) -> None:
+        pockets = self.scene.pockets
+        r2 = pockets.radius**2
+        for ball in list(self.active):
+            body = self.bodies[ball]
+            x, y = body.position
+            if any((x - cx) ** 2 + (y - cy) ** 2 <= r2 for cx, cy in pockets.centers):
+                self._log("pocket", (ball,), None)
+                self.ended[ball] = self.t
+                self.active.discard(ball)
+                self.space.remove(body, *body.shapes)
+
+    def _new_segments(self) -> None:
+        for ball in self.touched:
+            if ball not in self.ended:
+                body = self.bodies[ball]
+                pos, vel = body.position, body.velocity
+                self.segments[ball].append((self.t, (pos.x, pos.y), (vel.x, vel.y)))
+        self.touched.clear()
+
+    def _outcome(self, horizon: float) -> Outcome:
+        positions: dict[int, tuple[float, float] | None] = {}
+        segments: dict[int, tuple[Segment, ...]] = {}
+        for ball, body in self.bodies.items():
+            gone = ball in self.ended
+            positions[ball] = None if gone else (body.position.x, body.position.y)
+            starts = self.segments[ball]
+            ends = [s[0] for s in starts[1:]] + [self.ended.get(ball, horizon)]
+            segments[ball] = tuple(
+                Segment(t0, t1, pos, vel, self.decel)
+                for (t0, pos, vel), t1 in zip(starts, ends, strict=True)
+            )
+        return Outcome(horizon, positions, tuple(self.events), segments)
