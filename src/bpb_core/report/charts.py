@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pandas as pd
 
 if TYPE_CHECKING:
@@ -131,28 +132,28 @@ def leaderboards(board: pd.DataFrame, ci: pd.DataFrame | None = None) -> bytes:
         bars = ax.barh(list(ys), values, color=colours, edgecolor="white")
         for bar, hatch in zip(bars, hatches, strict=True):
             bar.set_hatch(hatch)
+        ends = values.copy()
         if ci is not None:
-            _error_bars(ax, ranked, ci, metric)
-        for y, value in zip(ys, values, strict=True):
-            ax.text(min(value + 1, 88), y, f"{value:.1f}%", va="center", fontsize=8)
-        names = [
-            label(str(r), bool(b)) for r, b in zip(ranked["run"], ranked["baseline"], strict=True)
-        ]
-        ax.set_yticks(list(ys), names, fontsize=8)
-        ax.set_xlim(0, 100)
+            ends = np.fmax(ends, _error_bars(ax, ranked, ci, metric))
+        for y, value, end in zip(ys, values, ends, strict=True):
+            ax.text(end + 1.5, y, f"{value:.1f}%", va="center", fontsize=8)
+        ax.set_yticks(list(ys), names_of(ranked), fontsize=8)
+        ax.set_xlim(0, 114)
+        ax.set_xticks([0, 20, 40, 60, 80, 100])
         ax.set_xlabel("mean accuracy over horizons (%)")
         ax.set_title(TASK_TITLES[metric] + " leaderboard", fontsize=10)
         ax.grid(axis="x", alpha=0.3)
     return _png(fig)
 
 
-def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> None:
+def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> Any:
     rows = ci[ci["metric"] == metric].set_index("run")
     lo = 100 * rows["lo"].reindex(ranked["run"]).to_numpy(dtype=float)
     hi = 100 * rows["hi"].reindex(ranked["run"]).to_numpy(dtype=float)
     mid = 100 * ranked[metric].to_numpy(dtype=float)
     err = [mid - lo, hi - mid]
     ax.errorbar(mid, range(len(ranked)), xerr=err, fmt="none", ecolor="black", capsize=3, lw=1)
+    return np.nan_to_num(hi, nan=0.0)
 
 
 def stasis(table: pd.DataFrame) -> bytes:

@@ -56,10 +56,19 @@ class Case:
 
 
 def worst_cases(units: pd.DataFrame, count: int = 8) -> pd.DataFrame:
-    """The ``count`` answered (run, scene) pairs with the lowest total score.
+    """Up to ``count`` answered (run, scene) pairs with the lowest total score.
 
-    Models come before baselines; only scenes whose calls were all answered are candidates.
+    Runs take turns (models before baselines, each run's worst scene first), so one bad run
+    does not fill the gallery; only scenes answered in every task and not fully right qualify.
     """
+    wide = _scene_totals(units)
+    wide = wide[wide["total"] < 1.0].sort_values(["total", "scene_id"], kind="stable")
+    wide["turn"] = wide.groupby("run", observed=True).cumcount()
+    ranked = wide.sort_values(["turn", "baseline", "total", "run"], kind="stable")
+    return ranked.head(count).drop(columns="turn").reset_index(drop=True)
+
+
+def _scene_totals(units: pd.DataFrame) -> pd.DataFrame:
     scenes = scene_scores(units)
     wide = scenes.pivot_table(
         index=["run", "baseline", "horizon", "index", "scene_id"],
@@ -67,17 +76,16 @@ def worst_cases(units: pd.DataFrame, count: int = 8) -> pd.DataFrame:
         values="score",
         observed=True,
     )
+    wide.columns.name = None
     answered = scenes.assign(ok=scenes["status"].isin(["ok", "parse_error"]))
     all_ok = answered.groupby(["run", "horizon", "index"], observed=True)["ok"].all()
     wide = wide.reset_index()
     keys = pd.MultiIndex.from_frame(wide[["run", "horizon", "index"]])
-    wide = wide[all_ok.reindex(keys).fillna(False).to_numpy(dtype=bool)]
+    wide = wide[all_ok.reindex(keys).fillna(False).to_numpy(dtype=bool)].copy()
     tasks = [t for t in TOTAL_WEIGHTS if t in wide.columns]
-    wide["total"] = sum(TOTAL_WEIGHTS[t] * wide[t] for t in tasks) / sum(
-        TOTAL_WEIGHTS[t] for t in tasks
-    )
-    wide = wide.sort_values(["baseline", "total", "run", "scene_id"], kind="stable")
-    return wide.head(count).reset_index(drop=True)
+    weights = sum(TOTAL_WEIGHTS[t] for t in tasks)
+    wide["total"] = sum(TOTAL_WEIGHTS[t] * wide[t] for t in tasks) / weights
+    return wide
 
 
 def build_cases(units: pd.DataFrame, runs: dict[str, Path], count: int = 8) -> list[Case]:
@@ -185,9 +193,9 @@ def overlay(dataset: Path, key: SceneKey, q3: pd.DataFrame) -> bytes:
     font = _font(max(12, round(r * 0.9)))
     for row in q3.to_dict(orient="records"):
         _mark(draw, canvas, {str(k): v for k, v in row.items()}, r, width, font)
-    _legend(draw, font)
+    framed = _with_legend(image, _font(max(14, round(image.width / 70))))
     buffer = io.BytesIO()
-    image.save(buffer, format="PNG", optimize=False)
+    framed.save(buffer, format="PNG", optimize=False)
     return buffer.getvalue()
 
 
@@ -219,8 +227,24 @@ def _mark(
         draw.text((x + r, y + r * 0.2), unit, fill=PRED_COLOUR, font=font)
 
 
-def _legend(draw: ImageDraw.ImageDraw, font: ImageFont.FreeTypeFont | ImageFont.ImageFont) -> None:
-    x, y = 10, 8
-    draw.rectangle((x - 4, y - 4, x + 430, y + 26), fill=(0, 0, 0))
-    draw.text((x, y), "true final position", fill=TRUTH_COLOUR, font=font)
-    draw.text((x + 220, y), "prediction", fill=PRED_COLOUR, font=font)
+def _with_legend(
+    image: Image.Image, font: ImageFont.FreeTypeFont | ImageFont.ImageFont
+) -> Image.Image:
+    """``image`` below a band that explains the marks (so nothing of the scene is covered)."""
+    band = round(font.size * 2.2) if isinstance(font, ImageFont.FreeTypeFont) else 30
+    framed = Image.new("RGB", (image.width, image.height + band), (24, 28, 36))
+    framed.paste(image, (0, band))
+    draw = ImageDraw.Draw(framed)
+    y = band // 2
+    x = 16
+    r = band // 4
+    draw.ellipse((x, y - r, x + 2 * r, y + r), outline=TRUTH_COLOUR, width=3)
+    draw.text((x + 3 * r, y), "true final position", fill=TRUTH_COLOUR, font=font, anchor="lm")
+    x += framed.width // 3
+    draw.ellipse((x, y - r, x + 2 * r, y + r), outline=PRED_COLOUR, width=3)
+    draw.line((x + r * 0.4, y - r * 0.6, x + r * 1.6, y + r * 0.6), fill=PRED_COLOUR, width=3)
+    draw.text((x + 3 * r, y), "predicted position", fill=PRED_COLOUR, font=font, anchor="lm")
+    x += framed.width // 3
+    draw.line((x, y, x + 2 * r, y), fill=LINK_COLOUR, width=2)
+    draw.text((x + 3 * r, y), "error", fill=LINK_COLOUR, font=font, anchor="lm")
+    return framed
