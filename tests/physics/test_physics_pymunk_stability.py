@@ -1,0 +1,80 @@
+"""The pymunk simulator against analytic, and the stability annotation's margins and flips."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from phys_helpers import R, scene
+
+from bpb_core.errors import BadInput
+from bpb_core.outcome import final_state
+from bpb_core.registry import make_registry
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+from bpb_tasks.simulators.bench_scenes import random_scenes
+from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
+from bpb_tasks.simulators.stability import annotate
+
+EXACT = AnalyticSimulator()
+
+
+def test_registry_builds_both_simulators_with_options() -> None:
+    registry = make_registry()
+    assert registry.simulator("analytic").name == "analytic"
+    assert registry.simulator("pymunk", dt=1e-2).dt == 1e-2
+    with pytest.raises(BadInput, match="--dt"):
+        PymunkSimulator(dt=0)
+
+
+def test_pymunk_head_on_close_to_exact() -> None:
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0)], mu=0.05, horizon=3)
+    fast, exact = PymunkSimulator(dt=1e-3).run(s), EXACT.run(s)
+    assert fast.cue_contacts() == exact.cue_contacts() == {1}
+    for ball in (0, 1):
+        p, q = fast.positions[ball], exact.positions[ball]
+        assert p is not None and q is not None and math.dist(p, q) < 5e-3
+    assert [e.kind for e in fast.events if e.kind != "stop"] == ["ball"]
+    assert fast.events[0].t == pytest.approx(exact.events[0].t, abs=2e-3)
+
+
+def test_pymunk_pocket_wall_and_resting_contact() -> None:
+    pocketed = PymunkSimulator().run(scene([(0.5, 0.06 * 0.5, 1.0, 0.0)], horizon=1))
+    assert pocketed.positions[0] is None and pocketed.events[-1].kind == "pocket"
+    resting = PymunkSimulator().run(scene([(0.5, 0.5, 0.0, 0.0), (R, 0.3, 0.0, 0.0)], horizon=0.5))
+    assert resting.events == ()
+    bounce = PymunkSimulator().run(scene([(1.5, 0.5, 1.0, 0.0)], horizon=1))
+    assert bounce.cue_walls() == {"RIGHT"}
+
+
+def test_pymunk_labels_mostly_agree_with_exact_on_random_scenes() -> None:
+    scenes = list(random_scenes(20, seed=2))
+    agree = sum(
+        final_state(s, PymunkSimulator(dt=1e-3).run(s)).q1 == final_state(s, EXACT.run(s)).q1
+        for s in scenes
+    )
+    assert agree >= 17
+
+
+def test_isolated_roll_is_stable_with_margins() -> None:
+    s = scene([(0.5, 0.5, 0.3, 0.0), (0.5, 0.2, 0.0, 0.0)], horizon=1)
+    st = annotate(s)
+    assert st.stable and st.flips == []
+    assert st.near_miss_gap == pytest.approx(0.3 - 2 * R, abs=1e-9)
+    assert st.min_graze_cos is None and st.min_event_gap is None
+
+
+def test_grazing_contact_flips_and_has_tiny_cosine() -> None:
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5 + 2 * R * (1 - 1e-9), 0.0, 0.0)], horizon=2)
+    st = annotate(s, EXACT.run(s))
+    assert not st.stable and "q1:1" in st.flips
+    assert st.min_graze_cos is not None and st.min_graze_cos < 1e-3
+
+
+def test_head_on_and_event_at_horizon_margins() -> None:
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0)], mu=0.05, horizon=10)
+    st = annotate(s)
+    assert st.min_graze_cos == pytest.approx(1.0)
+    wall = scene([(1.75, 0.5, 1.5, 0.0)], radius=0.25, mu=0.0625, g=8.0, width=4.0, pockets=[])
+    assert annotate(wall, delta=1e-4).horizon_gap is not None
+    at_t = annotate(wall.model_copy(update={"horizon": 2.0}))
+    assert at_t.horizon_gap == 0.0 and not at_t.stable and "q2:RIGHT" in at_t.flips

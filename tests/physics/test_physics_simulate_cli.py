@@ -1,0 +1,122 @@
+"""``bpb simulate`` through the real entry point: output order, formats, overrides, bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bpb_core.outcome import final_state
+from bpb_core.scene import FinalState, Scene
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+from bpb_tasks.simulators.bench_scenes import random_scene
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+def bpb(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+
+
+def write(path: Path, scene: Scene) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(scene.model_dump_json(indent=2))
+    return path
+
+
+@pytest.fixture
+def scenes(tmp_path: Path) -> list[tuple[Path, Scene]]:
+    out = []
+    for i in range(3):
+        s = random_scene(11, i)
+        out.append((write(tmp_path / f"s{i}.json", s), s))
+    return out
+
+
+def lines(result: subprocess.CompletedProcess[str]) -> list[FinalState]:
+    assert result.returncode == 0, result.stderr
+    return [FinalState.model_validate_json(line) for line in result.stdout.splitlines()]
+
+
+def test_one_line_per_scene_in_input_order(scenes: list[tuple[Path, Scene]]) -> None:
+    order = [scenes[2], scenes[0], scenes[1]]
+    finals = lines(bpb("simulate", *(str(p) for p, _ in order)))
+    assert [f.scene_id for f in finals] == [s.scene_id for _, s in order]
+    sim = AnalyticSimulator()
+    for final, (_, s) in zip(finals, order, strict=True):
+        assert final == final_state(s, sim.run(s))
+
+
+def test_dataset_folder_and_final_json(tmp_path: Path) -> None:
+    root = tmp_path / "data"
+    for horizon, index in ((2, 1), (1, 0), (2, 0)):
+        s = random_scene(5, index).model_copy(update={"scene_id": f"h{horizon}_{index:04d}"})
+        write(root / f"h{horizon}" / f"scene_{index:04d}" / "init.json", s)
+    (root / "h2" / "scene_0000" / "final.json").write_text("{}")
+    finals = lines(bpb("simulate", str(root)))
+    assert [f.scene_id for f in finals] == ["h1_0000", "h2_0000", "h2_0001"]
+    again = lines(bpb("simulate", str(root / "h2" / "scene_0000" / "final.json")))
+    assert [f.scene_id for f in again] == ["h2_0000"]
+
+
+def test_horizon_override_and_stability(scenes: list[tuple[Path, Scene]]) -> None:
+    path, scene = scenes[0]
+    (final,) = lines(bpb("simulate", str(path), "--horizon", "0.25", "--stability"))
+    assert final.horizon == 0.25
+    assert final == final_state(scene, AnalyticSimulator().run(scene, 0.25)).model_copy(
+        update={"stability": final.stability}
+    )
+    assert final.stability is not None and final.stability.delta == 1e-4
+
+
+def test_pymunk_with_dt(scenes: list[tuple[Path, Scene]]) -> None:
+    path, scene = scenes[1]
+    (final,) = lines(bpb("simulate", str(path), "--simulator", "pymunk", "--dt", "0.01"))
+    assert final.simulator == "pymunk" and final.scene_id == scene.scene_id
+
+
+def one_line_error(result: subprocess.CompletedProcess[str]) -> str:
+    assert result.returncode == 2, result.stderr
+    assert result.stdout == ""
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    return result.stderr.strip()
+
+
+def test_bad_scene_names_file_and_field(tmp_path: Path) -> None:
+    data = json.loads(random_scene(1, 0).model_dump_json())
+    data["balls"][2]["pos"] = [2.5, 0.4]
+    bad = tmp_path / "scenes" / "x.json"
+    bad.parent.mkdir()
+    bad.write_text(json.dumps(data))
+    message = one_line_error(bpb("simulate", str(bad)))
+    assert f"{bad}: balls[2].pos:" in message and "off the table" in message
+
+
+@pytest.mark.parametrize(
+    ("content", "expected"),
+    [
+        ("{not json", "Invalid JSON"),
+        (
+            '{"scene_id": "a", "horizon": 1, "balls": [{"id": 0, "pos": ["a", 0.5]}]}',
+            "balls[0].pos[0]",
+        ),
+        ('{"scene_id": "a", "horizon": 0, "balls": [{"id": 0, "pos": [0.5, 0.5]}]}', "horizon:"),
+    ],
+)
+def test_malformed_files_are_one_line_errors(tmp_path: Path, content: str, expected: str) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(content)
+    message = one_line_error(bpb("simulate", str(bad)))
+    assert str(bad) in message and expected in message
+
+
+def test_missing_path_and_unknown_simulator(
+    scenes: list[tuple[Path, Scene]], tmp_path: Path
+) -> None:
+    assert "no such file" in one_line_error(bpb("simulate", str(tmp_path / "nope.json")))
+    message = one_line_error(bpb("simulate", str(scenes[0][0]), "--simulator", "nosuch"))
+    assert "analytic" in message and "pymunk" in message
+    assert "--dt" in one_line_error(bpb("simulate", str(scenes[0][0]), "--dt", "0.01"))
