@@ -179,12 +179,17 @@ def paired_comparison(
 def all_pairs(
     units: pd.DataFrame, runs: Sequence[str] | None = None, **kwargs: object
 ) -> pd.DataFrame:
-    """:func:`paired_comparison` of every pair of ``runs`` (default: the non-baseline runs)."""
+    """:func:`paired_comparison` of every pair of ``runs``.
+
+    By default: every pair of model (non-baseline) runs, then every model against every
+    baseline; nothing when there is no model run.
+    """
     if runs is None:
-        runs = sorted(units.loc[~units["baseline"], "run"].unique().tolist())
-    frames = [
-        paired_comparison(units, a, b, **kwargs)  # type: ignore[arg-type]
-        for i, a in enumerate(runs)
-        for b in runs[i + 1 :]
-    ]
+        models = sorted(units.loc[~units["baseline"], "run"].unique().tolist())
+        baselines = sorted(units.loc[units["baseline"], "run"].unique().tolist())
+        pairs = [(a, b) for i, a in enumerate(models) for b in models[i + 1 :]]
+        pairs += [(a, b) for a in models for b in baselines]
+    else:
+        pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1 :]]
+    frames = [paired_comparison(units, a, b, **kwargs) for a, b in pairs]  # type: ignore[arg-type]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()

@@ -186,19 +186,38 @@ def _headline(tables: dict[str, pd.DataFrame]) -> str:
         "an answer; <i>completeness</i> is the share answered. Baselines are floors "
         "(stasis, straight, random) and the ceiling (oracle).</p>"
     )
-    return note + html.table(board)
+    return note + html.table(board, percent=SCORES)
+
+
+SCORES = ("q1", "q2", "q3", "total", "total_answered", "completeness")
 
 
 def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
     pairs = tables["pairs"]
+    horizons = [c for c in tables["by_horizon"].columns if c.startswith("h") or c == "mean"]
+    stasis = ("contact_stasis", "q1_stasis", "q2_stasis", "motion_stasis")
     return [
-        ("Accuracy by horizon (strict)", html.table(tables["by_horizon"])),
-        ("Accuracy by horizon (answered only)", html.table(tables["by_horizon_answered"])),
-        ("Leaderboard on stable scenes", html.table(tables["leaderboard_stable"])),
-        ("Bootstrap 95% intervals", html.table(tables["bootstrap"])),
-        ("Paired comparisons", html.table(pairs) if not pairs.empty else "<p>one model</p>"),
-        ("Stasis index", html.table(tables["stasis"])),
-        ("Q1 and per-wall confusion", html.table(tables["confusion"])),
+        ("Accuracy by horizon (strict)", html.table(tables["by_horizon"], percent=horizons)),
+        (
+            "Accuracy by horizon (answered only)",
+            html.table(tables["by_horizon_answered"], percent=horizons),
+        ),
+        ("Leaderboard on stable scenes", html.table(tables["leaderboard_stable"], percent=SCORES)),
+        (
+            "Bootstrap 95% intervals",
+            html.table(tables["bootstrap"], percent=("estimate", "lo", "hi")),
+        ),
+        (
+            "Paired comparisons (a minus b, shared scenes, exact sign test)",
+            html.table(pairs, percent=("a_score", "b_score", "diff", "lo", "hi"))
+            if not pairs.empty
+            else "<p class='muted'>no model runs to compare</p>",
+        ),
+        ("Stasis index", html.table(tables["stasis"], percent=stasis)),
+        (
+            "Q1 and per-wall confusion",
+            html.table(tables["confusion"], percent=("precision", "recall", "f1")),
+        ),
         ("Q3 distance error (m)", html.table(tables["distance"])),
         ("Tokens, cost, latency, retries", html.table(tables["usage"])),
     ]

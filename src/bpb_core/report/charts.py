@@ -23,7 +23,10 @@ TASK_TITLES = {
     "total": "Total (0.3 Q1 + 0.3 Q2 + 0.4 Q3)",
 }
 _MODEL_COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
-_BASELINE_GREYS = ["#555555", "#888888", "#aaaaaa", "#333333"]
+_BASELINE_GREYS = ["#444444", "#9a9a9a", "#6e6e6e", "#bdbdbd"]
+_BASELINE_LINES = ["--", ":", "-.", (0, (6, 2, 1, 2))]
+_BASELINE_HATCHES = ["//", "..", "xx", "\\\\"]
+_BASELINE_MARKERS = ["s", "^", "D", "v"]
 
 
 def label(run: str, baseline: bool) -> str:
@@ -60,8 +63,13 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     models = baselines = 0
     for row in runs.drop_duplicates("run").itertuples():
         if row.baseline:
-            colour = _BASELINE_GREYS[baselines % len(_BASELINE_GREYS)]
-            styles[str(row.run)] = {"color": colour, "ls": "--", "hatch": "//", "marker": "s"}
+            k = baselines % len(_BASELINE_GREYS)
+            styles[str(row.run)] = {
+                "color": _BASELINE_GREYS[k],
+                "ls": _BASELINE_LINES[k],
+                "hatch": _BASELINE_HATCHES[k],
+                "marker": _BASELINE_MARKERS[k],
+            }
             baselines += 1
         else:
             colour = _MODEL_COLOURS[models % len(_MODEL_COLOURS)]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import base64
 import html
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from datetime import UTC, datetime
 
 import pandas as pd
@@ -36,7 +36,7 @@ img.chart{max-width:100%;background:#fff;border:1px solid #dde1e7;margin:8px 0}
 .gallery{display:grid;grid-template-columns:repeat(auto-fill,minmax(560px,1fr));gap:16px}
 .case{background:#fff;border:1px solid #dde1e7;border-radius:6px;padding:10px}
 .case img{width:100%;display:block}.case ul{margin:4px 0;padding-left:18px;font-size:13px}
-.key{font-size:13px}.key span{font-weight:600}
+.scroll{overflow-x:auto;max-width:100%}.key{font-size:13px}.key span{font-weight:600}
 """
 SCRIPT = """
 window.addEventListener('load', function () {
@@ -46,7 +46,6 @@ window.addEventListener('load', function () {
   document.body.setAttribute('data-images-ok', ok ? 'yes' : 'no');
 });
 """
-PERCENT_HINTS = ("q1", "q2", "q3", "total", "accuracy", "completeness", "stasis", "h")
 
 
 def data_uri(png: bytes) -> str:
@@ -65,17 +64,14 @@ def _cell(column: str, value: object, percent: bool) -> str:
     return f"<td>{html.escape(str(value))}</td>"
 
 
-def _is_percent(column: str) -> bool:
-    name = column.lower()
-    if name in ("lo", "hi", "estimate", "diff", "precision", "recall", "f1"):
-        return True
-    return any(name == hint or name.startswith(hint) for hint in PERCENT_HINTS) and name not in (
-        "horizon",
-    )
-
-
-def table(frame: pd.DataFrame, *, drop: Sequence[str] = ("adapter", "model")) -> str:
-    """An HTML table of ``frame``; shares as percentages; baseline rows greyed and marked."""
+def table(
+    frame: pd.DataFrame,
+    *,
+    percent: Collection[str] = (),
+    drop: Sequence[str] = ("adapter", "model"),
+) -> str:
+    """An HTML table of ``frame``: ``percent`` columns as percentages, baseline rows greyed and
+    marked."""
     if frame.empty:
         return '<p class="muted">nothing to show</p>'
     columns = [c for c in frame.columns if c not in drop and c != "baseline"]
@@ -85,13 +81,15 @@ def table(frame: pd.DataFrame, *, drop: Sequence[str] = ("adapter", "model")) ->
         baseline = bool(record.get("baseline", False))
         cells = []
         for column in columns:
-            cell = _cell(str(column), record[column], _is_percent(str(column)))
+            cell = _cell(str(column), record[column], column in percent)
             if column == "run" and baseline:
                 cell = cell.replace("</td>", '<span class="badge">baseline</span></td>')
             cells.append(cell)
         css = ' class="baseline"' if baseline else ""
         rows.append(f"<tr{css}>{''.join(cells)}</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+    body = "".join(rows)
+    inner = f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    return f"<div class='scroll'>{inner}</div>"
 
 
 def _runs_section(runs: Sequence[RunFolder]) -> str:
