@@ -147,8 +147,9 @@ def config_from_mapping(data: Mapping[str, Any], source: str = "config") -> Data
         return DatasetConfig.model_validate(dict(data))
     except ValidationError as exc:
         first = exc.errors()[0]
+        message = str(first["msg"]).removeprefix("Value error, ")
         field = ".".join(str(part) for part in first["loc"]) or "(top level)"
-        raise BadInput(f"{source}: {field}: {first['msg']}") from None
+        raise BadInput(f"{source}: {field}: {message}") from None
 
 
 def load_config(path: str | Path | None) -> DatasetConfig:

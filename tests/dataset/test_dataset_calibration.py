@@ -1,0 +1,26 @@
+"""Cue-speed calibration: the shipped ranges give about 50% cue-ball collisions."""
+
+from __future__ import annotations
+
+import pytest
+
+from bpb_tasks.billiards.calibrate import calibrate_horizon, calibration_draws, collision_rate
+from bpb_tasks.billiards.config import CalibrationConfig, DatasetConfig
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+
+
+@pytest.mark.parametrize("horizon", [1.0, 2.0, 3.0, 4.0, 5.0])
+def test_shipped_ranges_hit_the_target_on_the_calibration_sample(horizon: float) -> None:
+    cfg = DatasetConfig()
+    draws = calibration_draws(horizon, cfg)
+    rate = collision_rate(draws, horizon, cfg.speed_range(horizon), cfg, AnalyticSimulator())
+    assert abs(rate - cfg.calibration.target) <= 0.02
+
+
+def test_calibration_is_deterministic_and_reaches_its_target() -> None:
+    cfg = DatasetConfig(calibration=CalibrationConfig(samples=120, iterations=8, target=0.3))
+    first = calibrate_horizon(3.0, cfg, AnalyticSimulator())
+    again = calibrate_horizon(3.0, cfg, AnalyticSimulator())
+    assert first == again
+    assert abs(first.rate - 0.3) <= 0.05
+    assert first.range.low == pytest.approx(first.range.high * cfg.calibration.low_ratio, abs=1e-3)

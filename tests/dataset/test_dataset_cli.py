@@ -1,0 +1,64 @@
+"""``bpb generate`` through the real entry point."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+def bpb(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+
+
+def test_generate_writes_a_dataset_and_prints_realised_rates(tmp_path: Path) -> None:
+    out = tmp_path / "ds"
+    done = bpb("generate", "--out", str(out), "--per-horizon", "4", "--horizons", "2,4",
+               "--seed", "3", "--workers", "2", "--no-images")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    manifest = json.loads((out / "dataset.json").read_text())
+    assert manifest["scenes"] == 8 and manifest["horizons"] == [2.0, 4.0]
+    for label in ("h2", "h4"):
+        rate = manifest["summary"][label]["collision_rate"]
+        assert f"{rate:.1%}" in done.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (["--horizons", "1,x"], "--horizons: 'x' is not a number"),
+        (["--horizons", "1,-2"], "--horizons: '-2' must be a positive"),
+        (["--per-horizon", "0"], "--per-horizon: must be at least 1"),
+        (["--workers", "0"], "--workers: must be at least 1"),
+        (["--horizons", "7"], "config: speed_ranges: no cue-speed range for horizon 7 s"),
+    ],
+)
+def test_bad_arguments_exit_2_with_one_line(tmp_path: Path, args: list[str], expected: str) -> None:
+    done = bpb("generate", "--out", str(tmp_path / "ds"), *args)
+    assert done.returncode == 2
+    assert done.stderr.strip().count("\n") == 0 and expected in done.stderr
+    assert not (tmp_path / "ds").exists()
+
+
+def test_bad_config_exits_2_naming_the_file_and_field(tmp_path: Path) -> None:
+    config = tmp_path / "cfg.toml"
+    config.write_text("[physics]\nball_radius = -0.1\n")
+    done = bpb("generate", "--out", str(tmp_path / "ds"), "--config", str(config))
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{config}: physics.ball_radius:" in lines[0]
+
+
+def test_existing_folder_is_refused_unless_overwrite(tmp_path: Path) -> None:
+    out = tmp_path / "ds"
+    common = ["generate", "--out", str(out), "--per-horizon", "1", "--horizons", "1",
+              "--workers", "1", "--no-images"]  # fmt: skip
+    assert bpb(*common).returncode == 0
+    again = bpb(*common)
+    assert again.returncode == 2 and "pass --overwrite" in again.stderr
+    assert bpb(*common, "--overwrite").returncode == 0

@@ -1,0 +1,98 @@
+"""Rendered PNGs: they decode, share one canvas, and draw each ball where the scene puts it."""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+from PIL import Image
+
+from bpb_core.dataset import load_dataset
+from bpb_core.outcome import Event, Outcome, Segment
+from bpb_core.scene import Ball, Scene
+from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
+from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render_style import ball_colour
+
+CONFIG = DatasetConfig()
+SPEC = CanvasSpec.from_config(CONFIG)
+
+
+def near(pixel: tuple[int, ...], colour: tuple[int, int, int], tol: int = 40) -> bool:
+    return all(abs(a - b) <= tol for a, b in zip(pixel[:3], colour, strict=True))
+
+
+def ring_pixel(img: Image.Image, pos: tuple[float, float]) -> tuple[int, ...]:
+    """A pixel on the coloured ring of the ball centred at ``pos`` (outside its white badge)."""
+    x, y = SPEC.to_px(*pos)
+    return tuple(img.getpixel((round(x + 0.8 * SPEC.radius_px), round(y))))  # type: ignore[arg-type]
+
+
+def test_images_decode_with_the_configured_canvas(small_dataset: Path) -> None:
+    data = load_dataset(small_dataset)
+    width = CONFIG.image.margin_left + 2 * 600 + CONFIG.image.margin_right
+    height = CONFIG.image.margin_top + 600 + CONFIG.image.margin_bottom
+    for key in data.keys:
+        for name in ("init.png", "final.png", "trajectory.png"):
+            with Image.open(data.path(key, name)) as img:
+                img.load()
+                assert img.format == "PNG" and img.size == (width, height) == SPEC.size
+
+
+def test_init_image_draws_every_ball_at_its_position(small_dataset: Path) -> None:
+    data = load_dataset(small_dataset)
+    for key in data.keys:
+        scene = data.scene(key)
+        with Image.open(data.path(key, "init.png")) as img:
+            rgb = img.convert("RGB")
+        for ball in scene.balls[1:]:  # object balls: the cue arrow may cross the cue ball's ring
+            assert near(ring_pixel(rgb, ball.pos), ball_colour(ball.id)), (key, ball.id)
+
+
+def hand_scene() -> tuple[Scene, Outcome]:
+    """Cue ball rolls right into ball 1 at rest; ball 1 is pocketed at the right middle."""
+    scene = Scene(
+        scene_id="h2_0000",
+        horizon=2.0,
+        pockets={"radius": 0.06, "centers": [[2.0, 0.5]]},
+        balls=[Ball(id=0, pos=(0.5, 0.5), vel=(1.0, 0.0)), Ball(id=1, pos=(1.2, 0.5))],
+    )
+    a = 0.002 * 9.8
+    t_hit = (1.0 - math.sqrt(1.0 - 2 * a * 0.64285)) / a
+    segments = {
+        0: (
+            Segment(0.0, t_hit, (0.5, 0.5), (1.0, 0.0), a),
+            Segment(t_hit, 2.0, (1.14285, 0.5), (0.0, 0.0), a),
+        ),
+        1: (
+            Segment(0.0, t_hit, (1.2, 0.5), (0.0, 0.0), a),
+            Segment(t_hit, 1.9, (1.2, 0.5), (1 - a * t_hit, 0.0), a),
+        ),
+    }
+    events = (
+        Event(t_hit, "ball", (0, 1), None, ((1.14285, 0.5), (1.2, 0.5))),
+        Event(1.9, "pocket", (1,), None, ((1.94, 0.5),)),
+    )
+    return scene, Outcome(2.0, {0: (1.14285, 0.5), 1: None}, events, segments)
+
+
+def test_final_and_trajectory_from_a_hand_made_outcome() -> None:
+    scene, outcome = hand_scene()
+    final = render_final(scene, outcome, SPEC)
+    assert near(ring_pixel(final, (1.14285, 0.5)), ball_colour(0))
+    assert not near(ring_pixel(final, (1.2, 0.5)), ball_colour(1))  # pocketed: not drawn
+    traj = render_trajectory(scene, outcome, SPEC)
+    x, y = SPEC.to_px(0.85, 0.5)  # on the cue ball's path, away from both balls
+    assert near(tuple(traj.getpixel((round(x), round(y)))), ball_colour(0))  # type: ignore[arg-type]
+    assert render_init(scene, SPEC).size == final.size == traj.size
+
+
+def test_encoded_pngs_are_small_palette_images_and_deterministic() -> None:
+    scene, outcome = hand_scene()
+    first = render_pngs(scene, outcome, CONFIG)
+    assert first == render_pngs(scene, outcome, CONFIG)
+    for data in first.values():
+        assert data.startswith(b"\x89PNG") and len(data) < 200_000
+        assert Image.open(io.BytesIO(data)).mode == "P"
