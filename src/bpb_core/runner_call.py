@@ -97,9 +97,15 @@ def _backoff(state: RunState, retry: int, error: ModelError) -> float:
     return state.rng.uniform(ceiling / 2, ceiling)
 
 
+class _NotSent(Exception):
+    """The run stopped sending (cost cap or auth failure) while this call waited for a slot."""
+
+
 async def _send(state: RunState, request: ModelRequest) -> ModelResponse:
     async with state.slots:
         await state.limiter.wait()
+        if not state.may_send():  # checked again here: the cap may be hit while we queued
+            raise _NotSent
         return await state.adapter.complete(request)
 
 
@@ -168,6 +174,9 @@ async def answer(
         }
         try:
             response = await _send(state, request)
+        except _NotSent:
+            state.not_sent(task_name)
+            return
         except ModelError as error:
             elapsed = time.perf_counter() - started
             if not await _on_model_error(state, ref, task_name, error, attempt, common, elapsed):

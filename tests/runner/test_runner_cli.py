@@ -1,0 +1,138 @@
+"""``bpb run`` through the real entry point: resume after kill -9, exit codes, dry run."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from runner_fake_openai import fake_server
+
+from bpb_core.storage import iter_answers
+
+BPB = str(Path(sys.executable).parent / "bpb")
+KEY = "sk-bpbtest-0123456789abcdefSECRET"
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "OPENAI_API_KEY": KEY, "COLUMNS": "200"}
+
+
+def _bpb(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([BPB, *args], capture_output=True, text=True, env=_env(), timeout=120)
+
+
+def _complete(run_dir: Path) -> set[str]:
+    return {f"{r.scene_id}/{r.task}" for _, r in iter_answers(run_dir) if r.status == "ok"}
+
+
+@pytest.mark.slow
+def test_kill_9_then_same_command_never_resends_completed(dataset: Path, tmp_path: Path) -> None:
+    with fake_server(dataset, {"latency": 0.3}, tmp_path) as server:
+        args = [
+            "run",
+            "--data",
+            str(dataset),
+            "--adapter",
+            "litellm:openai/fake-model",
+            "--api-base",
+            server.api_base,
+            "--out",
+            str(tmp_path / "out"),
+            "--concurrency",
+            "2",
+            "--timeout",
+            "10",
+        ]
+        run_dir = tmp_path / "out" / "litellm_openai_fake-model"
+        process = subprocess.Popen(
+            [BPB, *args], env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
+        deadline = time.time() + 60
+        while len(_complete(run_dir)) < 5 and time.time() < deadline:
+            time.sleep(0.05)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        done_at_kill = _complete(run_dir)
+        counts_at_kill = server.counts()
+        assert 5 <= len(done_at_kill) < 18
+        finished = _bpb(*args)
+        assert finished.returncode == 0, finished.stderr
+        counts = server.counts()
+        assert len(_complete(run_dir)) == 18
+        for key in done_at_kill:
+            assert counts[key] == counts_at_kill[key] == 1, key
+        assert all(counts[k] >= 1 for k in counts)
+        lines = (run_dir / "attempts.jsonl").read_text().splitlines()
+        assert all(json.loads(line) for line in lines if line.strip())
+        manifest = json.loads((run_dir / "run.json").read_text())
+        assert len(manifest["sessions"]) == 2 and manifest["finished"]
+
+
+def test_unknown_adapter_or_task_is_one_line_exit_2(dataset: Path, tmp_path: Path) -> None:
+    bad = _bpb("run", "--data", str(dataset), "--adapter", "nope:x", "--out", str(tmp_path))
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "baseline" in bad.stderr
+    assert "litellm" in bad.stderr
+    bad = _bpb("run", "--data", str(dataset), "--tasks", "q1,q9", "--out", str(tmp_path))
+    assert bad.returncode == 2 and "q9" in bad.stderr and "q3" in bad.stderr
+    bad = _bpb(
+        "run", "--data", str(dataset), "--adapter", "baseline:psychic", "--out", str(tmp_path)
+    )
+    assert bad.returncode == 2 and "baseline:oracle" in bad.stderr
+
+
+def test_auth_error_exits_2_with_a_clear_message(dataset: Path, tmp_path: Path) -> None:
+    with fake_server(dataset, {"faults": {"*/q1": ["401"] * 20}}, tmp_path) as server:
+        done = _bpb(
+            "run",
+            "--data",
+            str(dataset),
+            "--adapter",
+            "litellm:openai/fake-model",
+            "--api-base",
+            server.api_base,
+            "--out",
+            str(tmp_path / "o"),
+            "--tasks",
+            "q1",
+        )
+    assert done.returncode == 2
+    assert "authentication failed" in done.stderr and KEY not in done.stderr + done.stdout
+
+
+def test_dry_run_sends_nothing(dataset: Path, tmp_path: Path) -> None:
+    with fake_server(dataset) as server:
+        done = _bpb(
+            "run",
+            "--data",
+            str(dataset),
+            "--adapter",
+            "litellm:openai/fake-model",
+            "--api-base",
+            server.api_base,
+            "--out",
+            str(tmp_path),
+            "--dry-run",
+        )
+        assert done.returncode == 0, done.stderr
+        assert server.stats()["total"] == 0
+    assert "q3" in done.stdout and "6" in done.stdout
+    assert not (tmp_path / "litellm_openai_fake-model" / "attempts.jsonl").exists()
+
+
+def test_default_run_is_the_baseline_leaderboard(dataset: Path, tmp_path: Path) -> None:
+    done = _bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--cot", "q1")
+    assert done.returncode == 0, done.stderr
+    for name in ("stasis", "straight", "random", "oracle"):
+        assert f"baseline:{name}" in done.stdout
+        assert (tmp_path / f"baseline_{name}" / "scores.csv").exists()
+    manifest = json.loads((tmp_path / "baseline_oracle" / "run.json").read_text())
+    assert manifest["options"]["cot"] == {"q1": True, "q2": False, "q3": False}
+    changed = _bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--input-mode", "state")
+    assert changed.returncode == 2 and "input_mode" in changed.stderr
