@@ -1,0 +1,147 @@
+"""`bpb report` through the real entry point, its files, and the HTML in headless Chromium."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from PIL import Image
+
+from bpb_core.results import CALL_DTYPES, UNIT_DTYPES
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+CHROMIUM_FLAGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]  # fmt: skip
+
+
+def bpb(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "COLUMNS": "160"}
+    return subprocess.run([BPB, *args], capture_output=True, text=True, env=env, timeout=120)
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from reports_fixture import (
+        all_answers,
+        model_answers,
+        oracle_answer,
+        stasis_answer,
+        write_dataset,
+        write_run,
+    )
+
+    root = tmp_path_factory.mktemp("report")
+    data = write_dataset(root / "data")
+    runs = root / "runs"
+    write_run(runs / "baseline_oracle", "baseline:oracle", data, all_answers(oracle_answer))
+    write_run(runs / "baseline_stasis", "baseline:stasis", data, all_answers(stasis_answer))
+    write_run(runs / "litellm_model", "litellm:model", data, model_answers())
+    done = bpb("report", str(runs), "--out", str(root / "out"), "--bootstrap", "200")
+    assert done.returncode == 0, done.stderr
+    (root / "stdout.txt").write_text(done.stdout)
+    return root
+
+
+def test_terminal_tables_show_the_leaderboard_with_baselines_marked(report_dir: Path) -> None:
+    text = (report_dir / "stdout.txt").read_text()
+    assert "Leaderboard" in text and "Stasis index" in text and "Usage" in text
+    oracle = next(line for line in text.splitlines() if "baseline_oracle" in line)
+    assert "(baseline)" in oracle and oracle.count("100.0%") >= 4
+    stasis = next(line for line in text.splitlines() if "baseline_stasis (baseline)" in line)
+    assert "87.5%" in stasis and "71.2%" in stasis  # q1 and total worked out by hand
+
+
+def test_json_summary_for_scripts(report_dir: Path) -> None:
+    done = bpb("report", str(report_dir / "runs"), "--json", "--bootstrap", "50")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    board = {row["run"]: row for row in summary["leaderboard"]}
+    assert board["baseline_oracle"]["total"] == 1.0
+    assert board["baseline_stasis"]["total"] == pytest.approx(0.7125)
+    stasis = {row["run"]: row for row in summary["stasis"]}
+    assert stasis["baseline_stasis"]["motion_stasis"] == 1.0
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    done = bpb("report", str(tmp_path / "missing"))
+    assert done.returncode == 2
+    assert done.stderr.strip().count("\n") == 0 and "no such run folder" in done.stderr
+
+
+def test_exports_keep_rows_and_dtypes(report_dir: Path) -> None:
+    out = report_dir / "out"
+    units = pd.read_parquet(out / "units.parquet")
+    assert len(units) == 3 * 4 * 17
+    assert {k: str(v) for k, v in units.dtypes.items()} == UNIT_DTYPES
+    calls = pd.read_parquet(out / "calls.parquet")
+    assert {k: str(v) for k, v in calls.dtypes.items()} == CALL_DTYPES
+    assert len(pd.read_csv(out / "units.csv")) == len(units)
+    assert (out / "tables" / "leaderboard.csv").is_file()
+
+
+def test_charts_are_real_non_blank_pngs(report_dir: Path) -> None:
+    charts = sorted((report_dir / "out" / "charts").glob("*.png"))
+    assert [p.stem for p in charts] == [
+        "accuracy_vs_horizon", "leaderboards", "q3_tolerance_curve", "stasis_index",
+    ]  # fmt: skip
+    for path in charts:
+        with Image.open(path) as img:
+            assert img.width > 600 and len(img.convert("L").getcolors(1 << 16) or []) > 20
+
+
+def test_html_is_self_contained(report_dir: Path) -> None:
+    page = (report_dir / "out" / "report.html").read_text()
+    assert not re.search(r"""(src|href)=['"]?(https?:|//|file:)""", page)
+    assert "@import" not in page and "url(" not in page
+    assert page.count("data:image/png;base64,") == 4 + len(
+        list((report_dir / "out" / "gallery").glob("*.png"))
+    )
+    assert "Failure gallery" in page and "litellm_model" in page
+
+
+def _chromium() -> str | None:
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    if found is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("chromium is required in CI (apt-get install chromium)")
+        pytest.skip("chromium not installed")
+    return found
+
+
+@pytest.mark.slow
+def test_html_renders_charts_and_gallery_in_headless_chromium(
+    report_dir: Path, tmp_path: Path
+) -> None:
+    chromium = _chromium()
+    page = (report_dir / "out" / "report.html").as_uri()
+    common = [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
+    dom = subprocess.run(
+        [*common, "--dump-dom", page], capture_output=True, text=True, timeout=120
+    ).stdout
+    body = re.search(r"<body[^>]*>", dom)
+    assert body is not None
+    images = int(re.search(r'data-images="(\d+)"', body.group(0)).group(1))  # type: ignore[union-attr]
+    assert 'data-images-ok="yes"' in body.group(0) and images >= 5  # 4 charts + gallery
+    assert dom.count('class="case"') >= 1 and dom.count('class="chart"') == 4
+    shot = tmp_path / "shot.png"
+    subprocess.run(
+        [*common, f"--screenshot={shot}", "--window-size=1400,3000", page],
+        capture_output=True, timeout=120, check=True,
+    )  # fmt: skip
+    with Image.open(shot) as img:
+        assert img.size == (1400, 3000)
+        grey = img.convert("L")
+        assert len(grey.getcolors(1 << 16) or []) > 50  # not a blank page
+        lo, hi = grey.crop((0, 600, 1400, 3000)).getextrema()  # charts region has contrast
+        assert hi - lo > 150
+    if os.environ.get("BPB_KEEP_SCREENSHOT"):
+        shutil.copy(shot, os.environ["BPB_KEEP_SCREENSHOT"])
