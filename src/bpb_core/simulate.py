@@ -146,3 +146,60 @@ def simulate_paths(
     )
     for path in scene_files(paths):
         yield simulate_scene(load_scene(path), sim, horizon, stability=stability)
+
+
+_JOB: tuple[Simulator, float | None, bool] | None = None  # set before forking workers
+PARALLEL_MIN = 256  # below this many scenes, worker start-up costs more than it saves
+
+
+def simulate_lines(
+    paths: Iterable[str | Path],
+    *,
+    horizon: float | None = None,
+    simulator: str | Simulator = "analytic",
+    stability: bool = False,
+    registry: Registry | None = None,
+    options: Mapping[str, Any] | None = None,
+    workers: int = 0,
+) -> Iterator[str]:
+    """Like :func:`simulate_paths` but yields each ``final.json`` as one JSON line, in input
+    order, using ``workers`` processes (0: all cores when there are at least
+    :data:`PARALLEL_MIN` scenes; 1: this process only).
+
+    Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
+    """
+    global _JOB
+    if horizon is not None and not horizon > 0:
+        raise BadInput(f"--horizon: must be positive, got {horizon}")
+    sim = (
+        make_simulator(simulator, registry, **dict(options or {}))
+        if isinstance(simulator, str)
+        else simulator
+    )
+    files = scene_files(paths)
+    count = _worker_count(workers, len(files))
+    _JOB = (sim, horizon, stability)
+    if count <= 1:
+        yield from map(_line, files)
+        return
+    import multiprocessing
+
+    with multiprocessing.get_context("fork").Pool(count) as pool:
+        yield from pool.imap(_line, files, chunksize=max(16, min(256, len(files) // (8 * count))))
+
+
+def _worker_count(workers: int, scenes: int) -> int:
+    import multiprocessing
+    import os
+
+    if workers == 1 or "fork" not in multiprocessing.get_all_start_methods():
+        return 1
+    if workers > 1:
+        return workers
+    return (os.cpu_count() or 1) if scenes >= PARALLEL_MIN else 1
+
+
+def _line(path: Path) -> str:
+    assert _JOB is not None
+    sim, horizon, stability = _JOB
+    return simulate_scene(load_scene(path), sim, horizon, stability=stability).model_dump_json()

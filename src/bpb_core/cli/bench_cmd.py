@@ -11,7 +11,13 @@ import click
 
 # name -> (module, attribute, one-line help)
 BENCH_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "generate": (
+        "bpb_core.cli.bench_generate_cmd",
+        "bench_generate",
+        "Dataset generation time beside Pillow-only PNG encoding.",
+    ),
     "startup": ("bpb_core.cli.bench_startup_cmd", "startup", "Start-up time of the bpb command."),
+    "sim": ("bpb_core.cli.bench_sim_cmd", "sim", "Simulators: speed against error."),
 }
 
 

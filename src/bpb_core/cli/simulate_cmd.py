@@ -17,6 +17,12 @@ import click
     "--precision", default=None, help="analytic only: 'float64' (default) or digits for mpmath."
 )
 @click.option("--stability", is_flag=True, help="Add the stability annotation (slower).")
+@click.option(
+    "--workers",
+    default=0,
+    show_default=True,
+    help="Processes; 0 = all cores for 256+ scenes, 1 = no worker processes.",
+)
 def simulate(
     paths: tuple[str, ...],
     horizon: float | None,
@@ -24,9 +30,10 @@ def simulate(
     dt: float | None,
     precision: str | None,
     stability: bool,
+    workers: int,
 ) -> None:
     """Simulate init.json files, scene folders or dataset folders, in input order."""
-    from bpb_core.simulate import simulate_paths
+    from bpb_core.simulate import simulate_lines
 
     options: dict[str, Any] = {}
     if dt is not None:
@@ -34,7 +41,12 @@ def simulate(
     if precision is not None:
         options["precision"] = precision
     out = sys.stdout
-    for final in simulate_paths(
-        paths, horizon=horizon, simulator=simulator, stability=stability, options=options
+    for line in simulate_lines(
+        paths,
+        horizon=horizon,
+        simulator=simulator,
+        stability=stability,
+        options=options,
+        workers=workers,
     ):
-        out.write(final.model_dump_json() + "\n")
+        out.write(line + "\n")

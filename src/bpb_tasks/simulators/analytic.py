@@ -342,28 +342,27 @@ class _Simulation:
     def outcome(self, horizon_in: float, horizon: Number) -> Outcome:
         positions: dict[int, tuple[float, float] | None] = {}
         segments: dict[int, tuple[Segment, ...]] = {}
-        decel = float(self.motion.decel)
-        cast = float if self.numeric.num is not float else _same
+        exact = self.numeric.num is not float
         for b in self.bodies:
             if b.alive:
                 x, y, _ = self.motion.state(b, horizon)
-                positions[b.id] = (cast(x), cast(y))
+                positions[b.id] = (float(x), float(y)) if exact else (x, y)
             else:
                 positions[b.id] = None
-            end = self.ended.get(b.index, horizon)
-            starts = [*b.seg[1:], (end,)]
-            segments[b.id] = tuple(
-                Segment(
-                    cast(s[0]),
-                    cast(n[0]),
-                    (cast(s[1]), cast(s[2])),
-                    (cast(s[3]), cast(s[4])),
-                    decel,
-                )
-                for s, n in zip(b.seg, starts, strict=True)
-            )
+            segments[b.id] = self.segments_of(b, self.ended.get(b.index, horizon), exact)
         return Outcome(horizon_in, positions, tuple(self.events), segments)
 
-
-def _same(value: float) -> float:
-    return value
+    def segments_of(self, b: Body, end: Number, exact: bool) -> tuple[Segment, ...]:
+        """``b``'s pieces of motion as public floats (the last one ends at ``end``)."""
+        decel = float(self.motion.decel)
+        ends = [s[0] for s in b.seg[1:]]
+        ends.append(end)
+        if exact:
+            return tuple(
+                Segment(float(t0), float(t1), (float(x), float(y)), (float(vx), float(vy)), decel)
+                for (t0, x, y, vx, vy), t1 in zip(b.seg, ends, strict=True)
+            )
+        return tuple(
+            Segment(t0, t1, (x, y), (vx, vy), decel)
+            for (t0, x, y, vx, vy), t1 in zip(b.seg, ends, strict=True)
+        )

@@ -1,0 +1,158 @@
+"""``bpb bench sim``: speed against error of the simulators, side by side on the same scenes.
+
+Every scene is run by every contestant in turn (interleaved, so machine noise hits all alike) and
+compared with the 50-digit mpmath run of the analytic simulator: final-position error (per scene
+the largest error over the balls on the table in both; then max and median over scenes) and the
+number of scenes whose Q1 contacts, Q2 walls or pocketed set differ from the reference.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import statistics
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from datetime import date
+from pathlib import Path
+
+from bpb_core.interfaces import Simulator
+from bpb_core.outcome import Outcome
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+from bpb_tasks.simulators.bench_scenes import random_scenes
+from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
+from bpb_tasks.simulators.stability import labels
+
+Progress = Callable[[str, int, int], None]
+
+
+@dataclass(frozen=True)
+class SimRow:
+    """One contestant's figures over the benchmark scenes."""
+
+    name: str
+    ms_per_scene: float
+    max_error: float
+    median_error: float
+    q1_disagree: int
+    q2_disagree: int
+    pocket_disagree: int
+
+
+@dataclass(frozen=True)
+class SimBench:
+    """The result of :func:`bench_simulators`."""
+
+    scenes: int
+    seed: int
+    rows: list[SimRow]
+    simulate_ms: dict[int, float] | None = None
+    simulate_scenes: int = 0
+    machine: str = field(default_factory=lambda: machine_description())
+    day: str = field(default_factory=lambda: date.today().isoformat())
+
+
+def machine_description() -> str:
+    """``2 cores, <CPU model>, CPython 3.11.7`` for the figures' record."""
+    import os
+
+    model = "unknown CPU"
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    python = f"{platform.python_implementation()} {platform.python_version()}"
+    return f"{os.cpu_count()} cores, {model}, {python}"
+
+
+def contestants(dts: Sequence[float]) -> dict[str, Simulator]:
+    """analytic float64, analytic mpmath (the reference, timed too) and pymunk at each dt."""
+    sims: dict[str, Simulator] = {"analytic": AnalyticSimulator()}
+    sims.update({f"pymunk dt={dt:g}": PymunkSimulator(dt=dt) for dt in dts})
+    return sims
+
+
+def bench_simulators(
+    scenes: int = 100,
+    seed: int = 0,
+    dts: Sequence[float] = (1e-2, 1e-3, 1e-4),
+    progress: Progress | None = None,
+) -> SimBench:
+    """Run every contestant on ``scenes`` random 7-ball scenes and compare with the reference."""
+    reference = AnalyticSimulator(precision=50)
+    sims = {"analytic mpmath50 (reference)": reference, **contestants(dts)}
+    times: dict[str, float] = dict.fromkeys(sims, 0.0)
+    errors: dict[str, list[float]] = {name: [] for name in sims}
+    flips: dict[str, list[int]] = {name: [0, 0, 0] for name in sims}
+    sample = list(random_scenes(scenes, seed=seed))
+    for index, scene in enumerate(sample):
+        truth: Outcome | None = None
+        for name, sim in sims.items():
+            started = time.perf_counter()
+            outcome = sim.run(scene)
+            times[name] += time.perf_counter() - started
+            truth = outcome if truth is None else truth
+            errors[name].append(position_error(outcome, truth))
+            for k, (a, b) in enumerate(zip(labels(outcome), labels(truth), strict=True)):
+                flips[name][k] += a != b
+        if progress is not None:
+            progress("scenes", index + 1, len(sample))
+    rows = [
+        SimRow(
+            name,
+            1000 * times[name] / len(sample),
+            max(errors[name]),
+            statistics.median(errors[name]),
+            *flips[name],
+        )
+        for name in sims
+    ]
+    return SimBench(scenes, seed, rows)
+
+
+def position_error(outcome: Outcome, truth: Outcome) -> float:
+    """Largest distance between final positions of balls on the table in both."""
+    gaps = [
+        math.dist(p, q)
+        for ball, q in truth.positions.items()
+        if q is not None and (p := outcome.positions.get(ball)) is not None
+    ]
+    return max(gaps, default=0.0)
+
+
+def time_simulate(
+    count: int = 1000, seed: int = 1, workers: Sequence[int] = (1, 2)
+) -> dict[int, float]:
+    """Milliseconds per scene of ``bpb simulate``'s library path (read, validate, simulate,
+    build and serialise final.json) over ``count`` scene files in one process, start-up
+    excluded, for each worker count (interleaved over three rounds; the best round counts)."""
+    from bpb_core.simulate import simulate_lines
+
+    best: dict[int, float] = dict.fromkeys(workers, math.inf)
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for index, scene in enumerate(random_scenes(count, seed=seed)):
+            path = Path(tmp) / f"scene_{index:05d}.json"
+            path.write_text(scene.model_dump_json())
+            paths.append(path)
+        simulator = AnalyticSimulator()
+        for _ in simulate_lines(paths[:1], simulator=simulator, workers=1):  # warm-up
+            pass
+        for _ in range(3):
+            for n in workers:
+                started = time.perf_counter()
+                for _ in simulate_lines(paths, simulator=simulator, workers=n):
+                    pass
+                best[n] = min(best[n], 1000 * (time.perf_counter() - started) / count)
+    return best
+
+
+def with_simulate_timing(result: SimBench, count: int) -> SimBench:
+    """``result`` with the ``bpb simulate`` figures added."""
+    from dataclasses import replace
+
+    return replace(result, simulate_ms=time_simulate(count), simulate_scenes=count)
