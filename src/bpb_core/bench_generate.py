@@ -1,0 +1,163 @@
+"""``bpb bench generate``: dataset generation time beside Pillow encoding alone, and memory.
+
+All timings of one call run on the same machine in one process tree, one after the other, with
+the same number of worker processes, so machine noise hits them alike:
+
+* ``generate``: a full dataset (scenes, ground truth, stability, 3 PNGs per scene, stats);
+* ``generate --no-images``: the same without PNGs (what rendering costs is the difference);
+* ``pillow default``: Pillow alone encoding as many images of the same canvas size, RGB with
+  Pillow's default PNG settings (what a straightforward renderer pays just to save files);
+* ``pillow as bpb``: the same images encoded as bpb stores them (8-bit palette, zlib level 1).
+
+The images encoded by the Pillow baselines are real rendered scenes (decoded from the dataset).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from multiprocessing.pool import Pool
+from pathlib import Path
+
+from PIL import Image
+
+SAMPLE_IMAGES = 24
+
+
+@dataclass(frozen=True)
+class GenerateTiming:
+    """Wall seconds of each variant for ``scenes`` scenes (``images`` PNGs)."""
+
+    scenes: int
+    images: int
+    workers: int
+    size: tuple[int, int]
+    generate_s: float
+    no_images_s: float
+    pillow_default_s: float
+    pillow_bpb_s: float
+
+
+@dataclass(frozen=True)
+class MemoryUse:
+    """Peak resident set sizes (MiB) of one ``generate_dataset`` call in a fresh process."""
+
+    scenes: int
+    seconds: float
+    parent_mib: float
+    worker_mib: float
+
+
+def _encode_share(args: tuple[list[bytes], int, bool, int]) -> int:
+    """Encode ``count`` images cycling through ``sources``; return total bytes written."""
+    sources, count, as_bpb, level = args
+    images = [Image.open(io.BytesIO(data)) for data in sources]
+    rgb = [img.convert("RGB") for img in images]
+    palette = [img.convert("P") if img.mode != "P" else img for img in images]
+    total = 0
+    for i in range(count):
+        out = io.BytesIO()
+        if as_bpb:
+            palette[i % len(palette)].save(out, format="PNG", compress_level=level)
+        else:
+            rgb[i % len(rgb)].save(out, format="PNG")
+        total += out.tell()
+    return total
+
+
+def _pillow_seconds(sources: list[bytes], count: int, workers: int, as_bpb: bool) -> float:
+    shares = [count // workers + (1 if i < count % workers else 0) for i in range(workers)]
+    jobs = [(sources, n, as_bpb, 1) for n in shares]
+    with Pool(workers) as pool:
+        started = time.perf_counter()
+        pool.map(_encode_share, jobs)
+        return time.perf_counter() - started
+
+
+def _sample_images(root: Path) -> list[bytes]:
+    found = sorted(root.glob("h*/scene_*/*.png"))[:SAMPLE_IMAGES]
+    return [p.read_bytes() for p in found]
+
+
+def measure_generate(
+    per_horizon: int = 200,
+    horizons: Sequence[float] = (1, 2, 3, 4, 5),
+    seed: int = 0,
+    workers: int | None = None,
+) -> GenerateTiming:
+    """Time a dataset generation against Pillow-only encoding of as many images (see module)."""
+    from bpb_core.dataset import generate_dataset
+
+    n_workers = workers or os.cpu_count() or 1
+    with tempfile.TemporaryDirectory(prefix="bpb-bench-") as tmp:
+        root = Path(tmp)
+        started = time.perf_counter()
+        full = generate_dataset(root / "full", per_horizon, horizons, seed, workers=n_workers)
+        generate_s = time.perf_counter() - started
+        started = time.perf_counter()
+        generate_dataset(
+            root / "bare", per_horizon, horizons, seed, workers=n_workers, images=False
+        )
+        no_images_s = time.perf_counter() - started
+        sources = _sample_images(full)
+    scenes = per_horizon * len(horizons)
+    with Image.open(io.BytesIO(sources[0])) as first:
+        size = first.size
+    count = 3 * scenes
+    return GenerateTiming(
+        scenes=scenes,
+        images=count,
+        workers=n_workers,
+        size=size,
+        generate_s=generate_s,
+        no_images_s=no_images_s,
+        pillow_default_s=_pillow_seconds(sources, count, n_workers, as_bpb=False),
+        pillow_bpb_s=_pillow_seconds(sources, count, n_workers, as_bpb=True),
+    )
+
+
+_MEMORY_SCRIPT = """
+import json, resource, sys, time, warnings
+warnings.simplefilter("ignore")
+from bpb_core.dataset import generate_dataset
+out, per_horizon, workers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+started = time.perf_counter()
+generate_dataset(out, per_horizon, [1, 2, 3, 4, 5], 0, workers=workers)
+seconds = time.perf_counter() - started
+me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+print(json.dumps({"seconds": seconds, "parent_kib": me, "worker_kib": kids}))
+"""
+
+
+def measure_memory(per_horizon: int, workers: int | None = None) -> MemoryUse:
+    """Peak RSS of the generating process and of its largest worker, in a fresh interpreter."""
+    n_workers = workers or os.cpu_count() or 1
+    with tempfile.TemporaryDirectory(prefix="bpb-bench-mem-") as tmp:
+        done = subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                _MEMORY_SCRIPT,
+                str(Path(tmp) / "ds"),
+                str(per_horizon),
+                str(n_workers),
+            ],  # fmt: skip
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+    data = json.loads(done.stdout.strip().splitlines()[-1])
+    return MemoryUse(
+        scenes=5 * per_horizon,
+        seconds=data["seconds"],
+        parent_mib=data["parent_kib"] / 1024,
+        worker_mib=data["worker_kib"] / 1024,
+    )

@@ -1,0 +1,48 @@
+"""``bpb bench generate``: generation seconds beside Pillow-only encoding; optional memory."""
+
+from __future__ import annotations
+
+import click
+
+from bpb_core.cli.console import stdout
+
+
+@click.command("generate")
+@click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon (x5).")
+@click.option("--workers", type=int, default=None, help="Processes [default: all cores].")
+@click.option(
+    "--memory",
+    "memory",
+    default="",
+    help="Also measure peak RSS at these per-horizon sizes, e.g. 200,2000.",
+)
+def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
+    """Seconds for a dataset (1,000 scenes by default) beside Pillow encoding alone."""
+    from rich.table import Table
+
+    from bpb_core.bench_generate import measure_generate, measure_memory
+    from bpb_core.errors import BadInput
+
+    sizes = [int(x) for x in memory.split(",") if x.strip()] if memory else []
+    if per_horizon < 1 or any(s < 1 for s in sizes):
+        raise BadInput("--per-horizon/--memory: sizes must be at least 1")
+    t = measure_generate(per_horizon, workers=workers)
+    title = f"{t.scenes} scenes, {t.images} PNGs of {t.size[0]}x{t.size[1]} px, {t.workers} workers"
+    table = Table("variant", "seconds", "per scene ms", title=title)
+    rows = [
+        ("bpb generate (scenes, truth, stability, 3 PNGs, stats)", t.generate_s),
+        ("bpb generate --no-images", t.no_images_s),
+        (f"Pillow alone: {t.images} RGB PNGs, default settings", t.pillow_default_s),
+        (f"Pillow alone: {t.images} palette PNGs, level 1 (as bpb)", t.pillow_bpb_s),
+    ]
+    for name, seconds in rows:
+        table.add_row(name, f"{seconds:.2f}", f"{1000 * seconds / t.scenes:.2f}")
+    stdout().print(table)
+    if sizes:
+        mem = Table("scenes", "seconds", "parent peak MiB", "largest worker MiB", title="Memory")
+        for size in sizes:
+            m = measure_memory(size, workers)
+            mem.add_row(
+                str(m.scenes), f"{m.seconds:.1f}", f"{m.parent_mib:.1f}", f"{m.worker_mib:.1f}"
+            )
+        stdout().print(mem)
