@@ -149,7 +149,7 @@ def measure_memory(per_horizon: int, workers: int | None = None) -> MemoryUse:
                 str(Path(tmp) / "ds"),
                 str(per_horizon),
                 str(n_workers),
-            ],  # fmt: skip
+            ],
             check=True,
             capture_output=True,
             text=True,
