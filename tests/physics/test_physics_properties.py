@@ -45,6 +45,38 @@ def alive_states(outcome: Outcome, t: float) -> dict[int, tuple[float, float, fl
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scenes())
 def test_invariants_hold_on_random_scenes(s: Scene) -> None:
+    assert_invariants(s)
+
+
+@st.composite
+def racks(draw: st.DrawFn) -> Scene:
+    """A triangle of 10 touching balls broken by the cue: simultaneous contacts everywhere."""
+    balls = [
+        (1.3 + row * math.sqrt(3) * R, 0.5 + (j - row / 2) * 2 * R)
+        for row in range(4)
+        for j in range(row + 1)
+    ]
+    angle = draw(st.floats(-0.05, 0.05))
+    speed = draw(st.floats(0.3, 6.0))
+    cue = {"id": 0, "pos": [0.5, 0.5 + draw(st.floats(-0.02, 0.02))]}
+    cue["vel"] = [speed * math.cos(angle), speed * math.sin(angle)]
+    return Scene.model_validate(
+        {
+            "scene_id": "rack",
+            "horizon": 5.0,
+            "physics": {"mu": draw(st.sampled_from([0.002, 0.0]))},
+            "balls": [cue, *({"id": i + 1, "pos": list(p)} for i, p in enumerate(balls))],
+        }
+    )
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(racks())
+def test_invariants_hold_when_breaking_a_rack_of_touching_balls(s: Scene) -> None:
+    assert_invariants(s)
+
+
+def assert_invariants(s: Scene) -> None:
     out = FLOAT.run(s)
     assert len(out.events) <= 40 * len(s.balls) + 200  # bounded event count
     assert FLOAT.run(s) == out  # identical rerun
