@@ -8,7 +8,7 @@ import pytest
 from phys_helpers import R, kinds, scene, state_at
 
 from bpb_core.outcome import final_state
-from bpb_tasks.simulators.analytic import AnalyticSimulator
+from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
 
 SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]
 IDS = ["float64", "mpmath50"]
@@ -186,3 +186,15 @@ def test_degenerate_motion_never_crashes(balls: list[tuple[float, float, float, 
         out, ref = AnalyticSimulator().run(s), AnalyticSimulator(precision=50).run(s)
         assert 1 not in out.cue_contacts()
         assert kinds(out) == kinds(ref)
+
+
+def test_event_budget_is_enforced() -> None:
+    s = scene([(0.3, 0.4, 41.0, 17.0)], mu=0.0, horizon=5.0, pockets=[])
+    with pytest.raises(SimulationError, match="more than 10 events"):
+        AnalyticSimulator(max_events=10).run(s)
+
+
+def test_ball_resting_inside_a_pocket_is_pocketed_at_zero() -> None:
+    out = AnalyticSimulator().run(scene([(0.5, 0.5, 0.0, 0.0), (1.0, R + 0.01, 0.0, 0.0)]))
+    assert out.positions[1] is None
+    assert [(e.kind, e.ids, e.t) for e in out.events] == [("pocket", (1,), 0.0)]

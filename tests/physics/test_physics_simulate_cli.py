@@ -120,3 +120,12 @@ def test_missing_path_and_unknown_simulator(
     message = one_line_error(bpb("simulate", str(scenes[0][0]), "--simulator", "nosuch"))
     assert "analytic" in message and "pymunk" in message
     assert "--dt" in one_line_error(bpb("simulate", str(scenes[0][0]), "--dt", "0.01"))
+    assert "--precision" in one_line_error(bpb("simulate", str(scenes[0][0]), "--precision", "x"))
+
+
+def test_mpmath_precision_matches_float64(scenes: list[tuple[Path, Scene]]) -> None:
+    paths = [str(p) for p, _ in scenes]
+    exact = lines(bpb("simulate", *paths, "--precision", "40"))
+    fast = lines(bpb("simulate", *paths))
+    assert [f.q1 for f in exact] == [f.q1 for f in fast]
+    assert [f.predictions for f in exact] == [f.predictions for f in fast]

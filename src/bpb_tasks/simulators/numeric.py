@@ -53,4 +53,12 @@ def backend(precision: str | int | None) -> Numeric:
     """The backend named by ``precision``: ``None``/``"float64"``, or a digit count for mpmath."""
     if precision is None or precision == "float64":
         return FLOAT64
-    return mpmath_backend(int(precision))
+    try:
+        digits = int(precision)
+    except ValueError:
+        digits = 0
+    if digits < 20:
+        from bpb_core.errors import BadInput
+
+        raise BadInput(f"--precision: expected 'float64' or a digit count >= 20, got {precision!r}")
+    return mpmath_backend(digits)
