@@ -37,6 +37,9 @@ _EXPORTS: dict[str, str] = {
     "FinalState": "bpb_core.scene",
     "Outcome": "bpb_core.outcome",
     "final_state": "bpb_core.outcome",
+    "generate_dataset": "bpb_core.dataset",
+    "load_dataset": "bpb_core.dataset",
+    "Dataset": "bpb_core.dataset",
     "ModelRequest": "bpb_core.adapters",
     "ModelResponse": "bpb_core.adapters",
     "Message": "bpb_core.adapters",
@@ -76,6 +79,7 @@ if TYPE_CHECKING:
         TextPart,
         Usage,
     )
+    from bpb_core.dataset import Dataset, generate_dataset, load_dataset
     from bpb_core.errors import BadInput, BpbError, ParseFailure
     from bpb_core.hookspecs import hookimpl, hookspec
     from bpb_core.interfaces import (

@@ -11,12 +11,16 @@ import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset_manifest import IndexRow, sha256_bytes
 from bpb_core.layout import FINAL, INIT, scene_dir
 from bpb_core.outcome import CUE_ID, Outcome, final_state
 from bpb_core.scene import FinalState, Scene, Stability
+
+if TYPE_CHECKING:
+    from bpb_tasks.billiards.calibrate import Calibration
+    from bpb_tasks.billiards.config import DatasetConfig
 
 
 @dataclass(frozen=True)
@@ -46,7 +50,7 @@ class WorkerSetup:
 
     root: Path
     seed: int
-    config: Any  # bpb_tasks.billiards.config.DatasetConfig
+    config: DatasetConfig
     family_cls: type
     simulator_cls: type
     simulator_name: str
@@ -73,7 +77,7 @@ def run_job(job: Job) -> SceneResult:
     return produce(_SETUP, _STATE["family"], _STATE["simulator"], job)
 
 
-def calibrate_job(horizon: float) -> Any:
+def calibrate_job(horizon: float) -> Calibration:
     """Calibrate the cue-speed range of one horizon with the process's setup."""
     from bpb_tasks.billiards.calibrate import calibrate_horizon
 
@@ -93,17 +97,15 @@ def simulate_scene(
     )
     outcome: Outcome = simulator.run(scene)
     final = final_state(scene, outcome, setup.simulator_name)
-    stability = annotate(scene, outcome, setup.config.stability_delta)
+    stability = annotate(scene, outcome, setup.config.stability_delta, simulator)
     return scene, outcome, final.model_copy(update={"stability": stability})
 
 
-def annotate(scene: Scene, outcome: Outcome, delta: float) -> Stability | None:
-    """The stability annotation of the physics package (``None`` if it is not installed)."""
-    try:
-        from bpb_tasks.simulators.stability import annotate as physics_annotate
-    except ImportError:
-        return None
-    result: Stability = physics_annotate(scene, outcome, delta=delta)
+def annotate(scene: Scene, outcome: Outcome, delta: float, simulator: Any) -> Stability:
+    """The stability annotation (re-simulates perturbed copies with the same simulator)."""
+    from bpb_tasks.simulators.stability import annotate as physics_annotate
+
+    result: Stability = physics_annotate(scene, outcome, delta=delta, simulator=simulator)
     return result
 
 
