@@ -40,6 +40,13 @@ _EXPORTS: dict[str, str] = {
     "generate_dataset": "bpb_core.dataset",
     "load_dataset": "bpb_core.dataset",
     "Dataset": "bpb_core.dataset",
+    # running evaluations
+    "run_eval": "bpb_core.runner",
+    "evaluate": "bpb_core.runner",
+    "RunOptions": "bpb_core.runner_types",
+    "RetryPolicy": "bpb_core.runner_types",
+    "RunResult": "bpb_core.runner_types",
+    "ProgressEvent": "bpb_core.runner_types",
     "ModelRequest": "bpb_core.adapters",
     "ModelResponse": "bpb_core.adapters",
     "Message": "bpb_core.adapters",
@@ -101,4 +108,6 @@ if TYPE_CHECKING:
         lazy,
     )
     from bpb_core.registry import PluginWarning, Registry, make_registry
+    from bpb_core.runner import evaluate, run_eval
+    from bpb_core.runner_types import ProgressEvent, RetryPolicy, RunOptions, RunResult
     from bpb_core.scene import FinalState, Scene
