@@ -37,6 +37,10 @@ _EXPORTS: dict[str, str] = {
     "FinalState": "bpb_core.scene",
     "Outcome": "bpb_core.outcome",
     "final_state": "bpb_core.outcome",
+    # results and reports (pandas is imported when these are used)
+    "load_results": "bpb_core.results",
+    "load_frame": "bpb_core.results",
+    "build_report": "bpb_core.report.build",
     "generate_dataset": "bpb_core.dataset",
     "load_dataset": "bpb_core.dataset",
     "Dataset": "bpb_core.dataset",
@@ -108,6 +112,8 @@ if TYPE_CHECKING:
         lazy,
     )
     from bpb_core.registry import PluginWarning, Registry, make_registry
+    from bpb_core.report.build import build_report
+    from bpb_core.results import load_frame, load_results
     from bpb_core.runner import evaluate, run_eval
     from bpb_core.runner_types import ProgressEvent, RetryPolicy, RunOptions, RunResult
     from bpb_core.scene import FinalState, Scene
