@@ -128,24 +128,3 @@ def line_contact(
         return None
     return c / (-b + sqrt(disc))
 
-
-def circle_entry(
-    dx: Number,
-    dy: Number,
-    ux: Number,
-    uy: Number,
-    radius2: Number,
-    sqrt: Callable[[Number], Number],
-) -> Number | None:
-    """Distance along ``u`` to the first point within ``sqrt(radius2)`` of the centre (pockets):
-    tangency counts, since the centre is then within the radius."""
-    c = dx * dx + dy * dy - radius2
-    if c <= 0:
-        return c * 0
-    b = ux * dx + uy * dy
-    if b >= 0:
-        return None
-    disc = b * b - c
-    if disc < 0:
-        return None
-    return c / (-b + sqrt(disc))

@@ -12,7 +12,7 @@ import heapq
 from typing import Any
 
 from bpb_core.scene import Scene
-from bpb_tasks.simulators.analytic_motion import Body, Motion, circle_entry, line_contact
+from bpb_tasks.simulators.analytic_motion import Body, Motion, line_contact
 from bpb_tasks.simulators.analytic_roots import first_contact
 from bpb_tasks.simulators.numeric import Number, Numeric
 
@@ -78,19 +78,25 @@ class Predictor:
             b.wall_t = t if t < b.wall_t else b.wall_t
 
     def predict_pocket(self, b: Body, reach: Number) -> None:
-        best: tuple[Number, int] | None = None
-        x, y, r2 = b.x, b.y, self.pocket_r2
-        far = (reach + self.pocket_r) ** 2 if reach < self.motion.inf else reach
+        """Queue the first pocket ``b``'s centre enters (tangency counts) before it stops."""
+        best: Number | None = None
+        pocket = 0
+        x, y, ux, uy, r2 = b.x, b.y, b.ux, b.uy, self.pocket_r2
         for k, (cx, cy) in enumerate(self.pockets):
             dx, dy = x - cx, y - cy
-            if dx * dx + dy * dy > far:
-                continue  # out of reach: cannot enter this pocket before stopping
-            s = circle_entry(dx, dy, b.ux, b.uy, r2, self.sqrt)
-            if s is not None and s <= reach and (best is None or s < best[0]):
-                best = (s, k)
+            along = ux * dx + uy * dy
+            c = dx * dx + dy * dy - r2
+            if c <= 0:
+                s = c * 0  # already inside
+            elif along >= 0 or along * along < c:
+                continue  # moving away, or the line passes outside the circle
+            else:
+                s = c / (-along + self.sqrt(along * along - c))
+            if s <= reach and (best is None or s < best):
+                best, pocket = s, k
         if best is not None:
-            t = b.t0 + (self.motion.time_for(b.speed, best[0]) if best[0] > 0 else best[0])
-            self.push(t, POCKET, b, best[1])
+            t = b.t0 + (self.motion.time_for(b.speed, best) if best > 0 else best)
+            self.push(t, POCKET, b, pocket)
 
     def predict_pair(self, p: Body, q: Body, t: Number) -> None:
         """Queue the next contact of ``p`` and ``q`` after ``t``, if any."""
