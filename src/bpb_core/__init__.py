@@ -37,6 +37,8 @@ _EXPORTS: dict[str, str] = {
     "FinalState": "bpb_core.scene",
     "Outcome": "bpb_core.outcome",
     "final_state": "bpb_core.outcome",
+    "simulate_paths": "bpb_core.simulate",
+    "simulate_scene": "bpb_core.simulate",
     # results and reports (pandas is imported when these are used)
     "load_results": "bpb_core.results",
     "load_frame": "bpb_core.results",
@@ -117,3 +119,4 @@ if TYPE_CHECKING:
     from bpb_core.runner import evaluate, run_eval
     from bpb_core.runner_types import ProgressEvent, RetryPolicy, RunOptions, RunResult
     from bpb_core.scene import FinalState, Scene
+    from bpb_core.simulate import simulate_paths, simulate_scene

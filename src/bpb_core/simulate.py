@@ -137,13 +137,7 @@ def simulate_paths(
     Raises:
         BadInput: A path does not exist or a scene file is invalid (file and field named).
     """
-    if horizon is not None and not horizon > 0:
-        raise BadInput(f"--horizon: must be positive, got {horizon}")
-    sim = (
-        make_simulator(simulator, registry, **dict(options or {}))
-        if isinstance(simulator, str)
-        else simulator
-    )
+    sim = _prepare(horizon, simulator, registry, options)
     for path in scene_files(paths):
         yield simulate_scene(load_scene(path), sim, horizon, stability=stability)
 
@@ -169,13 +163,7 @@ def simulate_lines(
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
     global _JOB
-    if horizon is not None and not horizon > 0:
-        raise BadInput(f"--horizon: must be positive, got {horizon}")
-    sim = (
-        make_simulator(simulator, registry, **dict(options or {}))
-        if isinstance(simulator, str)
-        else simulator
-    )
+    sim = _prepare(horizon, simulator, registry, options)
     files = scene_files(paths)
     count = _worker_count(workers, len(files))
     _JOB = (sim, horizon, stability)
@@ -186,6 +174,19 @@ def simulate_lines(
 
     with multiprocessing.get_context("fork").Pool(count) as pool:
         yield from pool.imap(_line, files, chunksize=max(16, min(256, len(files) // (8 * count))))
+
+
+def _prepare(
+    horizon: float | None,
+    simulator: str | Simulator,
+    registry: Registry | None,
+    options: Mapping[str, Any] | None,
+) -> Simulator:
+    if horizon is not None and not horizon > 0:
+        raise BadInput(f"--horizon: must be positive, got {horizon}")
+    if isinstance(simulator, str):
+        return make_simulator(simulator, registry, **dict(options or {}))
+    return simulator
 
 
 def _worker_count(workers: int, scenes: int) -> int:
