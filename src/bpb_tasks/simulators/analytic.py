@@ -27,6 +27,12 @@ Physics conventions (the data contract; the dataset card quotes them):
   re-predicted (queued events of a changed ball are invalidated by a version counter). Balls at rest
   cost nothing until something moves towards them.
 
+* The outcome's event log holds ``ball`` (ids: the two balls, lower first), ``wall`` (ids: the
+  ball; ``wall`` names it), ``pocket`` and ``stop`` (a moving ball comes to rest; no label uses
+  it) events with the centres at that instant. Each ball's ``segments`` cover ``[0, horizon]``
+  (or until pocketed): a new piece starts at every change of its motion (collision, wall,
+  stop), so a piece is either pure deceleration or rest.
+
 The same code runs on float64 or on 50-digit mpmath numbers (``precision=50``), the reference.
 """
 
