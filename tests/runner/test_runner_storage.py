@@ -1,0 +1,54 @@
+"""Run-folder storage and pacing: atomic answers, torn log lines, the rpm cap."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+
+from bpb_core.layout import SceneKey
+from bpb_core.runner_limits import RateLimiter
+from bpb_core.storage import (
+    AnswerRecord,
+    AttemptLog,
+    completed,
+    read_attempts,
+    write_answer,
+)
+
+
+def test_torn_last_line_is_skipped_and_closed_before_appending(tmp_path: Path) -> None:
+    log = AttemptLog(tmp_path)
+    log.append({"n": 1})
+    log.close()
+    with (tmp_path / "attempts.jsonl").open("ab") as handle:
+        handle.write(b'{"n": 2, "text": "cut o')  # what kill -9 can leave
+    assert [e["n"] for e in read_attempts(tmp_path)] == [1]
+    log = AttemptLog(tmp_path)
+    log.append({"n": 3})
+    log.close()
+    assert [e["n"] for e in read_attempts(tmp_path)] == [1, 3]
+
+
+def test_only_ok_and_parse_error_count_as_complete(tmp_path: Path) -> None:
+    key = SceneKey(2.0, 5)
+    for task, status in (("q1", "ok"), ("q2", "parse_error"), ("q3", "api_error")):
+        record = AnswerRecord(
+            scene_id=key.scene_id, horizon=2.0, index=5, task=task, adapter="x:y", status=status
+        )  # type: ignore[arg-type]
+        write_answer(tmp_path, key, record)
+    (tmp_path / "h2/scene_0006").mkdir(parents=True)
+    (tmp_path / "h2/scene_0006/q1.json").write_text('{"scene_id": "h2_00')  # corrupt: redo it
+    assert completed(tmp_path) == {("h2_0005", "q1"), ("h2_0005", "q2")}
+    assert not list((tmp_path / "h2/scene_0005").glob(".*tmp"))
+
+
+def test_rpm_cap_spaces_request_starts() -> None:
+    async def go() -> float:
+        limiter = RateLimiter(rpm=600)  # one start per 0.1 s
+        started = time.monotonic()
+        await asyncio.gather(*(limiter.wait() for _ in range(5)))
+        return time.monotonic() - started
+
+    assert 0.35 < asyncio.run(go()) < 1.0
+    assert asyncio.run(asyncio.wait_for(RateLimiter(None).wait(), 0.1)) is None
