@@ -145,8 +145,9 @@ def _read_one(run: RunFolder, scorers: dict[str, Any], units: _Columns, calls: _
         stable = final.stability.stable if final.stability is not None else None
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
         meta |= {"scene_id": key.scene_id, "stable": stable}
+        folder = str(key.dir(run.path))
         for task in run.tasks:
-            record = read_answer(run.path, key, task)
+            record = read_answer(folder, task)
             scorer = scorers[task]
             rows: list[UnitRow] = scorer.units(record.get("answer"), final, scene)
             units.repeat({**meta, "task": task, "scene_rule": scorer.scene_rule}, len(rows))

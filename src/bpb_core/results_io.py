@@ -10,6 +10,7 @@ restricted to the run's ``horizons`` and, per horizon, to its first ``limit`` in
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -156,19 +157,17 @@ def read_truth(dataset: Path, key: SceneKey) -> tuple[Scene, FinalState]:
     return scene, final
 
 
-def read_answer(run_path: Path, key: SceneKey, task: str) -> dict[str, Any]:
-    """The answer record of one (scene, task); status ``missing`` when there is no file."""
-    path = key.dir(run_path) / f"{task}.json"
-    if not path.is_file():
-        return {"status": "missing", "answer": None, "attempts": 0}
+def read_answer(folder: str, task: str) -> dict[str, Any]:
+    """The answer record of one (scene, task) in the run's scene ``folder``; status ``missing``
+    when there is no file. (String paths: this runs once per answer file.)"""
+    path = os.path.join(folder, f"{task}.json")
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
+        with open(path, "rb") as handle:
+            record = json.loads(handle.read())
+    except FileNotFoundError:
+        return {"status": "missing", "answer": None, "attempts": 0}
+    except (OSError, ValueError) as exc:
         raise BadInput(f"{path}: cannot read answer file: {exc}") from None
-    if not isinstance(record, dict) or record.get("status") not in (
-        "ok",
-        "parse_error",
-        "api_error",
-    ):
+    if not isinstance(record, dict) or record.get("status") not in ANSWER_STATUSES:
         raise BadInput(f"{path}: status: expected ok, parse_error or api_error")
     return record
