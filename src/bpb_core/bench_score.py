@@ -169,3 +169,30 @@ def _explode_timing(
     scale = rows / (answers * per_answer)
     best, mid = min(times) * scale, statistics.median(times) * scale
     return ScoreTiming(task, "answers -> units (scaled)", rows, best, mid)
+
+
+@dataclass(frozen=True)
+class LoadTiming:
+    """Reading and scoring run folders: answer files, unit rows, seconds (cold and warm)."""
+
+    answers: int
+    units: int
+    cold: float
+    warm: float
+
+
+def bench_load(run_dirs: list[str]) -> LoadTiming:
+    """Time :func:`bpb_core.results.load_results` on ``run_dirs``: cold (ground truth not yet
+    cached in this process) and warm (a second read)."""
+    from bpb_core.results import load_results
+    from bpb_core.results_io import read_truth
+
+    read_truth.cache_clear()
+    started = time.perf_counter()
+    results = load_results(run_dirs)
+    cold = time.perf_counter() - started
+    started = time.perf_counter()
+    load_results(run_dirs)
+    warm = time.perf_counter() - started
+    answers = int((results.calls["status"] != "missing").sum())
+    return LoadTiming(answers, len(results.units), cold, warm)

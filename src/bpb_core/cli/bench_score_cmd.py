@@ -11,7 +11,10 @@ from bpb_core.cli.console import stdout
 @click.option("--rows", default=1_000_000, show_default=True, help="Answer rows per scorer.")
 @click.option("--repeats", default=5, show_default=True, help="Timed repeats (best and median).")
 @click.option("--loop-rows", default=50_000, show_default=True, help="Rows for the per-row loop.")
-def bench_score_cmd(rows: int, repeats: int, loop_rows: int) -> None:
+@click.option(
+    "--runs", "run_dirs", multiple=True, help="Also time reading and scoring these run folders."
+)
+def bench_score_cmd(rows: int, repeats: int, loop_rows: int, run_dirs: tuple[str, ...]) -> None:
     """Time the vectorised scorers beside a per-row loop (target: 1M rows in at most 2 s)."""
     from rich.table import Table
 
@@ -28,6 +31,15 @@ def bench_score_cmd(rows: int, repeats: int, loop_rows: int) -> None:
             f"{t.rows_per_second:,.0f}",
         )  # fmt: skip
     stdout().print(table)
+    if run_dirs:
+        from bpb_core.bench_score import bench_load
+
+        load = bench_load(list(run_dirs))
+        stdout().print(
+            f"load_results: {load.answers:,} answer files, {load.units:,} units: "
+            f"{load.cold:.2f} s cold, {load.warm:.2f} s warm "
+            f"({load.answers / load.cold:,.0f} files/s cold)"
+        )
     slow = [t for t in timings if t.method == "vectorised" and t.best > TARGET_SECONDS]
     if slow:
         raise click.exceptions.Exit(1)
