@@ -91,6 +91,7 @@ def _print_tables(built: Report) -> None:
     console = stdout()
     console.print(_leaderboard(tables["summary"], tables["bootstrap"]))
     console.print(_frame_table("Accuracy by horizon (strict)", tables["by_horizon"], percent=True))
+    console.print(_stable_table(tables))
     stasis = tables["stasis"][
         ["run", "baseline", "contact_stasis", "motion_stasis", "contacts", "moved"]
     ]
@@ -135,6 +136,25 @@ def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool) -> Table:
         cells = [_cell(row[c], percent and c not in ("contacts", "moved")) for c in columns]
         cells[0] = _name(str(row["run"]), bool(row.get("baseline", False)))
         table.add_row(*cells)
+    return table
+
+
+def _stable_table(tables: dict[str, pd.DataFrame]) -> Table:
+    from rich.table import Table
+
+    table = Table(title="All scenes vs the stable subset (strict totals)")
+    for name in ("run", "total, all", "total, stable", "stable scene-tasks"):
+        table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
+    stable = {str(r["run"]): r for r in tables["leaderboard_stable"].to_dict(orient="records")}
+    for row in tables["leaderboard"].to_dict(orient="records"):
+        run = str(row["run"])
+        kept = stable.get(run)
+        table.add_row(
+            _name(run, bool(row["baseline"])),
+            _pct(row["total"]),
+            "–" if kept is None else _pct(kept["total"]),
+            "0" if kept is None else str(kept["expected"]),
+        )
     return table
 
 

@@ -46,11 +46,13 @@ class Report:
     files: dict[str, Path] = field(default_factory=dict)
 
     def summary_json(self) -> dict[str, Any]:
-        """JSON-ready summary for scripts: leaderboard, CIs, stasis and written files."""
+        """JSON-ready summary for scripts: leaderboard, CIs, stasis, the stable-subset
+        leaderboard and the files written."""
         return {
             "leaderboard": summary_records(self.results.units),
             "bootstrap": _records(self.tables["bootstrap"]),
             "stasis": _records(self.tables["stasis"]),
+            "stable": _records(self.tables["leaderboard_stable"]),
             "files": {name: str(path) for name, path in self.files.items()},
         }
 
@@ -202,7 +204,14 @@ def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
             "Accuracy by horizon (answered only)",
             html.table(tables["by_horizon_answered"], percent=horizons),
         ),
-        ("Leaderboard on stable scenes", html.table(tables["leaderboard_stable"], percent=SCORES)),
+        (
+            "Leaderboard on stable scenes",
+            html.table(
+                tables["leaderboard_stable"],
+                percent=SCORES,
+                empty="no stable scenes (the dataset has no stability annotation?)",
+            ),
+        ),
         (
             "Bootstrap 95% intervals",
             html.table(tables["bootstrap"], percent=("estimate", "lo", "hi")),

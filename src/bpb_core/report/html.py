@@ -69,11 +69,12 @@ def table(
     *,
     percent: Collection[str] = (),
     drop: Sequence[str] = ("adapter", "model"),
+    empty: str = "nothing to show",
 ) -> str:
     """An HTML table of ``frame``: ``percent`` columns as percentages, baseline rows greyed and
     marked."""
     if frame.empty:
-        return '<p class="muted">nothing to show</p>'
+        return f'<p class="muted">{html.escape(empty)}</p>'
     columns = [c for c in frame.columns if c not in drop and c != "baseline"]
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in columns)
     rows = []
