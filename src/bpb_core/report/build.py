@@ -228,5 +228,6 @@ def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
             html.table(tables["confusion"], percent=("precision", "recall", "f1")),
         ),
         ("Q3 distance error (m)", html.table(tables["distance"])),
+        ("Q3 distance error by horizon (m)", html.table(tables["distance_by_horizon"])),
         ("Tokens, cost, latency, retries", html.table(tables["usage"])),
     ]
