@@ -127,4 +127,3 @@ def line_contact(
     if disc <= 0:
         return None
     return c / (-b + sqrt(disc))
-

@@ -1,6 +1,7 @@
 """``bpb bench sim``: speed against error of the simulators, side by side on the same scenes.
 
-Every scene is run by every contestant in turn (interleaved, so machine noise hits all alike) and
+Every scene is run by every contestant in turn (interleaved, so machine noise hits all alike;
+runs under 5 ms are repeated up to 5 times and the quickest counts) and
 compared with the 50-digit mpmath run of the analytic simulator: final-position error (per scene
 the largest error over the balls on the table in both; then max and median over scenes) and the
 number of scenes whose Q1 contacts, Q2 walls or pocketed set differ from the reference.
@@ -20,6 +21,7 @@ from pathlib import Path
 
 from bpb_core.interfaces import Simulator
 from bpb_core.outcome import Outcome
+from bpb_core.scene import Scene
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scenes
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
@@ -92,9 +94,8 @@ def bench_simulators(
     for index, scene in enumerate(sample):
         truth: Outcome | None = None
         for name, sim in sims.items():
-            started = time.perf_counter()
-            outcome = sim.run(scene)
-            times[name] += time.perf_counter() - started
+            outcome, seconds = timed_run(sim, scene)
+            times[name] += seconds
             truth = outcome if truth is None else truth
             errors[name].append(position_error(outcome, truth))
             for k, (a, b) in enumerate(zip(labels(outcome), labels(truth), strict=True)):
@@ -112,6 +113,18 @@ def bench_simulators(
         for name in sims
     ]
     return SimBench(scenes, seed, rows)
+
+
+def timed_run(sim: Simulator, scene: Scene, budget: float = 0.005) -> tuple[Outcome, float]:
+    """Run ``sim`` on ``scene``; fast runs are repeated (up to 5 times, within ``budget``
+    seconds) and the quickest counts, so a preempted sub-millisecond run does not dominate."""
+    best, spent, runs = math.inf, 0.0, 0
+    while runs < 5 and (runs == 0 or spent < budget):
+        started = time.perf_counter()
+        outcome = sim.run(scene)
+        seconds = time.perf_counter() - started
+        best, spent, runs = min(best, seconds), spent + seconds, runs + 1
+    return outcome, best
 
 
 def position_error(outcome: Outcome, truth: Outcome) -> float:
