@@ -80,10 +80,10 @@ def hand_scene() -> tuple[Scene, Outcome]:
 
 def test_final_and_trajectory_from_a_hand_made_outcome() -> None:
     scene, outcome = hand_scene()
-    final = render_final(scene, outcome, SPEC)
+    final = render_final(scene, outcome, SPEC).convert("RGB")
     assert near(ring_pixel(final, (1.14285, 0.5)), ball_colour(0))
     assert not near(ring_pixel(final, (1.2, 0.5)), ball_colour(1))  # pocketed: not drawn
-    traj = render_trajectory(scene, outcome, SPEC)
+    traj = render_trajectory(scene, outcome, SPEC).convert("RGB")
     x, y = SPEC.to_px(0.85, 0.5)  # on the cue ball's path, away from both balls
     assert near(tuple(traj.getpixel((round(x), round(y)))), ball_colour(0))  # type: ignore[arg-type]
     assert render_init(scene, SPEC).size == final.size == traj.size

@@ -1,8 +1,8 @@
 """The three scene images: the initial state, the state at the horizon and the trajectories.
 
 All three share one canvas (:class:`~bpb_tasks.billiards.render_canvas.CanvasSpec`): the same
-size, scale and ball radius, so they overlay exactly. :func:`render_pngs` returns encoded PNG
-bytes ready to be written.
+size, scale and ball radius, so they overlay exactly. They are drawn in palette mode (see
+:mod:`bpb_tasks.billiards.render_palette`); :func:`render_pngs` returns encoded PNG bytes.
 """
 
 from __future__ import annotations
@@ -16,51 +16,54 @@ from bpb_core.outcome import CUE_ID, Outcome
 from bpb_core.scene import Scene
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.render_canvas import CanvasSpec, background, to_palette
+from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render_palette import (
+    GHOST_ALPHA,
+    base,
+    header_y,
+    palette_for,
+    stamp,
+    text_patch,
+)
 from bpb_tasks.billiards.render_trajectory import draw_trajectories
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
+Point = tuple[float, float]
 
 
 def paste_ball(
-    img: Image.Image, spec: CanvasSpec, ball_id: int, pos: tuple[float, float], alpha: int = 255
+    img: Image.Image, spec: CanvasSpec, ball_id: int, pos: Point, alpha: int = 255
 ) -> None:
     """Draw ball ``ball_id`` centred on table point ``pos``."""
-    sprite = st.ball_sprite(ball_id, spec.radius_px, alpha)
+    sprite, mask = stamp(spec, ball_id, alpha)
     px, py = spec.to_px(*pos)
     half = sprite.width // 2
-    img.paste(sprite, (round(px) - half, round(py) - half), sprite)
+    img.paste(sprite, (round(px) - half, round(py) - half), mask)
 
 
-def title(img: Image.Image, spec: CanvasSpec, left: str, right: str = "") -> None:
-    """Write the header line above the table: ``left`` in bold, ``right`` right-aligned."""
-    draw = ImageDraw.Draw(img)
-    s = spec.scale
-    y = spec.top / 2 - 14 * s
-    draw.text(
-        (spec.left - 60 * s, y), left, fill=st.INK, font=st.font(round(19 * s), True), anchor="lm"
-    )
-    if right:
-        x = img.width - spec.right
-        draw.text((x, y), right, fill=st.MUTED, font=st.font(round(16 * s)), anchor="rm")
+def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
+    """Right-aligned grey note in the header line."""
+    patch = text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE)
+    x = img.width - spec.right - patch.width
+    img.paste(patch, (x, round(header_y(spec) - patch.height / 2)))
 
 
 def render_init(scene: Scene, spec: CanvasSpec) -> Image.Image:
-    """The initial state: balls, the cue velocity arrow and its speed in m/s (RGB)."""
-    img = background(spec).copy()
+    """The initial state: balls, the cue velocity arrow and its speed in m/s."""
+    img = base(spec, "Initial state, t = 0 s").copy()
     label = _draw_velocity(img, spec, scene)  # under the balls, so no id is hidden
     for ball in scene.balls:
         paste_ball(img, spec, ball.id, ball.pos)
-    speed = math.hypot(*scene.ball(CUE_ID).vel)
     if label is not None:
         _speed_label(img, spec, *label)
-    title(img, spec, "Initial state, t = 0 s", f"cue ball 0 speed {speed:.3f} m/s")
+    speed = math.hypot(*scene.ball(CUE_ID).vel)
+    header_note(img, spec, f"cue ball 0 speed {speed:.3f} m/s")
     return img
 
 
 def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
-    """The state at the horizon; pocketed balls are absent and listed in the header (RGB)."""
-    img = background(spec).copy()
+    """The state at the horizon; pocketed balls are absent and listed in the header."""
+    img = base(spec, f"State at t = {outcome.horizon:g} s").copy()
     pocketed = []
     for ball in sorted(scene.balls, key=lambda b: b.id):
         pos = outcome.positions.get(ball.id)
@@ -69,28 +72,28 @@ def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Imag
         else:
             paste_ball(img, spec, ball.id, pos)
     noun = "ball" if len(pocketed) == 1 else "balls"
-    note = f"pocketed: {noun} {', '.join(pocketed)}" if pocketed else "no ball pocketed"
-    title(img, spec, f"State at t = {outcome.horizon:g} s", note)
+    header_note(
+        img, spec, f"pocketed: {noun} {', '.join(pocketed)}" if pocketed else "no ball pocketed"
+    )
     return img
 
 
 def render_trajectory(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
     """Paths over [0, horizon], start positions faded, end positions solid, events marked."""
-    img = background(spec).copy()
+    img = base(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True).copy()
     for ball in scene.balls:
-        paste_ball(img, spec, ball.id, ball.pos, alpha=110)
-    draw_trajectories(img, spec, outcome)
+        paste_ball(img, spec, ball.id, ball.pos, alpha=GHOST_ALPHA)
+    draw_trajectories(img, spec, palette_for(spec), outcome)
     for ball in scene.balls:
         pos = outcome.positions.get(ball.id)
         if pos is not None:
             paste_ball(img, spec, ball.id, pos)
-    title(img, spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", "")
     return img
 
 
 def _draw_velocity(
     img: Image.Image, spec: CanvasSpec, scene: Scene
-) -> tuple[tuple[float, float], tuple[float, float], str] | None:
+) -> tuple[Point, Point, str] | None:
     """Draw the cue arrow; return where its speed label goes (tip, direction, text)."""
     cue = scene.ball(CUE_ID)
     vx, vy = cue.vel
@@ -102,79 +105,71 @@ def _draw_velocity(
     length = 0.10 + 0.12 * min(speed, 3.0)  # metres; direction matters, the label gives speed
     start = spec.to_px(cue.pos[0] + ux * r * 1.15, cue.pos[1] + uy * r * 1.15)
     end = spec.to_px(cue.pos[0] + ux * (r + length), cue.pos[1] + uy * (r + length))
-    arrow(ImageDraw.Draw(img), start, end, spec.scale)
+    pal = palette_for(spec)
+    arrow(ImageDraw.Draw(img), start, end, spec.scale, pal.ink(st.ARROW), pal.ink(st.HALO))
     return end, (ux, -uy), f"{speed:.2f} m/s"
 
 
 def arrow(
-    draw: ImageDraw.ImageDraw, start: tuple[float, float], end: tuple[float, float], s: float
+    draw: ImageDraw.ImageDraw, start: Point, end: Point, s: float, ink: int, halo: int
 ) -> None:
     """A thick arrow with a dark halo from ``start`` to ``end`` (pixels)."""
     dx, dy = end[0] - start[0], end[1] - start[1]
     n = math.hypot(dx, dy) or 1.0
     ux, uy = dx / n, dy / n
     head, wing = 16 * s, 8 * s
-    base = (end[0] - ux * head, end[1] - uy * head)
+    back = (end[0] - ux * head, end[1] - uy * head)
     tip = [
         end,
-        (base[0] - uy * wing, base[1] + ux * wing),
-        (base[0] + uy * wing, base[1] - ux * wing),
+        (back[0] - uy * wing, back[1] + ux * wing),
+        (back[0] + uy * wing, back[1] - ux * wing),
     ]
-    draw.line((start, base), fill=st.HALO, width=round(7 * s))
-    draw.polygon(_grow(tip, 2.0 * s), fill=st.HALO)
-    draw.line((start, base), fill=st.ARROW, width=round(4 * s))
-    draw.polygon(tip, fill=st.ARROW)
+    draw.line((start, back), fill=halo, width=round(7 * s))
+    draw.polygon(_grow(tip, 3.2 * s), fill=halo)
+    draw.line((start, back), fill=ink, width=round(4 * s))
+    draw.polygon(tip, fill=ink)
 
 
-def _grow(points: list[tuple[float, float]], by: float) -> list[tuple[float, float]]:
+def _grow(points: list[Point], by: float) -> list[Point]:
     cx = sum(p[0] for p in points) / len(points)
     cy = sum(p[1] for p in points) / len(points)
     out = []
     for x, y in points:
         d = math.hypot(x - cx, y - cy) or 1.0
-        out.append((x + (x - cx) / d * by * 1.6, y + (y - cy) / d * by * 1.6))
+        out.append((x + (x - cx) / d * by, y + (y - cy) / d * by))
     return out
 
 
 def _speed_label(
-    img: Image.Image,
-    spec: CanvasSpec,
-    anchor: tuple[float, float],
-    direction: tuple[float, float],
-    text: str,
+    img: Image.Image, spec: CanvasSpec, tip: Point, direction: Point, text: str
 ) -> None:
-    draw = ImageDraw.Draw(img)
     font = st.font(round(17 * spec.scale), bold=True)
-    box = draw.textbbox((0, 0), text, font=font)
-    w, h = box[2] - box[0] + 12 * spec.scale, box[3] - box[1] + 10 * spec.scale
+    patch = text_patch(
+        spec, text, font, st.INK, st.PAGE, pad=round(6 * spec.scale), outline=st.HALO
+    )
+    w, h = patch.size
     gap = 10 * spec.scale
-    cx = anchor[0] + direction[0] * (w / 2 + gap)
-    cy = anchor[1] + direction[1] * (h / 2 + gap)
-    cx = min(max(cx, w / 2 + 2), img.width - w / 2 - 2)
-    cy = min(max(cy, h / 2 + 2), img.height - h / 2 - 2)
-    rect = (cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2)
-    draw.rounded_rectangle(rect, radius=5 * spec.scale, fill=st.PAGE, outline=st.HALO, width=1)
-    draw.text((cx, cy), text, fill=st.INK, font=font, anchor="mm")
+    cx = tip[0] + direction[0] * (w / 2 + gap)
+    cy = tip[1] + direction[1] * (h / 2 + gap)
+    (x0, y0), (x1, y1) = spec.to_px(0, spec.height_m), spec.to_px(spec.width_m, 0)
+    cx = min(max(cx, x0 + w / 2 + 2), x1 - w / 2 - 2)  # keep it on the cloth, off the axes
+    cy = min(max(cy, y0 + h / 2 + 2), y1 - h / 2 - 2)
+    img.paste(patch, (round(cx - w / 2), round(cy - h / 2)))
 
 
-def encode_png(img: Image.Image, spec: CanvasSpec, ball_ids: tuple[int, ...], level: int) -> bytes:
-    """PNG bytes of ``img`` as an 8-bit palette image (deterministic for equal input)."""
+def encode_png(img: Image.Image, level: int) -> bytes:
+    """PNG bytes of a palette image (deterministic for equal input)."""
     out = io.BytesIO()
-    to_palette(img, spec, ball_ids).save(out, format="PNG", compress_level=level)
+    img.save(out, format="PNG", compress_level=level)
     return out.getvalue()
 
 
 def render_pngs(scene: Scene, outcome: Outcome, config: DatasetConfig) -> dict[str, bytes]:
     """``init.png``, ``final.png`` and ``trajectory.png`` of a simulated scene, encoded."""
     spec = CanvasSpec.from_config(config)
-    ids = tuple(sorted(b.id for b in scene.balls))
     level = config.image.compress_level
-    images = (
-        render_init(scene, spec),
-        render_final(scene, outcome, spec),
-        render_trajectory(scene, outcome, spec),
-    )
     return {
-        name: encode_png(img, spec, ids, level)
-        for name, img in zip(IMAGE_NAMES, images, strict=True)
+        "init.png": encode_png(render_init(scene, spec), level),
+        "final.png": encode_png(render_final(scene, outcome, spec), level),
+        "trajectory.png": encode_png(render_trajectory(scene, outcome, spec), level),
     }

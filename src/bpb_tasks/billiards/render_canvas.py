@@ -1,9 +1,8 @@
 """The canvas shared by every scene image: geometry, the static table background, the palette.
 
 The background (page, rails, cloth, grid, pockets, axes with ticks and labels) is drawn once per
-process and copied per image. Images are drawn in RGB and stored as 8-bit palette PNGs: the
-palette is fixed per canvas (derived once from the background and the sprites), which makes
-encoding several times faster than RGB and keeps the files small and deterministic.
+process in RGB; :mod:`bpb_tasks.billiards.render_palette` turns it into the 8-bit palette image
+that every scene image starts from.
 """
 
 from __future__ import annotations
@@ -152,34 +151,3 @@ def _vertical_text(
     target.paste(
         rotated, (round(centre[0] - rotated.width / 2), round(centre[1] - rotated.height / 2))
     )
-
-
-@functools.cache
-def palette(spec: CanvasSpec, ball_ids: tuple[int, ...]) -> Image.Image:
-    """A fixed 256-colour palette image for ``spec``: every colour the renderer draws with.
-
-    Derived from the background plus every sprite and stroke colour, so quantising a scene image
-    to it is exact for flat colours and close for antialiased edges.
-    """
-    base = background(spec).copy()
-    strip = Image.new("RGB", (base.width, 120), st.CLOTH)
-    x = 4
-    for ball_id in ball_ids:
-        for alpha in (255, 110):
-            sprite = st.ball_sprite(ball_id, spec.radius_px, alpha)
-            strip.paste(sprite, (x, 4), sprite)
-            x += sprite.width + 2
-    sample = ImageDraw.Draw(strip)
-    colours = [st.ARROW, st.HALO, st.MARK_BALL, st.MARK_WALL, st.MARK_POCKET, st.MUTED, st.PAGE]
-    colours += [st.ball_colour(i) for i in ball_ids]
-    for i, colour in enumerate(colours):
-        sample.rectangle((4 + 30 * i, 70, 30 + 30 * i, 116), fill=colour)
-    combined = Image.new("RGB", (base.width, base.height + strip.height))
-    combined.paste(base, (0, 0))
-    combined.paste(strip, (0, base.height))
-    return combined.quantize(colors=256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-
-
-def to_palette(img: Image.Image, spec: CanvasSpec, ball_ids: tuple[int, ...]) -> Image.Image:
-    """``img`` mapped to the canvas's fixed palette (no dithering: flat areas stay flat)."""
-    return img.quantize(palette=palette(spec, ball_ids), dither=Image.Dither.NONE)

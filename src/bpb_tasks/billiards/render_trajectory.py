@@ -8,12 +8,16 @@ contact point, wall contacts by a blue diamond at the centre, pocketings by a wh
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw
 
 from bpb_core.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.render_canvas import CanvasSpec
+
+if TYPE_CHECKING:
+    from bpb_tasks.billiards.render_palette import Palette
 
 Point = tuple[float, float]
 
@@ -43,53 +47,53 @@ def path_points(segments: tuple[Segment, ...]) -> list[Point]:
     return points
 
 
-def draw_trajectories(img: Image.Image, spec: CanvasSpec, outcome: Outcome) -> None:
+def draw_trajectories(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
     """Draw every moving ball's path (cue ball last, on top), then the event markers."""
     draw = ImageDraw.Draw(img)
     s = spec.scale
+    halo = pal.ink(st.HALO)
     order = sorted(outcome.segments, key=lambda i: (i == 0, i))
     for ball_id in order:
         pts = [spec.to_px(*p) for p in path_points(outcome.segments[ball_id])]
         if len(pts) < 2:
             continue
-        draw.line(pts, fill=st.HALO, width=round(6 * s), joint="curve")
-        draw.line(pts, fill=st.ball_colour(ball_id), width=round(3 * s), joint="curve")
+        draw.line(pts, fill=halo, width=round(6 * s), joint="curve")
+        draw.line(pts, fill=pal.ink(st.ball_colour(ball_id)), width=round(3 * s), joint="curve")
     for event in outcome.events:
-        _mark(draw, spec, event)
-    _legend(img, spec)
+        _mark(draw, spec, pal, event)
 
 
-def _mark(draw: ImageDraw.ImageDraw, spec: CanvasSpec, event: Event) -> None:
+def _mark(draw: ImageDraw.ImageDraw, spec: CanvasSpec, pal: Palette, event: Event) -> None:
     if not event.positions:
         return
-    s = spec.scale
+    s, halo = spec.scale, pal.ink(st.HALO)
     if event.kind == "ball" and len(event.positions) >= 2:
         (ax, ay), (bx, by) = event.positions[:2]
         x, y = spec.to_px((ax + bx) / 2, (ay + by) / 2)
         r = 7 * s
+        draw.ellipse((x - r - 2, y - r - 2, x + r + 2, y + r + 2), outline=halo, width=round(5 * s))
         draw.ellipse(
-            (x - r - 2, y - r - 2, x + r + 2, y + r + 2), outline=st.HALO, width=round(5 * s)
+            (x - r, y - r, x + r, y + r), outline=pal.ink(st.MARK_BALL), width=round(3 * s)
         )
-        draw.ellipse((x - r, y - r, x + r, y + r), outline=st.MARK_BALL, width=round(3 * s))
     elif event.kind == "wall":
         x, y = spec.to_px(*event.positions[0])
         r = 7 * s
         diamond = [(x, y - r), (x + r, y), (x, y + r), (x - r, y)]
-        draw.polygon(diamond, fill=st.MARK_WALL, outline=st.HALO, width=max(1, round(2 * s)))
+        draw.polygon(diamond, fill=pal.ink(st.MARK_WALL), outline=halo, width=max(1, round(2 * s)))
     elif event.kind == "pocket":
         x, y = spec.to_px(*event.positions[0])
         r = 8 * s
-        for dx in (-r, r):
-            draw.line(((x - dx, y - r), (x + dx, y + r)), fill=st.HALO, width=round(6 * s))
-        for dx in (-r, r):
-            draw.line(((x - dx, y - r), (x + dx, y + r)), fill=st.MARK_POCKET, width=round(3 * s))
+        for ink, width in ((halo, 6), (pal.ink(st.MARK_POCKET), 3)):
+            for dx in (-r, r):
+                draw.line(((x - dx, y - r), (x + dx, y + r)), fill=ink, width=round(width * s))
 
 
-def _legend(img: Image.Image, spec: CanvasSpec) -> None:
+def draw_legend(img: Image.Image, spec: CanvasSpec) -> None:
+    """The marker legend in the header of the trajectory image (drawn once, in RGB)."""
     draw = ImageDraw.Draw(img)
     s = spec.scale
     font = st.font(round(14 * s))
-    y = spec.top / 2 - 14 * s
+    y = spec.top / 2 - 14 * s  # the header line (render_palette.header_y)
     x = float(img.width - spec.right)
     items = (
         ("pocketed", "pocket"),

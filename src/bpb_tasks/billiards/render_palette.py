@@ -1,0 +1,124 @@
+"""The fixed 8-bit palette of a canvas, and the palette-mode pieces drawn from it.
+
+Scene images are drawn directly in palette ("P") mode: copying a 1-byte-per-pixel base and
+encoding it costs a third of RGB, and no per-image colour quantisation is needed. Everything
+antialiased (ball sprites, text) is composed in RGB once, mapped to the palette, and pasted with
+a binary mask. The palette holds every flat colour exactly, plus median-cut colours for the
+antialiased edges; it depends only on the canvas, so it is identical in every process.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+from PIL import Image, ImageDraw
+
+from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards.render_canvas import CanvasSpec, background
+
+FLAT: tuple[st.RGB, ...] = (
+    st.PAGE, st.INK, st.MUTED, st.CLOTH, st.GRID, st.RAIL, st.CUSHION, st.POCKET, st.ARROW,
+    st.HALO, st.MARK_BALL, st.MARK_WALL, st.MARK_POCKET, *st.BALL_COLOURS,
+)  # fmt: skip
+MAX_IDS = 16  # sprites of ids 0..15 shape the palette (the config allows up to 16 balls)
+GHOST_ALPHA = 110
+
+
+@dataclass(frozen=True, eq=False)
+class Palette:
+    """A 256-colour palette; ``ink`` gives the index of a flat colour for ImageDraw fills."""
+
+    image: Image.Image
+    index: dict[st.RGB, int] = field(default_factory=dict)
+
+    def ink(self, colour: st.RGB) -> int:
+        """Palette index of ``colour`` (one of :data:`FLAT`)."""
+        return self.index[colour]
+
+    def quantize(self, img: Image.Image) -> Image.Image:
+        """``img`` (RGB) mapped to this palette, without dithering."""
+        return img.quantize(palette=self.image, dither=Image.Dither.NONE)
+
+
+def _sample(spec: CanvasSpec) -> Image.Image:
+    """Background plus every sprite and some text: the colours images are made of."""
+    base = background(spec)
+    strip = Image.new("RGB", (base.width, 3 * int(2 * spec.radius_px + 8)), st.CLOTH)
+    x, y = 2, 2
+    for ball_id in range(MAX_IDS):
+        for alpha in (255, GHOST_ALPHA):
+            sprite = st.ball_sprite(ball_id, spec.radius_px, alpha)
+            if x + sprite.width > strip.width:
+                x, y = 2, y + sprite.height + 2
+            strip.paste(sprite, (x, y), sprite)
+            x += sprite.width + 2
+    draw = ImageDraw.Draw(strip)
+    draw.text((4, strip.height - 4), "0.123456789 m/s", fill=st.INK, font=st.font(17), anchor="ld")
+    sample = Image.new("RGB", (base.width, base.height + strip.height))
+    sample.paste(base, (0, 0))
+    sample.paste(strip, (0, base.height))
+    return sample
+
+
+@functools.cache
+def palette_for(spec: CanvasSpec) -> Palette:
+    """The canvas's palette (computed once per process)."""
+    flat = list(dict.fromkeys(FLAT))
+    extra = _sample(spec).quantize(256 - len(flat), method=Image.Quantize.MEDIANCUT)
+    colours = [c for rgb in flat for c in rgb] + (extra.getpalette() or [])[: 3 * (256 - len(flat))]
+    colours += [0] * (768 - len(colours))
+    image = Image.new("P", (1, 1))
+    image.putpalette(colours)
+    return Palette(image, {rgb: i for i, rgb in enumerate(flat)})
+
+
+@functools.cache
+def base(spec: CanvasSpec, header: str = "", legend: bool = False) -> Image.Image:
+    """The background in palette mode with a fixed header (and the trajectory legend)."""
+    from bpb_tasks.billiards.render_trajectory import draw_legend
+
+    img = background(spec).copy()
+    if header:
+        s = spec.scale
+        draw = ImageDraw.Draw(img)
+        font = st.font(round(19 * s), True)
+        draw.text((spec.left - 60 * s, header_y(spec)), header, fill=st.INK, font=font, anchor="lm")
+    if legend:
+        draw_legend(img, spec)
+    return palette_for(spec).quantize(img)
+
+
+def header_y(spec: CanvasSpec) -> float:
+    """Vertical centre of the header line."""
+    return spec.top / 2 - 14 * spec.scale
+
+
+@functools.cache
+def stamp(spec: CanvasSpec, ball_id: int, alpha: int = 255) -> tuple[Image.Image, Image.Image]:
+    """Ball sprite in palette mode (edges blended into the cloth) and its binary paste mask."""
+    sprite = st.ball_sprite(ball_id, spec.radius_px, alpha)
+    flat = Image.new("RGB", sprite.size, st.CLOTH)
+    flat.paste(sprite, (0, 0), sprite)
+    mask = sprite.getchannel("A").point(lambda a: 255 if a >= 24 else 0)
+    return palette_for(spec).quantize(flat), mask
+
+
+def text_patch(
+    spec: CanvasSpec,
+    text: str,
+    font: st.Font,
+    colour: st.RGB,
+    back: st.RGB,
+    pad: int = 2,
+    outline: st.RGB | None = None,
+) -> Image.Image:
+    """``text`` antialiased on a ``back`` rectangle (optionally outlined), in palette mode."""
+    left, top, right, bottom = font.getbbox(text)
+    w, h = int(right - left) + 2 * pad, int(bottom - top) + 2 * pad
+    patch = Image.new("RGB", (w, h), back)
+    draw = ImageDraw.Draw(patch)
+    if outline is not None:
+        draw.rectangle((0, 0, w - 1, h - 1), outline=outline, width=1)
+    draw.text((pad - left, pad - top), text, fill=colour, font=font)
+    return palette_for(spec).quantize(patch)
