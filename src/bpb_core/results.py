@@ -33,6 +33,7 @@ META_DTYPES: dict[str, str] = {
     "adapter": "category",
     "model": "category",
     "baseline": "bool",
+    "dataset": "category",
     "task": "category",
     "horizon": "float64",
     "index": "int32",

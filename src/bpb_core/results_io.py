@@ -51,7 +51,13 @@ class RunFolder:
             "adapter": self.adapter,
             "model": self.model,
             "baseline": self.baseline,
+            "dataset": self.dataset_id,
         }
+
+    @property
+    def dataset_id(self) -> str:
+        """The dataset's hash from ``run.json`` (its path when no hash is recorded)."""
+        return str(self.manifest.get("dataset_hash") or self.dataset)
 
 
 def find_runs(paths: Path | str | Iterable[Path | str]) -> list[RunFolder]:

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from bpb_core.errors import BadInput
 from bpb_core.results_tables import (
     METRICS,
     RUN_COLUMNS,
@@ -138,12 +139,18 @@ def paired_comparison(
 ) -> pd.DataFrame:
     """Run ``a`` minus run ``b`` on the scenes both answered, per metric.
 
+    Raises:
+        BadInput: The two runs answered different datasets (same scene ids, other scenes).
+
     Returns:
         One row per metric: ``a, b, metric, a_score, b_score, diff, lo, hi, scenes, wins,
         losses, ties, p_value`` (``diff`` = a - b as a mean over horizons; ``lo``/``hi`` its
         bootstrap interval; ``wins``/``losses`` count scenes where a scored higher/lower;
         ``p_value`` from the exact sign test on them).
     """
+    datasets = {run: _datasets(units, run) for run in (a, b)}
+    if datasets[a] != datasets[b]:
+        raise BadInput(f"runs {a!r} and {b!r}: answered different datasets; nothing to pair")
     left, right = score_matrix(units, a, view), score_matrix(units, b, view)
     shared = left.index.intersection(right.index)
     diff = left.loc[shared] - right.loc[shared]
@@ -176,10 +183,14 @@ def paired_comparison(
     return pd.DataFrame(rows)
 
 
+def _datasets(units: pd.DataFrame, run: str) -> set[str]:
+    return set(units.loc[units["run"] == run, "dataset"].astype(str).unique())
+
+
 def all_pairs(
     units: pd.DataFrame, runs: Sequence[str] | None = None, **kwargs: object
 ) -> pd.DataFrame:
-    """:func:`paired_comparison` of every pair of ``runs``.
+    """:func:`paired_comparison` of every pair of ``runs`` that answered the same dataset.
 
     By default: every pair of model (non-baseline) runs, then every model against every
     baseline; nothing when there is no model run.
@@ -191,5 +202,6 @@ def all_pairs(
         pairs += [(a, b) for a in models for b in baselines]
     else:
         pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1 :]]
+    pairs = [(a, b) for a, b in pairs if _datasets(units, a) == _datasets(units, b)]
     frames = [paired_comparison(units, a, b, **kwargs) for a, b in pairs]  # type: ignore[arg-type]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()

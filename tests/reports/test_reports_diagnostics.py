@@ -95,3 +95,21 @@ def test_sign_test_is_a_symmetric_probability(wins: int, losses: int) -> None:
     assert 0.0 <= p <= 1.0 and p == pytest.approx(sign_test(losses, wins))
     if wins == losses:
         assert p == 1.0
+
+
+def test_runs_on_different_datasets_are_not_paired(runs: Path, tmp_path: Path) -> None:
+    from reports_fixture import all_answers, oracle_answer, write_dataset, write_run
+
+    from bpb_core.errors import BadInput
+    from bpb_core.results_stats import all_pairs
+
+    other = write_dataset(tmp_path / "other_data")
+    write_run(runs / "litellm_other", "litellm:other", other, all_answers(oracle_answer))
+    units = load_results(runs).units
+    with pytest.raises(BadInput, match="different datasets"):
+        paired_comparison(units, "litellm_other", "litellm_model")
+    pairs = all_pairs(units, n_boot=50)
+    assert set(zip(pairs["a"], pairs["b"], strict=True)) == {
+        ("litellm_model", "baseline_oracle"),
+        ("litellm_model", "baseline_stasis"),
+    }
