@@ -61,8 +61,8 @@ def sim(
         )
     stdout().print(table)
     if result.simulate_ms is not None:
-        for n, ms in result.simulate_ms.items():
-            stdout().print(f"bpb simulate, {n} worker(s): {ms:.3f} ms/scene")
+        for label, ms in result.simulate_ms.items():
+            stdout().print(f"bpb simulate, {label}: {ms:.3f} ms/scene")
     if plot is not None:
         bench_report.plot(result, plot)
     if markdown is not None:

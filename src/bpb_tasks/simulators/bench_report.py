@@ -34,8 +34,7 @@ def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
         )
     if result.simulate_ms is not None:
         figures = ", ".join(
-            f"{n} worker{'s' if n > 1 else ''}: **{ms:.3f} ms/scene**"
-            for n, ms in result.simulate_ms.items()
+            f"{label}: **{ms:.3f} ms/scene**" for label, ms in result.simulate_ms.items()
         )
         lines += [
             "",
