@@ -47,17 +47,20 @@ def sim(
     if simulate_scenes > 0:
         result = bench.with_simulate_timing(result, simulate_scenes)
     table = Table(title=f"bpb bench sim: {result.scenes} scenes, {result.machine}, {result.day}")
-    for column in ("simulator", "ms/scene", "max err (m)", "median err (m)", "Q1", "Q2", "pocket"):
-        table.add_column(column, justify="left" if column == "simulator" else "right")
+    headers = ("simulator", "ms/scene", "max err m", "median err m", "Q1", "Q2", "pocket", "Q3")
+    for column in headers:
+        first = column == "simulator"
+        table.add_column(column, justify="left" if first else "right", no_wrap=first)
     for row in result.rows:
         table.add_row(
             row.name,
             f"{row.ms_per_scene:.3g}",
-            f"{row.max_error:.2e}",
-            f"{row.median_error:.2e}",
+            f"{row.max_error:.1e}",
+            f"{row.median_error:.1e}",
             str(row.q1_disagree),
             str(row.q2_disagree),
             str(row.pocket_disagree),
+            str(row.q3_wrong),
         )
     stdout().print(table)
     if result.simulate_ms is not None:

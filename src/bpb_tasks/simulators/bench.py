@@ -41,6 +41,7 @@ class SimRow:
     q1_disagree: int
     q2_disagree: int
     pocket_disagree: int
+    q3_wrong: int
 
 
 @dataclass(frozen=True)
@@ -86,10 +87,11 @@ def bench_simulators(
 ) -> SimBench:
     """Run every contestant on ``scenes`` random 7-ball scenes and compare with the reference."""
     reference = AnalyticSimulator(precision=50)
-    sims = {"analytic mpmath50 (reference)": reference, **contestants(dts)}
+    sims = {"mpmath50 (reference)": reference, **contestants(dts)}
     times: dict[str, float] = dict.fromkeys(sims, 0.0)
     errors: dict[str, list[float]] = {name: [] for name in sims}
     flips: dict[str, list[int]] = {name: [0, 0, 0] for name in sims}
+    wrong: dict[str, int] = dict.fromkeys(sims, 0)
     sample = list(random_scenes(scenes, seed=seed))
     for index, scene in enumerate(sample):
         truth: Outcome | None = None
@@ -98,6 +100,7 @@ def bench_simulators(
             times[name] += seconds
             truth = outcome if truth is None else truth
             errors[name].append(position_error(outcome, truth))
+            wrong[name] += q3_wrong(outcome, truth, scene.physics.ball_radius)
             for k, (a, b) in enumerate(zip(labels(outcome), labels(truth), strict=True)):
                 flips[name][k] += a != b
         if progress is not None:
@@ -108,7 +111,10 @@ def bench_simulators(
             1000 * times[name] / len(sample),
             max(errors[name]),
             statistics.median(errors[name]),
-            *flips[name],
+            flips[name][0],
+            flips[name][1],
+            flips[name][2],
+            wrong[name],
         )
         for name in sims
     ]
@@ -125,6 +131,18 @@ def timed_run(sim: Simulator, scene: Scene, budget: float = 0.005) -> tuple[Outc
         seconds = time.perf_counter() - started
         best, spent, runs = min(best, seconds), spent + seconds, runs + 1
     return outcome, best
+
+
+def q3_wrong(outcome: Outcome, truth: Outcome, radius: float) -> int:
+    """Balls that Q3 scoring would mark wrong: more than ``R`` off, or pocketed in one only."""
+    count = 0
+    for ball, q in truth.positions.items():
+        p = outcome.positions.get(ball)
+        if (p is None) != (q is None) or (
+            p is not None and q is not None and math.dist(p, q) > radius
+        ):
+            count += 1
+    return count
 
 
 def position_error(outcome: Outcome, truth: Outcome) -> float:

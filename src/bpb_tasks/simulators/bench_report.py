@@ -21,16 +21,17 @@ def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
         "5 ms repeated up to 5 times, the quickest counted; ms/scene is the mean over scenes).",
         "Error = final-position distance to the 50-digit mpmath run of `analytic`",
         "(per scene the worst ball; max and median over scenes). Disagreements = scenes whose",
-        "Q1 contacts, Q2 walls or pocketed set differ from the reference.",
+        "Q1 contacts, Q2 walls or pocketed set differ from the reference; Q3 = balls the Q3",
+        "scorer would mark wrong (more than R off, or pocketed in one run only).",
         "",
-        "| simulator | ms/scene | max error (m) | median error (m) | Q1 | Q2 | pocketed |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "| simulator | ms/scene | max error (m) | median error (m) | Q1 | Q2 | pocketed | Q3 |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for row in result.rows:
         lines.append(
             f"| {row.name} | {row.ms_per_scene:.3g} | {row.max_error:.2e} | "
             f"{row.median_error:.2e} | {row.q1_disagree} | {row.q2_disagree} | "
-            f"{row.pocket_disagree} |"
+            f"{row.pocket_disagree} | {row.q3_wrong} |"
         )
     if result.simulate_ms is not None:
         figures = ", ".join(
