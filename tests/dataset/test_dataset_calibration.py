@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+from bpb_core.dataset import generate_dataset, load_dataset
 from bpb_tasks.billiards.calibrate import calibrate_horizon, calibration_draws, collision_rate
 from bpb_tasks.billiards.config import CalibrationConfig, DatasetConfig
 from bpb_tasks.simulators.analytic import AnalyticSimulator
@@ -24,3 +27,16 @@ def test_calibration_is_deterministic_and_reaches_its_target() -> None:
     assert first == again
     assert abs(first.rate - 0.3) <= 0.05
     assert first.range.low == pytest.approx(first.range.high * cfg.calibration.low_ratio, abs=1e-3)
+
+
+def test_generate_with_calibrate_records_new_ranges(tmp_path: Path) -> None:
+    config = {"calibration": {"samples": 40, "iterations": 5}}
+    root = generate_dataset(
+        tmp_path / "c", 2, [6.0], 0, config=config, workers=1, images=False, calibrate=True
+    )
+    manifest = load_dataset(root).manifest
+    assert manifest.calibration is not None
+    found = manifest.calibration["6"]
+    assert manifest.config["speed_ranges"]["6"] == {"low": found["low"], "high": found["high"]}
+    assert manifest.summary["h6"].speed_range == (found["low"], found["high"])
+    assert 0.3 <= found["rate"] <= 0.7

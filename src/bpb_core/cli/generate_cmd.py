@@ -77,10 +77,14 @@ def show_summary(root: Path, manifest: DatasetManifest) -> None:
     """Print the realised cue-ball collision rate per horizon."""
     from rich.table import Table
 
+    from bpb_core.layout import horizon_label
+
     table = Table(title=f"{root}: {manifest.scenes} scenes, seed {manifest.seed}")
     for column in ("horizon", "scenes", "cue collisions", "rate", "speed range (m/s)", "unstable"):
         table.add_column(column, justify="right")
-    for label, s in manifest.summary.items():
+    for horizon in manifest.horizons:
+        label = horizon_label(horizon)
+        s = manifest.summary[label]
         unstable = str(s.unstable) if not manifest.stable_only else f"{s.dropped_unstable} dropped"
         low, high = s.speed_range
         table.add_row(
