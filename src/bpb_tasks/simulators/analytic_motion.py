@@ -127,3 +127,14 @@ def line_contact(
     if disc <= 0:
         return None
     return c / (-b + sqrt(disc))
+
+
+def point_segment_gap2(x: Number, y: Number, dx: Number, dy: Number) -> Number:
+    """Squared distance from the origin to the segment from ``(x, y)`` to ``(x + dx, y + dy)``."""
+    length2 = dx * dx + dy * dy
+    if length2 > 0:
+        k = -(x * dx + y * dy) / length2
+        if k > 0:
+            k = k if k < 1 else k * 0 + 1
+            x, y = x + k * dx, y + k * dy
+    return x * x + y * y

@@ -12,7 +12,7 @@ import heapq
 from typing import Any
 
 from bpb_core.scene import Scene
-from bpb_tasks.simulators.analytic_motion import Body, Motion, line_contact
+from bpb_tasks.simulators.analytic_motion import Body, Motion, line_contact, point_segment_gap2
 from bpb_tasks.simulators.analytic_roots import first_contact
 from bpb_tasks.simulators.numeric import Number, Numeric
 
@@ -32,6 +32,7 @@ class Predictor:
         self.motion = Motion(num(phys.mu) * num(phys.g), numeric.sqrt, num(float("inf")))
         self.contact2 = 4 * radius * radius
         self.two_r = 2 * radius
+        self.margin = num(1e-9)  # relative rounding margin of the cheap rejection test
         self.bounds = (
             radius,
             num(scene.table.width) - radius,
@@ -121,23 +122,24 @@ class Predictor:
                 tau = motion.time_for(ms, s) if s > 0 else s
                 heapq.heappush(self.queue, (t + tau, BALL, p.index, q.index, p.version, q.version))
             return
-        tau = self.moving_pair(p, q, t, (px - qx, py - qy), (ps, qs))
+        tau = self.moving_pair(p, q, t, (px, py, qx, qy), (ps, qs))
         if tau is not None:
             heapq.heappush(self.queue, (t + tau, BALL, p.index, q.index, p.version, q.version))
 
     def moving_pair(
-        self, p: Body, q: Body, t: Number, d0: tuple[Number, Number], speeds: tuple[Number, Number]
+        self, p: Body, q: Body, t: Number, ends: tuple[Number, ...], speeds: tuple[Number, Number]
     ) -> Number | None:
-        """First contact time (from ``t``) of two moving balls, by the quartic."""
-        horizon = min(p.tstop, q.tstop, p.wall_t, q.wall_t) - t
-        if horizon < 0:
+        """First contact time (from ``t``) of two moving balls at ``ends = (px, py, qx, qy)``."""
+        span = min(p.tstop, q.tstop, p.wall_t, q.wall_t) - t
+        if span < 0:
             return None
         ps, qs = speeds
+        px, py, qx, qy = ends
         vx, vy = p.ux * ps - q.ux * qs, p.uy * ps - q.uy * qs
         h = self.motion.half
         ax, ay = (q.ux - p.ux) * h, (q.uy - p.uy) * h
-        dx, dy = d0
-        if not self.paths_can_meet(d0, (vx, vy), (ax, ay), horizon):
+        dx, dy = px - qx, py - qy
+        if self.paths_apart((dx, dy), (vx, vy), (ax, ay), span):
             return None
         coeffs = [
             ax * ax + ay * ay,
@@ -146,20 +148,23 @@ class Predictor:
             2 * (vx * dx + vy * dy),
             dx * dx + dy * dy - self.contact2,
         ]
-        return first_contact(coeffs, horizon, self.numeric)
+        return first_contact(coeffs, span, self.numeric)
 
-    def paths_can_meet(
+    def paths_apart(
         self,
         d0: tuple[Number, Number],
         v: tuple[Number, Number],
         a: tuple[Number, Number],
         span: Number,
     ) -> bool:
-        """Cheap rejection: bound the relative displacement ``|v| T + |a| T^2`` over the span."""
-        dist = self.sqrt(d0[0] * d0[0] + d0[1] * d0[1])
-        reach = self.sqrt(v[0] * v[0] + v[1] * v[1]) * span
-        reach += self.sqrt(a[0] * a[0] + a[1] * a[1]) * span * span
-        return bool(dist - reach <= self.two_r)
+        """Cheap rejection of a moving pair: the relative position ``d0 + v t + a t^2`` stays
+        within ``|a| span^2 / 4`` of the chord from ``d0`` to its value at ``span``; if that
+        chord passes farther than ``2R`` plus this bulge from the origin, no contact."""
+        ex = v[0] * span + a[0] * span * span
+        ey = v[1] * span + a[1] * span * span
+        bulge = self.sqrt(a[0] * a[0] + a[1] * a[1]) * span * span / 4
+        limit = self.two_r * (1 + self.margin) + bulge
+        return bool(point_segment_gap2(d0[0], d0[1], ex, ey) > limit * limit)
 
     def predict_all(self, b: Body, t: Number, skip: Body | None = None) -> None:
         """Re-predict everything involving ``b``, which changed at ``t`` (pairs with ``skip`` are
