@@ -65,8 +65,8 @@ async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
         for task in todo:
             state.not_sent(task)
         return
-    scene = ref.load()
-    image = None if state.options.input_mode == "state" else ref.image()
+    scene = await state.offload(ref.load)
+    image = None if state.options.input_mode == "state" else await state.offload(ref.image)
     sha = None if image is None else hashlib.sha256(image).hexdigest()
     await asyncio.gather(*(answer(state, ref, scene, image, sha, t) for t in todo))
 
@@ -143,6 +143,7 @@ async def run_eval_async(
     try:
         await _drive(state, plan)
     finally:
+        state.io.shutdown(wait=True)
         state.log.close()
         finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)

@@ -11,9 +11,11 @@ from __future__ import annotations
 import asyncio
 import random
 import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from bpb_core.adapters import ModelRequest, ModelResponse
 from bpb_core.errors import AuthenticationFailed, ModelError, ModelTimeout, ParseFailure
@@ -23,6 +25,8 @@ from bpb_core.runner_limits import RateLimiter
 from bpb_core.runner_types import Progress, ProgressEvent, RunOptions
 from bpb_core.scene import Scene
 from bpb_core.storage import AnswerRecord, AttemptLog, UsageRecord, write_answer
+
+T = TypeVar("T")
 
 
 @dataclass
@@ -39,6 +43,9 @@ class RunState:
     limiter: RateLimiter
     slots: asyncio.Semaphore
     rng: random.Random
+    io: ThreadPoolExecutor = field(
+        default_factory=lambda: ThreadPoolExecutor(1, thread_name_prefix="bpb-io")
+    )
     spent: float = 0.0
     unpriced: bool = False
     tokens: int = 0
@@ -46,6 +53,11 @@ class RunState:
     auth_error: AuthenticationFailed | None = None
     model_id: str = ""
     statuses: dict[str, dict[str, int]] = field(default_factory=dict)
+
+    async def offload(self, fn: Callable[..., T], *args: Any) -> T:
+        """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
+        answer files of a pair land in order) while the event loop keeps serving calls."""
+        return await asyncio.get_running_loop().run_in_executor(self.io, fn, *args)
 
     def cot(self, task: str) -> bool:
         return self.options.cot.get(task, self.tasks[task].default_cot)
@@ -120,10 +132,10 @@ def _account(state: RunState, response: ModelResponse, tally: _Tally) -> None:
         state.model_id = response.model_id
 
 
-def _log(state: RunState, ref: SceneRef, task: str, **fields: Any) -> None:
+async def _log(state: RunState, ref: SceneRef, task: str, **fields: Any) -> None:
     entry = {"time": time.time(), "scene_id": ref.scene_id, "task": task, "adapter": state.spec}
     entry.update(fields)
-    state.log.append(entry)
+    await state.offload(state.log.append, entry)
 
 
 @dataclass
@@ -180,13 +192,13 @@ async def answer(
         except ModelError as error:
             elapsed = time.perf_counter() - started
             if not await _on_model_error(state, ref, task_name, error, attempt, common, elapsed):
-                _finish(state, ref, task_name, cot, "api_error", None, tally, attempt)
+                await _finish(state, ref, task_name, cot, "api_error", None, tally, attempt)
                 return
             continue
         _account(state, response, tally)
         attempt.finish_reason = response.finish_reason
         outcome = _parse(task, response, scene, prompt)
-        _log(
+        await _log(
             state,
             ref,
             task_name,
@@ -202,11 +214,11 @@ async def answer(
             error=outcome[2],
         )
         if outcome[0] == "ok":
-            _finish(state, ref, task_name, cot, "ok", outcome[3], tally, attempt, outcome[1])
+            await _finish(state, ref, task_name, cot, "ok", outcome[3], tally, attempt, outcome[1])
             return
         attempt.last_error = outcome[2]
         if attempt.reasks >= state.options.retry.max_reasks:
-            _finish(state, ref, task_name, cot, "parse_error", None, tally, attempt)
+            await _finish(state, ref, task_name, cot, "parse_error", None, tally, attempt)
             return
         attempt.reasks += 1
         attempt.escalation += 1
@@ -241,7 +253,7 @@ async def _on_model_error(
     attempt.last_error = message
     retry = error.retryable and attempt.retries < state.options.retry.max_retries
     delay = _backoff(state, attempt.retries + 1, error) if retry else None
-    _log(
+    await _log(
         state,
         ref,
         task,
@@ -265,7 +277,7 @@ async def _on_model_error(
     return True
 
 
-def _finish(
+async def _finish(
     state: RunState,
     ref: SceneRef,
     task: str,
@@ -294,7 +306,7 @@ def _finish(
         input_mode=state.options.input_mode,
         cot=cot,
     )
-    write_answer(state.run_dir, ref.key, record)
+    await state.offload(write_answer, state.run_dir, ref.key, record)
     state.count(task, status)
     tokens = record.usage.input_tokens + record.usage.output_tokens
     state.progress.update(

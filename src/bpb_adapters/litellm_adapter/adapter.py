@@ -110,10 +110,8 @@ class LiteLLMAdapter:
         """Send ``request``; raise a :mod:`bpb_core.errors` model error on failure."""
         started = time.perf_counter()
         try:
-            raw = await asyncio.wait_for(
-                self._litellm.acompletion(**self._kwargs(request)),
-                timeout=request.timeout + _TIMEOUT_GRACE,
-            )
+            async with asyncio.timeout(request.timeout + _TIMEOUT_GRACE):
+                raw = await self._litellm.acompletion(**self._kwargs(request))
         except TimeoutError:
             raise ModelTimeout(f"no reply within {request.timeout:g} s") from None
         except ModelError:

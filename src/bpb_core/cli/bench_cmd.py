@@ -18,6 +18,7 @@ BENCH_COMMANDS: dict[str, tuple[str, str, str]] = {
     ),
     "startup": ("bpb_core.cli.bench_startup_cmd", "startup", "Start-up time of the bpb command."),
     "sim": ("bpb_core.cli.bench_sim_cmd", "sim", "Simulators: speed against error."),
+    "run": ("bpb_core.cli.bench_run_cmd", "bench_run", "Runner request rate vs bare litellm; RSS."),
     "score": ("bpb_core.cli.bench_score_cmd", "bench_score_cmd", "Scoring speed (1M rows)."),
 }
 

@@ -1,0 +1,176 @@
+"""``bpb bench run``: runner overhead and memory, measured from the fake server's side.
+
+Throughput: the fake OpenAI server answers every request after ``latency`` seconds. In one
+session, a bare ``litellm.acompletion`` loop and ``bpb run`` (through the litellm adapter) each
+send the same number of requests with the same concurrency; the server labels arrivals by phase.
+A phase's rate is ``count / (last arrival - first arrival + latency)``: requests divided by the
+time from the first arrival until the last reply was due; the ideal is ``concurrency / latency``.
+Process start-up and litellm's import come before the first arrival and do not count.
+
+Memory: the peak resident set (``ru_maxrss`` from ``wait4``) of a ``bpb run`` subprocess making
+``3 x scenes`` calls against the server with no latency.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bpb_core.runner_data import select_scenes
+
+_DUMMY_KEY = "sk-bench-local-not-a-secret"
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One measured client."""
+
+    name: str
+    requests: int
+    seconds: float
+    rate: float
+    peak_rss_mb: float
+    exit_code: int
+
+
+class _Server:
+    def __init__(self, latency: float) -> None:
+        args = [sys.executable, "-m", "bpb_core.runner_fakeserver", "--latency", str(latency)]
+        self.process = subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
+        assert self.process.stdout is not None
+        self.port = int(self.process.stdout.readline().split()[1])
+        self.url = f"http://127.0.0.1:{self.port}"
+
+    def phase(self, name: str) -> None:
+        body = json.dumps({"name": name}).encode()
+        request = urllib.request.Request(f"{self.url}/phase", body, {"Content-Type": "json"})
+        urllib.request.urlopen(request, timeout=10).read()
+
+    def stats(self) -> dict[str, Any]:
+        with urllib.request.urlopen(f"{self.url}/stats", timeout=10) as response:
+            data: dict[str, Any] = json.loads(response.read())
+        return data
+
+    def close(self) -> None:
+        self.process.kill()
+        self.process.wait()
+
+
+def _child(args: list[str]) -> tuple[int, float]:
+    """Run a child process; return its exit code and peak RSS in MB."""
+    env = {**os.environ, "OPENAI_API_KEY": _DUMMY_KEY}
+    process = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, usage = os.wait4(process.pid, 0)
+    process.returncode = os.waitstatus_to_exitcode(status)
+    return process.returncode, usage.ru_maxrss / 1024
+
+
+def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> list[str]:
+    return [
+        sys.executable,
+        "-c",
+        "from bpb_core.cli.main import main; main()",
+        "run",
+        "--data",
+        str(data),
+        "--adapter",
+        "litellm:openai/fake-model",
+        "--api-base",
+        api_base,
+        "--out",
+        str(out),
+        "--concurrency",
+        str(concurrency),
+        "--limit",
+        str(limit),
+        "--timeout",
+        "60",
+    ]
+
+
+def _measure(server: _Server, name: str, args: list[str], latency: float) -> Phase:
+    server.phase(name)
+    code, rss = _child(args)
+    info = server.stats()["phases"].get(name, {"count": 0, "first": 0.0, "last": 0.0})
+    span = info["last"] - info["first"] + latency
+    rate = info["count"] / span if span > 0 else 0.0
+    return Phase(name, info["count"], span, rate, rss, code)
+
+
+def _combine(name: str, phases: list[Phase]) -> Phase:
+    requests = sum(p.requests for p in phases)
+    seconds = sum(p.seconds for p in phases)
+    return Phase(
+        name,
+        requests,
+        seconds,
+        requests / seconds if seconds > 0 else 0.0,
+        max(p.peak_rss_mb for p in phases),
+        max((p.exit_code for p in phases), key=abs),
+    )
+
+
+def bench_throughput(
+    data: Path,
+    concurrency: int = 64,
+    latency: float = 1.0,
+    scenes_per_horizon: int = 43,
+    rounds: int = 2,
+) -> tuple[Phase, Phase]:
+    """Requests per second of a bare litellm loop and of ``bpb run`` against one server.
+
+    The two clients alternate for ``rounds`` rounds (bare, bpb, bare, bpb, ...) so drifting
+    machine load hits both alike; each result pools its rounds (total requests / total time).
+    """
+    refs = select_scenes(data, None, scenes_per_horizon)
+    calls = 3 * len(refs)
+    server = _Server(latency)
+    bare: list[Phase] = []
+    ours: list[Phase] = []
+    api_base = f"{server.url}/v1"
+    try:
+        for round_no in range(rounds):
+            bare_args = [
+                sys.executable,
+                "-m",
+                "bpb_core.runner_bench_bare",
+                api_base,
+                str(calls),
+                str(concurrency),
+                str(data),
+            ]
+            bare.append(_measure(server, f"bare{round_no}", bare_args, latency))
+            with tempfile.TemporaryDirectory() as tmp:
+                args = _bpb(data, api_base, Path(tmp), concurrency, scenes_per_horizon)
+                ours.append(_measure(server, f"bpb{round_no}", args, latency))
+    finally:
+        server.close()
+    return _combine("bare litellm loop", bare), _combine("bpb run", ours)
+
+
+def bench_memory(data: Path, scenes_per_horizon: int, concurrency: int = 64) -> Phase:
+    """Peak RSS of a ``bpb run`` of ``3 x scenes`` calls against a zero-latency server."""
+    server = _Server(0.0)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            started = time.perf_counter()
+            args = _bpb(data, f"{server.url}/v1", Path(tmp), concurrency, scenes_per_horizon)
+            phase = _measure(server, "memory", args, 0.0)
+            return Phase(
+                "bpb run (memory)",
+                phase.requests,
+                time.perf_counter() - started,
+                phase.rate,
+                phase.peak_rss_mb,
+                phase.exit_code,
+            )
+    finally:
+        server.close()
