@@ -129,3 +129,12 @@ def test_mpmath_precision_matches_float64(scenes: list[tuple[Path, Scene]]) -> N
     fast = lines(bpb("simulate", *paths))
     assert [f.q1 for f in exact] == [f.q1 for f in fast]
     assert [f.predictions for f in exact] == [f.predictions for f in fast]
+
+
+def test_lines_before_a_bad_file_are_kept(scenes: list[tuple[Path, Scene]], tmp_path: Path) -> None:
+    bad = tmp_path / "broken.json"
+    bad.write_text("[]")
+    result = bpb("simulate", str(scenes[0][0]), str(scenes[1][0]), str(bad), str(scenes[2][0]))
+    assert result.returncode == 2
+    assert len(result.stdout.splitlines()) == 2
+    assert str(bad) in result.stderr and len(result.stderr.strip().splitlines()) == 1
