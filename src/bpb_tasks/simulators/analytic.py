@@ -165,7 +165,10 @@ class _Simulation(Predictor):
             self.motion.set_velocity(b, zero, vx, vy)
             b.seg.append((zero, b.x, b.y, vx, vy))
         for b in self.bodies:
-            self.predict_single(b)
+            if b.speed > 0:
+                self.predict_single(b)
+            else:
+                self.pocket_at_start(b)
         for b in self.bodies:
             if b.speed > 0:
                 self.predict_pairs(b, zero, None)
@@ -211,14 +214,11 @@ class _Simulation(Predictor):
     def segments_of(self, b: Body, end: Number, exact: bool) -> tuple[Segment, ...]:
         """``b``'s pieces of motion as public floats (the last one ends at ``end``)."""
         decel = float(self.motion.decel)
-        ends = [s[0] for s in b.seg[1:]]
-        ends.append(end)
-        if exact:
-            return tuple(
-                Segment(float(t0), float(t1), (float(x), float(y)), (float(vx), float(vy)), decel)
-                for (t0, x, y, vx, vy), t1 in zip(b.seg, ends, strict=True)
-            )
-        return tuple(
-            Segment(t0, t1, (x, y), (vx, vy), decel)
-            for (t0, x, y, vx, vy), t1 in zip(b.seg, ends, strict=True)
-        )
+        seg = b.seg
+        out = []
+        for i, (t0, x, y, vx, vy) in enumerate(seg):
+            t1 = seg[i + 1][0] if i + 1 < len(seg) else end
+            if exact:
+                t0, t1, x, y, vx, vy = (float(v) for v in (t0, t1, x, y, vx, vy))
+            out.append(Segment(t0, t1, (x, y), (vx, vy), decel))
+        return tuple(out)

@@ -57,8 +57,7 @@ class Predictor:
         motion = self.motion
         b.wall_t = motion.inf
         if b.speed == 0:
-            self.predict_pocket(b, b.speed)
-            return
+            return  # a resting ball enters no pocket (one it came to rest in has taken it)
         if motion.decel > 0:
             self.push(b.tstop, STOP, b, 0)
         reach = motion.reach(b)
@@ -71,6 +70,15 @@ class Predictor:
             self.predict_wall(b, wall, gap, reach)
         self.predict_pocket(b, reach)
 
+    def pocket_at_start(self, b: Body) -> None:
+        """Queue a pocket event at 0 for a resting ball placed within a pocket circle."""
+        x, y, r, r2 = b.x, b.y, self.pocket_r, self.pocket_r2
+        for k, (cx, cy) in enumerate(self.pockets):
+            dx, dy = x - cx, y - cy
+            if -r <= dx <= r and dx * dx + dy * dy <= r2:
+                self.push(b.t0, POCKET, b, k)
+                return
+
     def predict_wall(self, b: Body, wall: int, gap: Number, reach: Number) -> None:
         gap = gap if gap > 0 else gap * 0
         if gap < reach:  # reaching the wall exactly as the ball stops is not a contact
@@ -82,17 +90,22 @@ class Predictor:
         """Queue the first pocket ``b``'s centre enters (tangency counts) before it stops."""
         best: Number | None = None
         pocket = 0
-        x, y, ux, uy, r2 = b.x, b.y, b.ux, b.uy, self.pocket_r2
+        x, y, ux, uy, r, r2 = b.x, b.y, b.ux, b.uy, self.pocket_r, self.pocket_r2
         for k, (cx, cy) in enumerate(self.pockets):
             dx, dy = x - cx, y - cy
             along = ux * dx + uy * dy
-            c = dx * dx + dy * dy - r2
-            if c <= 0:
-                s = c * 0  # already inside
-            elif along >= 0 or along * along < c:
-                continue  # moving away, or the line passes outside the circle
+            if along >= 0:  # moving away: only a centre already inside counts
+                if not (-r <= dx <= r and -r <= dy <= r and dx * dx + dy * dy <= r2):
+                    continue
+                s = along * 0
             else:
-                s = c / (-along + self.sqrt(along * along - c))
+                c = dx * dx + dy * dy - r2
+                if c <= 0:
+                    s = c * 0  # already inside
+                elif along * along < c:
+                    continue  # the line passes outside the circle
+                else:
+                    s = c / (-along + self.sqrt(along * along - c))
             if s <= reach and (best is None or s < best):
                 best, pocket = s, k
         if best is not None:
