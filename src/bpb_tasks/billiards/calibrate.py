@@ -101,8 +101,3 @@ def calibrate_ranges(
 ) -> dict[str, Calibration]:
     """Calibrate every horizon; keys are ``speed_ranges`` keys (``"3"``)."""
     return {horizon_key(h): calibrate_horizon(h, config, simulator, step) for h in horizons}
-
-
-def evaluations_per_horizon(config: DatasetConfig) -> int:
-    """An upper estimate of rate evaluations per horizon (for progress totals)."""
-    return config.calibration.iterations + 8

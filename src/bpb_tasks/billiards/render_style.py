@@ -44,8 +44,10 @@ SUPERSAMPLE = 4
 
 
 def ball_colour(ball_id: int) -> RGB:
-    """Fill colour of ball ``ball_id`` (cycles past the table above)."""
-    return BALL_COLOURS[ball_id % len(BALL_COLOURS)]
+    """Fill colour of ball ``ball_id``; ids past 7 reuse object-ball colours, never the cue's."""
+    if ball_id == 0:
+        return BALL_COLOURS[0]
+    return BALL_COLOURS[1 + (ball_id - 1) % (len(BALL_COLOURS) - 1)]
 
 
 def _font_candidates(bold: bool) -> list[Path]:
@@ -86,7 +88,7 @@ def ball_sprite(ball_id: int, radius_px: float, alpha: int = 255) -> Image.Image
     badge = r * 0.62
     if ball_id != 0:
         draw.ellipse((c - badge, c - badge, c + badge, c + badge), fill=(*PAGE, 255))
-    label = font(round(r * 0.95), bold=True)
+    label = font(round(r * (0.95 if ball_id < 10 else 0.72)), bold=True)
     draw.text((c, c + 0.04 * r), str(ball_id), fill=(*INK, 255), font=label, anchor="mm")
     small = img.resize((side, side), Image.Resampling.LANCZOS)
     if alpha < 255:
