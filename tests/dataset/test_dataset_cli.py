@@ -62,3 +62,13 @@ def test_existing_folder_is_refused_unless_overwrite(tmp_path: Path) -> None:
     again = bpb(*common)
     assert again.returncode == 2 and "pass --overwrite" in again.stderr
     assert bpb(*common, "--overwrite").returncode == 0
+
+
+def test_a_config_that_cannot_be_sampled_exits_2(tmp_path: Path) -> None:
+    config = tmp_path / "crowded.json"
+    config.write_text('{"balls": 16, "physics": {"ball_radius": 0.2}}')
+    done = bpb("generate", "--out", str(tmp_path / "ds"), "--config", str(config),
+               "--per-horizon", "1", "--horizons", "1", "--no-images")  # fmt: skip
+    assert done.returncode == 2
+    assert "config: balls: could not place ball" in done.stderr
+    assert done.stderr.strip().count("\n") == 0

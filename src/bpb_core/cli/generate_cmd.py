@@ -53,6 +53,7 @@ class RichProgress:
             TimeElapsedColumn(),
             TimeRemainingColumn(),
             console=console.stderr(),
+            disable=not console.stderr().is_terminal,  # no bar in logs and pipes
         )
         self._task: TaskID | None = None
 

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from bpb_core.errors import BadInput
 from bpb_core.layout import scene_id
 from bpb_core.scene import Ball, Scene
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
@@ -78,7 +79,7 @@ def _positions(rng: random.Random, config: DatasetConfig) -> tuple[tuple[float, 
     edge = radius + config.min_gap + slack
     x_hi, y_hi = config.table.width - edge, config.table.height - edge
     if x_hi <= edge or y_hi <= edge:
-        raise ValueError("table too small for one ball with the configured gap")
+        raise BadInput("config: table: too small for one ball with the configured radius and gap")
     min_dist = 2 * radius + config.min_gap + 2 * slack
     pocket_dist = config.pockets.radius + config.pocket_margin + slack
     placed: list[tuple[float, float]] = []
@@ -89,7 +90,10 @@ def _positions(rng: random.Random, config: DatasetConfig) -> tuple[tuple[float, 
                 placed.append(p)
                 break
         else:
-            raise ValueError(f"could not place ball {len(placed)} without overlap")
+            raise BadInput(
+                f"config: balls: could not place ball {len(placed)} of {config.balls} without "
+                "overlap; use fewer or smaller balls, or a smaller min_gap"
+            )
     return tuple(placed)
 
 
