@@ -79,3 +79,23 @@ def test_family_is_a_registered_plugin_taking_a_plain_mapping() -> None:
     scene = family.sample(scene_rng(0, 2.0, 0), 2.0, 0, config)
     assert [b.id for b in scene.balls] == [0, 1, 2, 3]
     assert 0.1 - 1e-4 <= math.hypot(*scene.ball(0).vel) <= 0.2 + 1e-4
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32),
+    balls=st.integers(1, 12),
+    gap=st.floats(0.0, 0.02),
+    margin=st.floats(0.0, 0.05),
+)
+def test_invariants_hold_for_other_ball_counts_and_gaps(
+    seed: int, balls: int, gap: float, margin: float
+) -> None:
+    cfg = DatasetConfig(balls=balls, min_gap=gap, pocket_margin=margin)
+    scene = FAMILY.sample(scene_rng(seed, 2.0, 0), 2.0, 0, cfg)
+    r = cfg.physics.ball_radius
+    assert len(scene.balls) == balls
+    for i, a in enumerate(scene.balls):
+        assert min(a.pos[0], a.pos[1], 2.0 - a.pos[0], 1.0 - a.pos[1]) >= r + gap
+        assert all(math.dist(a.pos, c) >= 0.06 + margin for c in cfg.pockets.centers)
+        assert all(math.dist(a.pos, b.pos) >= 2 * r + gap for b in scene.balls[i + 1 :])
