@@ -28,12 +28,15 @@ class _Row:
     def fields(self) -> dict[str, Any]:
         cost = "$?" if self.cost is None else f"${self.cost:.4f}"
         failed = self.parse_error + self.api_error
-        return {
-            "stats": (
-                f"ok {self.ok} failed {failed} (parse {self.parse_error}, api {self.api_error}) "
-                f"retrying {self.retries} tok {self.tokens:,} {cost}"
-            )
-        }
+        text = (
+            f"ok {self.ok} failed {failed} (parse {self.parse_error}, api {self.api_error}) "
+            f"retrying {self.retries} tok {self.tokens:,} {cost}"
+        )
+        if self.done_before:
+            text += f" | {self.done_before} done before"
+        if self.not_sent:
+            text += f" | {self.not_sent} not sent"
+        return {"stats": text}
 
 
 class RichProgress:
