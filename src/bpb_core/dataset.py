@@ -148,7 +148,9 @@ def _write_stats(setup: WorkerSetup, writer: DatasetWriter, progress: GeneratePr
     from bpb_tasks.billiards.stats import write_stats
 
     progress.phase("stats", 1)
-    for rel in write_stats(setup.root, writer.tallies):
+    cfg = setup.config
+    ranges = {h: (cfg.speed_range(h).low, cfg.speed_range(h).high) for h in writer.tallies}
+    for rel in write_stats(setup.root, writer.tallies, ranges):
         writer.add_file(rel)
     progress.advance()
 

@@ -40,3 +40,10 @@ def test_generate_with_calibrate_records_new_ranges(tmp_path: Path) -> None:
     assert manifest.config["speed_ranges"]["6"] == {"low": found["low"], "high": found["high"]}
     assert manifest.summary["h6"].speed_range == (found["low"], found["high"])
     assert 0.3 <= found["rate"] <= 0.7
+
+
+@pytest.mark.slow
+def test_recalibrating_reproduces_the_shipped_range() -> None:
+    cfg = DatasetConfig()
+    found = calibrate_horizon(5.0, cfg, AnalyticSimulator())
+    assert found.range == cfg.speed_range(5.0)

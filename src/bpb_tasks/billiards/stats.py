@@ -24,11 +24,24 @@ class Tally(Protocol):
     speeds: list[float]
 
 
-def write_stats(root: Path, tallies: Mapping[float, Tally]) -> list[str]:
-    """Write both figures under ``root/stats`` and return their relative paths."""
+def write_stats(
+    root: Path,
+    tallies: Mapping[float, Tally],
+    ranges: Mapping[float, tuple[float, float]] | None = None,
+) -> list[str]:
+    """Write both figures under ``root/stats`` and return their relative paths.
+
+    Args:
+        root: Dataset folder.
+        tallies: Per-horizon counts and cue speeds.
+        ranges: Per-horizon sampled speed range; histogram bins then span exactly it.
+    """
     (root / "stats").mkdir(exist_ok=True)
     hs = sorted(tallies)
-    speed_histograms(root / SPEED_HIST, hs, [tallies[h].speeds for h in hs])
+    # init.json rounds velocity components, so a speed may leave its range by up to ~1e-4 m/s
+    padded = {h: (lo - 1e-3, hi + 1e-3) for h, (lo, hi) in (ranges or {}).items()}
+    spans = [padded.get(h) for h in hs]
+    speed_histograms(root / SPEED_HIST, hs, [tallies[h].speeds for h in hs], spans)
     collision_bars(
         root / COLLISIONS,
         hs,
@@ -46,7 +59,10 @@ def _save(fig: object, path: Path) -> None:
 
 
 def speed_histograms(
-    path: Path, horizons: Sequence[float], speeds: Sequence[Sequence[float]]
+    path: Path,
+    horizons: Sequence[float],
+    speeds: Sequence[Sequence[float]],
+    spans: Sequence[tuple[float, float] | None] | None = None,
 ) -> None:
     """One histogram of sampled cue speeds per horizon, side by side."""
     from matplotlib.figure import Figure
@@ -55,8 +71,9 @@ def speed_histograms(
     n = len(horizons)
     fig = Figure(figsize=(3.0 * n + 0.6, 3.0), layout="constrained")
     axes = fig.subplots(1, n, squeeze=False)[0]
-    for ax, h, values in zip(axes, horizons, speeds, strict=True):
-        ax.hist(values, bins=BINS, color="#2f6f9f", edgecolor="white", linewidth=0.6)
+    spans = spans or [None] * n
+    for ax, h, values, span in zip(axes, horizons, speeds, spans, strict=True):
+        ax.hist(values, bins=BINS, range=span, color="#2f6f9f", edgecolor="white", linewidth=0.6)
         ax.set_title(f"t = {h:g} s (n = {len(values)})", fontsize=10)
         ax.set_xlabel("cue speed (m/s)", fontsize=9)
         ax.tick_params(labelsize=8)
