@@ -175,6 +175,11 @@ def _manifest(
         scenes=sum(s.scenes for s in summary.values()),
         summary=summary,
         config=cfg.model_dump(mode="json"),
+        physics={
+            **cfg.physics.model_dump(mode="json"),
+            "table": cfg.table.model_dump(mode="json"),
+            "pockets": cfg.pockets.model_dump(mode="json"),
+        },
         calibration=None if calibration is None else _calibration_record(calibration),
         plugins=dict(setup.plugins),
         versions=versions(),

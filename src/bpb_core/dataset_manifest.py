@@ -58,6 +58,7 @@ class DatasetManifest(BaseModel):
     scenes: int
     summary: dict[str, HorizonSummary]
     config: dict[str, Any]
+    physics: dict[str, Any] = Field(default_factory=dict)
     calibration: dict[str, Any] | None = None
     plugins: dict[str, str] = Field(default_factory=dict)
     versions: dict[str, str] = Field(default_factory=dict)
