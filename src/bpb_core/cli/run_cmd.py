@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from bpb_core.runner_types import RunOptions, RunResult
 
 BASELINES = ("baseline:stasis", "baseline:straight", "baseline:random", "baseline:oracle")
-DEFAULT_OUT = "bpb-runs"
+DEFAULT_OUT = "runs"
 QUICK_PER_HORIZON = 10
 
 
