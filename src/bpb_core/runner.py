@@ -19,10 +19,11 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.adapters import AdapterOptions
 from bpb_core.errors import BadInput
-from bpb_core.runner_call import RunState, answer
+from bpb_core.runner_call import PairCall
 from bpb_core.runner_data import SceneRef, select_scenes
 from bpb_core.runner_limits import RateLimiter
 from bpb_core.runner_manifest import finish_manifest, start_manifest
+from bpb_core.runner_state import RunState
 from bpb_core.runner_types import (
     NoProgress,
     Progress,
@@ -68,7 +69,7 @@ async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
     scene = await state.offload(ref.load)
     image = None if state.options.input_mode == "state" else await state.offload(ref.image)
     sha = None if image is None else hashlib.sha256(image).hexdigest()
-    await asyncio.gather(*(answer(state, ref, scene, image, sha, t) for t in todo))
+    await asyncio.gather(*(PairCall(state, ref, scene, image, sha, t).run() for t in todo))
 
 
 async def _drive(state: RunState, plan: list[tuple[SceneRef, list[str]]]) -> None:

@@ -23,7 +23,7 @@ from bpb_core.storage import read_manifest, write_manifest
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
-    from bpb_core.runner_call import RunState
+    from bpb_core.runner_state import RunState
 
 _GUARDED = ("adapter", "dataset_hash", "input_mode", "cot", "force_numeric")
 

@@ -1,0 +1,121 @@
+"""What the calls of one run share: the adapter, limits, the IO thread and running totals."""
+
+from __future__ import annotations
+
+import asyncio
+import random
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+from bpb_core.adapters import ModelRequest, ModelResponse
+from bpb_core.errors import AuthenticationFailed
+from bpb_core.interfaces import ModelAdapter, Task
+from bpb_core.runner_limits import RateLimiter
+from bpb_core.runner_types import Progress, ProgressEvent, RunOptions
+from bpb_core.storage import AttemptLog, UsageRecord
+
+T = TypeVar("T")
+
+
+class NotSent(Exception):
+    """The run stopped sending (cost cap or auth failure) while this call waited for a slot."""
+
+
+@dataclass
+class RunState:
+    """Shared by every (scene, task) of one run of one adapter."""
+
+    adapter: ModelAdapter
+    spec: str
+    tasks: dict[str, Task]
+    options: RunOptions
+    run_dir: Path
+    log: AttemptLog
+    progress: Progress
+    limiter: RateLimiter
+    slots: asyncio.Semaphore
+    rng: random.Random
+    io: ThreadPoolExecutor = field(
+        default_factory=lambda: ThreadPoolExecutor(1, thread_name_prefix="bpb-io")
+    )
+    spent: float = 0.0
+    unpriced: bool = False
+    tokens: int = 0
+    stop_reason: str | None = None
+    auth_error: AuthenticationFailed | None = None
+    model_id: str = ""
+    statuses: dict[str, dict[str, int]] = field(default_factory=dict)
+
+    async def offload(self, fn: Callable[..., T], *args: Any) -> T:
+        """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
+        answer files of a pair land in order) while the event loop keeps serving calls."""
+        return await asyncio.get_running_loop().run_in_executor(self.io, fn, *args)
+
+    def cot(self, task: str) -> bool:
+        """Whether ``task`` asks for chain of thought in this run."""
+        return self.options.cot.get(task, self.tasks[task].default_cot)
+
+    def may_send(self) -> bool:
+        """False once the run must stop sending (cost cap reached or auth failed)."""
+        cap = self.options.max_cost
+        if cap is not None and self.spent >= cap and self.stop_reason is None:
+            self.stop_reason = "max-cost"
+        return self.stop_reason is None
+
+    async def send(self, request: ModelRequest) -> ModelResponse:
+        """Call the adapter within the concurrency and rate limits.
+
+        Raises:
+            NotSent: The run stopped sending while this call waited for a slot.
+        """
+        async with self.slots:
+            await self.limiter.wait()
+            if not self.may_send():  # checked again here: the cap may be hit while we queued
+                raise NotSent
+            return await self.adapter.complete(request)
+
+    def account(self, response: ModelResponse) -> None:
+        """Add a reply's tokens and cost to the run totals."""
+        self.tokens += (response.usage.input_tokens or 0) + (response.usage.output_tokens or 0)
+        if response.cost is None:
+            self.unpriced = True
+        else:
+            self.spent += response.cost
+        if response.model_id:
+            self.model_id = response.model_id
+
+    def not_sent(self, task: str) -> None:
+        """Record a pair left unsent (cost cap or auth stop); it stays resumable."""
+        self.count(task, "not_sent")
+        self.progress.update(ProgressEvent(self.spec, task, "done", status="not_sent"))
+
+    def count(self, task: str, status: str) -> None:
+        """Count one pair of ``task`` that ended with ``status``."""
+        by_status = self.statuses.setdefault(task, {})
+        by_status[status] = by_status.get(status, 0) + 1
+
+
+@dataclass
+class Tally:
+    """Usage, cost and latency summed over the attempts of one (scene, task)."""
+
+    attempts: int = 0
+    responses: int = 0
+    usage: UsageRecord = field(default_factory=UsageRecord)
+    cost: float | None = 0.0
+    latency: float = 0.0
+
+    def add(self, response: ModelResponse) -> None:
+        """Add one reply (cost becomes unknown once any reply has no price)."""
+        u = response.usage
+        self.responses += 1
+        self.usage.input_tokens += u.input_tokens or 0
+        self.usage.output_tokens += u.output_tokens or 0
+        self.usage.reasoning_tokens += u.reasoning_tokens or 0
+        self.usage.cached_tokens += u.cached_tokens or 0
+        if self.cost is not None:
+            self.cost = None if response.cost is None else self.cost + response.cost
+        self.latency += response.latency
