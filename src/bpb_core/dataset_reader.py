@@ -99,8 +99,13 @@ class Dataset:
 
     def verify(self) -> list[str]:
         """Files whose SHA-256 differs from ``checksums.sha256`` (or that are missing)."""
+        path = self.root / CHECKSUMS
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
         problems = []
-        for line in (self.root / CHECKSUMS).read_text(encoding="utf-8").splitlines():
+        for line in lines:
             digest, _, rel = line.partition("  ")
             target = self.root / rel
             if not target.is_file():
