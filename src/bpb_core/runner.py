@@ -73,22 +73,32 @@ async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
 
 
 async def _drive(state: RunState, plan: list[tuple[SceneRef, list[str]]]) -> None:
+    """Run the scenes through a bounded window; the first scene error stops new scenes, lets
+    the ones in flight finish (their answers are kept) and is raised."""
     window = asyncio.Semaphore(max(2 * state.options.concurrency, 4))
     running: set[asyncio.Task[None]] = set()
+    failures: list[BaseException] = []
 
     async def one(ref: SceneRef, todo: list[str]) -> None:
         try:
             await _scene(state, ref, todo)
+        except Exception as exc:  # re-raised below, after the scenes in flight finish
+            failures.append(exc)
         finally:
             window.release()
 
     for ref, todo in plan:
         await window.acquire()
+        if failures:
+            window.release()
+            break
         job = asyncio.create_task(one(ref, todo))
         running.add(job)
         job.add_done_callback(running.discard)
     if running:
         await asyncio.gather(*running)
+    if failures:
+        raise failures[0]
 
 
 def _state(

@@ -44,8 +44,11 @@ class SceneRef:
             raise BadInput(f"{path}: cannot read: {exc.strerror}") from None
         except ValidationError as exc:
             first = exc.errors()[0]
-            where = ".".join(str(p) for p in first["loc"]) or "(file)"
-            raise BadInput(f"{path}: {where}: {first['msg']}") from None
+            message = str(first["msg"]).removeprefix("Value error, ")
+            where = ".".join(str(p) for p in first["loc"])
+            raise BadInput(
+                f"{path}: {where}: {message}" if where else f"{path}: {message}"
+            ) from None
 
     def image(self) -> bytes:
         """The bytes of ``init.png``.

@@ -1,0 +1,56 @@
+"""Bad input to a run: one clear error naming the file and field; nothing done is lost."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bpb_core.errors import BadInput
+from bpb_core.registry import make_registry
+from bpb_core.runner import run_eval
+from bpb_core.runner_types import RunOptions
+from bpb_core.storage import completed
+
+REGISTRY = make_registry()
+
+
+def test_missing_image_names_the_file_and_state_mode_needs_none(
+    dataset: Path, tmp_path: Path
+) -> None:
+    data = tmp_path / "data"
+    shutil.copytree(dataset, data)
+    (data / "h1/scene_0001/init.png").unlink()
+    with pytest.raises(BadInput, match=r"h1/scene_0001/init.png: missing"):
+        run_eval(
+            data, "baseline:stasis", tmp_path / "a", RunOptions(concurrency=1), registry=REGISTRY
+        )
+    result = run_eval(
+        data, "baseline:stasis", tmp_path / "b", RunOptions(input_mode="state"), registry=REGISTRY
+    )
+    assert sum(c["ok"] for c in result.statuses.values()) == 18
+
+
+def test_corrupt_scene_names_file_and_field_and_keeps_finished_answers(
+    dataset: Path, tmp_path: Path
+) -> None:
+    data = tmp_path / "data"
+    shutil.copytree(dataset, data)
+    path = data / "h3/scene_0002/init.json"
+    scene = json.loads(path.read_text())
+    scene["balls"][1]["pos"] = [5.0, 0.5]
+    path.write_text(json.dumps(scene))
+    with pytest.raises(BadInput, match=r"h3/scene_0002/init.json: balls"):
+        run_eval(
+            data, "baseline:oracle", tmp_path / "run", RunOptions(concurrency=1), registry=REGISTRY
+        )
+    assert len(completed(tmp_path / "run")) >= 3  # scenes before the bad one stay answered
+
+
+def test_unknown_task_and_bad_concurrency(dataset: Path, tmp_path: Path) -> None:
+    with pytest.raises(BadInput, match="known tasks: q1, q2, q3"):
+        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(tasks=("q4",)), registry=REGISTRY)
+    with pytest.raises(BadInput, match="--concurrency"):
+        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(concurrency=0), registry=REGISTRY)
