@@ -14,7 +14,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from bpb_core.adapters import ModelRequest, ModelResponse
-from bpb_core.errors import AuthenticationFailed, ModelError, ModelTimeout, ParseFailure
+from bpb_core.errors import (
+    AuthenticationFailed,
+    ModelError,
+    ModelTimeout,
+    ParseFailure,
+    RequestRejected,
+)
 from bpb_core.interfaces import PromptOptions
 from bpb_core.runner_data import SceneRef
 from bpb_core.runner_state import NotSent, RunState, Tally
@@ -86,6 +92,9 @@ class PairCall:
             return True
         except ModelError as error:
             return await self._failed(error, time.perf_counter() - started)
+        except Exception as exc:  # an adapter bug: record it for this pair, keep the run going
+            bug = RequestRejected(f"adapter {self.state.spec} raised {type(exc).__name__}: {exc}")
+            return await self._failed(bug, time.perf_counter() - started)
         return await self._replied(response, prompt)
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
