@@ -152,13 +152,13 @@ def _explode_timing(
     from bpb_core.outcome import final_state
     from bpb_core.registry import make_registry
     from bpb_core.scene import Ball, Scene
-    from bpb_core.truth import answer_for_task
 
     balls = [Ball(id=k, pos=(0.3 + 0.2 * k, 0.5)) for k in range(7)]
     balls[0] = Ball(id=0, pos=(0.3, 0.5), vel=(0.5, 0.1))
     scene = Scene(scene_id="h1_0000", horizon=1.0, balls=balls)
-    final = final_state(scene, make_registry().simulator("analytic").run(scene))
-    answer = answer_for_task(task, final)
+    registry = make_registry()
+    final = final_state(scene, registry.simulator("analytic").run(scene))
+    answer = registry.task(task).expected(final)
     per_answer = len(scorer.units(answer, final, scene))
 
     def explode() -> None:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.layout import scene_dir
+from bpb_core.registry import make_registry
 from bpb_core.scene import (
     WALLS,
     Ball,
@@ -30,7 +31,6 @@ from bpb_core.scene import (
     Scene,
     Stability,
 )
-from bpb_core.truth import answer_for_task
 
 Pos = tuple[float, float]
 START: dict[int, Pos] = {k: (0.3 + 0.2 * k, 0.5) for k in range(7)}
@@ -50,6 +50,8 @@ TRUTH: dict[str, dict[str, Any]] = {
     "h2_0001": {"q1": set(), "q2": set(), "moves": {0: (1.9, 0.9)}},
 }
 SCENES = [(1.0, 0), (1.0, 1), (2.0, 0), (2.0, 1)]
+
+_TASKS = make_registry()
 
 
 def make_scene(horizon: float, index: int) -> Scene:
@@ -109,7 +111,7 @@ def write_run(
 
 def oracle_answer(sid: str, task: str) -> dict[str, Any]:
     horizon, index = float(sid[1]), int(sid[-4:])
-    return answer_for_task(task, make_final(make_scene(horizon, index)))
+    return _TASKS.task(task).expected(make_final(make_scene(horizon, index)))
 
 
 def stasis_answer(sid: str, task: str) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from reports_fixture import make_final, make_scene
 
 from bpb_core.bench_score import _loop_correct, synthetic_units
-from bpb_core.truth import answer_for_task
+from bpb_core.registry import make_registry
 from bpb_core.units import SCORER_INPUT
 from bpb_tasks.scoring.labels import Q1Scorer, Q2Scorer
 from bpb_tasks.scoring.positions import Q3Scorer
@@ -21,6 +21,8 @@ SCORERS: dict[str, Any] = {"q1": Q1Scorer(), "q2": Q2Scorer(), "q3": Q3Scorer()}
 SCENE = make_scene(2.0, 0)
 FINAL = make_final(SCENE)
 KEYS = {"q1": "answers", "q2": "answers", "q3": "predictions"}
+
+_TASKS = make_registry()
 
 
 @settings(max_examples=40, deadline=None)
@@ -43,7 +45,7 @@ def correct_of(task: str, answer: Any) -> list[bool]:
 def test_order_and_unknown_entries_do_not_change_scores(
     task: str, rnd: random.Random, data: st.DataObject
 ) -> None:
-    truth = answer_for_task(task, FINAL)
+    truth = _TASKS.task(task).expected(FINAL)
     assert all(correct_of(task, truth))  # the truth itself is right everywhere
     entries = list(truth[KEYS[task]])
     rnd.shuffle(entries)
