@@ -43,3 +43,23 @@ def test_upper_never_contains_json() -> None:
 def test_unknown_echo_model_is_bad_input() -> None:
     with pytest.raises(BadInput, match="echo:prompt"):
         make_registry().adapter("echo:nonsense")
+
+
+def test_bpb_run_drives_the_plugin_end_to_end(tmp_path: Path) -> None:
+    data, runs = tmp_path / "data", tmp_path / "runs"
+    subprocess.run(
+        [BPB, "generate", "--out", str(data), "--per-horizon", "1", "--horizons", "1"],
+        check=True,
+        capture_output=True,
+    )
+    result = subprocess.run(
+        [BPB, "run", "--data", str(data), "--adapter", "echo:prompt", "--adapter", "echo:upper",
+         "--tasks", "q1,q3", "--out", str(runs)],
+        capture_output=True,
+        text=True,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    parsed = json.loads((runs / "echo_prompt" / "h1" / "scene_0000" / "q1.json").read_text())
+    shouted = json.loads((runs / "echo_upper" / "h1" / "scene_0000" / "q3.json").read_text())
+    assert parsed["status"] == "ok" and parsed["answer"]["answers"]
+    assert shouted["status"] == "parse_error" and shouted["attempts"] > 1
