@@ -11,36 +11,12 @@ import hashlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
-
-from pydantic import BaseModel, ValidationError
 
 from bpb_core.dataset_manifest import CHECKSUMS, DatasetManifest
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
+from bpb_core.model_files import read_model
 from bpb_core.scene import FinalState, Scene
-
-M = TypeVar("M", bound=BaseModel)
-
-
-def read_model(path: Path, model: type[M]) -> M:
-    """Read and validate a JSON file; ``BadInput("<file>: <field>: problem")`` on failure."""
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
-    try:
-        return model.model_validate_json(data)
-    except ValidationError as exc:
-        raise BadInput(f"{path}: {validation_message(exc)}") from None
-
-
-def validation_message(exc: ValidationError) -> str:
-    """``field: problem`` of the first error (model-level checks name their own field)."""
-    first = exc.errors()[0]
-    message = str(first["msg"]).removeprefix("Value error, ")
-    where = ".".join(str(p) for p in first["loc"])
-    return f"{where}: {message}" if where else message
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from pydantic import ValidationError
-
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys
+from bpb_core.model_files import read_model
 from bpb_core.scene import Scene
 
 IMAGE = "init.png"
@@ -37,18 +36,7 @@ class SceneRef:
         Raises:
             BadInput: The file is missing or invalid (names the file and the field).
         """
-        path = self.folder / INIT
-        try:
-            return Scene.model_validate_json(path.read_bytes())
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror}") from None
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            message = str(first["msg"]).removeprefix("Value error, ")
-            where = ".".join(str(p) for p in first["loc"])
-            raise BadInput(
-                f"{path}: {where}: {message}" if where else f"{path}: {message}"
-            ) from None
+        return read_model(self.folder / INIT, Scene)
 
     def image(self) -> bytes:
         """The bytes of ``init.png``.

@@ -9,18 +9,17 @@ is a :class:`~bpb_core.errors.BadInput` naming the file and the field, e.g.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INIT, iter_scene_keys
+from bpb_core.model_files import read_model
 from bpb_core.outcome import final_state
 from bpb_core.scene import FinalState, Scene
 
 if TYPE_CHECKING:
-    from pydantic import ValidationError
-
     from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
 
@@ -50,34 +49,7 @@ def _folder_scenes(folder: Path) -> list[Path]:
 
 def load_scene(path: Path) -> Scene:
     """Read and validate one ``init.json``; errors name the file and field."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
-    from pydantic import ValidationError
-
-    try:
-        return Scene.model_validate_json(text)
-    except ValidationError as exc:
-        raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
-
-
-def describe_validation_error(exc: ValidationError) -> str:
-    """The first problem of a pydantic error as ``field.path: message`` on one line."""
-    first: dict[str, Any] = dict(exc.errors()[0])
-    message = str(first.get("msg", "invalid")).removeprefix("Value error, ")
-    where = _location(first.get("loc", ()))
-    more = len(exc.errors()) - 1
-    suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-    text = f"{where}: {message}" if where else message
-    return " ".join(text.split()) + suffix
-
-
-def _location(loc: Sequence[str | int]) -> str:
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out
+    return read_model(path, Scene)
 
 
 def simulate_scene(

@@ -2,17 +2,12 @@
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import pytest
+from dataset_small import SMALL
 
 from bpb_core.dataset import generate_dataset
-from bpb_core.registry import PluginWarning
-
-warnings.filterwarnings("ignore", category=PluginWarning)
-
-SMALL = {"per_horizon": 3, "horizons": [1.0, 3.0], "seed": 11}
 
 
 @pytest.fixture(scope="session")

@@ -15,9 +15,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from bpb_core.errors import BadInput
+from bpb_core.model_files import validate_mapping
 from bpb_core.scene import Physics, Pockets, Table
 
 
@@ -143,13 +144,7 @@ def config_from_mapping(data: Mapping[str, Any], source: str = "config") -> Data
     Raises:
         BadInput: ``"<source>: <field>: what is wrong"`` for the first invalid field.
     """
-    try:
-        return DatasetConfig.model_validate(dict(data))
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        message = str(first["msg"]).removeprefix("Value error, ")
-        field = ".".join(str(part) for part in first["loc"]) or "(top level)"
-        raise BadInput(f"{source}: {field}: {message}") from None
+    return validate_mapping(DatasetConfig, data, source)
 
 
 def load_config(path: str | Path | None) -> DatasetConfig:

@@ -1,0 +1,65 @@
+"""Reading pydantic-validated files and turning validation errors into one-line messages.
+
+Every file bpb reads (scenes, ground truth, manifests, configs) goes through here, so every user
+mistake reads the same way: ``<file>: <field.path[index]>: what is wrong``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
+
+from bpb_core.errors import BadInput
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def describe_validation_error(exc: ValidationError) -> str:
+    """The first problem of a pydantic error as ``field.path: message`` on one line."""
+    errors = exc.errors()
+    first: dict[str, Any] = dict(errors[0])
+    message = str(first.get("msg", "invalid")).removeprefix("Value error, ")
+    where = field_path(first.get("loc", ()))
+    more = len(errors) - 1
+    suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
+    text = f"{where}: {message}" if where else message
+    return " ".join(text.split()) + suffix
+
+
+def field_path(loc: Sequence[str | int]) -> str:
+    """``("balls", 2, "pos")`` -> ``balls[2].pos``."""
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+def read_model(path: Path, model: type[M]) -> M:
+    """Read and validate a JSON file.
+
+    Raises:
+        BadInput: ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``.
+    """
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    try:
+        return model.model_validate_json(data)
+    except ValidationError as exc:
+        raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
+
+
+def validate_mapping(model: type[M], data: Mapping[str, Any], source: str) -> M:
+    """Validate already-parsed ``data`` (a TOML or JSON config) read from ``source``.
+
+    Raises:
+        BadInput: ``"<source>: <field>: problem"``.
+    """
+    try:
+        return model.model_validate(dict(data))
+    except ValidationError as exc:
+        raise BadInput(f"{source}: {describe_validation_error(exc)}") from None
