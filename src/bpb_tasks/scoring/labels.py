@@ -16,7 +16,8 @@ scene 1 only when all four walls are right (exact wall-set match).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
 from typing import Any, Literal
 
 import numpy as np
@@ -90,53 +91,60 @@ def score_labels(units: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame({"correct": correct, "distance": distance}, index=units.index)
 
 
-class Q1Scorer:
+class _LabelScorer(ABC):
+    """Shared units/score logic; subclasses say which entry key names a unit and the truth."""
+
+    name: str
+    task: str
+    scene_rule: Literal["mean", "all"]
+    key: str
+
+    parse_key: Callable[[object], object]  # the unit an entry's key value names, or None
+
+    @abstractmethod
+    def truth(self, final: FinalState) -> dict[str, str]:
+        """Unit name to its true label."""
+
+    def units(
+        self, answer: Mapping[str, Any] | None, final: FinalState, scene: Scene
+    ) -> list[UnitRow]:
+        truth = self.truth(final)
+        found, dups = collect(entries(answer, "answers"), self.key, set(truth), self.parse_key)
+        return [
+            UnitRow(
+                unit=name,
+                truth=value,
+                pred=label(found[name].get("answer")) if name in found else None,
+                duplicate=name in dups,
+            )
+            for name, value in truth.items()
+        ]
+
+    def score(self, units: pd.DataFrame) -> pd.DataFrame:
+        return score_labels(units)
+
+
+class Q1Scorer(_LabelScorer):
     """Q1: per-ball accuracy over the object balls (see the module docstring for the rules)."""
 
     name = "q1"
     task = "q1"
     scene_rule: Literal["mean", "all"] = "mean"
+    key = "id"
+    parse_key = staticmethod(ball_id)
 
-    def units(
-        self, answer: Mapping[str, Any] | None, final: FinalState, scene: Scene
-    ) -> list[UnitRow]:
-        truth = {str(t.id): t.answer for t in final.q1}
-        found, dups = collect(entries(answer, "answers"), "id", set(truth), ball_id)
-        return [
-            UnitRow(
-                unit=name,
-                truth=value,
-                pred=label(found[name].get("answer")) if name in found else None,
-                duplicate=name in dups,
-            )
-            for name, value in truth.items()
-        ]
-
-    def score(self, units: pd.DataFrame) -> pd.DataFrame:
-        return score_labels(units)
+    def truth(self, final: FinalState) -> dict[str, str]:
+        return {str(t.id): t.answer for t in final.q1}
 
 
-class Q2Scorer:
+class Q2Scorer(_LabelScorer):
     """Q2: exact wall-set match per scene; each wall is also a unit for the confusion tables."""
 
     name = "q2"
     task = "q2"
     scene_rule: Literal["mean", "all"] = "all"
+    key = "wall"
+    parse_key = staticmethod(wall_name)
 
-    def units(
-        self, answer: Mapping[str, Any] | None, final: FinalState, scene: Scene
-    ) -> list[UnitRow]:
-        truth = {t.wall: t.answer for t in final.q2}
-        found, dups = collect(entries(answer, "answers"), "wall", set(truth), wall_name)
-        return [
-            UnitRow(
-                unit=name,
-                truth=value,
-                pred=label(found[name].get("answer")) if name in found else None,
-                duplicate=name in dups,
-            )
-            for name, value in truth.items()
-        ]
-
-    def score(self, units: pd.DataFrame) -> pd.DataFrame:
-        return score_labels(units)
+    def truth(self, final: FinalState) -> dict[str, str]:
+        return {t.wall: t.answer for t in final.q2}
