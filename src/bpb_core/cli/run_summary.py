@@ -27,3 +27,10 @@ def show_summary(run_dirs: list[Path]) -> None:
             *(f"{row[c]:.3f}" if isinstance(row[c], float) else str(row[c]) for c in columns)
         )
     stdout().print(table)
+    parents = sorted({str(d.parent) for d in run_dirs})
+    where = " ".join(parents) if parents else "RUN_DIR"
+    stderr().print(
+        f"next: bpb report {where} --out {parents[0] if parents else '.'}/report "
+        "(charts, failure gallery, HTML)",
+        highlight=False,
+    )
