@@ -49,10 +49,10 @@ _EXPORTS: dict[str, str] = {
     # running evaluations
     "run_eval": "bpb_core.runner",
     "evaluate": "bpb_core.runner",
-    "RunOptions": "bpb_core.runner_types",
-    "RetryPolicy": "bpb_core.runner_types",
-    "RunResult": "bpb_core.runner_types",
-    "ProgressEvent": "bpb_core.runner_types",
+    "RunOptions": "bpb_core.runner.types",
+    "RetryPolicy": "bpb_core.runner.types",
+    "RunResult": "bpb_core.runner.types",
+    "ProgressEvent": "bpb_core.runner.types",
     "ModelRequest": "bpb_core.adapters",
     "ModelResponse": "bpb_core.adapters",
     "Message": "bpb_core.adapters",
@@ -117,6 +117,6 @@ if TYPE_CHECKING:
     from bpb_core.report.build import build_report
     from bpb_core.results import load_frame, load_results
     from bpb_core.runner import evaluate, run_eval
-    from bpb_core.runner_types import ProgressEvent, RetryPolicy, RunOptions, RunResult
+    from bpb_core.runner.types import ProgressEvent, RetryPolicy, RunOptions, RunResult
     from bpb_core.scene import FinalState, Scene
     from bpb_core.simulate import simulate_paths, simulate_scene

@@ -11,8 +11,8 @@ import pytest
 from dataset_small import SMALL
 
 from bpb_core.dataset import generate_dataset, load_dataset
-from bpb_core.dataset_jobs import worker_setup
-from bpb_core.dataset_worker import Job, produce
+from bpb_core.dataset.jobs import worker_setup
+from bpb_core.dataset.worker import Job, produce
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
 from bpb_tasks.billiards.config import DatasetConfig

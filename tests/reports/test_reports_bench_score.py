@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.bench_score import synthetic_units
+from bpb_core.bench.score import synthetic_units
 from bpb_core.registry import make_registry
 
 

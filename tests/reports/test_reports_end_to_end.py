@@ -12,10 +12,10 @@ import pytest
 from bpb_core.dataset import generate_dataset
 from bpb_core.layout import FINAL, INIT, iter_scene_keys
 from bpb_core.results import load_results
-from bpb_core.results_diagnostics import stasis_index
-from bpb_core.results_tables import leaderboard
+from bpb_core.results.diagnostics import stasis_index
+from bpb_core.results.tables import leaderboard
 from bpb_core.runner import run_eval
-from bpb_core.runner_types import RunOptions
+from bpb_core.runner.types import RunOptions
 
 
 def expected_stasis(data: Path) -> dict[str, float]:

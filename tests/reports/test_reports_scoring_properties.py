@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from reports_fixture import make_final, make_scene
 
-from bpb_core.bench_score import _loop_correct, synthetic_units
+from bpb_core.bench.score import _loop_correct, synthetic_units
 from bpb_core.registry import make_registry
 from bpb_core.units import SCORER_INPUT
 from bpb_tasks.scoring.labels import Q1Scorer, Q2Scorer

@@ -9,7 +9,7 @@ import pytest
 
 from bpb_core.errors import BadInput
 from bpb_core.results import CALL_DTYPES, UNIT_DTYPES, load_results, summary
-from bpb_core.results_tables import accuracy, by_horizon, leaderboard
+from bpb_core.results.tables import accuracy, by_horizon, leaderboard
 
 
 def board(runs: Path, **kwargs: object) -> pd.DataFrame:

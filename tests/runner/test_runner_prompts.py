@@ -15,7 +15,7 @@ from bpb_core.adapters import ImagePart, Message, ModelRequest, ModelResponse, T
 from bpb_core.interfaces import PromptOptions
 from bpb_core.registry import make_registry
 from bpb_core.runner import run_eval
-from bpb_core.runner_types import RunOptions
+from bpb_core.runner.types import RunOptions
 from bpb_core.scene import FinalState
 
 REGISTRY = make_registry()

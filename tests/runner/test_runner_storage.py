@@ -7,8 +7,8 @@ import time
 from pathlib import Path
 
 from bpb_core.layout import SceneKey
-from bpb_core.runner_limits import RateLimiter
-from bpb_core.storage import (
+from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.storage import (
     AnswerRecord,
     AttemptLog,
     completed,

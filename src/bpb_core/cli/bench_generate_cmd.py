@@ -20,7 +20,7 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
     """Seconds for a dataset (1,000 scenes by default) beside Pillow encoding alone."""
     from rich.table import Table
 
-    from bpb_core.bench_generate import measure_generate, measure_memory
+    from bpb_core.bench.generate import measure_generate, measure_memory
     from bpb_core.errors import BadInput
 
     sizes = [int(x) for x in memory.split(",") if x.strip()] if memory else []

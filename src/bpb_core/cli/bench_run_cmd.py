@@ -77,8 +77,8 @@ def bench_run(
     """Request rate of `bpb run` vs a bare litellm.acompletion loop (server side), peak RSS."""
     from rich.table import Table
 
+    from bpb_core.bench.run import bench_memory, bench_throughput
     from bpb_core.cli.console import stdout
-    from bpb_core.runner_bench import bench_memory, bench_throughput
 
     data = _dataset(work, max(throughput_scenes, memory_scenes))
     bare, ours = bench_throughput(data, concurrency, latency, throughput_scenes, rounds)

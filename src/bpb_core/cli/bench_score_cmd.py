@@ -18,7 +18,7 @@ def bench_score_cmd(rows: int, repeats: int, loop_rows: int, run_dirs: tuple[str
     """Time the vectorised scorers beside a per-row loop (target: 1M rows in at most 2 s)."""
     from rich.table import Table
 
-    from bpb_core.bench_score import TARGET_SECONDS, bench_score
+    from bpb_core.bench.score import TARGET_SECONDS, bench_score
 
     timings = bench_score(rows, repeats=repeats, loop_rows=loop_rows)
     table = Table(
@@ -32,7 +32,7 @@ def bench_score_cmd(rows: int, repeats: int, loop_rows: int, run_dirs: tuple[str
         )  # fmt: skip
     stdout().print(table)
     if run_dirs:
-        from bpb_core.bench_score import bench_load
+        from bpb_core.bench.score import bench_load
 
         load = bench_load(list(run_dirs))
         stdout().print(

@@ -13,7 +13,7 @@ def startup(runs: int) -> None:
     """Time `bpb --help` against a bare `python -c pass` (target: at most +300 ms)."""
     from rich.table import Table
 
-    from bpb_core.bench_startup import measure_startup
+    from bpb_core.bench.startup import measure_startup
 
     result = measure_startup(runs)
     table = Table("command", "median ms", title=f"bpb start-up ({runs} interleaved runs)")

@@ -14,7 +14,7 @@ from bpb_core.errors import BadInput
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
 
-    from bpb_core.dataset_manifest import DatasetManifest
+    from bpb_core.dataset.manifest import DatasetManifest
 
 PHASES = {"calibrate": "calibrating speeds", "scenes": "scenes", "stats": "stats figures"}
 
@@ -34,7 +34,7 @@ def parse_horizons(text: str) -> list[float]:
 
 
 class RichProgress:
-    """Draws :class:`~bpb_core.dataset_jobs.GenerateProgress` events as rich progress bars."""
+    """Draws :class:`~bpb_core.dataset.jobs.GenerateProgress` events as rich progress bars."""
 
     def __init__(self) -> None:
         from rich.progress import (

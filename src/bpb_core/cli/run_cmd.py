@@ -18,7 +18,7 @@ from bpb_core.errors import BadInput
 if TYPE_CHECKING:
     from bpb_core.adapters import AdapterOptions
     from bpb_core.registry import Registry
-    from bpb_core.runner_types import RunOptions, RunResult
+    from bpb_core.runner.types import RunOptions, RunResult
 
 BASELINES = ("baseline:stasis", "baseline:straight", "baseline:random", "baseline:oracle")
 DEFAULT_OUT = "runs"
@@ -175,7 +175,7 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
     from bpb_core.cli.console import load_registry
-    from bpb_core.runner_types import RetryPolicy, RunOptions
+    from bpb_core.runner.types import RetryPolicy, RunOptions
 
     registry = load_registry()
     tasks = _csv(kw["tasks"], "--tasks")
@@ -265,7 +265,7 @@ def _show_dry_run(
 
     from bpb_core.cli.console import stdout
     from bpb_core.runner import slug
-    from bpb_core.runner_plan import dry_run
+    from bpb_core.runner.plan import dry_run
 
     table = Table(
         "adapter",

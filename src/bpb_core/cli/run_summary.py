@@ -11,7 +11,7 @@ def show_summary(run_dirs: list[Path]) -> None:
 
     from bpb_core.cli.console import stderr, stdout
     from bpb_core.errors import BpbError
-    from bpb_core.runner_plan import write_scores
+    from bpb_core.runner.plan import write_scores
 
     try:
         frame = write_scores(run_dirs)

@@ -23,15 +23,15 @@ import pandas as pd
 from bpb_core.report import charts as ch
 from bpb_core.report import gallery, html
 from bpb_core.results import Results, load_results
-from bpb_core.results_diagnostics import (
+from bpb_core.results.diagnostics import (
     confusion,
     distance_errors,
     stasis_index,
     tolerance_curve,
     usage,
 )
-from bpb_core.results_stats import all_pairs, bootstrap_ci
-from bpb_core.results_tables import accuracy, by_horizon, leaderboard, summary, summary_records
+from bpb_core.results.stats import all_pairs, bootstrap_ci
+from bpb_core.results.tables import accuracy, by_horizon, leaderboard, summary, summary_records
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry

@@ -116,7 +116,7 @@ def accuracy_vs_horizon(accuracy: pd.DataFrame, leaderboard_order: list[str]) ->
 
 
 def _total_by_horizon(accuracy: pd.DataFrame) -> pd.DataFrame:
-    from bpb_core.results_tables import TOTAL_WEIGHTS
+    from bpb_core.results.tables import TOTAL_WEIGHTS
 
     wide = accuracy.pivot_table(
         index=["run", "baseline", "horizon"], columns="task", values="accuracy", observed=True

@@ -19,8 +19,8 @@ import pandas as pd
 from PIL import Image, ImageDraw, ImageFont
 
 from bpb_core.layout import MANIFEST, SceneKey
-from bpb_core.results_io import read_truth
-from bpb_core.results_tables import TOTAL_WEIGHTS, scene_scores
+from bpb_core.results.reading import read_truth
+from bpb_core.results.tables import TOTAL_WEIGHTS, scene_scores
 
 TRUTH_COLOUR = (255, 212, 0)
 PRED_COLOUR = (235, 30, 70)

@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 import pandas as pd
 
 from bpb_core.report.gallery import Case
-from bpb_core.results_io import RunFolder
+from bpb_core.results.reading import RunFolder
 
 CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0;color:#1d2433;

@@ -17,7 +17,7 @@ DPI = 150
 
 
 class Tally(Protocol):
-    """Per-horizon counts (see :class:`bpb_core.dataset_writer.HorizonTally`)."""
+    """Per-horizon counts (see :class:`bpb_core.dataset.writer.HorizonTally`)."""
 
     scenes: int
     collisions: int

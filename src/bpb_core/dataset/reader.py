@@ -12,7 +12,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from bpb_core.dataset_manifest import CHECKSUMS, DatasetManifest
+from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
 from bpb_core.model_files import read_model

@@ -19,12 +19,13 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.adapters import AdapterOptions
 from bpb_core.errors import BadInput
-from bpb_core.runner_call import PairCall
-from bpb_core.runner_data import SceneRef, select_scenes
-from bpb_core.runner_limits import RateLimiter
-from bpb_core.runner_manifest import finish_manifest, start_manifest
-from bpb_core.runner_state import RunState
-from bpb_core.runner_types import (
+from bpb_core.runner.call import PairCall
+from bpb_core.runner.data import SceneRef, select_scenes
+from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.manifest import finish_manifest, start_manifest
+from bpb_core.runner.state import RunState
+from bpb_core.runner.storage import AttemptLog, completed
+from bpb_core.runner.types import (
     NoProgress,
     Progress,
     ProgressEvent,
@@ -32,7 +33,6 @@ from bpb_core.runner_types import (
     RunOptions,
     RunResult,
 )
-from bpb_core.storage import AttemptLog, completed
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task

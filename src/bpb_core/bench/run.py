@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bpb_core.runner_data import select_scenes
+from bpb_core.runner.data import select_scenes
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
 
@@ -43,7 +43,7 @@ class Phase:
 
 class _Server:
     def __init__(self, latency: float) -> None:
-        args = [sys.executable, "-m", "bpb_core.runner_fakeserver", "--latency", str(latency)]
+        args = [sys.executable, "-m", "bpb_core.testing.fakeserver", "--latency", str(latency)]
         self.process = subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
         assert self.process.stdout is not None
         self.port = int(self.process.stdout.readline().split()[1])
@@ -141,7 +141,7 @@ def bench_throughput(
             bare_args = [
                 sys.executable,
                 "-m",
-                "bpb_core.runner_bench_bare",
+                "bpb_core.bench.run_bare",
                 api_base,
                 str(calls),
                 str(concurrency),

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from bpb_core.results_tables import RUN_COLUMNS
+from bpb_core.results.tables import RUN_COLUMNS
 
 DEFAULT_TOLERANCES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
 """Tolerances of :func:`tolerance_curve`, in ball radii (1.0 is the Q3 rule)."""

@@ -22,11 +22,11 @@ from bpb_core.errors import (
     RequestRejected,
 )
 from bpb_core.interfaces import PromptOptions
-from bpb_core.runner_data import SceneRef
-from bpb_core.runner_state import NotSent, RunState, Tally
-from bpb_core.runner_types import ProgressEvent
+from bpb_core.runner.data import SceneRef
+from bpb_core.runner.state import NotSent, RunState, Tally
+from bpb_core.runner.storage import AnswerRecord, write_answer
+from bpb_core.runner.types import ProgressEvent
 from bpb_core.scene import Scene
-from bpb_core.storage import AnswerRecord, write_answer
 
 
 @dataclass

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
-from bpb_core.results_io import RunFolder, find_runs, read_answer, read_run, read_truth
+from bpb_core.results.reading import RunFolder, find_runs, read_answer, read_run, read_truth
 from bpb_core.units import SCORER_INPUT, SCORER_OUTPUT, UnitRow
 
 if TYPE_CHECKING:
@@ -192,9 +192,9 @@ def _score(frame: pd.DataFrame, scorers: dict[str, Any]) -> pd.DataFrame:
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per run: the four leaderboard scores (strict), answered-only total, completeness.
 
-    See :func:`bpb_core.results_tables.summary`.
+    See :func:`bpb_core.results.tables.summary`.
     """
-    from bpb_core.results_tables import summary as _summary
+    from bpb_core.results.tables import summary as _summary
 
     return _summary(frame)
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset_jobs import (
+from bpb_core.dataset.jobs import (
     GenerateProgress,
     NoProgress,
     make_pool,
@@ -23,10 +23,10 @@ from bpb_core.dataset_jobs import (
     run_scenes,
     worker_setup,
 )
-from bpb_core.dataset_manifest import DatasetManifest
-from bpb_core.dataset_reader import Dataset, load_dataset
-from bpb_core.dataset_worker import WorkerSetup
-from bpb_core.dataset_writer import DatasetWriter, versions
+from bpb_core.dataset.manifest import DatasetManifest
+from bpb_core.dataset.reader import Dataset, load_dataset
+from bpb_core.dataset.worker import WorkerSetup
+from bpb_core.dataset.writer import DatasetWriter, versions
 from bpb_core.errors import BadInput
 from bpb_core.layout import MANIFEST
 

@@ -13,7 +13,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import IO, Any
 
-from bpb_core.dataset_manifest import (
+from bpb_core.dataset.manifest import (
     CHECKSUMS,
     DatasetManifest,
     HorizonSummary,
@@ -21,7 +21,7 @@ from bpb_core.dataset_manifest import (
     csv_line,
     sha256_bytes,
 )
-from bpb_core.dataset_worker import SceneResult
+from bpb_core.dataset.worker import SceneResult
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.errors import BadInput
-from bpb_core.results_tables import (
+from bpb_core.results.tables import (
     METRICS,
     RUN_COLUMNS,
     TOTAL_WEIGHTS,
@@ -57,7 +57,7 @@ def _horizon_means(
     """(point estimate per metric, bootstrap replicates B x metrics): means over horizons.
 
     ``total`` is the weighted sum of the task means (as in the leaderboard), not a mean of
-    per-scene totals, so both views agree with :func:`~bpb_core.results_tables.leaderboard`.
+    per-scene totals, so both views agree with :func:`~bpb_core.results.tables.leaderboard`.
     """
     tasks = matrix[list(TOTAL_WEIGHTS)]
     points, reps = [], []

@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING
 
 from bpb_core.adapters import TextPart
 from bpb_core.interfaces import PromptOptions
-from bpb_core.runner_data import select_scenes
-from bpb_core.runner_types import RunOptions
-from bpb_core.storage import completed
+from bpb_core.runner.data import select_scenes
+from bpb_core.runner.storage import completed
+from bpb_core.runner.types import RunOptions
 
 if TYPE_CHECKING:
     import pandas as pd

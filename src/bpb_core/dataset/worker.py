@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset_manifest import IndexRow, sha256_bytes
+from bpb_core.dataset.manifest import IndexRow, sha256_bytes
 from bpb_core.layout import FINAL, INIT, scene_dir
 from bpb_core.outcome import CUE_ID, Outcome, final_state
 from bpb_core.scene import FinalState, Scene, Stability

@@ -17,13 +17,13 @@ from typing import TYPE_CHECKING, Any
 from bpb_core import __version__
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST
-from bpb_core.runner_data import dataset_hash
-from bpb_core.runner_types import RunOptions
-from bpb_core.storage import read_manifest, write_manifest
+from bpb_core.runner.data import dataset_hash
+from bpb_core.runner.storage import read_manifest, write_manifest
+from bpb_core.runner.types import RunOptions
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
-    from bpb_core.runner_state import RunState
+    from bpb_core.runner.state import RunState
 
 _GUARDED = ("adapter", "dataset_hash", "input_mode", "cot", "force_numeric")
 

@@ -12,7 +12,7 @@ from multiprocessing.pool import Pool
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from bpb_core.dataset_worker import (
+from bpb_core.dataset.worker import (
     Job,
     WorkerSetup,
     calibrate_job,
@@ -20,7 +20,7 @@ from bpb_core.dataset_worker import (
     remove_scene,
     run_job,
 )
-from bpb_core.dataset_writer import DatasetWriter, plugin_label
+from bpb_core.dataset.writer import DatasetWriter, plugin_label
 from bpb_core.errors import BpbError
 
 if TYPE_CHECKING:

@@ -13,9 +13,9 @@ from typing import Any, TypeVar
 from bpb_core.adapters import ModelRequest, ModelResponse
 from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
-from bpb_core.runner_limits import RateLimiter
-from bpb_core.runner_types import Progress, ProgressEvent, RunOptions
-from bpb_core.storage import AttemptLog, UsageRecord
+from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.storage import AttemptLog, UsageRecord
+from bpb_core.runner.types import Progress, ProgressEvent, RunOptions
 
 T = TypeVar("T")
 

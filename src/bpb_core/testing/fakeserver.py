@@ -14,7 +14,7 @@ dataset's ``final.json`` when pointed at one, and otherwise injects the faults i
 Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/q1":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``).
-Run it with ``python -m bpb_core.runner_fakeserver --port 0``; it prints ``PORT <n>`` when ready.
+Run it with ``python -m bpb_core.testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_core.runner_fakereplies import answer_text, fault_reply, model_reply
+from bpb_core.testing.fakereplies import answer_text, fault_reply, model_reply
 
 _SCENE = re.compile(r"\(scene (h[0-9.]+_\d+)\)")
 
@@ -172,7 +172,7 @@ async def serve(
 
 def main(argv: list[str] | None = None) -> None:
     """Command line: ``--port``, ``--data``, ``--latency``, ``--config FILE`` (fault plan)."""
-    parser = argparse.ArgumentParser(prog="python -m bpb_core.runner_fakeserver")
+    parser = argparse.ArgumentParser(prog="python -m bpb_core.testing.fakeserver")
     parser.add_argument("--port", type=int, default=0)
     parser.add_argument("--data", default=None)
     parser.add_argument("--latency", type=float, default=0.0)

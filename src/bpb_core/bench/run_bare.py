@@ -3,7 +3,7 @@
 It sends ``n`` requests with ``concurrency`` in flight and nothing else: no parsing, no files.
 For a fair comparison the requests carry what ``bpb run`` sends: the first scene's image and its
 q1, q2 and q3 prompts, in turn. Run as
-``python -m bpb_core.runner_bench_bare API_BASE N CONCURRENCY DATA``.
+``python -m bpb_core.bench.run_bare API_BASE N CONCURRENCY DATA``.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ def prompts(data: Path) -> list[tuple[bytes, str]]:
     """The image and the q1, q2, q3 prompt texts of the dataset's first scene."""
     from bpb_core.interfaces import PromptOptions
     from bpb_core.registry import make_registry
-    from bpb_core.runner_data import select_scenes
+    from bpb_core.runner.data import select_scenes
 
     ref = select_scenes(data, None, 1)[0]
     scene, image, registry = ref.load(), ref.image(), make_registry()

@@ -1,0 +1,1 @@
+"""Benchmarks behind `bpb bench ...` (the simulator benchmark lives with the simulators)."""
