@@ -6,6 +6,7 @@ class turns them into the :class:`~bpb_core.interfaces.Task` methods.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
 from bpb_core.adapters import ImagePart, Message, TextPart
@@ -16,28 +17,28 @@ from bpb_tasks.extraction import extract
 from bpb_tasks.prompting import common_prompt, reply_instruction
 
 
-class BuiltinTask:
-    """Base of q1, q2 and q3. Subclasses set the class attributes and the three hooks below."""
+class BuiltinTask(ABC):
+    """Base of q1, q2 and q3. Subclasses set the class attributes and the four abstract methods below."""
 
     name: ClassVar[str] = ""
     default_cot: ClassVar[bool] = False
     title: ClassVar[str] = ""
 
+    @abstractmethod
     def question(self, scene: Scene, options: PromptOptions) -> str:
         """The task's question and answer format with an example."""
-        raise NotImplementedError
 
+    @abstractmethod
     def example(self, scene: Scene) -> str:
         """A JSON example of the answer format for this scene."""
-        raise NotImplementedError
 
+    @abstractmethod
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         """Check a decoded JSON value; return it normalised or raise ParseFailure."""
-        raise NotImplementedError
 
+    @abstractmethod
     def expected(self, final: FinalState) -> dict[str, Any]:
         """The correct answer, in the task's answer format, from the ground truth."""
-        raise NotImplementedError
 
     def prompt_text(self, scene: Scene, options: PromptOptions) -> str:
         """The whole text of the prompt."""
