@@ -35,7 +35,8 @@ _TIMEOUT_GRACE = 5.0  # our own watchdog beyond the HTTP timeout, in case a laye
 
 
 def _import_litellm() -> Any:
-    os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+    # Always the bundled price map: a run must never reach out for prices, whatever the shell says.
+    os.environ["LITELLM_LOCAL_MODEL_COST_MAP"] = "True"
     litellm: Any = importlib.import_module("litellm")
     litellm.suppress_debug_info = True
     litellm.set_verbose = False
