@@ -11,12 +11,19 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
 
 
+PIPE_WIDTH = 140  # tables piped to a file or a log are not squeezed into 80 columns
+
+
 @functools.cache
 def stdout() -> Console:
-    """Console on standard output."""
+    """Console on standard output (140 columns when piped, unless COLUMNS says otherwise)."""
+    import os
+    import sys
+
     from rich.console import Console
 
-    return Console()
+    piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
+    return Console(width=PIPE_WIDTH if piped else None)
 
 
 @functools.cache
