@@ -18,7 +18,10 @@ from bpb_tasks.prompting import common_prompt, reply_instruction
 
 
 class BuiltinTask(ABC):
-    """Base of q1, q2 and q3. Subclasses set the class attributes and the four abstract methods below."""
+    """Base of q1, q2 and q3.
+
+    Subclasses set the class attributes and implement the four abstract methods below.
+    """
 
     name: ClassVar[str] = ""
     default_cot: ClassVar[bool] = False
