@@ -1,4 +1,6 @@
-"""bpb core: the plugin system, interfaces and data models of BilliardPhys-Bench.
+"""bpb core: the plugin system, the interfaces plugins implement, and the generic engine (dataset
+writer, runner, results, reports) that reaches every scene family, task and adapter through
+them.
 
 Names are imported lazily on first use so that ``import bpb_core`` (and ``bpb --help``) stays
 cheap; nothing here imports litellm, pandas, matplotlib or pymunk.
@@ -18,48 +20,53 @@ _EXPORTS: dict[str, str] = {
     "make_registry": "bpb_core.registry",
     "Registry": "bpb_core.registry",
     "PluginWarning": "bpb_core.registry",
-    "lazy": "bpb_core.records",
-    "TaskInfo": "bpb_core.records",
-    "SceneFamilyInfo": "bpb_core.records",
-    "SimulatorInfo": "bpb_core.records",
-    "AdapterInfo": "bpb_core.records",
-    "ScorerInfo": "bpb_core.records",
-    # interfaces
+    "lazy": "bpb_core.registration",
+    "TaskInfo": "bpb_core.registration",
+    "SceneFamilyInfo": "bpb_core.registration",
+    "SimulatorInfo": "bpb_core.registration",
+    "AdapterInfo": "bpb_core.registration",
+    "ScorerInfo": "bpb_core.registration",
+    "SuiteInfo": "bpb_core.registration",
+    "DiagnosticInfo": "bpb_core.registration",
+    # interfaces and the values passed between them
     "Task": "bpb_core.interfaces",
+    "Scene": "bpb_core.interfaces",
+    "GroundTruth": "bpb_core.interfaces",
+    "GeneratedScene": "bpb_core.interfaces",
     "SceneFamily": "bpb_core.interfaces",
     "Simulator": "bpb_core.interfaces",
     "ModelAdapter": "bpb_core.interfaces",
     "Scorer": "bpb_core.interfaces",
+    "Diagnostic": "bpb_core.interfaces",
     "PromptOptions": "bpb_core.interfaces",
     "ParsedAnswer": "bpb_core.interfaces",
-    # values
-    "Scene": "bpb_core.scene",
-    "FinalState": "bpb_core.scene",
-    "Outcome": "bpb_core.outcome",
-    "final_state": "bpb_core.outcome",
-    "simulate_paths": "bpb_core.simulate",
-    "simulate_scene": "bpb_core.simulate",
-    # results and reports (pandas is imported when these are used)
-    "load_results": "bpb_core.results",
-    "load_frame": "bpb_core.results",
-    "build_report": "bpb_core.report.build",
-    "generate_dataset": "bpb_core.dataset",
-    "load_dataset": "bpb_core.dataset",
-    "Dataset": "bpb_core.dataset",
+    "UnitRow": "bpb_core.scored_units",
+    "ScenePicture": "bpb_core.picture",
+    "extract": "bpb_core.reply_json",
+    # the library face (pandas is imported when the results functions are used)
+    "generate_dataset": "bpb_core.library",
+    "load_dataset": "bpb_core.library",
+    "Dataset": "bpb_core.library",
+    "simulate_paths": "bpb_core.library",
+    "run_eval": "bpb_core.library",
+    "evaluate": "bpb_core.library",
+    "load_results": "bpb_core.library",
+    "load_frame": "bpb_core.library",
+    "Results": "bpb_core.library",
+    "leaderboard": "bpb_core.library",
+    "build_report": "bpb_core.library",
     # running evaluations
-    "run_eval": "bpb_core.runner",
-    "evaluate": "bpb_core.runner",
-    "RunOptions": "bpb_core.runner.types",
-    "RetryPolicy": "bpb_core.runner.types",
-    "RunResult": "bpb_core.runner.types",
-    "ProgressEvent": "bpb_core.runner.types",
-    "ModelRequest": "bpb_core.adapters",
-    "ModelResponse": "bpb_core.adapters",
-    "Message": "bpb_core.adapters",
-    "TextPart": "bpb_core.adapters",
-    "ImagePart": "bpb_core.adapters",
-    "Usage": "bpb_core.adapters",
-    "AdapterOptions": "bpb_core.adapters",
+    "RunOptions": "bpb_core.runner.options",
+    "RetryPolicy": "bpb_core.runner.options",
+    "RunResult": "bpb_core.runner.result",
+    "ProgressEvent": "bpb_core.runner.progress",
+    "ModelRequest": "bpb_core.model_calls",
+    "ModelResponse": "bpb_core.model_calls",
+    "Message": "bpb_core.model_calls",
+    "TextPart": "bpb_core.model_calls",
+    "ImagePart": "bpb_core.model_calls",
+    "Usage": "bpb_core.model_calls",
+    "AdapterOptions": "bpb_core.model_calls",
     # errors
     "BpbError": "bpb_core.errors",
     "BadInput": "bpb_core.errors",
@@ -83,7 +90,35 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
-    from bpb_core.adapters import (
+    from bpb_core.errors import BadInput, BpbError, ParseFailure
+    from bpb_core.hookspecs import hookimpl, hookspec
+    from bpb_core.interfaces import (
+        Diagnostic,
+        GeneratedScene,
+        GroundTruth,
+        ModelAdapter,
+        ParsedAnswer,
+        PromptOptions,
+        Scene,
+        SceneFamily,
+        Scorer,
+        Simulator,
+        Task,
+    )
+    from bpb_core.library import (
+        Dataset,
+        Results,
+        build_report,
+        evaluate,
+        generate_dataset,
+        leaderboard,
+        load_dataset,
+        load_frame,
+        load_results,
+        run_eval,
+        simulate_paths,
+    )
+    from bpb_core.model_calls import (
         AdapterOptions,
         ImagePart,
         Message,
@@ -92,31 +127,20 @@ if TYPE_CHECKING:
         TextPart,
         Usage,
     )
-    from bpb_core.dataset import Dataset, generate_dataset, load_dataset
-    from bpb_core.errors import BadInput, BpbError, ParseFailure
-    from bpb_core.hookspecs import hookimpl, hookspec
-    from bpb_core.interfaces import (
-        ModelAdapter,
-        ParsedAnswer,
-        PromptOptions,
-        SceneFamily,
-        Scorer,
-        Simulator,
-        Task,
-    )
-    from bpb_core.outcome import Outcome, final_state
-    from bpb_core.records import (
+    from bpb_core.picture import ScenePicture
+    from bpb_core.registration import (
         AdapterInfo,
+        DiagnosticInfo,
         SceneFamilyInfo,
         ScorerInfo,
         SimulatorInfo,
+        SuiteInfo,
         TaskInfo,
         lazy,
     )
     from bpb_core.registry import PluginWarning, Registry, make_registry
-    from bpb_core.report.build import build_report
-    from bpb_core.results import load_frame, load_results
-    from bpb_core.runner import evaluate, run_eval
-    from bpb_core.runner.types import ProgressEvent, RetryPolicy, RunOptions, RunResult
-    from bpb_core.scene import FinalState, Scene
-    from bpb_core.simulate import simulate_paths, simulate_scene
+    from bpb_core.reply_json import extract
+    from bpb_core.runner.options import RetryPolicy, RunOptions
+    from bpb_core.runner.progress import ProgressEvent
+    from bpb_core.runner.result import RunResult
+    from bpb_core.scored_units import UnitRow

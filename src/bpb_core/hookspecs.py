@@ -1,8 +1,9 @@
 """The hooks a bpb plugin can implement.
 
 A plugin is a module (or object) exposed under the ``bpb`` entry-point group. Each hook takes no
-arguments and returns an iterable of registration records (see :mod:`bpb_core.records`). Names must
-be unique per kind across all installed plugins; a clash is an error naming both distributions.
+arguments and returns an iterable of registration records (see :mod:`bpb_core.registration`).
+Names must be unique per kind across all installed plugins; a clash is an error naming both
+distributions.
 
 Example ``pyproject.toml`` of a third-party adapter::
 
@@ -14,7 +15,7 @@ and ``bpb_echo/hooks.py``::
     from bpb_core import AdapterInfo, hookimpl, lazy
 
     @hookimpl
-    def bpb_adapters():
+    def bpb_model_adapters():
         yield AdapterInfo("echo", lazy("bpb_echo.adapter:make_adapter"), "Echoes a fixed answer")
 """
 
@@ -24,12 +25,14 @@ from collections.abc import Iterable
 
 import pluggy
 
-from bpb_core.records import (
+from bpb_core.registration import (
     AdapterInfo,
+    DiagnosticInfo,
     Kind,
     SceneFamilyInfo,
     ScorerInfo,
     SimulatorInfo,
+    SuiteInfo,
     TaskInfo,
 )
 
@@ -39,41 +42,47 @@ hookimpl = pluggy.HookimplMarker(PROJECT)
 
 
 @hookspec
-def bpb_tasks() -> Iterable[TaskInfo]:  # type: ignore[empty-body]
-    """Register tasks: questions asked about a scene, each with prompt, answer schema and parser.
+def bpb_eval_tasks() -> Iterable[TaskInfo]:  # type: ignore[empty-body]
+    """Register tasks: questions asked about the scenes of one family, each with its prompt,
+    answer schema, parser and expected answer.
 
     Returns:
-        :class:`~bpb_core.records.TaskInfo` records; ``load()`` gives a class implementing
-        :class:`~bpb_core.interfaces.Task`.
+        :class:`~bpb_core.registration.TaskInfo` records (``family`` names the scene family,
+        ``default`` puts the task in ``bpb run``'s default set); ``load()`` gives a class
+        implementing :class:`~bpb_core.interfaces.Task`.
     """
 
 
 @hookspec
 def bpb_scene_families() -> Iterable[SceneFamilyInfo]:  # type: ignore[empty-body]
-    """Register scene families: generators of one kind of scene (the built-in is ``billiards``).
+    """Register scene families: kinds of scene with their files, sampler, ground truth and
+    pictures.
 
     Returns:
-        :class:`~bpb_core.records.SceneFamilyInfo` records; ``load()`` gives a class implementing
+        :class:`~bpb_core.registration.SceneFamilyInfo` records (``default``: the family
+        ``bpb generate`` uses without ``--family``); ``load()`` gives a class implementing
         :class:`~bpb_core.interfaces.SceneFamily`.
     """
 
 
 @hookspec
 def bpb_simulators() -> Iterable[SimulatorInfo]:  # type: ignore[empty-body]
-    """Register physics simulators that turn a scene into its state at a horizon.
+    """Register physics simulators that turn a scene of one family into its outcome at a
+    horizon.
 
     Returns:
-        :class:`~bpb_core.records.SimulatorInfo` records; ``load()`` gives a class implementing
-        :class:`~bpb_core.interfaces.Simulator`.
+        :class:`~bpb_core.registration.SimulatorInfo` records (``family`` names the scene
+        family); ``load()`` gives a class implementing :class:`~bpb_core.interfaces.Simulator`.
     """
 
 
 @hookspec
-def bpb_adapters() -> Iterable[AdapterInfo]:  # type: ignore[empty-body]
+def bpb_model_adapters() -> Iterable[AdapterInfo]:  # type: ignore[empty-body]
     """Register model adapters, addressed as ``name:model`` (split at the first colon).
 
     Returns:
-        :class:`~bpb_core.records.AdapterInfo` records; ``load()`` gives a factory
+        :class:`~bpb_core.registration.AdapterInfo` records (``offline``: runs with no network
+        or key, so ``bpb run`` uses its ``models`` by default); ``load()`` gives a factory
         ``factory(model: str, options: AdapterOptions) -> ModelAdapter``.
     """
 
@@ -83,15 +92,41 @@ def bpb_scorers() -> Iterable[ScorerInfo]:  # type: ignore[empty-body]
     """Register scorers, each bound to one task by name.
 
     Returns:
-        :class:`~bpb_core.records.ScorerInfo` records; ``load()`` gives a class implementing
-        :class:`~bpb_core.interfaces.Scorer`.
+        :class:`~bpb_core.registration.ScorerInfo` records; ``load()`` gives a class
+        implementing :class:`~bpb_core.interfaces.Scorer` (and optionally
+        :class:`~bpb_core.interfaces.ExplainsErrors` and
+        :class:`~bpb_core.interfaces.DrawsOverlay` for the failure gallery).
+    """
+
+
+@hookspec
+def bpb_suites() -> Iterable[SuiteInfo]:  # type: ignore[empty-body]
+    """Register suites: weighted totals over tasks (the paper's 0.3 Q1 + 0.3 Q2 + 0.4 Q3).
+
+    Reports show every suite all of whose tasks ran, beside the task scores.
+
+    Returns:
+        :class:`~bpb_core.registration.SuiteInfo` records (``weights``: task to weight).
+    """
+
+
+@hookspec
+def bpb_diagnostics() -> Iterable[DiagnosticInfo]:  # type: ignore[empty-body]
+    """Register diagnostics: tables (and charts) derived from scored results.
+
+    Returns:
+        :class:`~bpb_core.registration.DiagnosticInfo` records (``tasks``: shown when any of
+        them ran); ``load()`` gives a class implementing
+        :class:`~bpb_core.interfaces.Diagnostic`.
     """
 
 
 HOOK_KINDS: dict[str, Kind] = {
-    "bpb_tasks": "task",
+    "bpb_eval_tasks": "task",
     "bpb_scene_families": "scene_family",
     "bpb_simulators": "simulator",
-    "bpb_adapters": "adapter",
+    "bpb_model_adapters": "adapter",
     "bpb_scorers": "scorer",
+    "bpb_suites": "suite",
+    "bpb_diagnostics": "diagnostic",
 }

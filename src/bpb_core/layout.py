@@ -9,7 +9,7 @@ Run: ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl``,
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,3 +67,21 @@ def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
             if smatch and sdir.is_dir():
                 keys.append(SceneKey(float(hmatch.group(1)), int(smatch.group(1))))
     return iter(sorted(keys))
+
+
+def select_keys(
+    keys: Iterable[SceneKey], horizons: Sequence[float] | None = None, limit: int | None = None
+) -> list[SceneKey]:
+    """``keys`` (sorted) at ``horizons`` (all when ``None``), the first ``limit`` per horizon:
+    the one selection rule of runs, dry runs and the scoring of runs."""
+    wanted = None if horizons is None else {float(h) for h in horizons}
+    taken: dict[float, int] = {}
+    chosen: list[SceneKey] = []
+    for key in keys:
+        if wanted is not None and key.horizon not in wanted:
+            continue
+        if limit is not None and taken.get(key.horizon, 0) >= limit:
+            continue
+        taken[key.horizon] = taken.get(key.horizon, 0) + 1
+        chosen.append(key)
+    return chosen

@@ -10,13 +10,36 @@ import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from importlib import metadata
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pluggy
 
 from bpb_core import hookspecs
-from bpb_core.errors import PluginError, UnknownName
-from bpb_core.records import KINDS, ComponentInfo, Kind, Registered
+from bpb_core.errors import BadInput, PluginError, UnknownName
+from bpb_core.registration import (
+    KINDS,
+    AdapterInfo,
+    ComponentInfo,
+    DiagnosticInfo,
+    Kind,
+    Registered,
+    SceneFamilyInfo,
+    ScorerInfo,
+    SimulatorInfo,
+    SuiteInfo,
+    TaskInfo,
+)
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import (
+        Diagnostic,
+        ModelAdapter,
+        SceneFamily,
+        Scorer,
+        Simulator,
+        Task,
+    )
+    from bpb_core.model_calls import AdapterOptions
 
 ENTRY_POINT_GROUP = "bpb"
 LOCAL = "<local>"
@@ -69,34 +92,116 @@ class Registry:
         for kind in KINDS:
             yield from self.entries(kind).values()
 
-    # Typed conveniences used by the runner and the CLI.
-    def task(self, name: str) -> Any:
+    # The typed facade: every component comes out as its interface.
+    def task(self, name: str) -> Task:
         """A fresh instance of the task ``name``."""
-        return self.load("task", name)()
+        task: Task = self.load("task", name)()
+        return task
 
-    def simulator(self, name: str, **options: Any) -> Any:
-        """A fresh instance of the simulator ``name`` built with ``options``."""
-        return self.load("simulator", name)(**options)
+    def task_info(self, name: str) -> TaskInfo:
+        """The record of task ``name`` (which family it asks about, whether it is a default)."""
+        info = self.get("task", name).info
+        assert isinstance(info, TaskInfo)
+        return info
 
-    def scene_family(self, name: str) -> Any:
+    def tasks_for(self, family: str, *, default_only: bool = False) -> list[str]:
+        """Tasks asking about ``family``'s scenes (only the default ones with ``default_only``,
+        or all of them when none is marked default), sorted by name."""
+        infos = [
+            r.info
+            for r in self.entries("task").values()
+            if isinstance(r.info, TaskInfo) and r.info.family == family
+        ]
+        chosen = [i for i in infos if i.default] if default_only else infos
+        return [i.name for i in (chosen or infos)]
+
+    def simulator(self, name: str, **options: Any) -> Simulator:
+        """A fresh instance of the simulator ``name`` built with ``options``.
+
+        Raises:
+            BadInput: The simulator does not take one of the options.
+        """
+        factory = self.load("simulator", name)
+        try:
+            simulator: Simulator = factory(**options)
+        except TypeError as exc:
+            given = ", ".join(f"--{k}" for k in options)
+            raise BadInput(f"simulator {name!r}: does not accept {given}: {exc}") from None
+        return simulator
+
+    def simulator_info(self, name: str) -> SimulatorInfo:
+        """The record of simulator ``name`` (which family it simulates)."""
+        info = self.get("simulator", name).info
+        assert isinstance(info, SimulatorInfo)
+        return info
+
+    def scene_family(self, name: str) -> SceneFamily:
         """A fresh instance of the scene family ``name``."""
-        return self.load("scene_family", name)()
+        family: SceneFamily = self.load("scene_family", name)()
+        return family
 
-    def scorer(self, name: str) -> Any:
+    def default_family(self) -> str:
+        """The family marked default by its plugin (or the only one installed).
+
+        Raises:
+            BadInput: None or several are marked and more than one is installed.
+        """
+        infos = [r.info for r in self.entries("scene_family").values()]
+        marked = [i.name for i in infos if isinstance(i, SceneFamilyInfo) and i.default]
+        if len(marked) == 1:
+            return marked[0]
+        if len(infos) == 1:
+            return infos[0].name
+        known = ", ".join(i.name for i in infos) or "none installed"
+        raise BadInput(f"--family: no single default scene family; choose one of: {known}")
+
+    def scorer(self, name: str) -> Scorer:
         """A fresh instance of the scorer ``name``."""
-        return self.load("scorer", name)()
+        scorer: Scorer = self.load("scorer", name)()
+        return scorer
 
-    def scorers_for(self, task: str) -> list[Registered]:
-        """Scorers bound to ``task``."""
-        return [r for r in self.entries("scorer").values() if getattr(r.info, "task", "") == task]
+    def scorer_for(self, task: str) -> Scorer:
+        """A fresh instance of the scorer of ``task``.
 
-    def adapter(self, spec: str, options: Any = None) -> Any:
+        Raises:
+            BadInput: No installed scorer scores ``task``.
+        """
+        for entry in self.entries("scorer").values():
+            if isinstance(entry.info, ScorerInfo) and entry.info.task == task:
+                return self.scorer(entry.info.name)
+        raise BadInput(f"task {task!r}: no installed scorer scores it")
+
+    def adapter(self, spec: str, options: AdapterOptions | None = None) -> ModelAdapter:
         """Build the adapter for a ``name:model`` spec (split at the first colon)."""
-        from bpb_core.adapters import AdapterOptions, split_spec
+        from bpb_core.model_calls import AdapterOptions, split_spec
 
         name, model = split_spec(spec)
         factory = self.load("adapter", name)
-        return factory(model, options if options is not None else AdapterOptions())
+        adapter: ModelAdapter = factory(model, options if options is not None else AdapterOptions())
+        return adapter
+
+    def offline_specs(self) -> list[str]:
+        """``name:model`` of every listed model of every offline adapter."""
+        return [
+            f"{r.info.name}:{model}"
+            for r in self.entries("adapter").values()
+            if isinstance(r.info, AdapterInfo) and r.info.offline
+            for model in r.info.models
+        ]
+
+    def suites(self) -> list[SuiteInfo]:
+        """Every installed suite, sorted by name."""
+        return [r.info for r in self.entries("suite").values() if isinstance(r.info, SuiteInfo)]
+
+    def diagnostics_for(self, tasks: Iterable[str]) -> list[Diagnostic]:
+        """Fresh instances of the diagnostics that look at any of ``tasks``, sorted by name."""
+        wanted = set(tasks)
+        found: list[Diagnostic] = []
+        for entry in self.entries("diagnostic").values():
+            info = entry.info
+            if isinstance(info, DiagnosticInfo) and wanted & set(info.tasks):
+                found.append(info.load()())
+        return found
 
 
 def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[object, PluginSource]]:

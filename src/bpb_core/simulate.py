@@ -1,26 +1,26 @@
 """Simulate scene files: the library behind ``bpb simulate``.
 
 Inputs are ``init.json`` files, scene folders holding one, ``final.json`` files (the ``init.json``
-beside them is simulated) or dataset folders (every ``h{t}/scene_{i}`` in dataset order). Results
-come back in input order, one :class:`~bpb_core.scene.FinalState` per scene. Every user mistake
-is a :class:`~bpb_core.errors.BadInput` naming the file and the field, e.g.
+beside them is simulated) or dataset folders (every ``h{t}/scene_{i}`` in dataset order). Scenes
+are read with the models of the simulator's scene family, and results come back in input order,
+one ground truth (the family's ``final.json`` model) per scene. Every user mistake is a
+:class:`~bpb_core.errors.BadInput` naming the file and the field, e.g.
 ``scenes/x.json: balls[2].pos: ball 2 at [2.5, 0.4] is off the table``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INIT, iter_scene_keys
-from bpb_core.model_files import read_model
-from bpb_core.outcome import final_state
-from bpb_core.scene import FinalState, Scene
+from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import Simulator
+    from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
     from bpb_core.registry import Registry
 
 
@@ -47,44 +47,47 @@ def _folder_scenes(folder: Path) -> list[Path]:
     return found
 
 
-def load_scene(path: Path) -> Scene:
-    """Read and validate one ``init.json``; errors name the file and field."""
-    return read_model(path, Scene)
-
-
 def simulate_scene(
-    scene: Scene,
+    scene: Any,
     simulator: Simulator,
+    family: SceneFamily,
     horizon: float | None = None,
     *,
     stability: bool = False,
-) -> FinalState:
+) -> GroundTruth:
     """Ground truth of ``scene`` at ``horizon`` (default: the scene's own) from ``simulator``."""
-    end = scene.horizon if horizon is None else horizon
-    outcome = simulator.run(scene, end)
-    final = final_state(scene, outcome, simulator=getattr(simulator, "name", "unknown"))
-    if stability:
-        from bpb_tasks.simulators.stability import annotate
-
-        final = final.model_copy(
-            update={"stability": annotate(scene, outcome, simulator=simulator)}
-        )
-    return final
+    return family.ground_truth(scene, simulator, horizon, stability=stability)
 
 
-def make_simulator(
-    name: str = "analytic", registry: Registry | None = None, **options: Any
-) -> Simulator:
-    """The simulator plugin ``name`` built with ``options`` (unknown options are bad input)."""
+@dataclass(frozen=True)
+class Prepared:
+    """A simulator with its family, resolved once for many scenes."""
+
+    simulator: Simulator
+    family: SceneFamily
+
+
+def prepare(
+    horizon: float | None,
+    simulator: str | Simulator,
+    registry: Registry | None,
+    options: Mapping[str, Any] | None,
+    family: str | None = None,
+) -> Prepared:
+    """Resolve ``simulator`` (a name or an object) and its scene family.
+
+    Raises:
+        BadInput: A bad horizon, an unknown simulator or an option it does not take.
+    """
     from bpb_core.registry import make_registry
 
+    if horizon is not None and not horizon > 0:
+        raise BadInput(f"--horizon: must be positive, got {horizon}")
     reg = registry if registry is not None else make_registry()
-    factory = reg.load("simulator", name)
-    try:
-        return factory(**options)  # type: ignore[no-any-return]
-    except TypeError as exc:
-        given = ", ".join(f"--{k}" for k in options)
-        raise BadInput(f"simulator {name!r}: does not accept {given}: {exc}") from None
+    if isinstance(simulator, str):
+        name = reg.simulator_info(simulator).family or family or reg.default_family()
+        return Prepared(reg.simulator(simulator, **dict(options or {})), reg.scene_family(name))
+    return Prepared(simulator, reg.scene_family(family or reg.default_family()))
 
 
 def simulate_paths(
@@ -95,7 +98,7 @@ def simulate_paths(
     stability: bool = False,
     registry: Registry | None = None,
     options: Mapping[str, Any] | None = None,
-) -> Iterator[FinalState]:
+) -> Iterator[GroundTruth]:
     """Simulate every scene named by ``paths`` and yield their final states in input order.
 
     Args:
@@ -109,12 +112,13 @@ def simulate_paths(
     Raises:
         BadInput: A path does not exist or a scene file is invalid (file and field named).
     """
-    sim = _prepare(horizon, simulator, registry, options)
+    job = prepare(horizon, simulator, registry, options)
     for path in scene_files(paths):
-        yield simulate_scene(load_scene(path), sim, horizon, stability=stability)
+        scene = read_model(path, job.family.scene_model)
+        yield simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
 
 
-_JOB: tuple[Simulator, float | None, bool] | None = None  # set before forking workers
+_JOB: tuple[Prepared, float | None, bool] | None = None  # set before forking workers
 PARALLEL_MIN = 256  # below this many scenes, worker start-up costs more than it saves
 
 
@@ -135,10 +139,10 @@ def simulate_lines(
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
     global _JOB
-    sim = _prepare(horizon, simulator, registry, options)
+    job = prepare(horizon, simulator, registry, options)
     files = scene_files(paths)
     count = _worker_count(workers, len(files))
-    _JOB = (sim, horizon, stability)
+    _JOB = (job, horizon, stability)
     if count <= 1:
         yield from map(_line, files)
         return
@@ -146,19 +150,6 @@ def simulate_lines(
 
     with multiprocessing.get_context("fork").Pool(count) as pool:
         yield from pool.imap(_line, files, chunksize=max(16, min(256, len(files) // (8 * count))))
-
-
-def _prepare(
-    horizon: float | None,
-    simulator: str | Simulator,
-    registry: Registry | None,
-    options: Mapping[str, Any] | None,
-) -> Simulator:
-    if horizon is not None and not horizon > 0:
-        raise BadInput(f"--horizon: must be positive, got {horizon}")
-    if isinstance(simulator, str):
-        return make_simulator(simulator, registry, **dict(options or {}))
-    return simulator
 
 
 def _worker_count(workers: int, scenes: int) -> int:
@@ -174,5 +165,7 @@ def _worker_count(workers: int, scenes: int) -> int:
 
 def _line(path: Path) -> str:
     assert _JOB is not None
-    sim, horizon, stability = _JOB
-    return simulate_scene(load_scene(path), sim, horizon, stability=stability).model_dump_json()
+    job, horizon, stability = _JOB
+    scene = read_model(path, job.family.scene_model)
+    truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+    return truth.model_dump_json()

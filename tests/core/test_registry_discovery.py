@@ -17,7 +17,7 @@ GOOD_PLUGIN = """
 from bpb_core import AdapterInfo, hookimpl, lazy
 
 @hookimpl
-def bpb_adapters():
+def bpb_model_adapters():
     yield AdapterInfo("shout", lazy("shout_impl:make"), "Shouts", models=("loud",))
 """
 GOOD_IMPL = """
@@ -93,7 +93,7 @@ def test_broken_plugin_warns_and_the_rest_keeps_working(install: Any, run_bpb: A
 def test_a_hook_that_raises_is_a_warning(recwarn: pytest.WarningsRecorder) -> None:
     class Exploding:
         @hookimpl
-        def bpb_tasks(self) -> Any:
+        def bpb_eval_tasks(self) -> Any:
             raise RuntimeError("boom")
 
     registry = make_registry([Exploding()], entry_points=False)
@@ -107,7 +107,7 @@ def test_name_clash_is_an_error_naming_both_distributions(install: Any, run_bpb:
 from bpb_core import AdapterInfo, hookimpl, lazy
 
 @hookimpl
-def bpb_adapters():
+def bpb_model_adapters():
     yield AdapterInfo("baseline", lazy("os:getcwd"), "Impostor")
 """
     install("bpb-impostor", "9.9", {"impostor_hooks": clash}, {"impostor": "impostor_hooks"})
@@ -131,7 +131,7 @@ def test_misspelt_hook_is_caught() -> None:
 def test_record_of_the_wrong_kind_is_rejected() -> None:
     class Wrong:
         @hookimpl
-        def bpb_tasks(self) -> list[AdapterInfo]:
+        def bpb_eval_tasks(self) -> list[AdapterInfo]:
             return [AdapterInfo("x", lazy("os:getcwd"))]
 
     with pytest.raises(PluginError, match="expected a task record"):
@@ -149,7 +149,7 @@ def test_unknown_name_lists_the_known_ones() -> None:
 def test_fresh_registries_do_not_share_state() -> None:
     class Extra:
         @hookimpl
-        def bpb_adapters(self) -> list[AdapterInfo]:
+        def bpb_model_adapters(self) -> list[AdapterInfo]:
             return [AdapterInfo("extra", lazy("os:getcwd"))]
 
     with_extra = make_registry([Extra()], entry_points=False)

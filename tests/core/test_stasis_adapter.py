@@ -6,7 +6,7 @@ import asyncio
 import json
 
 from bpb_core import ModelRequest, make_registry
-from bpb_core.scene import Ball, Scene
+from bpb_tasks.billiards.scene import Ball, Scene
 
 
 def _scene() -> Scene:

@@ -9,12 +9,12 @@ from pathlib import Path
 from PIL import Image
 
 from bpb_core.dataset import load_dataset
-from bpb_core.outcome import Event, Outcome, Segment
-from bpb_core.scene import Ball, Scene
 from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_style import ball_colour
+from bpb_tasks.billiards.scene import Ball, Scene
 
 CONFIG = DatasetConfig()
 SPEC = CanvasSpec.from_config(CONFIG)

@@ -5,13 +5,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from bpb_core.scene import FinalState, Scene, final_json_schema, scene_json_schema
+from bpb_tasks.billiards.scene import Scene, scene_json_schema
+from bpb_tasks.billiards.truth import FinalState, final_json_schema
 
 SCHEMAS = Path(__file__).resolve().parents[2] / "docs" / "schemas"
 
 
 def test_committed_schemas_match_the_code() -> None:
-    # Regenerate with: python -c "from bpb_core.scene import ..." (see docs/dataset-card.md)
+    # Regenerate with: python -c "from bpb_tasks.billiards.scene import ..." (see docs/dataset-card.md)
     assert json.loads((SCHEMAS / "init.schema.json").read_text()) == scene_json_schema()
     assert json.loads((SCHEMAS / "final.schema.json").read_text()) == final_json_schema()
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from bpb_core.outcome import Outcome, Segment
-from bpb_core.scene import DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.outcome import Outcome, Segment
+from bpb_tasks.billiards.scene import DEFAULT_RADIUS, Scene
 
 R = DEFAULT_RADIUS
 

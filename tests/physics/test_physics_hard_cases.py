@@ -7,7 +7,7 @@ import math
 import pytest
 from phys_helpers import R, kinds, scene, state_at
 
-from bpb_core.outcome import final_state
+from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
 
 SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]

@@ -10,8 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from phys_helpers import R, seg_state, state_at
 
-from bpb_core.outcome import Outcome, final_state
-from bpb_core.scene import Scene
+from bpb_tasks.billiards.outcome import Outcome
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scene, random_scenes
 

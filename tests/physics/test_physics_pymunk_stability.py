@@ -8,12 +8,12 @@ import pytest
 from phys_helpers import R, scene
 
 from bpb_core.errors import BadInput
-from bpb_core.outcome import final_state
 from bpb_core.registry import make_registry
+from bpb_tasks.billiards.stability import annotate
+from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scenes
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
-from bpb_tasks.simulators.stability import annotate
 
 EXACT = AnalyticSimulator()
 

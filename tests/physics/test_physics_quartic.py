@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 from phys_helpers import R, scene
 
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic_roots import first_contact, quadratic_roots
-from bpb_tasks.simulators.numeric import FLOAT64
+from bpb_tasks.simulators.analytic.numeric import FLOAT64
+from bpb_tasks.simulators.analytic.roots import first_contact, quadratic_roots
 
 
 def path(x: float, y: float, vx: float, vy: float, a: float, t: np.ndarray) -> np.ndarray:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.outcome import final_state
-from bpb_core.scene import FinalState, Scene
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scene
 

@@ -21,16 +21,8 @@ from typing import Any
 
 from bpb_core.layout import scene_dir
 from bpb_core.registry import make_registry
-from bpb_core.scene import (
-    WALLS,
-    Ball,
-    BallPosition,
-    FinalState,
-    Q1Label,
-    Q2Label,
-    Scene,
-    Stability,
-)
+from bpb_tasks.billiards.scene import WALLS, Ball, Scene
+from bpb_tasks.billiards.truth import BallPosition, FinalState, Q1Label, Q2Label, Stability
 
 Pos = tuple[float, float]
 START: dict[int, Pos] = {k: (0.3 + 0.2 * k, 0.5) for k in range(7)}

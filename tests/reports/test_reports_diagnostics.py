@@ -18,8 +18,8 @@ from bpb_core.results.diagnostics import (
     tolerance_curve,
     usage,
 )
-from bpb_core.results.stats import bootstrap_ci, paired_comparison, sign_test
 from bpb_core.results.tables import leaderboard
+from bpb_core.results.uncertainty import bootstrap_ci, paired_comparison, sign_test
 
 
 @pytest.fixture
@@ -101,7 +101,7 @@ def test_runs_on_different_datasets_are_not_paired(runs: Path, tmp_path: Path) -
     from reports_fixture import all_answers, oracle_answer, write_dataset, write_run
 
     from bpb_core.errors import BadInput
-    from bpb_core.results.stats import all_pairs
+    from bpb_core.results.uncertainty import all_pairs
 
     other = write_dataset(tmp_path / "other_data")
     write_run(runs / "litellm_other", "litellm:other", other, all_answers(oracle_answer))

@@ -15,7 +15,7 @@ from bpb_core.results import load_results
 from bpb_core.results.diagnostics import stasis_index
 from bpb_core.results.tables import leaderboard
 from bpb_core.runner import run_eval
-from bpb_core.runner.types import RunOptions
+from bpb_core.runner.options import RunOptions
 
 
 def expected_stasis(data: Path) -> dict[str, float]:

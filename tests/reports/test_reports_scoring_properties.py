@@ -13,9 +13,9 @@ from reports_fixture import make_final, make_scene
 
 from bpb_core.bench.score import _loop_correct, synthetic_units
 from bpb_core.registry import make_registry
-from bpb_core.units import SCORER_INPUT
-from bpb_tasks.scoring.labels import Q1Scorer, Q2Scorer
-from bpb_tasks.scoring.positions import Q3Scorer
+from bpb_core.scored_units import SCORER_INPUT
+from bpb_tasks.q3.scorer import Q3Scorer
+from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
 
 SCORERS: dict[str, Any] = {"q1": Q1Scorer(), "q2": Q2Scorer(), "q3": Q3Scorer()}
 SCENE = make_scene(2.0, 0)

@@ -9,9 +9,9 @@ import pytest
 from reports_fixture import make_final, make_scene
 
 from bpb_core.registry import make_registry
-from bpb_core.units import SCORER_INPUT
-from bpb_tasks.scoring.labels import Q1Scorer, Q2Scorer
-from bpb_tasks.scoring.positions import Q3Scorer
+from bpb_core.scored_units import SCORER_INPUT
+from bpb_tasks.q3.scorer import Q3Scorer
+from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
 
 SCENE = make_scene(2.0, 0)  # truth: Q1 T for balls 1, 2; Q2 T for LEFT, TOP; ball 2 pocketed
 FINAL = make_final(SCENE)

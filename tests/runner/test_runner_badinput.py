@@ -11,8 +11,8 @@ import pytest
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
 from bpb_core.runner import run_eval
-from bpb_core.runner.storage import completed
-from bpb_core.runner.types import RunOptions
+from bpb_core.run_folder import completed
+from bpb_core.runner.options import RunOptions
 
 REGISTRY = make_registry()
 

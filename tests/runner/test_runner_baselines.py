@@ -10,9 +10,9 @@ import pytest
 from bpb_core.registry import make_registry
 from bpb_core.results import load_frame, summary
 from bpb_core.runner import evaluate, run_eval, slug
-from bpb_core.runner.storage import iter_answers
-from bpb_core.runner.types import RunOptions
-from bpb_core.scene import Scene
+from bpb_core.run_folder import iter_answers
+from bpb_core.runner.options import RunOptions
+from bpb_tasks.billiards.scene import Scene
 
 REGISTRY = make_registry()
 BASELINES = ["baseline:oracle", "baseline:stasis", "baseline:straight", "baseline:random"]

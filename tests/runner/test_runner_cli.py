@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from runner_fake_openai import fake_server
 
-from bpb_core.runner.storage import iter_answers
+from bpb_core.run_folder import iter_answers
 
 BPB = str(Path(sys.executable).parent / "bpb")
 KEY = "sk-bpbtest-0123456789abcdefSECRET"

@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 from runner_fake_openai import fake_server
 
-from bpb_core.adapters import AdapterOptions
+from bpb_core.model_calls import AdapterOptions
 from bpb_core.registry import make_registry
 from bpb_core.runner import run_eval
-from bpb_core.runner.storage import iter_answers, read_attempts
-from bpb_core.runner.types import RetryPolicy, RunOptions
+from bpb_core.run_folder import iter_answers, read_attempts
+from bpb_core.runner.options import RetryPolicy, RunOptions
 
 REGISTRY = make_registry()
 MODEL = "litellm:openai/fake-model"

@@ -13,8 +13,8 @@ from runner_scenes import make_scene, png_bytes
 
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import redact
-from bpb_core.adapters import AdapterOptions, ModelRequest
 from bpb_core.interfaces import PromptOptions
+from bpb_core.model_calls import AdapterOptions, ModelRequest
 from bpb_core.registry import make_registry
 
 REGISTRY = make_registry()

@@ -13,7 +13,7 @@ from runner_scenes import make_scene
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_core.registry import make_registry
-from bpb_tasks.extraction import balanced_objects
+from bpb_core.reply_json import balanced_objects
 
 SCENE = make_scene(3.0, 0)
 REGISTRY = make_registry()

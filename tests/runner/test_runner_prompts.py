@@ -11,12 +11,12 @@ from pathlib import Path
 import pytest
 from runner_scenes import make_scene, png_bytes
 
-from bpb_core.adapters import ImagePart, Message, ModelRequest, ModelResponse, TextPart
 from bpb_core.interfaces import PromptOptions
+from bpb_core.model_calls import ImagePart, Message, ModelRequest, ModelResponse, TextPart
 from bpb_core.registry import make_registry
 from bpb_core.runner import run_eval
-from bpb_core.runner.types import RunOptions
-from bpb_core.scene import FinalState
+from bpb_core.runner.options import RunOptions
+from bpb_tasks.billiards.truth import FinalState
 
 REGISTRY = make_registry()
 SCENE = make_scene(3.0, 1)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from bpb_core.layout import SceneKey
 from bpb_core.runner.limits import RateLimiter
-from bpb_core.runner.storage import (
+from bpb_core.run_folder import (
     AnswerRecord,
     AttemptLog,
     completed,

@@ -1,8 +1,11 @@
-"""The baseline adapters: predicted outcomes rendered as JSON text answers.
+"""The baseline adapters: reference predictions rendered as JSON text answers.
 
-Each baseline predicts a :class:`~bpb_core.scene.FinalState` for the scene and answers a task with
-the part the task's ``expected()`` cuts from it, as JSON text, so its answers take the same parse
-path as a real model's.
+``baseline:oracle`` answers from the scene family's own ground truth (its default simulator run
+on the scene: the ceiling, and an end-to-end check); the other models (``stasis``, ``straight``,
+``random`` for billiards) are predictions the family offers
+(:class:`~bpb_core.interfaces.Predicting`). Either way the adapter answers a task with the part
+the task's ``expected()`` cuts from the prediction, as JSON text, so its answers take the same
+parse path as a real model's. Nothing here knows a particular family or task.
 """
 
 from __future__ import annotations
@@ -10,50 +13,81 @@ from __future__ import annotations
 import json
 import random
 import time
+import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from bpb_adapters.baseline.predictors import PREDICTORS, Predictor
-from bpb_core.adapters import AdapterOptions, ModelRequest, ModelResponse, Usage
 from bpb_core.errors import BadInput, RequestRejected
+from bpb_core.interfaces import Predicting
+from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily, Simulator, Task
+    from bpb_core.registry import Registry
+
+MODELS = ("stasis", "straight", "random", "oracle")
+ORACLE = "oracle"
 
 
-def _task(name: str) -> Any:
-    from bpb_core.registry import make_registry
+def _registry() -> Registry:
+    from bpb_core.registry import PluginWarning, make_registry
 
-    return make_registry().task(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PluginWarning)  # the CLI has shown them already
+        return make_registry()
 
 
 @dataclass
 class BaselineAdapter:
-    """Answers every request from ``predict(scene, rng)``, offline and instantly.
+    """Answers every request from a prediction of the request's scene, offline and instantly.
 
     Attributes:
         name: ``baseline:<model>``.
-        predict: The predictor.
+        model: Which prediction (``oracle`` or one the scene's family offers).
         seed: Seed of the per-(scene, task) generator (``baseline:random``).
     """
 
     name: str
-    predict: Predictor
+    model: str
     seed: int = 0
-    _tasks: dict[str, Any] = field(default_factory=dict, repr=False)
+    _registry: Registry | None = field(default=None, repr=False)
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
-    def _expected(self, task: str) -> Any:
-        if task not in self._tasks:
-            self._tasks[task] = _task(task)
-        return self._tasks[task]
+    def _component(self, key: str, build: Any) -> Any:
+        if key not in self._cache:
+            if self._registry is None:
+                self._registry = _registry()
+            self._cache[key] = build(self._registry)
+        return self._cache[key]
+
+    def _predict(self, family_name: str, scene: Any, rng: random.Random) -> Any:
+        family: SceneFamily = self._component(
+            f"f:{family_name}", lambda r: r.scene_family(family_name)
+        )
+        if self.model == ORACLE:
+            simulator: Simulator = self._component(
+                f"s:{family_name}",
+                lambda r: r.simulator(family.simulator_name(family.load_config(None))),
+            )
+            return family.ground_truth(scene, simulator, stability=False)
+        if not isinstance(family, Predicting) or self.model not in family.predictors:
+            offered = [ORACLE, *(family.predictors if isinstance(family, Predicting) else ())]
+            raise RequestRejected(
+                f"{self.name}: the {family_name} family offers no such prediction "
+                f"(it offers: {', '.join(offered)})"
+            )
+        return family.predict(self.model, scene, rng)
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the scene in ``request`` (baselines never read the prompt)."""
         started = time.perf_counter()
-        if request.scene is None:
-            raise RequestRejected(f"{self.name} needs the scene in the request")
+        if request.scene is None or request.family is None:
+            raise RequestRejected(f"{self.name} needs the scene and its family in the request")
         rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
-        final = self.predict(request.scene, rng)
-        text = json.dumps(self._expected(request.task).expected(final))
+        truth = self._predict(request.family, request.scene, rng)
+        task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         return ModelResponse(
-            text=text,
+            text=json.dumps(task.expected(truth)),
             usage=Usage(0, 0, 0, 0),
             cost=0.0,  # a local computation really costs nothing
             latency=time.perf_counter() - started,
@@ -64,8 +98,7 @@ class BaselineAdapter:
 
 def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter:
     """Build ``baseline:<model>`` (stasis, straight, random or oracle)."""
-    factory = PREDICTORS.get(model)
-    if factory is None:
-        known = ", ".join(f"baseline:{m}" for m in sorted(PREDICTORS))
+    if model not in MODELS:
+        known = ", ".join(f"baseline:{m}" for m in MODELS)
         raise BadInput(f"--adapter baseline:{model}: unknown baseline; known: {known}")
-    return BaselineAdapter(f"baseline:{model}", factory(), options.seed)
+    return BaselineAdapter(f"baseline:{model}", model, options.seed)

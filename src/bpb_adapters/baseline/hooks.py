@@ -5,14 +5,15 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.records import AdapterInfo, lazy
+from bpb_core.registration import AdapterInfo, lazy
 
 
 @hookimpl
-def bpb_adapters() -> Iterator[AdapterInfo]:
+def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "baseline",
         lazy("bpb_adapters.baseline.adapter:make_adapter"),
         "Offline reference answers, no network: stasis, straight, random, oracle",
         models=("stasis", "straight", "random", "oracle"),
+        offline=True,
     )

@@ -20,7 +20,8 @@ from typing import Any
 
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import map_error
-from bpb_core.adapters import (
+from bpb_core.errors import ModelError, ModelTimeout, ServerError
+from bpb_core.model_calls import (
     AdapterOptions,
     ImagePart,
     Message,
@@ -29,7 +30,6 @@ from bpb_core.adapters import (
     TextPart,
     Usage,
 )
-from bpb_core.errors import ModelError, ModelTimeout, ServerError
 
 _TIMEOUT_GRACE = 5.0  # our own watchdog beyond the HTTP timeout, in case a layer ignores it
 

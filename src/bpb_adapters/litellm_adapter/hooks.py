@@ -5,11 +5,11 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.records import AdapterInfo, lazy
+from bpb_core.registration import AdapterInfo, lazy
 
 
 @hookimpl
-def bpb_adapters() -> Iterator[AdapterInfo]:
+def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "litellm",
         lazy("bpb_adapters.litellm_adapter.adapter:make_adapter"),

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bpb_core.runner.data import select_scenes
+from bpb_core.runner.scenes import select_scenes
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
 

@@ -21,7 +21,7 @@ def prompts(data: Path) -> list[tuple[bytes, str]]:
     """The image and the q1, q2, q3 prompt texts of the dataset's first scene."""
     from bpb_core.interfaces import PromptOptions
     from bpb_core.registry import make_registry
-    from bpb_core.runner.data import select_scenes
+    from bpb_core.runner.scenes import select_scenes
 
     ref = select_scenes(data, None, 1)[0]
     scene, image, registry = ref.load(), ref.image(), make_registry()

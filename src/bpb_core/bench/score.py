@@ -1,6 +1,6 @@
 """How fast the scorers mark answers: vectorised ``Scorer.score`` beside a per-row Python loop.
 
-A synthetic frame of scored units (the columns of :data:`bpb_core.units.SCORER_INPUT`, with a
+A synthetic frame of scored units (the columns of :data:`bpb_core.scored_units.SCORER_INPUT`, with a
 realistic mix of statuses, missing, invalid and duplicate predictions) is scored by every
 registered built-in scorer. The per-row loop applies the same rules one row at a time on a
 smaller sample and is scaled up, to show what vectorising buys. Target: one million rows in at
@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bpb_core.units import SCORER_INPUT
+from bpb_core.scored_units import SCORER_INPUT
 
 TARGET_SECONDS = 2.0
 _P_Q3 = [0.85, 0.08, 0.02, 0.05]
@@ -149,9 +149,9 @@ def _explode_timing(
 ) -> ScoreTiming:
     """Time ``Scorer.units`` (answer dict -> unit rows), scaled to ``rows`` unit rows. This runs
     once per answer file while results are loaded, before the vectorised scoring."""
-    from bpb_core.outcome import final_state
     from bpb_core.registry import make_registry
-    from bpb_core.scene import Ball, Scene
+    from bpb_tasks.billiards.scene import Ball, Scene
+    from bpb_tasks.billiards.truth import final_state
 
     balls = [Ball(id=k, pos=(0.3 + 0.2 * k, 0.5)) for k in range(7)]
     balls[0] = Ball(id=0, pos=(0.3, 0.5), vel=(0.5, 0.1))

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
 
     from bpb_core.dataset.manifest import DatasetManifest
 
-PHASES = {"calibrate": "calibrating speeds", "scenes": "scenes", "stats": "stats figures"}
+PHASES = {"calibrate": "calibrating", "scenes": "scenes", "stats": "stats figures"}
 
 
 def parse_horizons(text: str) -> list[float]:
@@ -75,32 +75,43 @@ class RichProgress:
 
 
 def show_summary(root: Path, manifest: DatasetManifest) -> None:
-    """Print the realised cue-ball collision rate per horizon."""
+    """Print per-horizon counts: scenes, the family's own figures (such as the realised
+    cue-ball collision rate), unstable scenes."""
     from rich.table import Table
 
     from bpb_core.layout import horizon_label
 
-    table = Table(title=f"{root}: {manifest.scenes} scenes, seed {manifest.seed}")
-    for column in ("horizon", "scenes", "cue collisions", "rate", "speed range (m/s)", "unstable"):
+    summaries = [manifest.summary[horizon_label(h)] for h in manifest.horizons]
+    extra = list(dict.fromkeys(k for s in summaries for k in (s.model_extra or {})))
+    family = manifest.family or "unknown family"
+    table = Table(title=f"{root}: {manifest.scenes} {family} scenes, seed {manifest.seed}")
+    for column in ("horizon", "scenes", *(k.replace("_", " ") for k in extra), "unstable"):
         table.add_column(column, justify="right")
-    for horizon in manifest.horizons:
-        label = horizon_label(horizon)
-        s = manifest.summary[label]
+    for horizon, s in zip(manifest.horizons, summaries, strict=True):
         unstable = str(s.unstable) if not manifest.stable_only else f"{s.dropped_unstable} dropped"
-        low, high = s.speed_range
-        table.add_row(
-            label,
-            str(s.scenes),
-            str(s.cue_collisions),
-            f"{s.collision_rate:.1%}",
-            f"{low:g} to {high:g}",
-            unstable,
-        )
+        cells = [_figure(k, (s.model_extra or {}).get(k)) for k in extra]
+        table.add_row(horizon_label(horizon), str(s.scenes), *cells, unstable)
     console.stdout().print(table)
+
+
+def _figure(name: str, value: object) -> str:
+    """A family's summary figure as text: rates as percentages, ranges as ``low to high``."""
+    if value is None:
+        return "–"
+    if isinstance(value, float) and name.endswith("rate"):
+        return f"{value:.1%}"
+    if isinstance(value, list | tuple) and len(value) == 2:
+        return f"{value[0]:g} to {value[1]:g}"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 @click.command("generate")
 @click.option("--out", "out", required=True, type=click.Path(path_type=Path), help="Folder.")
+@click.option(
+    "--family",
+    default=None,
+    help="Scene family plugin [default: the default one; see bpb list scene-families].",
+)
 @click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon.")
 @click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma list.")
 @click.option("--seed", default=0, show_default=True, help="Dataset seed.")
@@ -112,6 +123,7 @@ def show_summary(root: Path, manifest: DatasetManifest) -> None:
 @click.option("--overwrite", is_flag=True, help="Replace an existing dataset at --out.")
 def generate(
     out: Path,
+    family: str | None,
     per_horizon: int,
     horizons: str,
     seed: int,
@@ -123,13 +135,17 @@ def generate(
     overwrite: bool,
 ) -> None:
     """Generate a dataset: scenes, ground truth, images, index, stats and manifest."""
-    from bpb_core.dataset import generate_dataset, load_dataset
+    from bpb_core.dataset.generate import generate_dataset
+    from bpb_core.dataset.reader import read_manifest
 
     if per_horizon < 1:
         raise BadInput(f"--per-horizon: must be at least 1, got {per_horizon}")
     if workers is not None and workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {workers}")
     hs = parse_horizons(horizons)
+    registry = console.load_registry()
+    if family is not None:
+        registry.get("scene_family", family)  # unknown names fail before anything starts
     with RichProgress() as progress:
         root = generate_dataset(
             out,
@@ -143,5 +159,7 @@ def generate(
             images=not no_images,
             calibrate=calibrate,
             overwrite=overwrite,
+            family=family,
+            registry=registry,
         )
-    show_summary(root, load_dataset(root).manifest)
+    show_summary(root, read_manifest(root))

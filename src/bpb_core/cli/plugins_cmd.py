@@ -8,7 +8,7 @@ from typing import Any
 import click
 
 from bpb_core.cli.console import load_registry, stdout
-from bpb_core.records import AdapterInfo, Kind, Registered
+from bpb_core.registration import AdapterInfo, Kind, Registered
 
 LIST_KINDS: dict[str, Kind] = {
     "tasks": "task",
@@ -16,6 +16,8 @@ LIST_KINDS: dict[str, Kind] = {
     "simulators": "simulator",
     "scorers": "scorer",
     "scene-families": "scene_family",
+    "suites": "suite",
+    "diagnostics": "diagnostic",
 }
 
 
@@ -28,8 +30,14 @@ def _row(entry: Registered) -> dict[str, Any]:
         "plugin": entry.plugin,
         "summary": entry.info.summary,
     }
-    if isinstance(entry.info, AdapterInfo):
-        row["models"] = list(entry.info.models)
+    info = entry.info
+    if isinstance(info, AdapterInfo):
+        row["models"] = list(info.models)
+        row["offline"] = info.offline
+    for name in ("family", "task", "tasks", "weights", "default"):
+        if hasattr(info, name):
+            value = getattr(info, name)
+            row[name] = dict(value) if name == "weights" else value
     return row
 
 
@@ -53,7 +61,8 @@ def plugins(as_json: bool) -> None:
 @click.command("list")
 @click.argument("what", type=click.Choice(sorted(LIST_KINDS)))
 def list_components(what: str) -> None:
-    """List the names of one kind of component: tasks, adapters, simulators, scorers."""
+    """List the names of one kind of component: tasks, adapters, simulators, scorers,
+    scene families, suites or diagnostics."""
     registry = load_registry()
     kind = LIST_KINDS[what]
     for entry in registry.entries(kind).values():

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -87,44 +88,50 @@ def report(
 
 
 def _print_tables(built: Report) -> None:
-    tables = built.tables
+    tables, results = built.tables, built.results
     console = stdout()
-    console.print(_leaderboard(tables["summary"], tables["bootstrap"]))
+    console.print(_leaderboard(tables["summary"], tables["bootstrap"], built))
     console.print(_frame_table("Accuracy by horizon (strict)", tables["by_horizon"], percent=True))
-    console.print(_stable_table(tables))
-    stasis = tables["stasis"][
-        ["run", "baseline", "contact_stasis", "motion_stasis", "contacts", "moved"]
-    ]
-    console.print(_frame_table("Stasis index (answered units)", stasis, percent=True))
+    if results.suites:
+        console.print(_stable_table(tables, results.suites[0].name))
+    for diagnostic in built.diagnostics:
+        if diagnostic.terminal:
+            frame = tables[diagnostic.name][["run", "baseline", *diagnostic.terminal]]
+            console.print(_frame_table(diagnostic.title, frame, percent=diagnostic.percent))
     use = tables["usage"].rename(columns=USAGE_COLUMNS)[
         ["run", "baseline", *USAGE_COLUMNS.values()]
     ]
     console.print(_frame_table("Usage", use, percent=False))
 
 
-def _leaderboard(board: pd.DataFrame, ci: pd.DataFrame) -> Table:
+def _leaderboard(board: pd.DataFrame, ci: pd.DataFrame, built: Report) -> Table:
     from rich.table import Table
 
+    from bpb_core.results.tables import metrics
+
+    results = built.results
+    scores = metrics(results.units, results.suites)
+    first = results.suites[0].name if results.suites else None
+    extra = ["95% CI", "answered-only"] if first else []
     table = Table(title="Leaderboard (mean over horizons; strict = missing/errors wrong)")
-    for name in ("run", "q1", "q2", "q3", "total", "95% CI", "answered-only", "complete"):
+    for name in ("run", *scores, *extra, "complete"):
         table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
-    rows = ci[ci["metric"] == "total"]
+    rows = ci[ci["metric"] == first]
     bounds = dict(zip(rows["run"], zip(rows["lo"], rows["hi"], strict=True), strict=True))
     for row in board.to_dict(orient="records"):
         run = str(row["run"])
-        interval = "–"
-        lo, hi = bounds.get(run, (math.nan, math.nan))
-        if not math.isnan(lo):
-            interval = f"{_pct(lo)}–{_pct(hi)}"
-        table.add_row(
-            _name(run, bool(row["baseline"])),
-            *(_pct(row[m]) for m in ("q1", "q2", "q3", "total")),
-            interval, _pct(row["total_answered"]), _pct(row["completeness"]),
-        )  # fmt: skip
+        cells = [_pct(row[m]) for m in scores]
+        if first:
+            lo, hi = bounds.get(run, (math.nan, math.nan))
+            interval = "–" if math.isnan(lo) else f"{_pct(lo)}–{_pct(hi)}"
+            cells += [interval, _pct(row[f"{first}_answered"])]
+        table.add_row(_name(run, bool(row["baseline"])), *cells, _pct(row["completeness"]))
     return table
 
 
-def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool) -> Table:
+def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[str]) -> Table:
+    """A rich table of ``frame``; ``percent`` is True (every float column), False, or the
+    columns shown as percentages."""
     from rich.table import Table
 
     table = Table(title=title)
@@ -133,17 +140,20 @@ def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool) -> Table:
         left = name in ("run", "task")
         table.add_column(str(name), justify="left" if left else "right", no_wrap=name == "run")
     for row in frame.to_dict(orient="records"):
-        cells = [_cell(row[c], percent and c not in ("contacts", "moved")) for c in columns]
+        cells = [
+            _cell(row[c], percent is True or (percent is not False and c in percent))
+            for c in columns
+        ]
         cells[0] = _name(str(row["run"]), bool(row.get("baseline", False)))
         table.add_row(*cells)
     return table
 
 
-def _stable_table(tables: dict[str, pd.DataFrame]) -> Table:
+def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
     from rich.table import Table
 
-    table = Table(title="All scenes vs the stable subset (strict totals)")
-    for name in ("run", "total, all", "total, stable", "stable scene-tasks"):
+    table = Table(title=f"All scenes vs the stable subset (strict {suite})")
+    for name in ("run", f"{suite}, all", f"{suite}, stable", "stable scene-tasks"):
         table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
     stable = {str(r["run"]): r for r in tables["leaderboard_stable"].to_dict(orient="records")}
     for row in tables["leaderboard"].to_dict(orient="records"):
@@ -151,8 +161,8 @@ def _stable_table(tables: dict[str, pd.DataFrame]) -> Table:
         kept = stable.get(run)
         table.add_row(
             _name(run, bool(row["baseline"])),
-            _pct(row["total"]),
-            "–" if kept is None else _pct(kept["total"]),
+            _pct(row[suite]),
+            "–" if kept is None else _pct(kept[suite]),
             "0" if kept is None else str(kept["expected"]),
         )
     return table

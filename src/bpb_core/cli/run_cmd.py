@@ -16,11 +16,11 @@ import click
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
-    from bpb_core.adapters import AdapterOptions
+    from bpb_core.model_calls import AdapterOptions
     from bpb_core.registry import Registry
-    from bpb_core.runner.types import RunOptions, RunResult
+    from bpb_core.runner.options import RunOptions
+    from bpb_core.runner.result import RunResult
 
-BASELINES = ("baseline:stasis", "baseline:straight", "baseline:random", "baseline:oracle")
 DEFAULT_OUT = "runs"
 QUICK_PER_HORIZON = 10
 
@@ -56,7 +56,7 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
 def _adapter_options(
     api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
 ) -> AdapterOptions:
-    from bpb_core.adapters import AdapterOptions
+    from bpb_core.model_calls import AdapterOptions
 
     price_table: dict[str, dict[str, float]] = {}
     if prices is not None:
@@ -74,7 +74,9 @@ def _adapter_options(
 
 
 def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> None:
-    from bpb_core.adapters import split_spec
+    if not adapters:
+        raise BadInput("--adapter: none given and no offline adapter is installed")
+    from bpb_core.model_calls import split_spec
 
     for task in tasks:
         registry.get("task", task)
@@ -82,7 +84,7 @@ def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> N
         registry.get("adapter", split_spec(spec)[0])
 
 
-def _data(data: Path | None, out: Path, seed: int) -> Path:
+def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     if data is not None:
         return data
     quick = out / "data"
@@ -95,7 +97,7 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
         f"no --data: generating a small dataset ({QUICK_PER_HORIZON} scenes per horizon, "
         f"seed {seed}) in {quick}"
     )
-    return generate_dataset(quick, QUICK_PER_HORIZON, [1, 2, 3, 4, 5], seed)
+    return generate_dataset(quick, QUICK_PER_HORIZON, [1, 2, 3, 4, 5], seed, registry=registry)
 
 
 @click.command("run")
@@ -104,12 +106,16 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
     type=click.Path(path_type=Path),
     help="Dataset folder (default: a small generated one in OUT/data).",
 )
-@click.option("--tasks", default="q1,q2,q3", show_default=True, help="Comma-separated tasks.")
+@click.option(
+    "--tasks",
+    default=None,
+    help="Comma-separated tasks [default: the default tasks of the dataset's scene family].",
+)
 @click.option(
     "--adapter",
     "adapters",
     multiple=True,
-    help="NAME:MODEL, repeatable (default: the four baselines).",
+    help="NAME:MODEL, repeatable (default: every offline adapter's models, e.g. the baselines).",
 )
 @click.option("--horizons", help="Comma-separated horizons to include (default: all).")
 @click.option("--limit", type=click.IntRange(min=1), help="First N scenes per horizon.")
@@ -126,12 +132,12 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
     "--enable-cot/--no-cot",
     "enable_cot",
     default=None,
-    help="Chain of thought for every task (default: on for q1, q2; off for q3).",
+    help="Chain of thought for every task (default: each task's own default).",
 )
 @click.option(
     "--cot",
     "cot_tasks",
-    help="Tasks with chain of thought, e.g. q1,q2 (or 'none'); overrides --enable-cot/--no-cot.",
+    help="Tasks with chain of thought, comma-separated (or 'none'); overrides --enable-cot.",
 )
 @click.option("--max-tokens", type=click.IntRange(min=1), help="Output token cap per call.")
 @click.option(
@@ -141,7 +147,9 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
     show_default=True,
     help="Seconds per call (grows on retries).",
 )
-@click.option("--force-numeric", is_flag=True, help="Ask Q3 for numbers instead of null.")
+@click.option(
+    "--force-numeric", is_flag=True, help="Ask for numbers where a task would allow null."
+)
 @click.option(
     "--input-mode",
     type=click.Choice(["image", "image+state", "state"]),
@@ -175,12 +183,16 @@ def _data(data: Path | None, out: Path, seed: int) -> Path:
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
     from bpb_core.cli.console import load_registry
-    from bpb_core.runner.types import RetryPolicy, RunOptions
+    from bpb_core.runner.asking import default_tasks
+    from bpb_core.runner.options import RetryPolicy, RunOptions
 
     registry = load_registry()
     tasks = _csv(kw["tasks"], "--tasks")
-    adapters = list(kw["adapters"]) or list(BASELINES)
+    adapters = list(kw["adapters"]) or registry.offline_specs()
     _check_names(registry, tasks, adapters)
+    out: Path = kw["out"]
+    data = _data(kw["data"], out, kw["seed"], registry)
+    tasks = tasks or default_tasks(data, registry)
     options = RunOptions(
         tasks=tuple(tasks),
         horizons=_horizons(kw["horizons"]),
@@ -197,13 +209,11 @@ def run(**kw: Any) -> None:
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
     adapter_options = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
-    out: Path = kw["out"]
-    data = _data(kw["data"], out, kw["seed"])
     if kw["dry_run"]:
         _show_dry_run(data, out, adapters, options, registry)
         return
     results = _run_all(data, out, adapters, options, adapter_options, registry)
-    raise click.exceptions.Exit(_finish(results))
+    raise click.exceptions.Exit(_finish(results, registry))
 
 
 def _run_all(
@@ -235,11 +245,11 @@ def _run_all(
     return results
 
 
-def _finish(results: list[RunResult]) -> int:
+def _finish(results: list[RunResult], registry: Registry) -> int:
     from bpb_core.cli.console import stderr
     from bpb_core.cli.run_summary import show_summary
 
-    show_summary([r.run_dir for r in results])
+    show_summary([r.run_dir for r in results], registry)
     code = 0
     for result in results:
         if result.stopped == "auth":
@@ -265,7 +275,7 @@ def _show_dry_run(
 
     from bpb_core.cli.console import stdout
     from bpb_core.runner import slug
-    from bpb_core.runner.plan import dry_run
+    from bpb_core.runner.dry_run import dry_run
 
     table = Table(
         "adapter",

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.runner.types import ProgressEvent
+from bpb_core.runner.progress import ProgressEvent
 
 if TYPE_CHECKING:
     from rich.progress import Progress as RichBar
@@ -40,7 +40,7 @@ class _Row:
 
 
 class RichProgress:
-    """Draws :class:`~bpb_core.runner.types.ProgressEvent` s as rich progress bars."""
+    """Draws :class:`~bpb_core.runner.progress.ProgressEvent` s as rich progress bars."""
 
     def __init__(self, bar: RichBar) -> None:
         self._bar = bar

@@ -3,24 +3,31 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+
+_NOT_SCORES = ("run", "adapter", "model", "baseline", "expected")
 
 
-def show_summary(run_dirs: list[Path]) -> None:
+def show_summary(run_dirs: list[Path], registry: Registry) -> None:
     """Write ``scores.csv`` into each run folder and print the leaderboard summary."""
     from rich.table import Table
 
     from bpb_core.cli.console import stderr, stdout
     from bpb_core.errors import BpbError
-    from bpb_core.runner.plan import write_scores
+    from bpb_core.results.scores_csv import write_scores
 
     try:
-        frame = write_scores(run_dirs)
+        frame = write_scores(run_dirs, registry)
     except BpbError as exc:
         stderr().print(f"[yellow]warning:[/] could not score the run: {exc}")
         return
     if frame is None or frame.empty:
         return
-    columns = [c for c in ("adapter", "q1", "q2", "q3", "total", "completeness") if c in frame]
+    scores = [c for c in frame.columns if c not in _NOT_SCORES and not c.endswith("_answered")]
+    columns = ["adapter", *scores]
     table = Table(*columns, title="bpb run: scores (strict; completeness = answered share)")
     for _, row in frame.iterrows():
         table.add_row(

@@ -6,7 +6,6 @@ order however many workers run.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.pool import Pool
 from pathlib import Path
@@ -24,8 +23,7 @@ from bpb_core.dataset.writer import DatasetWriter, plugin_label
 from bpb_core.errors import BpbError
 
 if TYPE_CHECKING:
-    from bpb_tasks.billiards.calibrate import Calibration
-    from bpb_tasks.billiards.config import DatasetConfig
+    from bpb_core.registry import Registry
 
 CHUNK = 4
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
@@ -53,30 +51,27 @@ class NoProgress:
         return None
 
 
-def worker_setup(root: Path, seed: int, cfg: DatasetConfig, images: bool) -> WorkerSetup:
-    """Resolve the config's scene family and simulator plugins into a picklable setup."""
-    registry = _registry()
-    family = registry.get("scene_family", cfg.family)
-    simulator = registry.get("simulator", cfg.simulator)
-    plugins = (("scene_family", plugin_label(family)), ("simulator", plugin_label(simulator)))
+def worker_setup(
+    registry: Registry, family: str, root: Path, seed: int, config: Any, images: bool
+) -> WorkerSetup:
+    """Resolve the family and the simulator its config names into a picklable setup."""
+    family_entry = registry.get("scene_family", family)
+    family_cls = family_entry.info.load()
+    simulator = family_cls().simulator_name(config)
+    simulator_entry = registry.get("simulator", simulator)
+    plugins = (
+        ("scene_family", plugin_label(family_entry)),
+        ("simulator", plugin_label(simulator_entry)),
+    )
     return WorkerSetup(
         root=root,
         seed=seed,
-        config=cfg,
-        family_cls=family.info.load(),
-        simulator_cls=simulator.info.load(),
-        simulator_name=cfg.simulator,
+        config=config,
+        family_cls=family_cls,
+        simulator_cls=simulator_entry.info.load(),
         images=images,
         plugins=plugins,
     )
-
-
-def _registry() -> Any:
-    from bpb_core.registry import PluginWarning, make_registry
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
-        return make_registry()
 
 
 class InProcess:
@@ -106,14 +101,12 @@ def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
 
 def run_calibration(
     pool: Pool | InProcess, hs: list[float], progress: GenerateProgress
-) -> dict[str, Calibration]:
-    """Calibrate each horizon's speed range, one horizon per job."""
-    from bpb_tasks.billiards.config import horizon_key
-
+) -> dict[float, Any]:
+    """Calibrate each horizon, one horizon per job; results keyed by horizon."""
     progress.phase("calibrate", len(hs))
-    found: dict[str, Calibration] = {}
-    for result in pool.imap(calibrate_job, hs):
-        found[horizon_key(result.horizon)] = result
+    found: dict[float, Any] = {}
+    for horizon, result in pool.imap(calibrate_job, hs):
+        found[horizon] = result
         progress.advance()
     return found
 

@@ -12,7 +12,8 @@ import csv
 import hashlib
 import io
 import json
-from dataclasses import astuple, dataclass, fields
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -22,25 +23,19 @@ CHECKSUMS = "checksums.sha256"
 
 
 class HorizonSummary(BaseModel):
-    """Counts of one horizon.
+    """Counts of one horizon; the scene family adds its own fields (``extra``).
 
     Attributes:
         scenes: Scenes kept.
-        cue_collisions: Scenes whose cue ball touches another ball by the horizon.
-        collision_rate: ``cue_collisions / scenes``.
         dropped_unstable: Scenes drawn but dropped by ``--stable-only``.
         unstable: Kept scenes whose stability annotation says unstable.
-        speed_range: The cue-speed range used, ``[low, high]`` in m/s.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="allow")
 
     scenes: int
-    cue_collisions: int
-    collision_rate: float
     dropped_unstable: int = 0
     unstable: int = 0
-    speed_range: tuple[float, float]
 
 
 class DatasetManifest(BaseModel):
@@ -64,6 +59,12 @@ class DatasetManifest(BaseModel):
     versions: dict[str, str] = Field(default_factory=dict)
     files: dict[str, str] = Field(default_factory=dict)
 
+    @property
+    def family(self) -> str | None:
+        """The scene family that made the dataset (the config's ``family``)."""
+        name = self.config.get("family")
+        return name if isinstance(name, str) and name else None
+
     def to_json(self) -> str:
         """Canonical JSON text (sorted keys, fixed indentation, trailing newline)."""
         return json.dumps(self.model_dump(mode="json"), indent=2, sort_keys=True) + "\n"
@@ -76,38 +77,43 @@ class DatasetManifest(BaseModel):
 
 @dataclass(frozen=True)
 class IndexRow:
-    """One line of ``index.csv``: a scene and what happens in it."""
+    """One line of ``index.csv``: a scene, the family's cells about it, and its stability.
+
+    Attributes:
+        values: The family's cells, in the order of its ``index_columns``.
+        stable: The stability annotation's verdict (``None``: not annotated).
+    """
 
     scene_id: str
     horizon: float
     index: int
-    cue_speed: float
-    cue_angle_deg: float
-    cue_collision: bool
-    cue_contacts: str
-    cue_walls: str
-    pocketed: str
-    events: int
+    values: tuple[tuple[str, object], ...]
     stable: bool | None
 
-    @classmethod
-    def header(cls) -> list[str]:
-        """Column names, in order."""
-        return [f.name for f in fields(cls)]
+    @staticmethod
+    def header(columns: Sequence[str]) -> list[str]:
+        """Column names, in order, for a family with ``columns``."""
+        return ["scene_id", "horizon", "index", *columns, "stable"]
+
+    def get(self, column: str) -> object:
+        """The family's cell ``column``."""
+        return dict(self.values)[column]
 
     def cells(self) -> list[str]:
         """The row as CSV cells (booleans as ``true``/``false``, empty when unknown)."""
-        out: list[str] = []
-        for value in astuple(self):
-            if isinstance(value, bool):
-                out.append("true" if value else "false")
-            elif value is None:
-                out.append("")
-            elif isinstance(value, float):
-                out.append(f"{value:.6g}" if value == int(value) else f"{value:.6f}")
-            else:
-                out.append(str(value))
-        return out
+        values = [self.scene_id, self.horizon, self.index, *(v for _, v in self.values)]
+        return [cell(v) for v in [*values, self.stable]]
+
+
+def cell(value: object) -> str:
+    """One CSV cell: ``true``/``false``, empty for ``None``, 6 decimals for fractional floats."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:.6g}" if value == int(value) else f"{value:.6f}"
+    return str(value)
 
 
 def csv_line(cells: list[str]) -> str:

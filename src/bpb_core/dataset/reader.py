@@ -1,7 +1,8 @@
 """Read a generated dataset: manifest, scene list and the scenes with their ground truth.
 
-Scenes are read lazily, one folder at a time. Every corrupt or missing file raises
-:class:`~bpb_core.errors.BadInput` naming the file (and the field, for JSON files).
+Scenes are read lazily, one folder at a time, with the models of the scene family that made the
+dataset. Every corrupt or missing file raises :class:`~bpb_core.errors.BadInput` naming the file
+(and the field, for JSON files).
 """
 
 from __future__ import annotations
@@ -11,24 +12,30 @@ import hashlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.errors import BadInput
-from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
-from bpb_core.model_files import read_model
-from bpb_core.scene import FinalState, Scene
+from bpb_core.interfaces import SceneFamily
+from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, select_keys
+from bpb_core.validated_files import read_model
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
 
 
 @dataclass(frozen=True)
 class Dataset:
-    """A dataset folder: its manifest and a selection of its scenes.
+    """A dataset folder: its manifest, its scene family and a selection of its scenes.
 
-    Iterating yields ``(SceneKey, Scene, FinalState)`` in horizon then index order.
+    Iterating yields ``(SceneKey, scene, truth)`` in horizon then index order; scene and truth
+    are the family's models of ``init.json`` and ``final.json``.
     """
 
     root: Path
     manifest: DatasetManifest
     keys: tuple[SceneKey, ...]
+    family: SceneFamily
 
     @property
     def dataset_hash(self) -> str:
@@ -42,36 +49,27 @@ class Dataset:
 
     def select(self, horizons: Sequence[float] | None = None, limit: int | None = None) -> Dataset:
         """The scenes at ``horizons`` (all when ``None``), at most ``limit`` per horizon."""
-        wanted = None if horizons is None else {float(h) for h in horizons}
-        taken: dict[float, int] = {}
-        keys = []
-        for key in self.keys:
-            if wanted is not None and key.horizon not in wanted:
-                continue
-            if limit is not None and taken.get(key.horizon, 0) >= limit:
-                continue
-            taken[key.horizon] = taken.get(key.horizon, 0) + 1
-            keys.append(key)
-        return Dataset(self.root, self.manifest, tuple(keys))
+        keys = select_keys(self.keys, horizons, limit)
+        return Dataset(self.root, self.manifest, tuple(keys), self.family)
 
     def __len__(self) -> int:
         return len(self.keys)
 
-    def __iter__(self) -> Iterator[tuple[SceneKey, Scene, FinalState]]:
+    def __iter__(self) -> Iterator[tuple[SceneKey, Any, Any]]:
         for key in self.keys:
-            yield key, self.scene(key), self.final(key)
+            yield key, self.scene(key), self.truth(key)
 
     def path(self, key: SceneKey, name: str) -> Path:
         """Path of file ``name`` (``init.png``) of scene ``key``."""
         return key.dir(self.root) / name
 
-    def scene(self, key: SceneKey) -> Scene:
-        """The scene's ``init.json``."""
-        return read_model(self.path(key, INIT), Scene)
+    def scene(self, key: SceneKey) -> Any:
+        """The scene's ``init.json``, read with the family's scene model."""
+        return read_model(self.path(key, INIT), self.family.scene_model)
 
-    def final(self, key: SceneKey) -> FinalState:
-        """The scene's ``final.json`` (ground truth)."""
-        return read_model(self.path(key, FINAL), FinalState)
+    def truth(self, key: SceneKey) -> Any:
+        """The scene's ``final.json`` (ground truth), read with the family's truth model."""
+        return read_model(self.path(key, FINAL), self.family.truth_model)
 
     def verify(self) -> list[str]:
         """Files whose SHA-256 differs from ``checksums.sha256`` (or that are missing)."""
@@ -92,21 +90,60 @@ class Dataset:
 
 
 def load_dataset(
-    root: str | Path, horizons: Sequence[float] | None = None, limit: int | None = None
+    root: str | Path,
+    horizons: Sequence[float] | None = None,
+    limit: int | None = None,
+    *,
+    registry: Registry | None = None,
 ) -> Dataset:
     """Open the dataset folder ``root`` (optionally narrowed with :meth:`Dataset.select`).
 
     Raises:
-        BadInput: ``root`` is not a dataset or its manifest or index is corrupt.
+        BadInput: ``root`` is not a dataset, its manifest or index is corrupt, or its scene
+            family is not installed.
     """
     root = Path(root)
-    if not (root / MANIFEST).is_file():
-        raise BadInput(f"{root}: not a bpb dataset (no {MANIFEST}); create one with bpb generate")
-    manifest = read_model(root / MANIFEST, DatasetManifest)
-    dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)))
+    manifest = read_manifest(root)
+    family = dataset_family(manifest, root, registry)
+    dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family)
     if horizons is None and limit is None:
         return dataset
     return dataset.select(horizons, limit)
+
+
+def read_manifest(root: Path) -> DatasetManifest:
+    """The validated ``dataset.json`` of ``root``.
+
+    Raises:
+        BadInput: There is none, or it is invalid.
+    """
+    if not (root / MANIFEST).is_file():
+        raise BadInput(f"{root}: not a bpb dataset (no {MANIFEST}); create one with bpb generate")
+    return read_model(root / MANIFEST, DatasetManifest)
+
+
+def dataset_family(
+    manifest: DatasetManifest | None, root: Path, registry: Registry | None = None
+) -> SceneFamily:
+    """The scene family that made the dataset at ``root`` (the default family for a folder of
+    scenes with no manifest).
+
+    Raises:
+        BadInput: The family is not installed.
+    """
+    from bpb_core.registry import make_registry
+
+    registry = registry if registry is not None else make_registry()
+    name = manifest.family if manifest is not None else None
+    if name is None:
+        name = registry.default_family()
+    elif name not in registry.names("scene_family"):
+        known = ", ".join(registry.names("scene_family")) or "none"
+        raise BadInput(
+            f"{root / MANIFEST}: config.family: scene family {name!r} is not installed "
+            f"(installed: {known})"
+        )
+    return registry.scene_family(name)
 
 
 def _read_index(path: Path) -> list[SceneKey]:

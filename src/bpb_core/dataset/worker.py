@@ -1,26 +1,20 @@
-"""One scene from seed to files: sample, simulate, annotate, render, write, hash.
+"""One scene from seed to files: the family makes it, the worker writes and hashes it.
 
-Runs in the worker processes of :func:`bpb_core.dataset.generate_dataset` (and in-process for
-``workers=1``). Each call writes one scene folder and returns a small :class:`SceneResult`, so
-nothing accumulates in memory however large the dataset is.
+Runs in the worker processes of :func:`bpb_core.dataset.generate.generate_dataset` (and
+in-process for ``workers=1``). Each call writes one scene folder and returns a small
+:class:`SceneResult`, so nothing accumulates in memory however large the dataset is.
 """
 
 from __future__ import annotations
 
-import math
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.layout import FINAL, INIT, scene_dir
-from bpb_core.outcome import CUE_ID, Outcome, final_state
-from bpb_core.scene import FinalState, Scene, Stability
-
-if TYPE_CHECKING:
-    from bpb_tasks.billiards.calibrate import Calibration
-    from bpb_tasks.billiards.config import DatasetConfig
+from bpb_core.interfaces import Calibrating, SceneFamily, Simulator
+from bpb_core.layout import scene_dir, scene_id
 
 
 @dataclass(frozen=True)
@@ -46,16 +40,20 @@ class SceneResult:
 
 @dataclass(frozen=True)
 class WorkerSetup:
-    """Everything a worker needs, picklable (classes travel by reference)."""
+    """Everything a worker needs, picklable (classes travel by reference).
+
+    Attributes:
+        options: Keyword options the simulator is built with.
+    """
 
     root: Path
     seed: int
-    config: DatasetConfig
+    config: Any
     family_cls: type
     simulator_cls: type
-    simulator_name: str
     images: bool
     plugins: tuple[tuple[str, str], ...] = ()
+    options: tuple[tuple[str, Any], ...] = ()
 
 
 _SETUP: WorkerSetup | None = None
@@ -67,91 +65,44 @@ def init_worker(setup: WorkerSetup) -> None:
     global _SETUP
     _SETUP = setup
     _STATE["family"] = setup.family_cls()
-    _STATE["simulator"] = setup.simulator_cls()
+    _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
+
+
+def _ready() -> tuple[WorkerSetup, SceneFamily, Simulator]:
+    if _SETUP is None:
+        raise RuntimeError("init_worker was not called in this process")
+    return _SETUP, _STATE["family"], _STATE["simulator"]
 
 
 def run_job(job: Job) -> SceneResult:
     """Produce one scene with the process's setup (see :func:`init_worker`)."""
-    if _SETUP is None:
-        raise RuntimeError("init_worker was not called in this process")
-    return produce(_SETUP, _STATE["family"], _STATE["simulator"], job)
+    setup, family, simulator = _ready()
+    return produce(setup, family, simulator, job)
 
 
-def calibrate_job(horizon: float) -> Calibration:
-    """Calibrate the cue-speed range of one horizon with the process's setup."""
-    from bpb_tasks.billiards.calibrate import calibrate_horizon
-
-    if _SETUP is None:
-        raise RuntimeError("init_worker was not called in this process")
-    return calibrate_horizon(horizon, _SETUP.config, _STATE["simulator"])
+def calibrate_job(horizon: float) -> tuple[float, Any]:
+    """Calibrate one horizon with the process's setup (the family must be ``Calibrating``)."""
+    setup, family, simulator = _ready()
+    assert isinstance(family, Calibrating), "checked before the pool starts"
+    return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 
-def simulate_scene(
-    setup: WorkerSetup, family: Any, simulator: Any, horizon: float, index: int
-) -> tuple[Scene, Outcome, FinalState]:
-    """Sample scene ``index`` at ``horizon``, simulate it and annotate its stability."""
-    from bpb_tasks.billiards.sampler import scene_rng
-
-    scene: Scene = family.sample(
-        scene_rng(setup.seed, horizon, index), horizon, index, setup.config
-    )
-    outcome: Outcome = simulator.run(scene)
-    final = final_state(scene, outcome, setup.simulator_name)
-    stability = annotate(scene, outcome, setup.config.stability_delta, simulator)
-    return scene, outcome, final.model_copy(update={"stability": stability})
-
-
-def annotate(scene: Scene, outcome: Outcome, delta: float, simulator: Any) -> Stability:
-    """The stability annotation (re-simulates perturbed copies with the same simulator)."""
-    from bpb_tasks.simulators.stability import annotate as physics_annotate
-
-    result: Stability = physics_annotate(scene, outcome, delta=delta, simulator=simulator)
-    return result
-
-
-def produce(setup: WorkerSetup, family: Any, simulator: Any, job: Job) -> SceneResult:
-    """Sample, simulate, render and write one scene; return its row and file hashes."""
-    scene, outcome, final = simulate_scene(setup, family, simulator, job.horizon, job.index)
-    row = index_row(scene, outcome, final, job.index)
-    if not job.keep_unstable and row.stable is False:
+def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
+    """Make, write and hash one scene; return its row and file hashes."""
+    made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
+    values = tuple((column, made.row[column]) for column in family.index_columns)
+    stable = made.truth.stable
+    row = IndexRow(scene_id(job.horizon, job.index), job.horizon, job.index, values, stable)
+    if not job.keep_unstable and stable is False:
         return SceneResult(row, ())
-    blobs: dict[str, bytes] = {
-        INIT: (scene.model_dump_json(indent=2) + "\n").encode(),
-        FINAL: (final.model_dump_json(indent=2) + "\n").encode(),
-    }
-    if setup.images:
-        from bpb_tasks.billiards.render import render_pngs
-
-        blobs.update(render_pngs(scene, outcome, setup.config))
     folder = scene_dir(setup.root, job.horizon, job.index)
     folder.mkdir(parents=True, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
-    for name, data in blobs.items():
+    for name, data in made.files(setup.images).items():
         (folder / name).write_bytes(data)
         files.append((f"{rel}/{name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
-
-
-def index_row(scene: Scene, outcome: Outcome, final: FinalState, index: int) -> IndexRow:
-    """The ``index.csv`` row of a simulated scene."""
-    vx, vy = scene.ball(CUE_ID).vel
-    angle = math.degrees(math.atan2(vy, vx)) % 360.0
-    contacts = sorted(outcome.cue_contacts())
-    pocketed = sorted(i for i, p in outcome.positions.items() if p is None)
-    return IndexRow(
-        scene_id=scene.scene_id,
-        horizon=scene.horizon,
-        index=index,
-        cue_speed=round(math.hypot(vx, vy), 6),
-        cue_angle_deg=round(angle, 6),
-        cue_collision=bool(contacts),
-        cue_contacts=" ".join(map(str, contacts)),
-        cue_walls=" ".join(q.wall for q in final.q2 if q.answer == "T"),
-        pocketed=" ".join(map(str, pocketed)),
-        events=len(outcome.events),
-        stable=None if final.stability is None else final.stability.stable,
-    )
 
 
 def remove_scene(root: Path, horizon: float, index: int) -> None:

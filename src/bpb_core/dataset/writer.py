@@ -1,14 +1,14 @@
 """Streams a dataset's descriptive files to disk while scenes arrive, then seals the manifest.
 
-``index.csv`` and ``checksums.sha256`` are appended scene by scene; only per-horizon counters and
-cue speeds (one float per scene, for the histogram) stay in memory.
+``index.csv`` and ``checksums.sha256`` are appended scene by scene; only per-horizon counters (and
+whatever the scene family's tallies keep) stay in memory.
 """
 
 from __future__ import annotations
 
 import platform
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import IO, Any
@@ -22,47 +22,57 @@ from bpb_core.dataset.manifest import (
     sha256_bytes,
 )
 from bpb_core.dataset.worker import SceneResult
+from bpb_core.interfaces import HorizonTally
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")
 
 
 @dataclass
-class HorizonTally:
-    """Running counts of one horizon."""
+class HorizonCounts:
+    """Running counts of one horizon that every family has."""
 
     scenes: int = 0
-    collisions: int = 0
     unstable: int = 0
     dropped: int = 0
-    speeds: list[float] = field(default_factory=list)
 
 
 class DatasetWriter:
-    """Appends index rows and checksums in scene order; writes the stats and the manifest."""
+    """Appends index rows and checksums in scene order; writes the manifest.
 
-    def __init__(self, root: Path, horizons: Sequence[float]) -> None:
+    Attributes:
+        tallies: The family's per-horizon tallies (empty when the family keeps none).
+    """
+
+    def __init__(
+        self,
+        root: Path,
+        horizons: Sequence[float],
+        columns: Sequence[str],
+        tallies: Mapping[float, HorizonTally] | None = None,
+    ) -> None:
         self.root = root
-        self.tallies = {h: HorizonTally() for h in horizons}
+        self.counts = {h: HorizonCounts() for h in horizons}
+        self.tallies = dict(tallies or {})
         self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
         self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
-        self._index.write(csv_line(IndexRow.header()))
+        self._index.write(csv_line(IndexRow.header(columns)))
 
     def add(self, result: SceneResult) -> None:
         """Record a kept scene."""
         row = result.row
-        tally = self.tallies[row.horizon]
-        tally.scenes += 1
-        tally.collisions += row.cue_collision
-        tally.unstable += row.stable is False
-        tally.speeds.append(row.cue_speed)
+        counts = self.counts[row.horizon]
+        counts.scenes += 1
+        counts.unstable += row.stable is False
+        if row.horizon in self.tallies:
+            self.tallies[row.horizon].add(dict(row.values))
         self._index.write(csv_line(row.cells()))
         for rel, digest in result.files:
             self._sums.write(f"{digest}  {rel}\n")
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
-        self.tallies[horizon].dropped += 1
+        self.counts[horizon].dropped += 1
 
     def add_file(self, rel: str) -> None:
         """Checksum an extra file (a stats figure) written under the root."""
@@ -73,17 +83,13 @@ class DatasetWriter:
         self._index.close()
         self._sums.close()
 
-    def summary(self, speed_ranges: dict[float, tuple[float, float]]) -> dict[str, HorizonSummary]:
-        """Per-horizon counts keyed by horizon label (``h3``)."""
+    def summary(self) -> dict[str, HorizonSummary]:
+        """Per-horizon counts (with the family's fields) keyed by horizon label (``h3``)."""
         out = {}
-        for h, t in self.tallies.items():
+        for h, c in self.counts.items():
+            extra: dict[str, Any] = self.tallies[h].summary() if h in self.tallies else {}
             out[horizon_label(h)] = HorizonSummary(
-                scenes=t.scenes,
-                cue_collisions=t.collisions,
-                collision_rate=round(t.collisions / t.scenes, 6) if t.scenes else 0.0,
-                dropped_unstable=t.dropped,
-                unstable=t.unstable,
-                speed_range=speed_ranges[h],
+                scenes=c.scenes, dropped_unstable=c.dropped, unstable=c.unstable, **extra
             )
         return out
 

@@ -4,7 +4,7 @@
 when given an output folder::
 
     OUT/report.html            self-contained page (charts and gallery embedded)
-    OUT/charts/*.png           accuracy vs horizon, leaderboards, stasis, tolerance curve
+    OUT/charts/*.png           leaderboards, accuracy vs horizon, the diagnostics' charts
     OUT/gallery/*.png          the failure gallery's overlays
     OUT/tables/*.csv           every derived table
     OUT/units.{csv,parquet}    the scored units frame
@@ -13,7 +13,8 @@ when given an output folder::
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+from html import escape
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -22,37 +23,42 @@ import pandas as pd
 
 from bpb_core.report import charts as ch
 from bpb_core.report import gallery, html
-from bpb_core.results import Results, load_results
-from bpb_core.results.diagnostics import (
-    confusion,
-    distance_errors,
-    stasis_index,
-    tolerance_curve,
-    usage,
+from bpb_core.results.frames import Results, load_results
+from bpb_core.results.tables import (
+    accuracy,
+    by_horizon,
+    leaderboard,
+    metrics,
+    summary,
+    summary_records,
 )
-from bpb_core.results.stats import all_pairs, bootstrap_ci
-from bpb_core.results.tables import accuracy, by_horizon, leaderboard, summary, summary_records
+from bpb_core.results.uncertainty import all_pairs, bootstrap_ci
+from bpb_core.results.usage import usage
 
 if TYPE_CHECKING:
+    from bpb_core.interfaces import Diagnostic
     from bpb_core.registry import Registry
 
 
 @dataclass(frozen=True)
 class Report:
-    """A built report: the results, every derived table and the files written (if any)."""
+    """A built report: the results, every derived table (the diagnostics' among them, under
+    their names), the diagnostics shown and the files written (if any)."""
 
     results: Results
     tables: dict[str, pd.DataFrame]
     files: dict[str, Path] = field(default_factory=dict)
+    diagnostics: tuple[Diagnostic, ...] = ()
 
     def summary_json(self) -> dict[str, Any]:
-        """JSON-ready summary for scripts: leaderboard, CIs, stasis, the stable-subset
-        leaderboard and the files written."""
+        """JSON-ready summary for scripts: leaderboard, CIs, the stable-subset leaderboard,
+        every diagnostic and the files written."""
         return {
-            "leaderboard": summary_records(self.results.units),
+            "leaderboard": summary_records(self.results.units, self.results.suites),
+            "suites": {s.name: dict(s.weights) for s in self.results.suites},
             "bootstrap": _records(self.tables["bootstrap"]),
-            "stasis": _records(self.tables["stasis"]),
             "stable": _records(self.tables["leaderboard_stable"]),
+            "diagnostics": {d.name: _records(self.tables[d.name]) for d in self.diagnostics},
             "files": {name: str(path) for name, path in self.files.items()},
         }
 
@@ -63,28 +69,30 @@ def _records(frame: pd.DataFrame) -> list[dict[str, Any]]:
 
 
 def report_tables(
-    results: Results, *, n_boot: int = 2000, seed: int = 0
+    results: Results,
+    diagnostics: Sequence[Diagnostic] = (),
+    *,
+    n_boot: int = 2000,
+    seed: int = 0,
 ) -> dict[str, pd.DataFrame]:
     """Every table of a report, derived from ``results`` (nothing is written or printed)."""
-    units, calls = results.units, results.calls
-    return {
-        "summary": summary(units),
-        "leaderboard": leaderboard(units),
-        "leaderboard_answered": leaderboard(units, view="answered"),
-        "leaderboard_stable": leaderboard(units, stable_only=True),
+    units, calls, suites = results.units, results.calls, results.suites
+    tables = {
+        "summary": summary(units, suites),
+        "leaderboard": leaderboard(units, suites),
+        "leaderboard_answered": leaderboard(units, suites, view="answered"),
+        "leaderboard_stable": leaderboard(units, suites, stable_only=True),
         "accuracy": accuracy(units),
         "accuracy_answered": accuracy(units, view="answered"),
         "by_horizon": by_horizon(units),
         "by_horizon_answered": by_horizon(units, view="answered"),
-        "bootstrap": bootstrap_ci(units, n_boot=n_boot, seed=seed),
-        "pairs": all_pairs(units, n_boot=n_boot, seed=seed),
-        "confusion": confusion(units),
-        "stasis": stasis_index(units),
-        "distance": distance_errors(units),
-        "distance_by_horizon": distance_errors(units, by_horizon=True),
-        "tolerance": tolerance_curve(units),
+        "bootstrap": bootstrap_ci(units, suites, n_boot=n_boot, seed=seed),
+        "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed),
         "usage": usage(calls),
     }
+    for diagnostic in diagnostics:
+        tables[diagnostic.name] = diagnostic.table(results)
+    return tables
 
 
 def build_report(
@@ -96,46 +104,68 @@ def build_report(
     gallery_size: int = 8,
     registry: Registry | None = None,
 ) -> Report:
-    """Score run folders and derive every table; with ``out``, also write charts, exports and
-    ``report.html`` there.
+    """Score run folders and derive every table (with the diagnostics of the tasks that ran);
+    with ``out``, also write charts, exports and ``report.html`` there.
 
     Raises:
         BadInput: No run folder found, or a run, answer or ground-truth file cannot be read.
     """
+    from bpb_core.registry import make_registry
+
+    registry = registry if registry is not None else make_registry()
     results = load_results(run_dirs, registry=registry)
-    tables = report_tables(results, n_boot=n_boot, seed=seed)
+    diagnostics = tuple(registry.diagnostics_for(results.tasks))
+    tables = report_tables(results, diagnostics, n_boot=n_boot, seed=seed)
+    report = Report(results, tables, diagnostics=diagnostics)
     if out is None:
-        return Report(results, tables)
-    files = write_report(results, tables, Path(out), gallery_size=gallery_size)
-    return Report(results, tables, files)
+        return report
+    files = write_report(report, Path(out), registry, gallery_size=gallery_size)
+    return Report(results, tables, files, diagnostics)
 
 
-def chart_pngs(tables: dict[str, pd.DataFrame]) -> dict[str, bytes]:
-    """The report's charts as PNG bytes, keyed by title."""
+def titles(results: Results, registry: Registry) -> dict[str, str]:
+    """Display titles of the tasks and suites (a task no longer installed keeps its name)."""
+    found = {s.name: s.title or s.name for s in results.suites}
+    for task in results.tasks:
+        known = task in registry.names("task")
+        found[task] = (registry.task_info(task).title if known else "") or task
+    return found
+
+
+def chart_pngs(report: Report, names: dict[str, str]) -> dict[str, bytes]:
+    """The report's charts as PNG bytes, keyed by title: leaderboards, accuracy against
+    horizon, then each diagnostic's chart."""
+    tables, suites = report.tables, report.results.suites
     order = tables["leaderboard"]["run"].tolist()
-    return {
-        "Leaderboards": ch.leaderboards(tables["leaderboard"], tables["bootstrap"]),
-        "Accuracy vs horizon": ch.accuracy_vs_horizon(tables["accuracy"], order),
-        "Stasis index": ch.stasis(tables["stasis"]),
-        "Q3 tolerance curve": ch.tolerance(tables["tolerance"]),
+    board = metrics(report.results.units, suites)
+    pngs = {
+        "Leaderboards": ch.leaderboards(tables["leaderboard"], board, tables["bootstrap"], names),
+        "Accuracy vs horizon": ch.accuracy_vs_horizon(tables["accuracy"], order, suites, names),
     }
+    for diagnostic in report.diagnostics:
+        png = diagnostic.chart(tables[diagnostic.name])
+        if png is not None:
+            pngs[diagnostic.title] = png
+    return pngs
 
 
 def write_report(
-    results: Results, tables: dict[str, pd.DataFrame], out: Path, *, gallery_size: int = 8
+    report: Report, out: Path, registry: Registry, *, gallery_size: int = 8
 ) -> dict[str, Path]:
     """Write charts, gallery images, CSV/Parquet exports and ``report.html`` under ``out``."""
+    results, tables = report.results, report.tables
     files: dict[str, Path] = {}
     for sub in ("charts", "gallery", "tables"):
         (out / sub).mkdir(parents=True, exist_ok=True)
-    pngs = chart_pngs(tables)
+    pngs = chart_pngs(report, titles(results, registry))
     for title, png in pngs.items():
         files[f"chart:{title}"] = _write(out / "charts" / f"{_slug(title)}.png", png)
-    datasets = {run.label: run.dataset for run in results.runs}
-    cases = gallery.build_cases(results.units, datasets, gallery_size)
+    scorers = {task: registry.scorer_for(task) for task in results.tasks}
+    cases = gallery.build_cases(results, scorers, gallery_size)
     for i, case in enumerate(cases):
-        name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
-        files[f"gallery:{i}"] = _write(out / "gallery" / name, case.png)
+        if case.png:
+            name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
+            files[f"gallery:{i}"] = _write(out / "gallery" / name, case.png)
     for name, frame in tables.items():
         files[f"table:{name}"] = out / "tables" / f"{name}.csv"
         frame.to_csv(files[f"table:{name}"], index=False)
@@ -143,8 +173,8 @@ def write_report(
     page = html.render(
         title="BilliardPhys-Bench report",
         runs=results.runs,
-        headline=[("Leaderboard (strict)", _headline(tables))],
-        sections=_sections(tables),
+        headline=[("Leaderboard (strict)", _headline(tables, results))],
+        sections=_sections(tables, report.diagnostics),
         charts=pngs,
         cases=cases,
     )
@@ -171,34 +201,43 @@ def _export_frames(results: Results, out: Path) -> dict[str, Path]:
     return files
 
 
-def _headline(tables: dict[str, pd.DataFrame]) -> str:
+def _headline(tables: dict[str, pd.DataFrame], results: Results) -> str:
     board = tables["summary"].copy()
+    first = results.suites[0].name if results.suites else None
     ci = tables["bootstrap"].pivot_table(
         index="run", columns="metric", values=["lo", "hi"], observed=True
     )
-    if not ci.empty:
-        lo, hi = ci["lo"]["total"], ci["hi"]["total"]
-        board["total 95% CI"] = [
+    if first is not None and not ci.empty:
+        lo, hi = ci["lo"][first], ci["hi"][first]
+        board[f"{first} 95% CI"] = [
             f"{100 * lo.get(r, float('nan')):.1f}–{100 * hi.get(r, float('nan')):.1f}%"
             for r in board["run"]
         ]
+    suites = ", ".join(f"<i>{escape(s.name)}</i> ({escape(s.summary)})" for s in results.suites)
     note = (
         "<p class='muted'>Mean accuracy over horizons. Strict view: a missing answer, API error "
-        "or parse error is wrong. <i>total_answered</i> leaves out calls that never returned "
-        "an answer; <i>completeness</i> is the share answered. Baselines are floors "
-        "(stasis, straight, random) and the ceiling (oracle).</p>"
+        "or parse error is wrong. <i>&lt;suite&gt;_answered</i> leaves out calls that never "
+        "returned an answer; <i>completeness</i> is the share answered. Baselines are floors "
+        "(stasis, straight, random) and the ceiling (oracle)."
+        + (f" Suites: {suites}." if suites else "")
+        + "</p>"
     )
-    return note + html.table(board, percent=SCORES)
+    percent = [*metrics(results.units, results.suites), "completeness"]
+    percent += [f"{s.name}_answered" for s in results.suites]
+    return note + html.table(board, percent=percent)
 
 
-SCORES = ("q1", "q2", "q3", "total", "total_answered", "completeness")
-
-
-def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
+def _sections(
+    tables: dict[str, pd.DataFrame], diagnostics: Sequence[Diagnostic]
+) -> list[tuple[str, str]]:
     pairs = tables["pairs"]
     horizons = [c for c in tables["by_horizon"].columns if c.startswith("h") or c == "mean"]
-    stasis = ("contact_stasis", "q1_stasis", "q2_stasis", "motion_stasis")
-    return [
+    scores = [
+        c
+        for c in tables["leaderboard_stable"].columns
+        if c not in ("run", "adapter", "model", "baseline", "expected")
+    ]
+    sections = [
         ("Accuracy by horizon (strict)", html.table(tables["by_horizon"], percent=horizons)),
         (
             "Accuracy by horizon (answered only)",
@@ -208,7 +247,7 @@ def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
             "Leaderboard on stable scenes",
             html.table(
                 tables["leaderboard_stable"],
-                percent=SCORES,
+                percent=scores,
                 empty="no stable scenes (the dataset has no stability annotation?)",
             ),
         ),
@@ -222,12 +261,9 @@ def _sections(tables: dict[str, pd.DataFrame]) -> list[tuple[str, str]]:
             if not pairs.empty
             else "<p class='muted'>no model runs to compare</p>",
         ),
-        ("Stasis index", html.table(tables["stasis"], percent=stasis)),
-        (
-            "Q1 and per-wall confusion",
-            html.table(tables["confusion"], percent=("precision", "recall", "f1")),
-        ),
-        ("Q3 distance error (m)", html.table(tables["distance"])),
-        ("Q3 distance error by horizon (m)", html.table(tables["distance_by_horizon"])),
-        ("Tokens, cost, latency, retries", html.table(tables["usage"])),
     ]
+    for diagnostic in diagnostics:
+        body = html.table(tables[diagnostic.name], percent=diagnostic.percent)
+        sections.append((diagnostic.title, body))
+    sections.append(("Tokens, cost, latency, retries", html.table(tables["usage"])))
+    return sections

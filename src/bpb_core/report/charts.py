@@ -8,6 +8,7 @@ against the floors and the ceiling.
 from __future__ import annotations
 
 import io
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -16,12 +17,8 @@ import pandas as pd
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-TASK_TITLES = {
-    "q1": "Q1 ball collisions",
-    "q2": "Q2 wall contacts",
-    "q3": "Q3 final positions",
-    "total": "Total (0.3 Q1 + 0.3 Q2 + 0.4 Q3)",
-}
+    from bpb_core.registration import SuiteInfo
+
 _MODEL_COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
 _BASELINE_GREYS = ["#444444", "#9a9a9a", "#6e6e6e", "#bdbdbd"]
 _BASELINE_LINES = ["--", ":", "-.", (0, (6, 2, 1, 2))]
@@ -40,7 +37,8 @@ def names_of(frame: pd.DataFrame) -> list[str]:
     return [label(str(run), bool(baseline)) for run, baseline in pairs]
 
 
-def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, Any]:
+def figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, Any]:
+    """A constrained-layout figure with a grid of axes (Agg backend, nothing global)."""
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -51,7 +49,8 @@ def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, 
     return fig, axes
 
 
-def _png(fig: Figure) -> bytes:
+def png(fig: Figure) -> bytes:
+    """The figure as PNG bytes."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png")
     return buffer.getvalue()
@@ -78,21 +77,25 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     return styles
 
 
-def accuracy_vs_horizon(accuracy: pd.DataFrame, leaderboard_order: list[str]) -> bytes:
-    """One panel per task (and the total): accuracy against horizon, one line per run."""
+def accuracy_vs_horizon(
+    accuracy: pd.DataFrame,
+    leaderboard_order: list[str],
+    suites: Sequence[SuiteInfo] = (),
+    titles: Mapping[str, str] | None = None,
+) -> bytes:
+    """One panel per task (and per suite): accuracy against horizon, one line per run."""
+    titles = titles or {}
     frame = accuracy.copy()
-    totals = _total_by_horizon(frame)
-    panels = (
-        [*sorted(frame["task"].unique()), "total"]
-        if len(totals)
-        else sorted(frame["task"].unique())
-    )
+    panels: dict[str, pd.DataFrame] = {
+        str(task): frame[frame["task"] == task] for task in sorted(frame["task"].unique())
+    }
+    for suite in suites:
+        panels[suite.name] = _suite_by_horizon(frame, suite)
     ncols = min(len(panels), 2)
     nrows = (len(panels) + ncols - 1) // ncols
-    fig, axes = _figure(nrows, ncols, (6.2 * ncols, 3.6 * nrows))
+    fig, axes = figure(nrows, ncols, (6.2 * ncols, 3.6 * nrows))
     styles = run_styles(frame[["run", "baseline"]])
-    for ax, task in zip(axes.flat, panels, strict=False):
-        data = totals if task == "total" else frame[frame["task"] == task]
+    for ax, (name, data) in zip(axes.flat, panels.items(), strict=False):
         for run in leaderboard_order:
             rows = data[data["run"] == run].sort_values("horizon")
             if rows.empty:
@@ -102,7 +105,7 @@ def accuracy_vs_horizon(accuracy: pd.DataFrame, leaderboard_order: list[str]) ->
                 rows["horizon"], 100 * rows["accuracy"], color=style["color"], ls=style["ls"],
                 marker=style["marker"], label=label(run, bool(rows["baseline"].iloc[0])),
             )  # fmt: skip
-        ax.set_title(TASK_TITLES.get(task, task))
+        ax.set_title(titles.get(name, name))
         ax.set_xlabel("horizon (s)")
         ax.set_ylabel("accuracy (%)")
         ax.set_ylim(-3, 103)
@@ -112,26 +115,35 @@ def accuracy_vs_horizon(accuracy: pd.DataFrame, leaderboard_order: list[str]) ->
         ax.set_visible(False)
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
-    return _png(fig)
+    return png(fig)
 
 
-def _total_by_horizon(accuracy: pd.DataFrame) -> pd.DataFrame:
-    from bpb_core.results.tables import TOTAL_WEIGHTS
-
+def _suite_by_horizon(accuracy: pd.DataFrame, suite: SuiteInfo) -> pd.DataFrame:
     wide = accuracy.pivot_table(
         index=["run", "baseline", "horizon"], columns="task", values="accuracy", observed=True
     )
-    if not set(TOTAL_WEIGHTS) <= set(wide.columns):
+    if not set(suite.weights) <= set(wide.columns):
         return pd.DataFrame(columns=["run", "baseline", "horizon", "accuracy"])
-    wide["accuracy"] = sum(w * wide[t] for t, w in TOTAL_WEIGHTS.items())
+    wide["accuracy"] = sum(w * wide[t] for t, w in suite.weights.items())
     return wide[["accuracy"]].reset_index()
 
 
-def leaderboards(board: pd.DataFrame, ci: pd.DataFrame | None = None) -> bytes:
-    """The paper's four leaderboards (Q1, Q2, Q3, total): horizontal bars, best on top."""
-    fig, axes = _figure(2, 2, (12.4, 1.6 + 0.42 * len(board) * 2))
+def leaderboards(
+    board: pd.DataFrame,
+    metrics: Sequence[str],
+    ci: pd.DataFrame | None = None,
+    titles: Mapping[str, str] | None = None,
+) -> bytes:
+    """One leaderboard per metric (the paper's four: Q1, Q2, Q3, total): horizontal bars,
+    best on top."""
+    titles = titles or {}
+    ncols = min(len(metrics), 2)
+    nrows = (len(metrics) + ncols - 1) // ncols
+    fig, axes = figure(nrows, ncols, (6.2 * ncols, (0.8 + 0.42 * len(board)) * nrows))
     styles = run_styles(board[["run", "baseline"]])
-    for ax, metric in zip(axes.flat, ("q1", "q2", "q3", "total"), strict=True):
+    for ax in list(axes.flat)[len(metrics) :]:
+        ax.set_visible(False)
+    for ax, metric in zip(axes.flat, metrics, strict=False):
         ranked = board.dropna(subset=[metric]).sort_values(metric)
         values = 100 * ranked[metric].to_numpy(dtype=float)
         ys = range(len(ranked))
@@ -149,9 +161,9 @@ def leaderboards(board: pd.DataFrame, ci: pd.DataFrame | None = None) -> bytes:
         ax.set_xlim(0, 114)
         ax.set_xticks([0, 20, 40, 60, 80, 100])
         ax.set_xlabel("mean accuracy over horizons (%)")
-        ax.set_title(TASK_TITLES[metric] + " leaderboard", fontsize=10)
+        ax.set_title(titles.get(metric, metric) + " leaderboard", fontsize=10)
         ax.grid(axis="x", alpha=0.3)
-    return _png(fig)
+    return png(fig)
 
 
 def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> Any:
@@ -162,59 +174,3 @@ def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) ->
     err = [mid - lo, hi - mid]
     ax.errorbar(mid, range(len(ranked)), xerr=err, fmt="none", ecolor="black", capsize=3, lw=1)
     return np.nan_to_num(hi, nan=0.0)
-
-
-def stasis(table: pd.DataFrame) -> bytes:
-    """Stasis index per run: share of true contacts predicted absent and of moved balls
-    predicted unmoved (higher = more 'nothing happens' bias)."""
-    fig, axes = _figure(1, 1, (9.0, 1.8 + 0.5 * len(table)))
-    ax = axes[0, 0]
-    ranked = table.sort_values("contact_stasis", na_position="first")
-    ys = list(range(len(ranked)))
-    height = 0.38
-    contact = 100 * ranked["contact_stasis"].fillna(0).to_numpy(dtype=float)
-    motion = 100 * ranked["motion_stasis"].fillna(0).to_numpy(dtype=float)
-    ax.barh(
-        [y + height / 2 for y in ys],
-        contact,
-        height,
-        color="#d62728",
-        label="true contacts predicted absent",
-    )
-    ax.barh(
-        [y - height / 2 for y in ys],
-        motion,
-        height,
-        color="#1f77b4",
-        label="moved balls predicted unmoved",
-    )
-    names = [label(str(r), bool(b)) for r, b in zip(ranked["run"], ranked["baseline"], strict=True)]
-    ax.set_yticks(ys, names, fontsize=8)
-    ax.set_xlim(0, 100)
-    ax.set_xlabel("share (%)")
-    ax.set_title("Stasis index (answered units only)")
-    ax.legend(loc="lower right", fontsize=8)
-    ax.grid(axis="x", alpha=0.3)
-    return _png(fig)
-
-
-def tolerance(curve: pd.DataFrame) -> bytes:
-    """Q3 accuracy against the tolerance (in ball radii), one line per run."""
-    fig, axes = _figure(1, 1, (8.0, 4.2))
-    ax = axes[0, 0]
-    styles = run_styles(curve[["run", "baseline"]])
-    for run, rows in curve.groupby("run", observed=True, sort=False):
-        style = styles[str(run)]
-        ax.plot(
-            rows["tolerance"], 100 * rows["accuracy"], color=style["color"], ls=style["ls"],
-            marker=style["marker"], ms=3, label=label(str(run), bool(rows["baseline"].iloc[0])),
-        )  # fmt: skip
-    ax.axvline(1.0, color="black", lw=0.8, ls=":")
-    ax.text(1.05, 2, "Q3 rule (1 R)", fontsize=8)
-    ax.set_xlabel("tolerance (ball radii)")
-    ax.set_ylabel("Q3 accuracy (%)")
-    ax.set_ylim(-3, 103)
-    ax.set_title("Q3 tolerance curve")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return _png(fig)

@@ -117,16 +117,18 @@ def _case(case: Case) -> str:
 
     def listing(title: str, items: list[str]) -> str:
         if not items:
-            return f"<div class='key'><span>{title}:</span> all right</div>"
+            return f"<div class='key'><span>{html.escape(title)}:</span> all right</div>"
         body = "".join(f"<li>{html.escape(i)}</li>" for i in items)
-        return f"<div class='key'><span>{title}:</span><ul>{body}</ul></div>"
+        return f"<div class='key'><span>{html.escape(title)}:</span><ul>{body}</ul></div>"
 
+    image = (
+        f"<img alt='{html.escape(case.scene_id)}' src='{data_uri(case.png)}'>" if case.png else ""
+    )
+    wrong = "".join(listing(f"{task.upper()} wrong", items) for task, items in case.wrong.items())
     return (
         f"<div class='case'><h3>{html.escape(case.run)} &middot; {html.escape(case.scene_id)}"
         f"</h3><div class='muted'>horizon {case.horizon:g} s &middot; {scores}</div>"
-        f"<img alt='{html.escape(case.scene_id)}' src='{data_uri(case.png)}'>"
-        f"{listing('Q1 wrong', case.wrong_q1)}{listing('Q2 wrong', case.wrong_q2)}"
-        f"{listing('Q3 wrong', case.q3_errors)}</div>"
+        f"{image}{wrong}</div>"
     )
 
 
@@ -160,9 +162,8 @@ def render(
         f"<h1>{html.escape(title)}</h1><div class='muted'>generated {when} by bpb</div>"
         f"<h2>Runs</h2>{_runs_section(runs)}"
         f"{join(headline)}<h2>Charts</h2>{chart_html}{join(sections)}"
-        "<h2>Failure gallery</h2><p class='muted'>The worst answered scenes (lowest total), models"
-        " before baselines. Yellow ring: where each ball truly ends; red ring and cross: the "
-        "model's prediction; white line: the error.</p>"
+        "<h2>Failure gallery</h2><p class='muted'>The worst answered scenes (lowest score), "
+        "models before baselines; the legend above each picture explains its marks.</p>"
         f"<div class='gallery'>{gallery}</div>"
         f"<script>{SCRIPT}</script></main></body></html>"
     )

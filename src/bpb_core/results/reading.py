@@ -4,25 +4,38 @@ A run folder holds ``run.json`` (adapter spec, model id, tasks, options, dataset
 answer file per (scene, task). The dataset path is read from ``data`` or ``dataset`` (a string,
 or an object with a ``path``); a relative path is tried against the run folder, its parents and
 the working directory. The scenes a run was expected to answer are the dataset's scenes,
-restricted to the run's ``horizons`` and, per horizon, to its first ``limit`` indices.
+restricted to the run's ``horizons`` and, per horizon, to its first ``limit`` indices (the
+runner's own selection rule, :func:`bpb_core.layout.select_keys`). Scenes and ground truth are
+read with the models of the dataset's scene family.
 """
 
 from __future__ import annotations
 
-import json
-import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from pydantic import ValidationError
+
+from bpb_core.dataset.reader import dataset_family, read_manifest
 from bpb_core.errors import BadInput
-from bpb_core.layout import FINAL, INIT, RUN_MANIFEST, SceneKey, iter_scene_keys
-from bpb_core.scene import FinalState, Scene
+from bpb_core.layout import (
+    FINAL,
+    INIT,
+    MANIFEST,
+    RUN_MANIFEST,
+    SceneKey,
+    iter_scene_keys,
+    select_keys,
+)
+from bpb_core.run_folder import read_manifest as read_run_manifest
+from bpb_core.validated_files import describe_validation_error
 
-DEFAULT_TASKS = ("q1", "q2", "q3")
-ANSWER_STATUSES = ("ok", "parse_error", "api_error")
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily
+    from bpb_core.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -37,6 +50,7 @@ class RunFolder:
     dataset: Path
     scene_keys: tuple[SceneKey, ...]
     manifest: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    family: SceneFamily | None = field(default=None, compare=False, repr=False)
 
     @property
     def baseline(self) -> bool:
@@ -59,8 +73,15 @@ class RunFolder:
         """The dataset's hash from ``run.json`` (its path when no hash is recorded)."""
         return str(self.manifest.get("dataset_hash") or self.dataset)
 
+    def truth(self, key: SceneKey) -> tuple[Any, Any]:
+        """The scene and its ground truth (cached; datasets are immutable once written)."""
+        assert self.family is not None, "read_run resolves the family"
+        return read_truth(self.dataset, key, self.family.scene_model, self.family.truth_model)
 
-def find_runs(paths: Path | str | Iterable[Path | str]) -> list[RunFolder]:
+
+def find_runs(
+    paths: Path | str | Iterable[Path | str], registry: Registry | None = None
+) -> list[RunFolder]:
     """Run folders in ``paths`` (each a run folder or a folder of run folders), labelled uniquely.
 
     Raises:
@@ -80,7 +101,7 @@ def find_runs(paths: Path | str | Iterable[Path | str]) -> list[RunFolder]:
             raise BadInput(f"{path}: not a run folder (no {RUN_MANIFEST}) and holds none")
         found.extend(inner)
     labels = _labels(found)
-    return [read_run(path, label) for path, label in zip(found, labels, strict=True)]
+    return [read_run(path, label, registry) for path, label in zip(found, labels, strict=True)]
 
 
 def _labels(paths: list[Path]) -> list[str]:
@@ -90,21 +111,28 @@ def _labels(paths: list[Path]) -> list[str]:
     return [f"{p.parent.name}/{p.name}" if names.count(p.name) > 1 else p.name for p in paths]
 
 
-def read_run(path: Path, label: str | None = None) -> RunFolder:
+def read_run(path: Path, label: str | None = None, registry: Registry | None = None) -> RunFolder:
     """Read ``path/run.json`` and work out the scenes the run was expected to answer."""
-    manifest_path = path / RUN_MANIFEST
-    try:
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise BadInput(f"{manifest_path}: cannot read run manifest: {exc}") from None
-    if not isinstance(manifest, dict):
-        raise BadInput(f"{manifest_path}: expected a JSON object")
+    manifest = read_run_manifest(path)
+    if manifest is None:
+        raise BadInput(f"{path / RUN_MANIFEST}: no run manifest")
     adapter = str(manifest.get("adapter") or manifest.get("spec") or path.name)
     model = str(manifest.get("model_id") or manifest.get("model") or adapter)
-    tasks = tuple(str(t) for t in (_option(manifest, "tasks") or DEFAULT_TASKS))
     dataset = _dataset_path(manifest, path)
+    family = _family(dataset, registry)
+    tasks = _option(manifest, "tasks")
+    if not tasks:
+        raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
     keys = _expected_keys(manifest, dataset)
-    return RunFolder(path, label or path.name, adapter, model, tasks, dataset, keys, manifest)
+    names = tuple(str(t) for t in tasks)
+    return RunFolder(
+        path, label or path.name, adapter, model, names, dataset, keys, manifest, family
+    )
+
+
+def _family(dataset: Path, registry: Registry | None) -> SceneFamily:
+    manifest = read_manifest(dataset) if (dataset / MANIFEST).is_file() else None
+    return dataset_family(manifest, dataset, registry)
 
 
 def _option(manifest: dict[str, Any], name: str) -> Any:
@@ -131,49 +159,30 @@ def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:
 
 
 def _expected_keys(manifest: dict[str, Any], dataset: Path) -> tuple[SceneKey, ...]:
-    keys = list(iter_scene_keys(dataset))
-    horizons = _option(manifest, "horizons")
-    if horizons:
-        wanted = {float(h) for h in horizons}
-        keys = [k for k in keys if k.horizon in wanted]
-    limit = _option(manifest, "limit")
-    if limit:
-        seen: dict[float, int] = {}
-        keep: list[SceneKey] = []
-        for key in keys:
-            seen[key.horizon] = seen.get(key.horizon, 0) + 1
-            if seen[key.horizon] <= int(limit):
-                keep.append(key)
-        keys = keep
-    return tuple(keys)
+    horizons = _option(manifest, "horizons") or None
+    limit = _option(manifest, "limit") or None
+    return tuple(
+        select_keys(iter_scene_keys(dataset), horizons, None if limit is None else int(limit))
+    )
 
 
 @lru_cache(maxsize=65536)
-def read_truth(dataset: Path, key: SceneKey) -> tuple[Scene, FinalState]:
-    """The scene and its ground truth (cached; datasets are immutable once written)."""
+def read_truth(
+    dataset: Path, key: SceneKey, scene_model: type[Any], truth_model: type[Any]
+) -> tuple[Any, Any]:
+    """The scene and its ground truth, read with the family's models (cached; datasets are
+    immutable once written).
+
+    Raises:
+        BadInput: A file is missing or invalid (names the scene folder).
+    """
     folder = key.dir(dataset)
     try:
-        scene = Scene.model_validate_json((folder / INIT).read_bytes())
-        final = FinalState.model_validate_json((folder / FINAL).read_bytes())
+        scene = scene_model.model_validate_json((folder / INIT).read_bytes())
+        truth = truth_model.model_validate_json((folder / FINAL).read_bytes())
     except OSError as exc:
         raise BadInput(f"{folder}: cannot read ground truth: {exc}") from None
-    except ValueError as exc:
-        first = str(exc).splitlines()[0]
-        raise BadInput(f"{folder}: invalid scene or ground truth: {first}") from None
-    return scene, final
-
-
-def read_answer(folder: str, task: str) -> dict[str, Any]:
-    """The answer record of one (scene, task) in the run's scene ``folder``; status ``missing``
-    when there is no file. (String paths: this runs once per answer file.)"""
-    path = os.path.join(folder, f"{task}.json")
-    try:
-        with open(path, "rb") as handle:
-            record = json.loads(handle.read())
-    except FileNotFoundError:
-        return {"status": "missing", "answer": None, "attempts": 0}
-    except (OSError, ValueError) as exc:
-        raise BadInput(f"{path}: cannot read answer file: {exc}") from None
-    if not isinstance(record, dict) or record.get("status") not in ANSWER_STATUSES:
-        raise BadInput(f"{path}: status: expected ok, parse_error or api_error")
-    return record
+    except ValidationError as exc:
+        problem = describe_validation_error(exc)
+        raise BadInput(f"{folder}: invalid scene or ground truth: {problem}") from None
+    return scene, truth

@@ -7,23 +7,26 @@ Two views (SPEC section 8):
 - ``answered``: scenes whose call never produced an answer (``api_error``, ``missing``) are left
   out; a parse error is still wrong. ``completeness`` says what share of scenes is left.
 
-A scene's score for a task is the share of its units that are right (``mean``: Q1, Q3) or 1 when
-all are right (``all``: Q2). A task's accuracy at a horizon is the mean over scenes; the
-leaderboard score is the mean over horizons; ``total`` = 0.3 Q1 + 0.3 Q2 + 0.4 Q3.
+A scene's score for a task is the share of its units that are right (``mean``) or 1 when all
+are right (``all``), as the task's scorer says. A task's accuracy at a horizon is the mean over
+scenes; the leaderboard score is the mean over horizons; a suite's score is the weighted sum of
+its tasks' leaderboard scores (NaN for a run that lacks one of them).
 """
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import pandas as pd
 
+if TYPE_CHECKING:
+    from bpb_core.registration import SuiteInfo
+
 View = Literal["strict", "answered"]
 VIEWS: tuple[View, ...] = ("strict", "answered")
 UNANSWERED = ("api_error", "missing")
-TOTAL_WEIGHTS: dict[str, float] = {"q1": 0.3, "q2": 0.3, "q3": 0.4}
-METRICS = ("q1", "q2", "q3", "total")
 RUN_COLUMNS = ["run", "adapter", "model", "baseline"]
 SCENE_KEYS = ["run", "task", "horizon", "index", "scene_id"]
 
@@ -91,51 +94,77 @@ def by_horizon(
     return wide.reset_index()
 
 
+def tasks_of(units: pd.DataFrame) -> list[str]:
+    """Tasks present in a units frame, sorted."""
+    return sorted(str(t) for t in units["task"].unique())
+
+
+def suite_score(means: pd.DataFrame, suite: SuiteInfo) -> pd.Series:
+    """A suite's score per row of ``means`` (one column per task; NaN when a task is absent)."""
+    total = pd.Series(0.0, index=means.index)
+    for task, weight in suite.weights.items():
+        column = means[task] if task in means.columns else pd.Series(np.nan, index=means.index)
+        total = total + weight * column
+    return total
+
+
+def metrics(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> list[str]:
+    """The leaderboard's score columns: every task present, then every suite."""
+    return [*tasks_of(units), *(s.name for s in suites)]
+
+
 def leaderboard(
     units: pd.DataFrame,
+    suites: Sequence[SuiteInfo] = (),
     *,
     view: View = "strict",
     stable_only: bool = False,
-    sort_by: str = "total",
+    sort_by: str | None = None,
 ) -> pd.DataFrame:
-    """One row per run: Q1, Q2, Q3 (means over horizons), total, completeness; best first.
-
-    ``total`` is NaN for a run that lacks one of the three tasks.
+    """One row per run: each task's score (mean over horizons), each suite's weighted total,
+    completeness; best first (by ``sort_by``, default the first suite, else the mean task).
     """
     acc = accuracy(units, view=view, stable_only=stable_only)
+    tasks = tasks_of(units)
     means = acc.pivot_table(
         index=RUN_COLUMNS, columns="task", values="accuracy", aggfunc="mean", observed=True
-    )
-    for task in TOTAL_WEIGHTS:
-        if task not in means.columns:
-            means[task] = np.nan
-    means["total"] = sum(w * means[t] for t, w in TOTAL_WEIGHTS.items())
+    ).reindex(columns=tasks)
+    for suite in suites:
+        means[suite.name] = suite_score(means, suite)
     counts = acc.groupby(RUN_COLUMNS, observed=True)[["answered", "expected"]].sum()
     out = means.join(counts).reset_index()
     out.columns.name = None
     out["completeness"] = out["answered"] / out["expected"]
-    fixed = (*RUN_COLUMNS, *METRICS, "answered", "expected", "completeness")
-    other = [c for c in out.columns if c not in fixed]  # tasks beyond q1-q3
-    out = out[[*RUN_COLUMNS, *METRICS, *other, "completeness", "expected"]]
-    return out.sort_values(sort_by, ascending=False, na_position="last").reset_index(drop=True)
+    out = out[[*RUN_COLUMNS, *metrics(units, suites), "completeness", "expected"]]
+    key = sort_by or (suites[0].name if suites else None)
+    order = out[key] if key is not None else out[tasks].mean(axis=1)
+    ranked = out.assign(_order=order.to_numpy()).sort_values(
+        "_order", ascending=False, na_position="last", kind="stable"
+    )
+    return ranked.drop(columns="_order").reset_index(drop=True)
 
 
-def summary(units: pd.DataFrame) -> pd.DataFrame:
-    """Strict leaderboard plus the answered-only total and the completeness, best first.
+def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFrame:
+    """Strict leaderboard plus each suite's answered-only score and the completeness, best
+    first.
 
-    Columns: ``run, adapter, model, baseline, q1, q2, q3, total, total_answered,
-    completeness, expected`` (``expected``: scene-task pairs the run should have answered).
+    Columns: ``run, adapter, model, baseline``, each task, each suite followed by
+    ``<suite>_answered``, ``completeness, expected`` (``expected``: scene-task pairs the run
+    should have answered).
     """
-    strict = leaderboard(units, view="strict")
-    answered = leaderboard(units, view="answered").set_index("run")["total"]
-    position = list(strict.columns).index("total") + 1
-    strict.insert(position, "total_answered", strict["run"].map(answered))
+    strict = leaderboard(units, suites, view="strict")
+    answered = leaderboard(units, suites, view="answered").set_index("run")
+    for suite in suites:
+        position = list(strict.columns).index(suite.name) + 1
+        strict.insert(position, f"{suite.name}_answered", strict["run"].map(answered[suite.name]))
     return strict
 
 
-def summary_records(units: pd.DataFrame) -> list[dict[str, object]]:
+def summary_records(
+    units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()
+) -> list[dict[str, object]]:
     """:func:`summary` as JSON-ready dicts (NaN becomes ``None``)."""
-    table = summary(units)
+    table = summary(units, suites)
     records: list[dict[str, object]] = []
     for row in table.to_dict(orient="records"):
         records.append({str(k): _plain(v) for k, v in row.items()})

@@ -13,7 +13,6 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bpb_core.adapters import ModelRequest, ModelResponse
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -22,11 +21,11 @@ from bpb_core.errors import (
     RequestRejected,
 )
 from bpb_core.interfaces import PromptOptions
-from bpb_core.runner.data import SceneRef
+from bpb_core.model_calls import ModelRequest, ModelResponse
+from bpb_core.run_folder import AnswerRecord, write_answer
+from bpb_core.runner.progress import ProgressEvent
+from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import NotSent, RunState, Tally
-from bpb_core.runner.storage import AnswerRecord, write_answer
-from bpb_core.runner.types import ProgressEvent
-from bpb_core.scene import Scene
 
 
 @dataclass
@@ -54,7 +53,7 @@ class PairCall:
 
     state: RunState
     ref: SceneRef
-    scene: Scene
+    scene: Any
     image: bytes | None
     image_sha: str | None
     task: str
@@ -104,6 +103,7 @@ class PairCall:
             messages,
             self.task,
             self.scene,
+            self.state.family,
             options.temperature,
             options.max_tokens,
             self.timeout,

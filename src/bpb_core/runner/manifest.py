@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any
 from bpb_core import __version__
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST
-from bpb_core.runner.data import dataset_hash
-from bpb_core.runner.storage import read_manifest, write_manifest
-from bpb_core.runner.types import RunOptions
+from bpb_core.run_folder import read_manifest, write_manifest
+from bpb_core.runner.options import RunOptions
+from bpb_core.runner.scenes import dataset_hash
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry

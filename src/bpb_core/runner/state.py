@@ -10,12 +10,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from bpb_core.adapters import ModelRequest, ModelResponse
 from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
+from bpb_core.model_calls import ModelRequest, ModelResponse
+from bpb_core.run_folder import AttemptLog, UsageRecord
 from bpb_core.runner.limits import RateLimiter
-from bpb_core.runner.storage import AttemptLog, UsageRecord
-from bpb_core.runner.types import Progress, ProgressEvent, RunOptions
+from bpb_core.runner.options import RunOptions
+from bpb_core.runner.progress import Progress, ProgressEvent
 
 T = TypeVar("T")
 
@@ -48,6 +49,7 @@ class RunState:
     auth_error: AuthenticationFailed | None = None
     model_id: str = ""
     statuses: dict[str, dict[str, int]] = field(default_factory=dict)
+    family: str = ""
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and

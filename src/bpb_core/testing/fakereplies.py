@@ -1,65 +1,80 @@
-"""Reply bodies of the fake OpenAI server: correct answers and the injected faults."""
+"""What the fake OpenAI server answers: the correct answer for a known prompt, and the injected
+faults."""
 
 from __future__ import annotations
 
+import hashlib
 import json
-import re
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 from aiohttp import web
 
-from bpb_core.layout import FINAL, scene_dir
-from bpb_core.scene import WALLS, FinalState
+from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.model_calls import Message, TextPart
+from bpb_core.reply_json import balanced_objects
 
-_KEY = re.compile(r"^h([0-9.]+)_(\d+)/(q[123])$")
-_IDS = re.compile(r"ids (\d+)\.\.(\d+)")
 HTTP_FAULTS = {"429": 429, "500": 500, "401": 401, "400": 400, "503": 503}
+UNKNOWN = "unknown/unknown"
+_ESCALATIONS = (0, 1, 2)
 
 
-def _truth(data: Path | None, key: str) -> FinalState | None:
-    match = _KEY.match(key)
-    if data is None or match is None:
-        return None
-    path = scene_dir(data, float(match.group(1)), int(match.group(2))) / FINAL
-    try:
-        return FinalState.model_validate_json(path.read_bytes())
-    except (OSError, ValueError):
-        return None
+def prompt_key(text: str) -> str:
+    """A digest of a prompt's text, the index's key."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def _generic(task: str, prompt: str) -> dict[str, Any]:
-    ids_match = _IDS.search(prompt)
-    low, high = (int(ids_match.group(1)), int(ids_match.group(2))) if ids_match else (0, 6)
-    ids = list(range(low, high + 1))
-    if task == "q1":
-        return {"answers": [{"id": i, "answer": "F"} for i in ids if i != 0]}
-    if task == "q2":
-        return {"answers": [{"wall": w, "answer": "F"} for w in WALLS]}
-    return {"predictions": [{"id": i, "pos": [1.0, 0.5]} for i in ids]}
+class PromptIndex:
+    """Every prompt bpb could send about a dataset, mapped to its ``scene/task`` key and the
+    correct answer.
 
+    Built by asking each of the dataset family's tasks for its messages under every prompt
+    option (input mode, chain of thought, force-numeric, escalation), so the server knows what
+    it is asked without parsing any task's wording.
+    """
 
-def answer_value(data: Path | None, key: str, prompt: str) -> dict[str, Any]:
-    """The correct answer from ``final.json`` when known, else a valid all-F / centre answer."""
-    task = key.rsplit("/", 1)[-1]
-    final = _truth(data, key)
-    if final is None:
-        return _generic(task, prompt)
-    if task == "q1":
-        return {"answers": [label.model_dump() for label in final.q1]}
-    if task == "q2":
-        return {"answers": [label.model_dump() for label in final.q2]}
-    return {
-        "predictions": [
-            {"id": p.id, "pos": None if p.pos is None else list(p.pos)} for p in final.predictions
+    def __init__(self, data: Path | None) -> None:
+        self.entries: dict[str, tuple[str, str]] = {}
+        if data is not None:
+            self._build(data)
+
+    def _build(self, data: Path) -> None:
+        from bpb_core.dataset.reader import load_dataset
+        from bpb_core.registry import make_registry
+
+        registry = make_registry()
+        dataset = load_dataset(data, registry=registry)
+        tasks = {name: registry.task(name) for name in registry.tasks_for(dataset.family.name)}
+        variants = [
+            PromptOptions(mode, cot, numeric, escalation)
+            for mode in get_args(InputMode)
+            for cot in (False, True)
+            for numeric in (False, True)
+            for escalation in _ESCALATIONS
         ]
-    }
+        for key, scene, truth in dataset:
+            for name, task in tasks.items():
+                answer = json.dumps(task.expected(truth))
+                for options in variants:
+                    text = message_text(task.messages(scene, b"image", options))
+                    self.entries[prompt_key(text)] = (f"{key.scene_id}/{name}", answer)
+
+    def lookup(self, text: str) -> tuple[str, str]:
+        """``(scene/task key, correct answer JSON)``; for an unknown prompt, ``unknown/unknown``
+        and the last JSON object in the prompt (the answer format's example)."""
+        found = self.entries.get(prompt_key(text))
+        if found is not None:
+            return found
+        example = ""
+        for candidate in balanced_objects(text):
+            example = candidate
+        return UNKNOWN, example or "{}"
 
 
-def answer_text(data: Path | None, key: str, prompt: str) -> str:
-    """The correct answer as JSON text."""
-    return json.dumps(answer_value(data, key, prompt))
+def message_text(messages: tuple[Message, ...]) -> str:
+    """All text parts of ``messages``, joined by newlines (images left out)."""
+    return "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
 
 
 def _content(fault: str, answer: str) -> tuple[str, str]:

@@ -1,8 +1,10 @@
 """A local OpenAI-compatible chat server with fault injection, for tests and ``bpb bench run``.
 
-It answers ``POST /v1/chat/completions`` the way a model would: it reads the scene id and task
-from the prompt (``scene h3_0007``; the JSON format names the task), answers correctly from the
-dataset's ``final.json`` when pointed at one, and otherwise injects the faults it was told to:
+It answers ``POST /v1/chat/completions`` the way a model would: pointed at a dataset, it knows
+every prompt bpb could send about it (:class:`~bpb_core.testing.fakereplies.PromptIndex`), so it
+recognises the scene and task it is asked and answers correctly from the ground truth; an unknown
+prompt is answered with the example answer the prompt itself shows. It injects the faults it was
+told to:
 
 - ``ok``: a correct answer (``cot``: reasoning with braces, then the answer);
 - ``429`` (with Retry-After), ``500``, ``401``, ``400``: HTTP errors;
@@ -22,7 +24,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
-import re
 import sys
 import time
 from collections import Counter
@@ -32,18 +33,7 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_core.testing.fakereplies import answer_text, fault_reply, model_reply
-
-_SCENE = re.compile(r"\(scene (h[0-9.]+_\d+)\)")
-
-
-def task_of(prompt: str) -> str:
-    """Which built-in task a prompt asks (by its JSON format)."""
-    if '"predictions"' in prompt:
-        return "q3"
-    if '"wall"' in prompt:
-        return "q2"
-    return "q1"
+from bpb_core.testing.fakereplies import PromptIndex, fault_reply, model_reply
 
 
 def prompt_text(body: dict[str, Any]) -> tuple[str, int]:
@@ -67,6 +57,7 @@ class FakeOpenAI:
 
     def __init__(self, config: dict[str, Any]) -> None:
         self.data = Path(config["data"]) if config.get("data") else None
+        self.prompts = PromptIndex(self.data)
         self.latency = float(config.get("latency", 0.0))
         self.configure(config)
         self.counts: Counter[str] = Counter()
@@ -106,8 +97,7 @@ class FakeOpenAI:
             self.auth_seen += 1
         text, images = prompt_text(body)
         self.images += images
-        match = _SCENE.search(text)
-        key = f"{match.group(1) if match else 'unknown'}/{task_of(text)}"
+        key, answer = self.prompts.lookup(text)
         seen = self.counts[key]
         self.counts[key] += 1
         self.total += 1
@@ -116,7 +106,6 @@ class FakeOpenAI:
             await asyncio.sleep(self.latency)
         if fault == "hang":
             await asyncio.sleep(self.hang)
-        answer = answer_text(self.data, key, text)
         special = await fault_reply(request, fault, self.retry_after)
         if special is not None:
             return special

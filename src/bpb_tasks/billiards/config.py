@@ -18,8 +18,8 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from bpb_core.errors import BadInput
-from bpb_core.model_files import validate_mapping
-from bpb_core.scene import Physics, Pockets, Table
+from bpb_core.validated_files import validate_mapping
+from bpb_tasks.billiards.scene import Physics, Pockets, Table
 
 
 class _Strict(BaseModel):

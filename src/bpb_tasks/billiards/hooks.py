@@ -5,13 +5,14 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.records import SceneFamilyInfo, lazy
+from bpb_core.registration import SceneFamilyInfo, lazy
 
 
 @hookimpl
 def bpb_scene_families() -> Iterator[SceneFamilyInfo]:
     yield SceneFamilyInfo(
         "billiards",
-        lazy("bpb_tasks.billiards.sampler:BilliardsFamily"),
+        lazy("bpb_tasks.billiards.family:BilliardsFamily"),
         "7 balls on a 2 m x 1 m table with 6 pockets; only the cue ball moves",
+        default=True,
     )

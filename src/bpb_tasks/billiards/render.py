@@ -12,10 +12,9 @@ import math
 
 from PIL import Image, ImageDraw
 
-from bpb_core.outcome import CUE_ID, Outcome
-from bpb_core.scene import Scene
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_palette import (
     GHOST_ALPHA,
@@ -26,6 +25,7 @@ from bpb_tasks.billiards.render_palette import (
     text_patch,
 )
 from bpb_tasks.billiards.render_trajectory import draw_trajectories
+from bpb_tasks.billiards.scene import Scene
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
 Point = tuple[float, float]

@@ -1,8 +1,9 @@
 """Paths and event markers of the trajectory image, drawn from an :class:`Outcome`.
 
-Each :class:`~bpb_core.outcome.Segment` is straight (friction acts along the velocity), so a path
-is a polyline through the segment end points. Ball-ball contacts are marked by a red ring at the
-contact point, wall contacts by a blue diamond at the centre, pocketings by a white cross.
+Each :class:`~bpb_tasks.billiards.outcome.Segment` is straight (friction acts along the
+velocity), so a path is a polyline through the segment end points. Ball-ball contacts are marked
+by a red ring at the contact point, wall contacts by a blue diamond at the centre, pocketings by
+a white cross.
 """
 
 from __future__ import annotations
@@ -12,8 +13,8 @@ from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw
 
-from bpb_core.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 
 if TYPE_CHECKING:

@@ -9,14 +9,12 @@ from __future__ import annotations
 import hashlib
 import math
 import random
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 from bpb_core.errors import BadInput
 from bpb_core.layout import scene_id
-from bpb_core.scene import Ball, Scene
-from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
+from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.scene import Ball, Scene
 
 MAX_TRIES_PER_BALL = 10_000
 
@@ -99,23 +97,3 @@ def _positions(rng: random.Random, config: DatasetConfig) -> tuple[tuple[float, 
 
 def _free(p: tuple[float, float], others: list[tuple[float, float]], dist: float) -> bool:
     return all(math.dist(p, q) >= dist for q in others)
-
-
-class BilliardsFamily:
-    """Scene family plugin ``billiards`` (implements :class:`bpb_core.interfaces.SceneFamily`)."""
-
-    name = "billiards"
-
-    def sample(
-        self, rng: random.Random, horizon: float, index: int, config: Mapping[str, Any]
-    ) -> Scene:
-        """Draw scene ``index`` at ``horizon``; ``config`` holds :class:`DatasetConfig` fields.
-
-        Args:
-            rng: The scene's own generator, normally :func:`scene_rng` of (seed, horizon, index).
-            horizon: Simulation horizon in seconds (selects the cue-speed range).
-            index: Scene number within the horizon (names the scene).
-            config: A :class:`DatasetConfig` or a mapping of its fields.
-        """
-        resolved = config if isinstance(config, DatasetConfig) else config_from_mapping(config)
-        return build_scene(draw(rng, resolved), horizon, index, resolved)

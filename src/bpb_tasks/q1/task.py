@@ -5,13 +5,49 @@ from __future__ import annotations
 import json
 from typing import Any, ClassVar
 
+from pydantic import BaseModel, ConfigDict, field_validator
+
 from bpb_core.interfaces import PromptOptions
-from bpb_core.scene import FinalState, Scene
-from bpb_tasks.answers import validate_q1
-from bpb_tasks.prompting_task import BuiltinTask
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.answers import TF, Item, check_ids, load, read_id, upper
+from bpb_tasks.questions.question import BilliardsQuestion
 
 
-class Q1Task(BuiltinTask):
+class BallAnswer(Item):
+    """Q1 item: did the cue ball touch ball ``id``."""
+
+    id: int
+    answer: TF
+
+    @field_validator("id", mode="before")
+    @classmethod
+    def _id(cls, value: Any) -> int:
+        return read_id(value)
+
+    @field_validator("answer", mode="before")
+    @classmethod
+    def _tf(cls, value: Any) -> Any:
+        return upper(value)
+
+
+class Q1Answer(BaseModel):
+    """``{"answers": [{"id": 1, "answer": "T"}, ...]}``."""
+
+    model_config = ConfigDict(extra="ignore", frozen=True)
+    answers: list[BallAnswer]
+
+
+def validate_q1(value: Any, scene: Scene) -> dict[str, Any]:
+    """Validate a Q1 answer: one T/F per object ball, in id order."""
+    answer = load(Q1Answer, "q1", value)
+    object_ids = [b.id for b in scene.balls if b.id != 0]
+    check_ids("q1", [a.id for a in answer.answers], object_ids)
+    items = sorted(answer.answers, key=lambda a: a.id)
+    return {"answers": [{"id": a.id, "answer": a.answer} for a in items]}
+
+
+class Q1Task(BilliardsQuestion):
     """Cue-ball collisions with each object ball (chain of thought on by default)."""
 
     name: ClassVar[str] = "q1"
@@ -34,5 +70,5 @@ class Q1Task(BuiltinTask):
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         return validate_q1(value, scene)
 
-    def expected(self, final: FinalState) -> dict[str, Any]:
-        return {"answers": [label.model_dump() for label in final.q1]}
+    def expected(self, truth: FinalState) -> dict[str, Any]:
+        return {"answers": [label.model_dump() for label in truth.q1]}

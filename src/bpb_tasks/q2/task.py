@@ -5,13 +5,46 @@ from __future__ import annotations
 import json
 from typing import Any, ClassVar
 
+from pydantic import BaseModel, ConfigDict, field_validator
+
+from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
-from bpb_core.scene import WALLS, FinalState, Scene
-from bpb_tasks.answers import validate_q2
-from bpb_tasks.prompting_task import BuiltinTask
+from bpb_tasks.billiards.scene import WALLS, Scene, Wall
+from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.answers import TF, Item, load, upper
+from bpb_tasks.questions.question import BilliardsQuestion
 
 
-class Q2Task(BuiltinTask):
+class WallAnswer(Item):
+    """Q2 item: did the cue ball touch ``wall``."""
+
+    wall: Wall
+    answer: TF
+
+    @field_validator("wall", "answer", mode="before")
+    @classmethod
+    def _upper(cls, value: Any) -> Any:
+        return upper(value)
+
+
+class Q2Answer(BaseModel):
+    """``{"answers": [{"wall": "TOP", "answer": "F"}, ...]}``."""
+
+    model_config = ConfigDict(extra="ignore", frozen=True)
+    answers: list[WallAnswer]
+
+
+def validate_q2(value: Any, scene: Scene) -> dict[str, Any]:
+    """Validate a Q2 answer: one T/F per wall, in TOP, BOTTOM, LEFT, RIGHT order."""
+    answer = load(Q2Answer, "q2", value)
+    walls = [a.wall for a in answer.answers]
+    if len(walls) != len(set(walls)) or set(walls) != set(WALLS):
+        raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {walls}")
+    by_wall = {a.wall: a.answer for a in answer.answers}
+    return {"answers": [{"wall": w, "answer": by_wall[w]} for w in WALLS]}
+
+
+class Q2Task(BilliardsQuestion):
     """Cue-ball contacts with each wall (chain of thought on by default)."""
 
     name: ClassVar[str] = "q2"
@@ -32,5 +65,5 @@ class Q2Task(BuiltinTask):
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         return validate_q2(value, scene)
 
-    def expected(self, final: FinalState) -> dict[str, Any]:
-        return {"answers": [label.model_dump() for label in final.q2]}
+    def expected(self, truth: FinalState) -> dict[str, Any]:
+        return {"answers": [label.model_dump() for label in truth.q2]}

@@ -3,15 +3,68 @@
 from __future__ import annotations
 
 import json
+import math
 from typing import Any, ClassVar
 
+from pydantic import BaseModel, ConfigDict, field_validator
+
+from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
-from bpb_core.scene import FinalState, Scene
-from bpb_tasks.answers import validate_q3
-from bpb_tasks.prompting_task import BuiltinTask
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.answers import Item, check_ids, load, read_id
+from bpb_tasks.questions.question import BilliardsQuestion
 
 
-class Q3Task(BuiltinTask):
+class PositionAnswer(Item):
+    """Q3 item: centre of ball ``id`` at the horizon, ``None`` for pocketed."""
+
+    id: int
+    pos: tuple[float, float] | None
+
+    @field_validator("id", mode="before")
+    @classmethod
+    def _id(cls, value: Any) -> int:
+        return read_id(value)
+
+    @field_validator("pos", mode="before")
+    @classmethod
+    def _numbers(cls, value: Any) -> Any:
+        if value is None:
+            return None
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            raise ValueError("pos must be [x, y] or null")
+        if any(isinstance(c, bool) or not isinstance(c, int | float) for c in value):
+            raise ValueError("pos must hold two numbers")
+        if not all(math.isfinite(c) for c in value):
+            raise ValueError("pos must be finite")
+        return value
+
+
+class Q3Answer(BaseModel):
+    """``{"predictions": [{"id": 0, "pos": [x, y]}, ...]}``; ``pos`` null when pocketed."""
+
+    model_config = ConfigDict(extra="ignore", frozen=True)
+    predictions: list[PositionAnswer]
+
+
+def validate_q3(value: Any, scene: Scene) -> dict[str, Any]:
+    """Validate a Q3 answer: every ball once, at least one number, positions on the table."""
+    answer = load(Q3Answer, "q3", value)
+    check_ids("q3", [p.id for p in answer.predictions], [b.id for b in scene.balls])
+    if all(p.pos is None for p in answer.predictions):
+        raise ParseFailure("q3: predictions: at least one position must be numeric")
+    width, height = scene.table.width, scene.table.height
+    for p in answer.predictions:
+        if p.pos is not None and not (0 <= p.pos[0] <= width and 0 <= p.pos[1] <= height):
+            raise ParseFailure(f"q3: predictions: ball {p.id} at {list(p.pos)} is off the table")
+    items = sorted(answer.predictions, key=lambda p: p.id)
+    return {
+        "predictions": [{"id": p.id, "pos": None if p.pos is None else list(p.pos)} for p in items]
+    }
+
+
+class Q3Task(BilliardsQuestion):
     """Final positions of all balls (chain of thought off by default, as in the paper)."""
 
     name: ClassVar[str] = "q3"
@@ -44,10 +97,10 @@ class Q3Task(BuiltinTask):
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         return validate_q3(value, scene)
 
-    def expected(self, final: FinalState) -> dict[str, Any]:
+    def expected(self, truth: FinalState) -> dict[str, Any]:
         return {
             "predictions": [
                 {"id": p.id, "pos": None if p.pos is None else list(p.pos)}
-                for p in final.predictions
+                for p in truth.predictions
             ]
         }

@@ -20,12 +20,12 @@ from datetime import date
 from pathlib import Path
 
 from bpb_core.interfaces import Simulator
-from bpb_core.outcome import Outcome
-from bpb_core.scene import Scene
+from bpb_tasks.billiards.outcome import Outcome
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.stability import labels
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scenes
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
-from bpb_tasks.simulators.stability import labels
 
 Progress = Callable[[str, int, int], None]
 

@@ -12,7 +12,7 @@ import math
 import random
 from collections.abc import Iterator
 
-from bpb_core.scene import DEFAULT_POCKETS, DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.scene import DEFAULT_POCKETS, DEFAULT_RADIUS, Scene
 
 
 def random_scene(

@@ -20,8 +20,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from bpb_core.outcome import Event, Outcome, Segment
-from bpb_core.scene import Scene
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
+from bpb_tasks.billiards.scene import Scene
 
 _WALL_NORMALS = {"TOP": (0.0, 1.0), "BOTTOM": (0.0, -1.0), "LEFT": (-1.0, 0.0), "RIGHT": (1.0, 0.0)}
 

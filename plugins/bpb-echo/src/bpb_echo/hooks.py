@@ -8,7 +8,7 @@ from bpb_core import AdapterInfo, hookimpl, lazy
 
 
 @hookimpl
-def bpb_adapters() -> Iterator[AdapterInfo]:
+def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "echo",
         lazy("bpb_echo.adapter:make_adapter"),

@@ -1,0 +1,196 @@
+"""Generate a dataset (:func:`generate_dataset`) with a scene family plugin.
+
+Generation runs one job per scene on a process pool; each worker asks the family for its scene
+and writes the folder, returning a small row, which the parent streams into ``index.csv`` and
+``checksums.sha256`` in scene order. Every scene's randomness comes from (seed, horizon, index),
+so the same arguments give byte-identical datasets whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import warnings
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.dataset.jobs import (
+    GenerateProgress,
+    NoProgress,
+    make_pool,
+    run_calibration,
+    run_scenes,
+    worker_setup,
+)
+from bpb_core.dataset.manifest import DatasetManifest
+from bpb_core.dataset.worker import WorkerSetup
+from bpb_core.dataset.writer import DatasetWriter, versions
+from bpb_core.errors import BadInput
+from bpb_core.interfaces import Calibrating, DrawingStats, SceneFamily, Tallying
+from bpb_core.layout import MANIFEST
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+
+
+def generate_dataset(
+    out: str | Path,
+    per_horizon: int,
+    horizons: Sequence[float],
+    seed: int,
+    config: Any = None,
+    progress: GenerateProgress | None = None,
+    *,
+    family: str | None = None,
+    stable_only: bool = False,
+    workers: int | None = None,
+    images: bool = True,
+    calibrate: bool = False,
+    overwrite: bool = False,
+    registry: Registry | None = None,
+) -> Path:
+    """Generate a dataset folder (SPEC section 4 layout) and return its path.
+
+    The folder is built beside ``out`` under a hidden ``.NAME.partial`` name and renamed at the
+    end, so an interrupted generation never leaves a folder that looks complete.
+
+    Args:
+        out: Folder to create; it must not exist or be empty (or be a dataset, with
+            ``overwrite``).
+        per_horizon: Scenes per horizon.
+        horizons: Horizons in seconds.
+        seed: Dataset seed; scene ``i`` at horizon ``t`` is drawn from (seed, t, i).
+        config: The family's config object, a mapping of its fields or a JSON/TOML file;
+            ``None`` uses the family's defaults.
+        progress: Receives progress; nothing is printed.
+        family: Scene family plugin (default: the installed default family).
+        stable_only: Keep only scenes whose ground truth is stable: unstable draws are skipped
+            and further indices drawn until ``per_horizon`` are kept (scene indices then have
+            gaps; the dropped count per horizon is in the manifest).
+        workers: Processes (default: all cores); 1 runs in this process.
+        images: Render the family's images.
+        calibrate: Recalibrate the family's sampling first (recorded in the manifest).
+        overwrite: Replace an existing dataset folder at ``out``.
+        registry: Where the family and simulator come from (default: installed plugins).
+
+    Raises:
+        BadInput: Bad arguments or config (the message names the file or field).
+    """
+    registry = registry if registry is not None else _registry()
+    name = family or registry.default_family()
+    maker = registry.scene_family(name)
+    cfg = _config(maker, config)
+    hs = _check_args(per_horizon, horizons)
+    if calibrate and not isinstance(maker, Calibrating):
+        raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
+    if not calibrate:
+        maker.check_config(cfg, hs)  # fail before touching the disk
+    progress = progress or NoProgress()
+    target = Path(out)
+    partial = _prepare(target, overwrite)
+    n_workers = max(1, workers or os.cpu_count() or 1)
+    setup = worker_setup(registry, name, partial, seed, cfg, images)
+    calibration = None
+    if isinstance(maker, Calibrating) and calibrate:
+        with make_pool(n_workers, setup) as pool:
+            results = run_calibration(pool, hs, progress)
+        cfg, calibration = maker.apply_calibration(cfg, results)
+        setup = replace(setup, config=cfg)
+    tallies = {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
+    writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+    try:
+        with make_pool(n_workers, setup) as pool:
+            run_scenes(pool, setup, writer, hs, per_horizon, stable_only, progress)
+        _write_stats(maker, setup, writer, progress)
+    finally:
+        writer.close()
+    writer.write_manifest(
+        _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
+    )
+    if target.exists():
+        shutil.rmtree(target)
+    partial.rename(target)
+    return target
+
+
+def _registry() -> Registry:
+    from bpb_core.registry import PluginWarning, make_registry
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
+        return make_registry()
+
+
+def _config(family: SceneFamily, config: Any) -> Any:
+    cfg = family.load_config(config)
+    named = getattr(cfg, "family", family.name)
+    if named != family.name:
+        raise BadInput(f"config: family: {named!r}, but the scene family is {family.name!r}")
+    return cfg
+
+
+def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
+    if per_horizon < 1:
+        raise BadInput(f"per_horizon: must be at least 1, got {per_horizon}")
+    hs = [float(h) for h in horizons]
+    if not hs:
+        raise BadInput("horizons: give at least one horizon")
+    bad = [h for h in hs if not h > 0]
+    if bad:
+        raise BadInput(f"horizons: must be positive seconds, got {bad[0]:g}")
+    if len(set(hs)) != len(hs):
+        raise BadInput("horizons: a horizon is listed twice")
+    return hs
+
+
+def _prepare(target: Path, overwrite: bool) -> Path:
+    if target.exists() and (not target.is_dir() or any(target.iterdir())):
+        is_dataset = (target / MANIFEST).is_file()
+        if not (overwrite and is_dataset):
+            hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
+            raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
+    partial = target.parent / f".{target.name}.partial"
+    if partial.exists():
+        shutil.rmtree(partial)  # left over from an interrupted generation
+    partial.mkdir(parents=True)
+    return partial
+
+
+def _write_stats(
+    family: SceneFamily, setup: WorkerSetup, writer: DatasetWriter, progress: GenerateProgress
+) -> None:
+    if not isinstance(family, DrawingStats):
+        return
+    progress.phase("stats", 1)
+    for rel in family.write_stats(setup.root, setup.config, writer.tallies):
+        writer.add_file(rel)
+    progress.advance()
+
+
+def _manifest(
+    family: SceneFamily,
+    setup: WorkerSetup,
+    writer: DatasetWriter,
+    hs: list[float],
+    per_horizon: int,
+    stable_only: bool,
+    calibration: dict[str, Any] | None,
+) -> DatasetManifest:
+    summary = writer.summary()
+    config = {"family": family.name, **setup.config.model_dump(mode="json")}
+    return DatasetManifest(
+        seed=setup.seed,
+        per_horizon=per_horizon,
+        horizons=hs,
+        stable_only=stable_only,
+        images=setup.images,
+        scenes=sum(s.scenes for s in summary.values()),
+        summary=summary,
+        config=config,
+        physics=family.physics(setup.config),
+        calibration=calibration,
+        plugins=dict(setup.plugins),
+        versions=versions(),
+    )

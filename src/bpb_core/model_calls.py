@@ -1,0 +1,130 @@
+"""Value types of the model-adapter interface: requests, replies, usage and options.
+
+Adapters are async: :meth:`ModelAdapter.complete` takes a :class:`ModelRequest` and returns a
+:class:`ModelResponse` or raises one of the :mod:`bpb_core.errors` model errors. Retries belong to
+the runner, never to an adapter.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from bpb_core.errors import BadInput
+
+
+@dataclass(frozen=True)
+class TextPart:
+    """Plain text in a message."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class ImagePart:
+    """An image in a message; logs refer to it by ``sha256``, never inline."""
+
+    data: bytes = field(repr=False)
+    media_type: str = "image/png"
+
+    @property
+    def sha256(self) -> str:
+        """Hex digest of the image bytes."""
+        return hashlib.sha256(self.data).hexdigest()
+
+
+@dataclass(frozen=True)
+class Message:
+    """One chat message."""
+
+    role: Literal["system", "user", "assistant"]
+    parts: tuple[TextPart | ImagePart, ...]
+
+
+@dataclass(frozen=True)
+class ModelRequest:
+    """One call to a model.
+
+    Attributes:
+        messages: The conversation to send.
+        task: Name of the task asked (``q1``); offline baselines answer by it.
+        scene: The scene asked about. Only offline baselines may look at it; an adapter that
+            talks to a model must send ``messages`` and nothing else.
+        family: Name of the scene's family (offline baselines ask it for predictions).
+        temperature: Sampling temperature (the paper's protocol uses 0).
+        max_tokens: Output token cap, ``None`` for the provider default.
+        timeout: Seconds before the call counts as timed out.
+        attempt: 1 for the first call of a (scene, task), higher on retries.
+    """
+
+    messages: tuple[Message, ...]
+    task: str
+    scene: Any = None
+    family: str | None = None
+    temperature: float = 0.0
+    max_tokens: int | None = None
+    timeout: float = 120.0
+    attempt: int = 1
+
+
+@dataclass(frozen=True)
+class Usage:
+    """Token counts as the provider reported them (``None`` when not reported)."""
+
+    input_tokens: int | None = None
+    output_tokens: int | None = None
+    reasoning_tokens: int | None = None
+    cached_tokens: int | None = None
+
+
+@dataclass(frozen=True)
+class ModelResponse:
+    """A model's reply.
+
+    Attributes:
+        text: The reply text.
+        usage: Token counts.
+        cost: Cost in USD, ``None`` when unknown (never a made-up 0).
+        latency: Seconds from request to reply.
+        model_id: The provider's model id that answered.
+        finish_reason: ``stop``, ``length`` (cut off by the token limit) and so on.
+    """
+
+    text: str
+    usage: Usage = Usage()
+    cost: float | None = None
+    latency: float = 0.0
+    model_id: str = ""
+    finish_reason: str | None = None
+
+
+@dataclass(frozen=True)
+class AdapterOptions:
+    """Options every adapter factory receives; adapters ignore what does not apply to them.
+
+    Attributes:
+        api_base: Base URL of an OpenAI-compatible or provider endpoint.
+        seed: Seed for adapters with randomness (``baseline:random``).
+        prices: Per-model price overrides, USD per token: ``{"input": .., "output": ..}``.
+        aliases: Extra model-name aliases, ``{"claude-opus-4.7": "anthropic/..."}``.
+        extra: Adapter-specific settings from the config file.
+    """
+
+    api_base: str | None = None
+    seed: int = 0
+    prices: dict[str, dict[str, float]] = field(default_factory=dict)
+    aliases: dict[str, str] = field(default_factory=dict)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def split_spec(spec: str) -> tuple[str, str]:
+    """Split an adapter spec ``name:model`` at the first colon.
+
+    Raises:
+        BadInput: The spec has no name or no model part.
+    """
+    name, sep, model = spec.partition(":")
+    if not sep or not name or not model:
+        raise BadInput(f"--adapter {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
+    return name, model

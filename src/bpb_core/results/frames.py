@@ -1,0 +1,226 @@
+"""Run folders to pandas: the one place that builds the results frames.
+
+:func:`load_results` reads run folders (``run.json`` plus ``h{t}/scene_{i}/{task}.json``) and
+the dataset each one names, cuts every answer into scored units with the task's scorer, scores
+them vectorised and returns two frames with explicit dtypes:
+
+- ``units``: one row per scored unit of every expected (run, scene, task); a scene the run has
+  no answer file for appears with status ``missing``. Columns: :data:`META_DTYPES`, the
+  scorer input (:data:`bpb_core.scored_units.SCORER_INPUT`), each scorer's own columns (NaN on
+  other tasks' rows) and the scorer output (``correct``, ``distance``).
+- ``calls``: one row per (run, scene, task) with status, tokens, cost, latency and retries.
+
+It also names the suites that apply: installed suites all of whose tasks appear in the units.
+Everything else (accuracies, leaderboards, diagnostics, reports) is derived from these frames.
+Nothing here prints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.registration import SuiteInfo
+from bpb_core.results.reading import RunFolder, find_runs
+from bpb_core.run_folder import AnswerRecord, read_answer
+from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT, UnitRow
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from bpb_core.interfaces import Scorer
+    from bpb_core.registry import Registry
+
+META_DTYPES: dict[str, str] = {
+    "run": "category",
+    "adapter": "category",
+    "model": "category",
+    "baseline": "bool",
+    "dataset": "category",
+    "task": "category",
+    "horizon": "float64",
+    "index": "int32",
+    "scene_id": "category",
+    "stable": "boolean",
+    "scene_rule": "category",
+}
+"""Per-row columns of the units frame (``stable`` is NA when not annotated)."""
+
+CALL_DTYPES: dict[str, str] = {
+    **{k: v for k, v in META_DTYPES.items() if k != "scene_rule"},
+    "status": "category",
+    "attempts": "int32",
+    "retries": "int32",
+    "input_tokens": "int64",
+    "output_tokens": "int64",
+    "reasoning_tokens": "int64",
+    "cached_tokens": "int64",
+    "cost": "float64",
+    "latency": "float64",
+    "finish_reason": "str",
+    "rule": "str",
+    "input_mode": "str",
+    "cot": "boolean",
+    "error": "str",
+}
+"""Columns of the calls frame (``cost`` is NaN when unknown, never a made-up 0)."""
+
+_USAGE = ("input_tokens", "output_tokens", "reasoning_tokens", "cached_tokens")
+
+
+@dataclass(frozen=True)
+class Results:
+    """The two frames every table and report is derived from, the run folders read and the
+    suites whose tasks all appear."""
+
+    units: pd.DataFrame
+    calls: pd.DataFrame
+    runs: tuple[RunFolder, ...] = ()
+    suites: tuple[SuiteInfo, ...] = field(default=())
+
+    @property
+    def tasks(self) -> list[str]:
+        """Tasks in the units frame, sorted."""
+        return sorted(str(t) for t in self.units["task"].unique())
+
+
+def load_results(
+    run_dirs: Path | str | Iterable[Path | str], *, registry: Registry | None = None
+) -> Results:
+    """Read and score run folders.
+
+    Args:
+        run_dirs: Run folders (holding ``run.json``) or folders of run folders.
+        registry: Where scorers, suites and scene families come from; default: all installed
+            plugins.
+
+    Raises:
+        BadInput: No run folder found, a run, answer or ground-truth file cannot be read, or
+            no installed scorer scores a task.
+    """
+    from bpb_core.registry import make_registry
+
+    registry = registry if registry is not None else make_registry()
+    runs = find_runs(run_dirs, registry)
+    scorers: dict[str, Scorer] = {}
+    for run in runs:
+        for task in run.tasks:
+            if task not in scorers:
+                scorers[task] = registry.scorer_for(task)
+    extra = _extra_columns(scorers.values())
+    units = _Columns({**META_DTYPES, **SCORER_INPUT, **extra, **SCORER_OUTPUT})
+    calls = _Columns(CALL_DTYPES)
+    for run in runs:
+        _read_one(run, scorers, units, calls)
+    unit_frame = _score(units.frame(), scorers)
+    present = set(scorers)
+    suites = tuple(s for s in registry.suites() if set(s.weights) <= present)
+    return Results(unit_frame, calls.frame(), tuple(runs), suites)
+
+
+def load_frame(
+    run_dirs: Path | str | Iterable[Path | str], *, registry: Registry | None = None
+) -> pd.DataFrame:
+    """The scored units frame of :func:`load_results` (one row per scored unit)."""
+    return load_results(run_dirs, registry=registry).units
+
+
+def _extra_columns(scorers: Iterable[Scorer]) -> dict[str, str]:
+    columns: dict[str, str] = {}
+    for scorer in scorers:
+        for name, dtype in scorer.columns.items():
+            columns.setdefault(name, dtype)
+    return columns
+
+
+class _Columns:
+    """Column lists filled row by row, turned into one frame with fixed dtypes."""
+
+    def __init__(self, dtypes: dict[str, str]) -> None:
+        self.dtypes = dtypes
+        self.data: dict[str, list[Any]] = {name: [] for name in dtypes}
+        self.rows = 0
+
+    def repeat(self, values: dict[str, Any], count: int) -> None:
+        for name, value in values.items():
+            self.data[name].extend([value] * count)
+
+    def extend(self, name: str, values: Sequence[Any]) -> None:
+        self.data[name].extend(values)
+
+    def pad(self) -> None:
+        """Fill columns that this block of rows did not set (another scorer's) with NaN."""
+        self.rows = max(len(values) for values in self.data.values())
+        for values in self.data.values():
+            values.extend([float("nan")] * (self.rows - len(values)))
+
+    def frame(self) -> pd.DataFrame:
+        import pandas as pd
+
+        columns = {
+            name: pd.Series(values, dtype=self.dtypes[name]) for name, values in self.data.items()
+        }
+        return pd.DataFrame(columns)
+
+
+def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls: _Columns) -> None:
+    for key in run.scene_keys:
+        scene, truth = run.truth(key)
+        meta = {**run.meta, "horizon": key.horizon, "index": key.index}
+        meta |= {"scene_id": key.scene_id, "stable": truth.stable}
+        folder = key.dir(run.path)
+        for task in run.tasks:
+            record = read_answer(folder / f"{task}.json")
+            status = "missing" if record is None else record.status
+            answer = None if record is None else record.answer
+            scorer = scorers[task]
+            rows: list[UnitRow] = scorer.units(answer, truth, scene)
+            units.repeat({**meta, "task": task, "scene_rule": scorer.scene_rule}, len(rows))
+            units.repeat({"status": status, "correct": False}, len(rows))
+            for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
+                units.extend(name, [row[position] for row in rows])
+            for position, name in enumerate(scorer.columns):
+                units.extend(name, [row.values[position] for row in rows])
+            units.extend("distance", [float("nan")] * len(rows))
+            units.pad()
+            _add_call(calls, {**meta, "task": task}, status, record)
+
+
+def _add_call(
+    calls: _Columns, meta: dict[str, Any], status: str, record: AnswerRecord | None
+) -> None:
+    if record is None:
+        values: dict[str, Any] = {**meta, "status": status, "attempts": 0, "retries": 0}
+        values |= {name: 0 for name in _USAGE} | {"cost": float("nan"), "latency": float("nan")}
+        values |= {"cot": None, "finish_reason": None, "rule": None, "input_mode": None}
+        calls.repeat({**values, "error": None}, 1)
+        return
+    usage = record.usage
+    values = {
+        **meta,
+        "status": status,
+        "attempts": record.attempts,
+        "retries": max(record.attempts - 1, 0),
+        **{name: int(getattr(usage, name)) for name in _USAGE},
+        "cost": float(record.cost) if record.cost is not None else float("nan"),
+        "latency": float(record.latency or float("nan")),
+        "cot": record.cot,
+        "finish_reason": record.finish_reason,
+        "rule": record.rule,
+        "input_mode": record.input_mode,
+        "error": record.error,
+    }
+    calls.repeat(values, 1)
+
+
+def _score(frame: pd.DataFrame, scorers: dict[str, Scorer]) -> pd.DataFrame:
+    for task, scorer in scorers.items():
+        mask = (frame["task"] == task).to_numpy(dtype=bool)
+        if not mask.any():
+            continue
+        scored = scorer.score(frame.loc[mask, [*SCORER_INPUT, *scorer.columns]])
+        frame.loc[mask, "correct"] = scored["correct"].to_numpy(dtype=bool)
+        frame.loc[mask, "distance"] = scored["distance"].to_numpy(dtype=float)
+    return frame

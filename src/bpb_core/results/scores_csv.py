@@ -1,0 +1,27 @@
+"""``scores.csv``: the scored units of a run, written into its folder at the end of ``bpb run``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from bpb_core.results.frames import load_results
+from bpb_core.results.tables import summary
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from bpb_core.registry import Registry
+
+
+def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> pd.DataFrame | None:
+    """Write ``scores.csv`` (scored units) into each run folder and return the summary table
+    (``None`` when there is nothing to score)."""
+    if not run_dirs:
+        return None
+    results = load_results(list(run_dirs), registry=registry)
+    frame = results.units
+    for run in results.runs:
+        frame[frame["run"] == run.label].to_csv(run.path / "scores.csv", index=False)
+    return summary(frame, results.suites)

@@ -1,0 +1,222 @@
+"""Uncertainty: bootstrap confidence intervals over scenes and paired comparisons of two runs.
+
+Scenes are resampled with replacement within each horizon (the leaderboard score is a mean
+over horizons, so each horizon keeps its size), and the same resampled scenes are used for every
+task, so a suite's interval accounts for scenes being shared by its tasks. Resampling is
+done with multinomial weights and one matrix product per horizon: fully vectorised. Generators
+are seeded from ``seed`` and the run label, so results do not depend on the order of runs.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+import zlib
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from bpb_core.errors import BadInput
+from bpb_core.registration import SuiteInfo
+from bpb_core.results.tables import RUN_COLUMNS, UNANSWERED, View, scene_scores, tasks_of
+
+FloatArray = np.ndarray[tuple[int, ...], np.dtype[np.float64]]
+
+
+def _rng(seed: int, *labels: str) -> np.random.Generator:
+    return np.random.default_rng([seed, *(zlib.crc32(label.encode()) for label in labels)])
+
+
+def score_matrix(
+    units: pd.DataFrame,
+    run: str,
+    suites: Sequence[SuiteInfo] = (),
+    view: View = "strict",
+) -> pd.DataFrame:
+    """Scene scores of one run: index (horizon, scene_id), one column per task of ``units``
+    (NaN = left out of the view or not asked) plus one per suite (its weighted scene score)."""
+    tasks = tasks_of(units)
+    scenes = scene_scores(units[units["run"] == run])
+    if view == "answered":
+        scenes.loc[scenes["status"].isin(UNANSWERED), "score"] = np.nan
+    wide = scenes.pivot_table(
+        index=["horizon", "scene_id"], columns="task", values="score", observed=True, dropna=False
+    ).reindex(columns=tasks)
+    for suite in suites:
+        wide[suite.name] = sum(w * wide[t] for t, w in suite.weights.items())
+    wide.columns.name = None
+    return wide[[*tasks, *(s.name for s in suites)]]
+
+
+def _horizon_means(
+    matrix: pd.DataFrame,
+    tasks: list[str],
+    suites: Sequence[SuiteInfo],
+    rng: np.random.Generator | None,
+    n_boot: int,
+) -> tuple[FloatArray, FloatArray]:
+    """(point estimate per metric, bootstrap replicates B x metrics): means over horizons.
+
+    A suite is the weighted sum of its task means (as in the leaderboard), not a mean of
+    per-scene suite scores, so both views agree with
+    :func:`~bpb_core.results.tables.leaderboard`.
+    """
+    points, reps = [], []
+    for _, block in matrix[tasks].groupby(level="horizon", sort=True):
+        values = block.to_numpy(dtype=float)
+        present = ~np.isnan(values)
+        filled = np.where(present, values, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            points.append(filled.sum(0) / present.sum(0))
+            if rng is not None:
+                n = len(values)
+                weights = rng.multinomial(n, np.full(n, 1.0 / n), size=n_boot).astype(float)
+                reps.append((weights @ filled) / (weights @ present.astype(float)))
+    width = len(tasks)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a task absent from a horizon
+        point = np.nanmean(np.stack(points), axis=0) if points else np.full(width, np.nan)
+        rep = np.nanmean(np.stack(reps), axis=0) if reps else np.full((1, width), np.nan)
+    for suite in suites:
+        idx = [tasks.index(t) for t in suite.weights]
+        weights_vec = np.array(list(suite.weights.values()))
+        point = np.append(point, point[idx] @ weights_vec)
+        rep = np.column_stack([rep, rep[:, idx] @ weights_vec])
+    return point, rep
+
+
+def _interval(reps: FloatArray, level: float) -> tuple[FloatArray, FloatArray]:
+    alpha = (1 - level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lo, hi = np.nanquantile(reps, [alpha, 1 - alpha], axis=0)
+    return lo, hi
+
+
+def bootstrap_ci(
+    units: pd.DataFrame,
+    suites: Sequence[SuiteInfo] = (),
+    *,
+    view: View = "strict",
+    n_boot: int = 2000,
+    seed: int = 0,
+    level: float = 0.95,
+) -> pd.DataFrame:
+    """Leaderboard scores with bootstrap confidence intervals over scenes.
+
+    Returns:
+        Columns ``run, adapter, model, baseline, metric, estimate, lo, hi, scenes``; ``metric``
+        is a task or a suite.
+    """
+    rows = []
+    tasks = tasks_of(units)
+    names = [*tasks, *(s.name for s in suites)]
+    runs = units[RUN_COLUMNS].drop_duplicates().to_dict(orient="records")
+    for info in runs:
+        matrix = score_matrix(units, str(info["run"]), suites, view)
+        point, reps = _horizon_means(matrix, tasks, suites, _rng(seed, str(info["run"])), n_boot)
+        lo, hi = _interval(reps, level)
+        for j, metric in enumerate(names):
+            rows.append({**info, "metric": metric, "estimate": point[j], "lo": lo[j], "hi": hi[j]})
+            rows[-1]["scenes"] = int(matrix[metric].notna().sum())
+    columns = [*RUN_COLUMNS, "metric", "estimate", "lo", "hi", "scenes"]
+    frame = pd.DataFrame(rows, columns=columns)
+    return frame.astype({"estimate": "float64", "lo": "float64", "hi": "float64"})
+
+
+def sign_test(wins: int, losses: int) -> float:
+    """Two-sided exact sign test p-value (ties dropped); McNemar's exact test for 0/1 scores."""
+    n = wins + losses
+    if n == 0:
+        return 1.0
+    k = min(wins, losses)
+    log_half = n * math.log(0.5)
+    terms = [math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) for i in range(k + 1)]
+    tail = sum(math.exp(t + log_half) for t in terms)
+    return min(1.0, 2 * tail)
+
+
+def paired_comparison(
+    units: pd.DataFrame,
+    a: str,
+    b: str,
+    suites: Sequence[SuiteInfo] = (),
+    *,
+    view: View = "strict",
+    n_boot: int = 2000,
+    seed: int = 0,
+    level: float = 0.95,
+) -> pd.DataFrame:
+    """Run ``a`` minus run ``b`` on the scenes both answered, per metric.
+
+    Raises:
+        BadInput: The two runs answered different datasets (same scene ids, other scenes).
+
+    Returns:
+        One row per metric: ``a, b, metric, a_score, b_score, diff, lo, hi, scenes, wins,
+        losses, ties, p_value`` (``diff`` = a - b as a mean over horizons; ``lo``/``hi`` its
+        bootstrap interval; ``wins``/``losses`` count scenes where a scored higher/lower;
+        ``p_value`` from the exact sign test on them).
+    """
+    datasets = {run: _datasets(units, run) for run in (a, b)}
+    if datasets[a] != datasets[b]:
+        raise BadInput(f"runs {a!r} and {b!r}: answered different datasets; nothing to pair")
+    tasks = tasks_of(units)
+    left, right = score_matrix(units, a, suites, view), score_matrix(units, b, suites, view)
+    shared = left.index.intersection(right.index)
+    diff = left.loc[shared] - right.loc[shared]
+    left, right = left.loc[shared].where(diff.notna()), right.loc[shared].where(diff.notna())
+    point, reps = _horizon_means(diff, tasks, suites, _rng(seed, a, b), n_boot)
+    a_point, _ = _horizon_means(left, tasks, suites, None, 0)
+    b_point, _ = _horizon_means(right, tasks, suites, None, 0)
+    lo, hi = _interval(reps, level)
+    rows = []
+    for j, metric in enumerate([*tasks, *(s.name for s in suites)]):
+        column = diff[metric].dropna()
+        wins, losses = int((column > 0).sum()), int((column < 0).sum())
+        rows.append(
+            {
+                "a": a,
+                "b": b,
+                "metric": metric,
+                "a_score": a_point[j],
+                "b_score": b_point[j],
+                "diff": point[j],
+                "lo": lo[j],
+                "hi": hi[j],
+                "scenes": len(column),
+                "wins": wins,
+                "losses": losses,
+                "ties": len(column) - wins - losses,
+                "p_value": sign_test(wins, losses),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _datasets(units: pd.DataFrame, run: str) -> set[str]:
+    return set(units.loc[units["run"] == run, "dataset"].astype(str).unique())
+
+
+def all_pairs(
+    units: pd.DataFrame,
+    suites: Sequence[SuiteInfo] = (),
+    runs: Sequence[str] | None = None,
+    **kwargs: object,
+) -> pd.DataFrame:
+    """:func:`paired_comparison` of every pair of ``runs`` that answered the same dataset.
+
+    By default: every pair of model (non-baseline) runs, then every model against every
+    baseline; nothing when there is no model run.
+    """
+    if runs is None:
+        models = sorted(units.loc[~units["baseline"], "run"].unique().tolist())
+        baselines = sorted(units.loc[units["baseline"], "run"].unique().tolist())
+        pairs = [(a, b) for i, a in enumerate(models) for b in models[i + 1 :]]
+        pairs += [(a, b) for a in models for b in baselines]
+    else:
+        pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1 :]]
+    pairs = [(a, b) for a, b in pairs if _datasets(units, a) == _datasets(units, b)]
+    frames = [paired_comparison(units, a, b, suites, **kwargs) for a, b in pairs]  # type: ignore[arg-type]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()

@@ -1,0 +1,186 @@
+"""The run folder on disk: answer files, the attempts log and ``run.json``; the one reader and
+writer of each, used by the runner and by the results alike.
+
+Layout (mirrors the dataset): ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl`` and one
+``RUN_DIR/h{t}/scene_{i:04d}/{task}.json`` per answered (scene, task). Answer files are written
+atomically (temporary file, then rename), so a killed run leaves either the whole file or none;
+a (scene, task) whose file says ``ok`` or ``parse_error`` is complete and never asked again.
+The attempts log is appended and flushed line by line; a torn last line from a killed process is
+skipped by readers and closed off before the next append.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from bpb_core.errors import BadInput
+from bpb_core.layout import ATTEMPTS, RUN_MANIFEST, SceneKey, iter_scene_keys
+from bpb_core.validated_files import describe_validation_error
+
+Status = Literal["ok", "parse_error", "api_error"]
+COMPLETE: frozenset[str] = frozenset({"ok", "parse_error"})
+
+
+class UsageRecord(BaseModel):
+    """Token counts summed over the attempts of one (scene, task)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    input_tokens: int = 0
+    output_tokens: int = 0
+    reasoning_tokens: int = 0
+    cached_tokens: int = 0
+
+
+class AnswerRecord(BaseModel):
+    """The content of ``RUN_DIR/h{t}/scene_{i:04d}/{task}.json`` (team contract)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    scene_id: str
+    horizon: float
+    index: int
+    task: str
+    adapter: str
+    status: Status
+    answer: dict[str, Any] | None = None
+    rule: str | None = None
+    finish_reason: str | None = None
+    attempts: int = 0
+    usage: UsageRecord = Field(default_factory=UsageRecord)
+    cost: float | None = None
+    latency: float = 0.0
+    error: str | None = None
+    input_mode: str = "image"
+    cot: bool = False
+
+
+def answer_path(run_dir: Path, key: SceneKey, task: str) -> Path:
+    """Where the answer of ``task`` for scene ``key`` lives."""
+    return key.dir(run_dir) / f"{task}.json"
+
+
+def write_json_atomic(path: Path, data: Any) -> None:
+    """Write ``data`` as JSON to ``path`` through a temporary file and a rename."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    text = json.dumps(data, indent=1) + "\n"
+    try:
+        tmp.write_text(text, encoding="utf-8")
+    except FileNotFoundError:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
+    """Store one (scene, task) result atomically; returns the file written."""
+    path = answer_path(run_dir, key, record.task)
+    write_json_atomic(path, record.model_dump(mode="json"))
+    return path
+
+
+def read_answer(path: Path) -> AnswerRecord | None:
+    """The record in ``path``, or ``None`` when there is no such file.
+
+    Raises:
+        BadInput: The file cannot be read or is not an answer record (names the file).
+    """
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read answer file: {exc.strerror or exc}") from None
+    try:
+        return AnswerRecord.model_validate_json(data)
+    except ValidationError as exc:
+        raise BadInput(f"{path}: not an answer file: {describe_validation_error(exc)}") from None
+
+
+def iter_answers(run_dir: Path) -> Iterator[tuple[SceneKey, AnswerRecord]]:
+    """Every readable answer file of a run folder, by scene then task name; a torn or foreign
+    file is skipped (the runner asks its pair again)."""
+    for key in iter_scene_keys(run_dir):
+        for path in sorted(key.dir(run_dir).glob("*.json")):
+            try:
+                record = read_answer(path)
+            except BadInput:
+                continue
+            if record is not None:
+                yield key, record
+
+
+def completed(run_dir: Path) -> set[tuple[str, str]]:
+    """``(scene_id, task)`` pairs already finished (``ok`` or ``parse_error``)."""
+    return {(r.scene_id, r.task) for _, r in iter_answers(run_dir) if r.status in COMPLETE}
+
+
+class AttemptLog:
+    """Append-only JSON-lines log of every model call, flushed after each line."""
+
+    def __init__(self, run_dir: Path) -> None:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        self.path = run_dir / ATTEMPTS
+        self._file = self.path.open("a+b")
+        self._close_torn_line()
+
+    def _close_torn_line(self) -> None:
+        size = self._file.seek(0, os.SEEK_END)
+        if size:
+            self._file.seek(size - 1)
+            if self._file.read(1) != b"\n":
+                self._file.write(b"\n")
+                self._file.flush()
+
+    def append(self, entry: dict[str, Any]) -> None:
+        """Write one attempt and flush it to the operating system."""
+        self._file.write(json.dumps(entry, ensure_ascii=False).encode("utf-8") + b"\n")
+        self._file.flush()
+
+    def close(self) -> None:
+        """Close the file."""
+        self._file.close()
+
+
+def read_attempts(run_dir: Path) -> Iterator[dict[str, Any]]:
+    """Every complete line of the attempts log (a torn line from a killed run is skipped)."""
+    path = run_dir / ATTEMPTS
+    if not path.exists():
+        return
+    with path.open("rb") as handle:
+        for line in handle:
+            try:
+                entry = json.loads(line)
+            except ValueError:
+                continue
+            if isinstance(entry, dict):
+                yield entry
+
+
+def write_manifest(run_dir: Path, manifest: dict[str, Any]) -> None:
+    """Write ``run.json`` atomically."""
+    write_json_atomic(run_dir / RUN_MANIFEST, manifest)
+
+
+def read_manifest(run_dir: Path) -> dict[str, Any] | None:
+    """``run.json`` of a run folder, or ``None`` if there is none yet.
+
+    Raises:
+        BadInput: It exists but cannot be read or is not a JSON object (names the file).
+    """
+    path = run_dir / RUN_MANIFEST
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError) as exc:
+        raise BadInput(f"{path}: cannot read run manifest: {exc}") from None
+    if not isinstance(data, dict):
+        raise BadInput(f"{path}: expected a JSON object")
+    return data

@@ -1,0 +1,69 @@
+"""What a run asks: the dataset's scene family, its tasks, and the scenes selected.
+
+A run's tasks default to the default tasks of the dataset's family; a task that asks about
+another family's scenes is bad input, named with both families.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from bpb_core.dataset.reader import dataset_family, read_manifest
+from bpb_core.errors import BadInput
+from bpb_core.layout import MANIFEST
+from bpb_core.runner.options import RunOptions
+from bpb_core.runner.scenes import SceneRef, select_scenes
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily, Task
+    from bpb_core.registry import Registry
+
+
+@dataclass(frozen=True)
+class Asking:
+    """The family, the options with their tasks resolved, the task objects and the scenes."""
+
+    family: SceneFamily
+    options: RunOptions
+    tasks: dict[str, Task]
+    scenes: list[SceneRef]
+
+
+def data_family(data: Path, registry: Registry) -> SceneFamily:
+    """The scene family of the dataset at ``data`` (the default family without a manifest).
+
+    Raises:
+        BadInput: The manifest is invalid or its family is not installed.
+    """
+    manifest = read_manifest(data) if (data / MANIFEST).is_file() else None
+    return dataset_family(manifest, data, registry)
+
+
+def default_tasks(data: Path, registry: Registry) -> list[str]:
+    """The default tasks of the dataset's scene family."""
+    return registry.tasks_for(data_family(data, registry).name, default_only=True)
+
+
+def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
+    """Resolve what a run on ``data`` with ``options`` asks.
+
+    Raises:
+        BadInput: Not a dataset, an unknown task, or a task of another scene family.
+    """
+    family = data_family(data, registry)
+    names = options.tasks or tuple(registry.tasks_for(family.name, default_only=True))
+    if not names:
+        raise BadInput(f"--tasks: no installed task asks about {family.name} scenes")
+    for name in names:
+        asks = registry.task_info(name).family
+        if asks and asks != family.name:
+            raise BadInput(
+                f"--tasks: {name} asks about {asks} scenes, but {data} holds {family.name} scenes"
+            )
+    resolved = dataclasses.replace(options, tasks=tuple(names))
+    tasks = {name: registry.task(name) for name in names}
+    scenes = select_scenes(data, family, options.horizons, options.limit)
+    return Asking(family, resolved, tasks, scenes)

@@ -1,0 +1,77 @@
+"""What a run would send, without sending it (``bpb run --dry-run``).
+
+The token estimate counts prompt characters / 4 plus an image estimate from the PNG size
+(OpenAI's tile rule: 85 + 170 per 512-pixel tile after scaling to fit 2048x768); it is a
+planning figure, not a bill.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from bpb_core.interfaces import PromptOptions
+from bpb_core.model_calls import TextPart
+from bpb_core.run_folder import completed
+from bpb_core.runner.asking import asking
+from bpb_core.runner.options import RunOptions
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+
+
+@dataclass
+class DryRun:
+    """Calls a run would make and their estimated input tokens, per task.
+
+    Attributes:
+        calls: Calls to send per task (pairs already complete are not counted).
+        done: Pairs already complete per task.
+        input_tokens: Estimated input tokens per task (first attempts only).
+    """
+
+    calls: dict[str, int] = field(default_factory=dict)
+    done: dict[str, int] = field(default_factory=dict)
+    input_tokens: dict[str, int] = field(default_factory=dict)
+
+
+def image_tokens(png: bytes) -> int:
+    """Estimated tokens of a PNG image (OpenAI high-detail tile rule); 765 if unreadable."""
+    if len(png) < 24 or png[:8] != b"\x89PNG\r\n\x1a\n":
+        return 765
+    width, height = struct.unpack(">II", png[16:24])
+    scale = min(1.0, 2048 / max(width, height))
+    width, height = width * scale, height * scale
+    scale = min(1.0, 768 / min(width, height))
+    tiles = math.ceil(width * scale / 512) * math.ceil(height * scale / 512)
+    return int(85 + 170 * tiles)
+
+
+def dry_run(data: Path, run_dir: Path, options: RunOptions, registry: Registry) -> DryRun:
+    """Count the calls and estimate the input tokens of a run without sending anything."""
+    plan = DryRun()
+    asked = asking(data, options, registry)
+    options, tasks = asked.options, asked.tasks
+    done = completed(run_dir) if run_dir.exists() else set()
+    for ref in asked.scenes:
+        scene = ref.load()
+        image = None if options.input_mode == "state" else ref.image()
+        for name, task in tasks.items():
+            if (ref.scene_id, name) in done:
+                plan.done[name] = plan.done.get(name, 0) + 1
+                continue
+            cot = options.cot.get(name, task.default_cot)
+            prompt = PromptOptions(options.input_mode, cot, options.force_numeric)
+            chars = sum(
+                len(p.text)
+                for m in task.messages(scene, image, prompt)
+                for p in m.parts
+                if isinstance(p, TextPart)
+            )
+            tokens = chars // 4 + (0 if image is None else image_tokens(image))
+            plan.calls[name] = plan.calls.get(name, 0) + 1
+            plan.input_tokens[name] = plan.input_tokens.get(name, 0) + tokens
+    return plan

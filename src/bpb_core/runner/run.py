@@ -1,0 +1,232 @@
+"""Evaluate model adapters on a dataset: the library behind ``bpb run``.
+
+:func:`run_eval` runs one adapter into one run folder; :func:`evaluate` runs several, each into
+``OUT/<slug>/``. Re-running the same call resumes: (scene, task) pairs whose answer file says
+``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. Scenes stream
+through a bounded window, so memory does not grow with the dataset, and each scene's image is
+read once for all its tasks.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import random
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.errors import BadInput
+from bpb_core.model_calls import AdapterOptions
+from bpb_core.run_folder import AttemptLog, completed
+from bpb_core.runner.asking import asking
+from bpb_core.runner.call import PairCall
+from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.manifest import finish_manifest, start_manifest
+from bpb_core.runner.options import RunOptions
+from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
+from bpb_core.runner.result import RunResult
+from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.state import RunState
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import ModelAdapter, Task
+    from bpb_core.registry import Registry
+
+
+def slug(spec: str) -> str:
+    """Folder name of an adapter spec: ``litellm:openai/gpt-5`` -> ``litellm_openai_gpt-5``."""
+    return spec.replace(":", "_").replace("/", "_")
+
+
+def _plan(
+    refs: list[SceneRef], tasks: Sequence[str], done: set[tuple[str, str]]
+) -> list[tuple[SceneRef, list[str]]]:
+    plan = []
+    for ref in refs:
+        todo = [t for t in tasks if (ref.scene_id, t) not in done]
+        if todo:
+            plan.append((ref, todo))
+    return plan
+
+
+async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
+    if not state.may_send():
+        for task in todo:
+            state.not_sent(task)
+        return
+    scene = await state.offload(ref.load)
+    image = None if state.options.input_mode == "state" else await state.offload(ref.image)
+    sha = None if image is None else hashlib.sha256(image).hexdigest()
+    await asyncio.gather(*(PairCall(state, ref, scene, image, sha, t).run() for t in todo))
+
+
+async def _drive(state: RunState, plan: list[tuple[SceneRef, list[str]]]) -> None:
+    """Run the scenes through a bounded window; the first scene error stops new scenes, lets
+    the ones in flight finish (their answers are kept) and is raised."""
+    window = asyncio.Semaphore(max(2 * state.options.concurrency, 4))
+    running: set[asyncio.Task[None]] = set()
+    failures: list[BaseException] = []
+
+    async def one(ref: SceneRef, todo: list[str]) -> None:
+        try:
+            await _scene(state, ref, todo)
+        except Exception as exc:  # re-raised below, after the scenes in flight finish
+            failures.append(exc)
+        finally:
+            window.release()
+
+    for ref, todo in plan:
+        await window.acquire()
+        if failures:
+            window.release()
+            break
+        job = asyncio.create_task(one(ref, todo))
+        running.add(job)
+        job.add_done_callback(running.discard)
+    if running:
+        await asyncio.gather(*running)
+    if failures:
+        raise failures[0]
+
+
+def _state(
+    adapter: ModelAdapter,
+    spec: str,
+    tasks: dict[str, Task],
+    options: RunOptions,
+    run_dir: Path,
+    progress: Progress,
+    family: str,
+) -> RunState:
+    if options.concurrency < 1:
+        raise BadInput(f"--concurrency: must be at least 1, got {options.concurrency}")
+    return RunState(
+        adapter=adapter,
+        spec=spec,
+        tasks=tasks,
+        options=options,
+        run_dir=run_dir,
+        log=AttemptLog(run_dir),
+        progress=progress,
+        limiter=RateLimiter(options.rpm),
+        slots=asyncio.Semaphore(options.concurrency),
+        rng=random.Random(options.seed),
+        family=family,
+    )
+
+
+async def run_eval_async(
+    data: Path,
+    adapter: str | ModelAdapter,
+    run_dir: Path,
+    options: RunOptions | None = None,
+    *,
+    registry: Registry | None = None,
+    adapter_options: AdapterOptions | None = None,
+    progress: Progress | None = None,
+) -> RunResult:
+    """Async form of :func:`run_eval` (for callers already inside an event loop)."""
+    from bpb_core.registry import make_registry
+
+    registry = registry or make_registry()
+    progress = progress or NoProgress()
+    asked = asking(data, options or RunOptions(), registry)
+    options, tasks, refs = asked.options, asked.tasks, asked.scenes
+    model = _adapter(registry, adapter, adapter_options, options)
+    spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    done = completed(run_dir)
+    plan = _plan(refs, options.tasks, done)
+    manifest = start_manifest(run_dir, spec, data, options, registry, len(refs))
+    state = _state(model, spec, tasks, options, run_dir, progress, asked.family.name)
+    _announce(state, refs, plan, done)
+    try:
+        await _drive(state, plan)
+    finally:
+        state.io.shutdown(wait=True)
+        state.log.close()
+        finish_manifest(run_dir, manifest, state)
+    return _result(state, refs, done)
+
+
+def _adapter(
+    registry: Registry,
+    adapter: str | ModelAdapter,
+    options: AdapterOptions | None,
+    run: RunOptions,
+) -> ModelAdapter:
+    if not isinstance(adapter, str):
+        return adapter
+    built: ModelAdapter = registry.adapter(adapter, options or AdapterOptions(seed=run.seed))
+    return built
+
+
+def _announce(
+    state: RunState,
+    refs: list[SceneRef],
+    plan: list[tuple[SceneRef, list[str]]],
+    done: set[tuple[str, str]],
+) -> None:
+    ids = {ref.scene_id for ref in refs}
+    for task in state.options.tasks:
+        before = sum(1 for scene_id, t in done if t == task and scene_id in ids)
+        todo = sum(1 for _, names in plan if task in names)
+        state.progress.update(ProgressEvent(state.spec, task, "skipped", count=before))
+        state.progress.update(ProgressEvent(state.spec, task, "planned", count=todo))
+
+
+def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str]]) -> RunResult:
+    ids = {ref.scene_id for ref in refs}
+    statuses: dict[str, Counter[str]] = {}
+    for task in state.options.tasks:
+        counts = Counter(state.statuses.get(task, {}))
+        counts["done_before"] = sum(1 for s, t in done if t == task and s in ids)
+        statuses[task] = counts
+    return RunResult(
+        run_dir=state.run_dir,
+        adapter=state.spec,
+        statuses=statuses,
+        cost=None if state.unpriced else state.spent,
+        tokens=state.tokens,
+        stopped=state.stop_reason,
+        error=None if state.auth_error is None else str(state.auth_error),
+    )
+
+
+def run_eval(
+    data: Path,
+    adapter: str | ModelAdapter,
+    run_dir: Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> RunResult:
+    """Ask ``adapter`` every task about every selected scene of ``data``; write ``run_dir``.
+
+    Args:
+        data: Dataset folder.
+        adapter: An adapter spec (``baseline:oracle``, ``litellm:gpt-5``) or an adapter object.
+        run_dir: The run folder (created; resumed when it holds an earlier run).
+        options: Run options.
+        **kwargs: ``registry``, ``adapter_options``, ``progress``.
+
+    Returns:
+        Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.
+        An authentication failure sets ``stopped="auth"``; the CLI turns it into exit code 2.
+    """
+    return asyncio.run(run_eval_async(data, adapter, run_dir, options, **kwargs))
+
+
+def evaluate(
+    data: Path,
+    adapters: Sequence[str],
+    out: Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> list[RunResult]:
+    """Run several adapters one after the other, each into ``out/<slug(spec)>/``.
+
+    An adapter stopped by an authentication failure does not stop the others.
+    """
+    return [run_eval(data, spec, out / slug(spec), options, **kwargs) for spec in adapters]

@@ -1,0 +1,99 @@
+"""The scenes a run asks about, read lazily from a dataset folder.
+
+Only ``init.json`` (and the family's input image, for image input) is read: the runner never
+looks at ground truth. Scenes stream one at a time so a large dataset costs no memory up front.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.errors import BadInput
+from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
+from bpb_core.validated_files import read_model
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily
+
+
+@dataclass(frozen=True)
+class SceneRef:
+    """A scene of the dataset, not yet loaded."""
+
+    key: SceneKey
+    folder: Path
+    family: SceneFamily
+
+    @property
+    def scene_id(self) -> str:
+        return self.key.scene_id
+
+    def load(self) -> Any:
+        """Read and validate ``init.json`` with the family's scene model.
+
+        Raises:
+            BadInput: The file is missing or invalid (names the file and the field).
+        """
+        return read_model(self.folder / INIT, self.family.scene_model)
+
+    def image(self) -> bytes:
+        """The bytes of the family's input image (``init.png`` for billiards).
+
+        Raises:
+            BadInput: The image is missing (image input modes need it).
+        """
+        name = self.family.input_image
+        if name is None:
+            raise BadInput(
+                f"{self.folder}: the {self.family.name} scene family has no images; "
+                "use --input-mode state"
+            )
+        path = self.folder / name
+        try:
+            return path.read_bytes()
+        except OSError:
+            raise BadInput(f"{path}: missing; use --input-mode state for text-only runs") from None
+
+
+def select_scenes(
+    data: Path,
+    family: SceneFamily,
+    horizons: Sequence[float] | None = None,
+    limit: int | None = None,
+) -> list[SceneRef]:
+    """Scenes of ``data`` at ``horizons`` (all when ``None``), the first ``limit`` per horizon.
+
+    Raises:
+        BadInput: ``data`` is not a dataset folder or no scene matches.
+    """
+    if not data.is_dir():
+        raise BadInput(f"{data}: --data: not a dataset folder")
+    keys = select_keys(iter_scene_keys(data), horizons, limit)
+    if not keys:
+        raise BadInput(f"{data}: --data: no scenes (h*/scene_*/init.json) match the selection")
+    return [SceneRef(key, key.dir(data), family) for key in keys]
+
+
+def dataset_hash(data: Path) -> str:
+    """A hash identifying the dataset: the manifest's own when it records one, else a digest of
+    ``dataset.json`` (or, without a manifest, of every ``init.json``)."""
+    manifest = data / MANIFEST
+    if manifest.exists():
+        try:
+            recorded = json.loads(manifest.read_text(encoding="utf-8")).get("dataset_hash")
+        except (OSError, ValueError, AttributeError):
+            recorded = None
+        if isinstance(recorded, str) and recorded:
+            return recorded
+        return hashlib.sha256(manifest.read_bytes()).hexdigest()
+    digest = hashlib.sha256()
+    for key in iter_scene_keys(data):
+        path = key.dir(data) / INIT
+        if path.exists():
+            digest.update(path.read_bytes())
+    return digest.hexdigest()

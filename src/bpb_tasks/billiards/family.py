@@ -1,0 +1,222 @@
+"""The ``billiards`` scene family: 7 balls on a 2 m x 1 m table, only the cue ball moving.
+
+Everything core needs to generate, read and check billiards datasets comes through
+:class:`BilliardsFamily`: the config model, the sampler (seeded per scene), the simulation with
+ground truth and stability annotation, the three images, the index columns and per-horizon
+counts, the stats figures, speed calibration, the reference predictions behind the ``baseline``
+adapter and the failure gallery's picture.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from bpb_core.interfaces import Simulator
+from bpb_core.picture import ScenePicture
+from bpb_tasks.billiards.calibrate import Calibration, calibrate_horizon
+from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping, horizon_key, load_config
+from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.render import IMAGE_NAMES
+from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState, final_state
+
+INDEX_COLUMNS = (
+    "cue_speed",
+    "cue_angle_deg",
+    "cue_collision",
+    "cue_contacts",
+    "cue_walls",
+    "pocketed",
+    "events",
+)
+
+
+@dataclass(frozen=True)
+class MadeScene:
+    """A sampled, simulated and annotated scene (implements ``GeneratedScene``)."""
+
+    scene: Scene
+    outcome: Outcome
+    truth: FinalState
+    config: DatasetConfig
+
+    @property
+    def row(self) -> dict[str, object]:
+        """The family's ``index.csv`` cells."""
+        vx, vy = self.scene.ball(CUE_ID).vel
+        contacts = sorted(self.outcome.cue_contacts())
+        pocketed = sorted(i for i, p in self.outcome.positions.items() if p is None)
+        return {
+            "cue_speed": round(math.hypot(vx, vy), 6),
+            "cue_angle_deg": round(math.degrees(math.atan2(vy, vx)) % 360.0, 6),
+            "cue_collision": bool(contacts),
+            "cue_contacts": " ".join(map(str, contacts)),
+            "cue_walls": " ".join(q.wall for q in self.truth.q2 if q.answer == "T"),
+            "pocketed": " ".join(map(str, pocketed)),
+            "events": len(self.outcome.events),
+        }
+
+    def files(self, images: bool) -> dict[str, bytes]:
+        """``init.json``, ``final.json`` and, with ``images``, the three PNGs."""
+        blobs = {
+            "init.json": (self.scene.model_dump_json(indent=2) + "\n").encode(),
+            "final.json": (self.truth.model_dump_json(indent=2) + "\n").encode(),
+        }
+        if images:
+            from bpb_tasks.billiards.render import render_pngs
+
+            blobs.update(render_pngs(self.scene, self.outcome, self.config))
+        return blobs
+
+
+@dataclass
+class BilliardsTally:
+    """Per-horizon counts: cue-ball collisions and the cue speeds drawn (for the histogram)."""
+
+    speed_range: tuple[float, float]
+    scenes: int = 0
+    collisions: int = 0
+    speeds: list[float] = field(default_factory=list)
+
+    def add(self, row: Mapping[str, object]) -> None:
+        """Count one kept scene from its index cells."""
+        self.scenes += 1
+        self.collisions += bool(row["cue_collision"])
+        speed = row["cue_speed"]
+        assert isinstance(speed, float)
+        self.speeds.append(speed)
+
+    def summary(self) -> dict[str, Any]:
+        """Collisions, their rate and the speed range, for the manifest."""
+        rate = round(self.collisions / self.scenes, 6) if self.scenes else 0.0
+        return {
+            "cue_collisions": self.collisions,
+            "collision_rate": rate,
+            "speed_range": self.speed_range,
+        }
+
+
+class BilliardsFamily:
+    """Scene family plugin ``billiards`` (see the module docstring)."""
+
+    name = "billiards"
+    scene_model = Scene
+    truth_model = FinalState
+    config_model = DatasetConfig
+    input_image = "init.png"
+    image_names = IMAGE_NAMES
+    index_columns = INDEX_COLUMNS
+    predictors = ("stasis", "straight", "random")
+
+    def load_config(self, source: Any) -> DatasetConfig:
+        """A :class:`DatasetConfig` from a config, a mapping of its fields, a JSON/TOML file or
+        ``None`` (the defaults)."""
+        if isinstance(source, DatasetConfig):
+            return source
+        if source is None or isinstance(source, str | Path):
+            return load_config(source)
+        return config_from_mapping(source)
+
+    def check_config(self, config: DatasetConfig, horizons: Sequence[float]) -> None:
+        """Every horizon needs a cue-speed range (unless calibrated first)."""
+        for horizon in horizons:
+            config.speed_range(horizon)
+
+    def simulator_name(self, config: DatasetConfig) -> str:
+        """The simulator the config names (``analytic`` by default)."""
+        return config.simulator
+
+    def sample(
+        self, rng: random.Random, horizon: float, index: int, config: Mapping[str, Any]
+    ) -> Scene:
+        """Draw scene ``index`` at ``horizon`` from ``rng`` (normally :func:`scene_rng`)."""
+        resolved = self.load_config(config)
+        return build_scene(draw(rng, resolved), horizon, index, resolved)
+
+    def make_scene(
+        self, config: DatasetConfig, simulator: Simulator, seed: int, horizon: float, index: int
+    ) -> MadeScene:
+        """Sample, simulate and annotate scene ``index`` at ``horizon``."""
+        from bpb_tasks.billiards.stability import annotate
+
+        scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
+        outcome: Outcome = simulator.run(scene)
+        final = final_state(scene, outcome, config.simulator)
+        stability = annotate(scene, outcome, delta=config.stability_delta, simulator=simulator)
+        truth = final.model_copy(update={"stability": stability})
+        return MadeScene(scene, outcome, truth, config)
+
+    def physics(self, config: DatasetConfig) -> dict[str, Any]:
+        """Physics constants, table and pockets."""
+        return {
+            **config.physics.model_dump(mode="json"),
+            "table": config.table.model_dump(mode="json"),
+            "pockets": config.pockets.model_dump(mode="json"),
+        }
+
+    def ground_truth(
+        self,
+        scene: Scene,
+        simulator: Simulator,
+        horizon: float | None = None,
+        *,
+        stability: bool,
+    ) -> FinalState:
+        """``final.json`` of ``scene`` at ``horizon`` (default: its own) from ``simulator``."""
+        end = scene.horizon if horizon is None else horizon
+        outcome: Outcome = simulator.run(scene, end)
+        final = final_state(scene, outcome, simulator=getattr(simulator, "name", "unknown"))
+        if not stability:
+            return final
+        from bpb_tasks.billiards.stability import annotate
+
+        return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
+
+    def calibrate_horizon(
+        self, config: DatasetConfig, simulator: Simulator, horizon: float
+    ) -> Calibration:
+        """The cue-speed range of ``horizon`` giving the target collision rate."""
+        return calibrate_horizon(horizon, config, simulator)
+
+    def apply_calibration(
+        self, config: DatasetConfig, results: Mapping[float, Any]
+    ) -> tuple[DatasetConfig, dict[str, Any]]:
+        """The config with the calibrated ranges, and the manifest's calibration record."""
+        found: dict[str, Calibration] = {horizon_key(h): c for h, c in results.items()}
+        record = {
+            key: {"low": c.range.low, "high": c.range.high, "rate": c.rate, "samples": c.samples}
+            for key, c in found.items()
+        }
+        return config.with_ranges({key: c.range for key, c in found.items()}), record
+
+    def new_tally(self, config: DatasetConfig, horizon: float) -> BilliardsTally:
+        """An empty tally for ``horizon``."""
+        speeds = config.speed_range(horizon)
+        return BilliardsTally((speeds.low, speeds.high))
+
+    def write_stats(
+        self, root: Path, config: DatasetConfig, tallies: Mapping[float, Any]
+    ) -> list[str]:
+        """Cue-speed histograms and collision counts per horizon under ``root/stats``."""
+        from bpb_tasks.billiards.stats_figures import write_stats
+
+        ranges = {h: t.speed_range for h, t in tallies.items()}
+        return write_stats(root, tallies, ranges)
+
+    def predict(self, name: str, scene: Scene, rng: random.Random) -> FinalState:
+        """The ``stasis``, ``straight`` or ``random`` prediction for ``scene``."""
+        from bpb_tasks.billiards.predictors import PREDICTORS
+
+        return PREDICTORS[name](scene, rng)
+
+    def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
+        """The scene's trajectory image (or a plain table) for the failure gallery."""
+        from bpb_tasks.billiards.picture import scene_picture
+
+        return scene_picture(dataset, folder, scene)

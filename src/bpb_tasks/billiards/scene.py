@@ -1,0 +1,124 @@
+"""The billiards scene: the model of ``init.json`` (SPEC section 4).
+
+This pydantic model is half of the data contract of a billiards dataset (the other half,
+``final.json``, is :mod:`bpb_tasks.billiards.truth`); :func:`scene_json_schema` publishes it as a
+JSON Schema.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+Wall = Literal["TOP", "BOTTOM", "LEFT", "RIGHT"]
+WALLS: tuple[Wall, ...] = ("TOP", "BOTTOM", "LEFT", "RIGHT")
+TOUCH_TOLERANCE = 1e-9  # balls may touch within this many metres; deeper overlap is bad input
+
+DEFAULT_RADIUS = 0.028575
+DEFAULT_POCKETS: list[tuple[float, float]] = [
+    (0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (0.0, 1.0), (1.0, 1.0), (2.0, 1.0),
+]  # fmt: skip
+
+
+class StrictModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+Vec = tuple[float, float]
+
+
+class Table(StrictModel):
+    """Table size in metres; origin bottom-left, x right, y up."""
+
+    width: float = Field(2.0, gt=0)
+    height: float = Field(1.0, gt=0)
+
+
+class Physics(StrictModel):
+    """Physical constants; every one is recorded with the scene."""
+
+    ball_radius: float = Field(DEFAULT_RADIUS, gt=0)
+    mu: float = Field(0.002, ge=0)
+    g: float = Field(9.8, gt=0)
+    wall_restitution: float = Field(1.0, ge=0, le=1)
+
+    @property
+    def deceleration(self) -> float:
+        """Friction deceleration mu*g in m/s^2."""
+        return self.mu * self.g
+
+
+class Pockets(StrictModel):
+    """Pocket circles; a ball is pocketed when its centre first comes within ``radius``."""
+
+    radius: float = Field(0.06, ge=0)
+    centers: list[Vec] = Field(default_factory=lambda: list(DEFAULT_POCKETS))
+
+
+class Ball(StrictModel):
+    """A ball's id, centre position (m) and velocity (m/s) at t = 0."""
+
+    id: int = Field(ge=0)
+    pos: Vec
+    vel: Vec = (0.0, 0.0)
+
+    @field_validator("pos", "vel")
+    @classmethod
+    def _finite(cls, value: Vec) -> Vec:
+        if not all(math.isfinite(c) for c in value):
+            raise ValueError("must be finite numbers")
+        return value
+
+
+class Scene(StrictModel):
+    """An initial state: the content of ``init.json``."""
+
+    scene_id: str
+    horizon: float = Field(gt=0)
+    table: Table = Field(default_factory=Table)
+    physics: Physics = Field(default_factory=Physics)
+    pockets: Pockets = Field(default_factory=Pockets)
+    balls: list[Ball] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _geometry(self) -> Scene:
+        check_geometry(self)
+        return self
+
+    def ball(self, ball_id: int) -> Ball:
+        """The ball with id ``ball_id``."""
+        for ball in self.balls:
+            if ball.id == ball_id:
+                return ball
+        raise KeyError(ball_id)
+
+
+def check_geometry(scene: Scene) -> None:
+    """Raise ValueError naming the ball when ids repeat, a centre is off the table or balls
+    overlap by more than :data:`TOUCH_TOLERANCE`."""
+    radius = scene.physics.ball_radius
+    seen: set[int] = set()
+    for i, ball in enumerate(scene.balls):
+        if ball.id in seen:
+            raise ValueError(f"balls[{i}].id: duplicate ball id {ball.id}")
+        seen.add(ball.id)
+        x, y = ball.pos
+        lo, hi_x, hi_y = (
+            radius - TOUCH_TOLERANCE,
+            scene.table.width - radius + TOUCH_TOLERANCE,
+            (scene.table.height - radius + TOUCH_TOLERANCE),
+        )
+        if not (lo <= x <= hi_x and lo <= y <= hi_y):
+            raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} is off the table")
+    min_gap = 2 * radius - TOUCH_TOLERANCE
+    for i, a in enumerate(scene.balls):
+        for b in scene.balls[i + 1 :]:
+            if math.dist(a.pos, b.pos) < min_gap:
+                raise ValueError(f"balls: ball {a.id} and ball {b.id} overlap")
+
+
+def scene_json_schema() -> dict[str, Any]:
+    """JSON Schema of ``init.json``."""
+    return Scene.model_json_schema()

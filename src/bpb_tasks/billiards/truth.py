@@ -1,0 +1,126 @@
+"""The billiards ground truth: the model of ``final.json`` (SPEC section 4), and how it is
+derived from a simulated :class:`~bpb_tasks.billiards.outcome.Outcome`.
+
+``q1`` and ``q2`` hold the cue ball's contacts with each object ball and each wall, ``predictions``
+every ball's position at the horizon, ``events`` the full event log and ``stability`` how close
+those labels are to flipping. :func:`final_json_schema` publishes the model as a JSON Schema.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.scene import WALLS, Scene, StrictModel, Vec, Wall
+
+TF = Literal["T", "F"]
+
+
+class Q1Label(StrictModel):
+    """Did the cue ball touch object ball ``id``?"""
+
+    id: int
+    answer: TF
+
+
+class Q2Label(StrictModel):
+    """Did the cue ball touch ``wall``?"""
+
+    wall: Wall
+    answer: TF
+
+
+class BallPosition(StrictModel):
+    """A ball's centre at the horizon; ``None`` once pocketed."""
+
+    id: int
+    pos: Vec | None
+
+
+EventKind = Literal["ball", "wall", "pocket", "stop"]
+
+
+class EventRecord(StrictModel):
+    """One event: ``ids`` are the balls involved, ``positions`` their centres at time ``t``."""
+
+    t: float
+    kind: EventKind
+    ids: list[int]
+    wall: Wall | None = None
+    positions: list[Vec] = Field(default_factory=list)
+
+
+class Stability(BaseModel):
+    """How close the scene's labels are to flipping (SPEC section 3).
+
+    Attributes:
+        stable: No label flips under any perturbation of size ``delta``.
+        delta: Perturbation size in metres (positions) and m/s scaled likewise (velocity).
+        near_miss_gap: Smallest positive gap (m) between balls that did not touch.
+        min_graze_cos: Smallest |cos| of the approach angle over contacts (grazing near 0).
+        min_event_gap: Smallest time (s) between two events sharing a ball.
+        horizon_gap: Time (s) between the horizon and the nearest event.
+        flips: Labels that flipped under perturbation, e.g. ``q1:3``, ``q2:TOP``, ``q3:pocket:5``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    stable: bool
+    delta: float
+    near_miss_gap: float | None = None
+    min_graze_cos: float | None = None
+    min_event_gap: float | None = None
+    horizon_gap: float | None = None
+    flips: list[str] = Field(default_factory=list)
+
+
+class FinalState(StrictModel):
+    """Ground truth at the horizon: the content of ``final.json``."""
+
+    scene_id: str
+    horizon: float
+    q1: list[Q1Label]
+    q2: list[Q2Label]
+    predictions: list[BallPosition]
+    events: list[EventRecord] = Field(default_factory=list)
+    stability: Stability | None = None
+    simulator: str = "analytic"
+
+    @property
+    def stable(self) -> bool | None:
+        """Whether no label flips under the stability perturbations (``None``: not annotated)."""
+        return None if self.stability is None else self.stability.stable
+
+
+def final_json_schema() -> dict[str, Any]:
+    """JSON Schema of ``final.json``."""
+    return FinalState.model_json_schema()
+
+
+def final_state(scene: Scene, outcome: Outcome, simulator: str = "analytic") -> FinalState:
+    """Ground truth of ``scene`` from its simulated ``outcome`` (positions rounded to 4 dp)."""
+    contacts, walls = outcome.cue_contacts(), outcome.cue_walls()
+    object_ids = sorted(b.id for b in scene.balls if b.id != CUE_ID)
+
+    def rounded(pos: tuple[float, float] | None) -> tuple[float, float] | None:
+        return None if pos is None else (round(pos[0], 4) + 0.0, round(pos[1], 4) + 0.0)
+
+    return FinalState(
+        scene_id=scene.scene_id,
+        horizon=outcome.horizon,
+        q1=[Q1Label(id=i, answer="T" if i in contacts else "F") for i in object_ids],
+        q2=[Q2Label(wall=w, answer="T" if w in walls else "F") for w in WALLS],
+        predictions=[
+            BallPosition(id=b.id, pos=rounded(outcome.positions[b.id]))
+            for b in sorted(scene.balls, key=lambda b: b.id)
+        ],
+        events=[
+            EventRecord(
+                t=e.t, kind=e.kind, ids=list(e.ids), wall=e.wall, positions=list(e.positions)
+            )
+            for e in outcome.events
+        ],
+        simulator=simulator,
+    )

@@ -1,0 +1,107 @@
+"""The stasis index: how often a model predicts that nothing happens when something does.
+
+It looks at the three billiards questions together: true contacts (Q1 balls, Q2 walls) labelled
+``F``, and balls that truly moved more than one radius (or were pocketed) predicted within one
+radius of where they started (Q3). Only answered units count (see
+:mod:`bpb_tasks.questions.label_diagnostics`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from bpb_core.results.tables import RUN_COLUMNS
+from bpb_tasks.questions.label_diagnostics import labelled
+
+if TYPE_CHECKING:
+    from bpb_core.results.frames import Results
+
+SHARES = ("contact_stasis", "q1_stasis", "q2_stasis", "motion_stasis")
+
+
+def stasis_index(units: pd.DataFrame) -> pd.DataFrame:
+    """The stasis index per run.
+
+    Returns:
+        One row per run: ``contact_stasis`` (share of true Q1 and Q2 contacts labelled ``F``),
+        ``q1_stasis`` and ``q2_stasis`` (the same per task), ``motion_stasis`` (share of balls
+        that truly moved more than one radius, or were pocketed, that are predicted within one
+        radius of where they started), and the counts ``contacts`` and ``moved`` behind them.
+    """
+    labels = labelled(units, ("q1", "q2"))
+    labels = labels[labels["truth"] == "T"].assign(missed=lambda f: f["pred"] == "F")
+    per_task = labels.pivot_table(
+        index=RUN_COLUMNS, columns="task", values="missed", aggfunc="mean", observed=True
+    ).reindex(columns=["q1", "q2"])
+    pooled = labels.groupby(RUN_COLUMNS, observed=True)["missed"].agg(["mean", "size"])
+    moves = _moved_units(units)
+    motion = moves.groupby(RUN_COLUMNS, observed=True)["unmoved"].agg(["mean", "size"])
+    out = pd.DataFrame(
+        {
+            "contact_stasis": pooled["mean"],
+            "q1_stasis": per_task["q1"],
+            "q2_stasis": per_task["q2"],
+            "motion_stasis": motion["mean"],
+            "contacts": pooled["size"],
+            "moved": motion["size"],
+        }
+    )
+    out[["contacts", "moved"]] = out[["contacts", "moved"]].fillna(0).astype("int64")
+    return out.reset_index()
+
+
+def _moved_units(units: pd.DataFrame) -> pd.DataFrame:
+    """Answered Q3 units (position or null) of balls that truly moved more than R or were
+    pocketed."""
+    frame = units[(units["task"] == "q3") & (units["status"] == "ok") & ~units["duplicate"]]
+    frame = frame[frame["pred"].isin(["pos", "null"])]
+    if frame.empty:
+        return frame.assign(unmoved=pd.Series(dtype=bool))
+    travelled = np.hypot(frame["truth_x"] - frame["start_x"], frame["truth_y"] - frame["start_y"])
+    moved = (frame["truth"] == "null") | (travelled > frame["radius"])
+    frame = frame[moved]
+    shift = np.hypot(frame["pred_x"] - frame["start_x"], frame["pred_y"] - frame["start_y"])
+    return frame.assign(unmoved=shift <= frame["radius"])  # a null prediction (NaN) moved
+
+
+class StasisIndex:
+    """Diagnostic ``stasis`` (see the module docstring), with its bar chart."""
+
+    name = "stasis"
+    title = "Stasis index"
+    percent: tuple[str, ...] = SHARES
+    terminal: tuple[str, ...] = ("contact_stasis", "motion_stasis", "contacts", "moved")
+
+    def table(self, results: Results) -> pd.DataFrame:
+        return stasis_index(results.units)
+
+    def chart(self, table: pd.DataFrame) -> bytes | None:
+        """Per run: share of true contacts predicted absent and of moved balls predicted
+        unmoved (higher = more 'nothing happens' bias)."""
+        from bpb_core.report.charts import figure, names_of, png
+
+        fig, axes = figure(1, 1, (9.0, 1.8 + 0.5 * len(table)))
+        ax = axes[0, 0]
+        ranked = table.sort_values("contact_stasis", na_position="first")
+        ys = list(range(len(ranked)))
+        height = 0.38
+        contact = 100 * ranked["contact_stasis"].fillna(0).to_numpy(dtype=float)
+        motion = 100 * ranked["motion_stasis"].fillna(0).to_numpy(dtype=float)
+        ax.barh(
+            [y + height / 2 for y in ys], contact, height, color="#d62728",
+            label="true contacts predicted absent",
+        )  # fmt: skip
+        ax.barh(
+            [y - height / 2 for y in ys], motion, height, color="#1f77b4",
+            label="moved balls predicted unmoved",
+        )  # fmt: skip
+        ax.set_yticks(ys, names_of(ranked), fontsize=8)
+        ax.set_xlim(0, 100)
+        ax.set_xlabel("share (%)")
+        ax.set_title("Stasis index (answered units only)")
+        ax.legend(loc="lower right", fontsize=8)
+        ax.grid(axis="x", alpha=0.3)
+        return png(fig)

@@ -1,0 +1,129 @@
+"""Diagnostics of Q3: how far predicted final positions are from the truth.
+
+``q3_distance`` (and ``q3_distance_by_horizon``): the error in metres where both prediction and
+truth are positions, with the count of balls where exactly one side is ``null``.
+``q3_tolerance``: Q3 accuracy if a ball counted as right within k radii instead of one.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from bpb_core.results.tables import RUN_COLUMNS
+
+if TYPE_CHECKING:
+    from bpb_core.results.frames import Results
+
+DEFAULT_TOLERANCES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
+"""Tolerances of :func:`tolerance_curve`, in ball radii (1.0 is the Q3 rule)."""
+
+
+def distance_errors(units: pd.DataFrame, *, by_horizon: bool = False) -> pd.DataFrame:
+    """Q3 position error (m) where both prediction and truth are positions.
+
+    Returns:
+        Columns ``run, adapter, model, baseline[, horizon], mean, median, p90, max, n,
+        null_mismatch`` (``null_mismatch``: answered balls where exactly one side is null).
+    """
+    keys = [*RUN_COLUMNS, "horizon"] if by_horizon else list(RUN_COLUMNS)
+    frame = units[(units["task"] == "q3") & (units["status"] == "ok")]
+    both = frame[frame["distance"].notna()]
+    stats = both.groupby(keys, observed=True)["distance"].agg(
+        mean="mean", median="median", p90=lambda d: d.quantile(0.9), max="max", n="size"
+    )
+    mismatch = (frame["truth"] == "null") != (frame["pred"] == "null")
+    mismatch &= frame["pred"].isin(["pos", "null"])
+    counts = mismatch.groupby([frame[k] for k in keys], observed=True).sum()
+    stats["null_mismatch"] = counts.reindex(stats.index).fillna(0).astype("int64")
+    return stats.reset_index()
+
+
+def tolerance_curve(
+    units: pd.DataFrame, tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
+) -> pd.DataFrame:
+    """Q3 accuracy (strict, pooled over balls) if a ball counted as right within k radii.
+
+    Returns:
+        Columns ``run, adapter, model, baseline, tolerance`` (in radii), ``tolerance_m``
+        (metres, for the first row's radius) and ``accuracy``. At ``tolerance == 1`` this is
+        the Q3 per-ball accuracy pooled over all scenes.
+    """
+    frame = units[units["task"] == "q3"]
+    ok = ((frame["status"] == "ok") & ~frame["duplicate"]).to_numpy(dtype=bool)
+    both_null = ((frame["truth"] == "null") & (frame["pred"] == "null")).to_numpy(dtype=bool)
+    ratio = (frame["distance"] / frame["radius"]).to_numpy(dtype=float)
+    ks = np.asarray(tolerances, dtype=float)
+    hits = ok[:, None] & (both_null[:, None] | (ratio[:, None] <= ks[None, :]))
+    wide = pd.DataFrame(hits, columns=ks, index=frame.index)
+    wide[RUN_COLUMNS] = frame[RUN_COLUMNS]
+    means = wide.groupby(RUN_COLUMNS, observed=True)[list(ks)].mean()
+    long = means.melt(ignore_index=False, var_name="tolerance", value_name="accuracy")
+    long = long.reset_index().sort_values(["run", "tolerance"], kind="stable")
+    radius = float(frame["radius"].iloc[0]) if len(frame) else float("nan")
+    long["tolerance"] = long["tolerance"].astype("float64")
+    long.insert(len(RUN_COLUMNS) + 1, "tolerance_m", long["tolerance"] * radius)
+    return long.reset_index(drop=True)
+
+
+class Q3Distance:
+    """Q3 distance error per run (m)."""
+
+    name = "q3_distance"
+    title = "Q3 distance error (m)"
+    percent: tuple[str, ...] = ()
+    terminal: tuple[str, ...] = ()
+
+    def table(self, results: Results) -> pd.DataFrame:
+        return distance_errors(results.units)
+
+    def chart(self, table: pd.DataFrame) -> bytes | None:
+        return None
+
+
+class Q3DistanceByHorizon(Q3Distance):
+    """Q3 distance error per run and horizon (m)."""
+
+    name = "q3_distance_by_horizon"
+    title = "Q3 distance error by horizon (m)"
+
+    def table(self, results: Results) -> pd.DataFrame:
+        return distance_errors(results.units, by_horizon=True)
+
+
+class Q3Tolerance:
+    """Q3 accuracy against the tolerance, with its chart."""
+
+    name = "q3_tolerance"
+    title = "Q3 tolerance curve"
+    percent: tuple[str, ...] = ("accuracy",)
+    terminal: tuple[str, ...] = ()
+
+    def table(self, results: Results) -> pd.DataFrame:
+        return tolerance_curve(results.units)
+
+    def chart(self, table: pd.DataFrame) -> bytes | None:
+        """Q3 accuracy against the tolerance (in ball radii), one line per run."""
+        from bpb_core.report.charts import figure, label, png, run_styles
+
+        fig, axes = figure(1, 1, (8.0, 4.2))
+        ax = axes[0, 0]
+        styles = run_styles(table[["run", "baseline"]])
+        for run, rows in table.groupby("run", observed=True, sort=False):
+            style = styles[str(run)]
+            ax.plot(
+                rows["tolerance"], 100 * rows["accuracy"], color=style["color"],
+                ls=style["ls"], marker=style["marker"], ms=3,
+                label=label(str(run), bool(rows["baseline"].iloc[0])),
+            )  # fmt: skip
+        ax.axvline(1.0, color="black", lw=0.8, ls=":")
+        ax.text(1.05, 2, "Q3 rule (1 R)", fontsize=8)
+        ax.set_xlabel("tolerance (ball radii)")
+        ax.set_ylabel("Q3 accuracy (%)")
+        ax.set_ylim(-3, 103)
+        ax.set_title("Q3 tolerance curve")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        return png(fig)

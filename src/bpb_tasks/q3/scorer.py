@@ -1,0 +1,155 @@
+"""The Q3 scorer: every ball's position at the horizon.
+
+A ball is right when the predicted centre lies within one ball radius of the true centre
+(Euclidean distance <= R), or when both the prediction and the truth are ``null`` (pocketed). A
+position where the truth is ``null``, or ``null`` where the truth is a position, is wrong. A
+position must be a list of two finite numbers; anything else is an invalid prediction (wrong).
+Missing balls and balls listed twice are wrong; unknown ids and extra keys are ignored; only
+answers with status ``ok`` can be right. A scene's score is the share of its balls that are right.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+from PIL import ImageDraw, ImageFont
+
+from bpb_core.picture import ScenePicture, font
+from bpb_core.scored_units import INVALID, NAN, UnitRow, entries
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.ids import ball_id
+from bpb_tasks.questions.labels import collect
+
+XY = tuple[float, float]
+
+
+def position(value: object) -> tuple[str, XY]:
+    """(``pos``/``null``/``?``, (x, y)) for a predicted ``pos`` value."""
+    if value is None:
+        return "null", (NAN, NAN)
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        x, y = value
+        numbers = all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in (x, y))
+        if numbers and math.isfinite(x) and math.isfinite(y):
+            return "pos", (float(x), float(y))
+    return INVALID, (NAN, NAN)
+
+
+COLUMNS: dict[str, str] = {
+    "truth_x": "float64",
+    "truth_y": "float64",
+    "pred_x": "float64",
+    "pred_y": "float64",
+    "start_x": "float64",
+    "start_y": "float64",
+    "radius": "float64",
+}
+"""Q3's own unit columns: true, predicted and starting centre (NaN when absent), ball radius."""
+
+TRUTH_COLOUR = (255, 212, 0)
+PRED_COLOUR = (235, 30, 70)
+LINK_COLOUR = (255, 255, 255)
+
+
+class Q3Scorer:
+    """Q3: per-ball position within the ball radius (see the module docstring)."""
+
+    name = "q3"
+    task = "q3"
+    scene_rule: Literal["mean", "all"] = "mean"
+    columns: Mapping[str, str] = COLUMNS
+
+    def units(
+        self, answer: Mapping[str, Any] | None, truth: FinalState, scene: Scene
+    ) -> list[UnitRow]:
+        radius = scene.physics.ball_radius
+        starts = {str(b.id): b.pos for b in scene.balls}
+        true_pos = {str(p.id): p.pos for p in truth.predictions}
+        found, dups = collect(entries(answer, "predictions"), "id", set(true_pos), ball_id)
+        rows = []
+        for name, where in true_pos.items():
+            pred, (px, py) = (
+                position(found[name].get("pos")) if name in found else (None, (NAN, NAN))
+            )
+            tx, ty = where if where is not None else (NAN, NAN)
+            sx, sy = starts.get(name, (NAN, NAN))
+            rows.append(
+                UnitRow(
+                    unit=name,
+                    truth="null" if where is None else "pos",
+                    pred=pred,
+                    duplicate=name in dups,
+                    values=(tx, ty, px, py, sx, sy, radius),
+                )
+            )
+        return rows
+
+    def score(self, units: pd.DataFrame) -> pd.DataFrame:
+        """``distance`` between predicted and true centres; ``correct`` by the radius rule."""
+        ok = (units["status"] == "ok").to_numpy(dtype=bool)
+        ok = ok & ~units["duplicate"].to_numpy(dtype=bool)
+        dx = units["pred_x"].to_numpy(dtype=float) - units["truth_x"].to_numpy(dtype=float)
+        dy = units["pred_y"].to_numpy(dtype=float) - units["truth_y"].to_numpy(dtype=float)
+        distance = np.hypot(dx, dy)
+        near = distance <= units["radius"].to_numpy(dtype=float)  # NaN compares False
+        both_null = ((units["truth"] == "null") & (units["pred"] == "null")).to_numpy(dtype=bool)
+        correct = ok & (near | both_null)
+        return pd.DataFrame({"correct": correct, "distance": distance}, index=units.index)
+
+    def explain(self, rows: pd.DataFrame) -> list[str]:
+        """``ball 3: off by 0.120 m (4.2 R)`` (or what was said instead) per wrong ball."""
+        return [_wrong_text(r) for r in rows[~rows["correct"].astype(bool)].itertuples()]
+
+    def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
+        """True (yellow ring) and predicted (red ring and cross) centres joined by a line."""
+        r = (float(rows["radius"].iloc[0]) if len(rows) else 0.028575) * picture.scale
+        width = max(2, round(r / 6))
+        face = font(max(12, round(r * 0.9)))
+        draw = ImageDraw.Draw(picture.image)
+        for row in rows.itertuples():
+            _marks(draw, picture, row, r, width, face)
+        picture.explain("true final position", TRUTH_COLOUR, "ring")
+        picture.explain("predicted position", PRED_COLOUR, "ring-cross")
+        picture.explain("error", LINK_COLOUR, "line")
+
+
+def _wrong_text(r: Any) -> str:
+    if r.truth == "null" or r.pred != "pos":
+        truth = "pocketed" if r.truth == "null" else f"({r.truth_x:.3f}, {r.truth_y:.3f})"
+        pred = {"null": "pocketed", "?": "invalid"}.get(str(r.pred), "no answer")
+        pred = f"({r.pred_x:.3f}, {r.pred_y:.3f})" if r.pred == "pos" else pred
+        return f"ball {r.unit}: predicted {pred}, truth {truth}"
+    return f"ball {r.unit}: off by {r.distance:.3f} m ({r.distance / r.radius:.1f} R)"
+
+
+def _marks(
+    draw: ImageDraw.ImageDraw,
+    picture: ScenePicture,
+    row: Any,
+    r: float,
+    width: int,
+    face: ImageFont.FreeTypeFont | ImageFont.ImageFont,
+) -> None:
+    def point(x: float, y: float) -> tuple[float, float] | None:
+        return None if math.isnan(x) or math.isnan(y) else picture.to_px(x, y)
+
+    truth = point(float(row.truth_x), float(row.truth_y))
+    pred = point(float(row.pred_x), float(row.pred_y))
+    unit = str(row.unit)
+    if truth and pred:
+        draw.line((*truth, *pred), fill=LINK_COLOUR, width=max(1, width // 2))
+    if truth:
+        tx, ty = truth
+        draw.ellipse((tx - r, ty - r, tx + r, ty + r), outline=TRUTH_COLOUR, width=width)
+        draw.text((tx + r, ty - r), unit, fill=TRUTH_COLOUR, font=face)
+    if pred:
+        x, y, d = pred[0], pred[1], r * 0.6
+        draw.ellipse((x - r, y - r, x + r, y + r), outline=PRED_COLOUR, width=width)
+        draw.line((x - d, y - d, x + d, y + d), fill=PRED_COLOUR, width=width)
+        draw.line((x - d, y + d, x + d, y - d), fill=PRED_COLOUR, width=width)
+        draw.text((x + r, y + r * 0.2), unit, fill=PRED_COLOUR, font=face)

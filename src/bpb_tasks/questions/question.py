@@ -1,0 +1,87 @@
+"""The shared shape of the billiards questions q1-q3: prompt, parse and expected answer.
+
+A question supplies its text, JSON example, validator and ground-truth cut; this base class turns
+them into the :class:`~bpb_core.interfaces.Task` methods. The text every question starts with
+(table, balls, pockets, physics, horizon) is :mod:`bpb_tasks.questions.prompt`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar
+
+from bpb_core.errors import BadInput, ParseFailure
+from bpb_core.interfaces import ParsedAnswer, PromptOptions
+from bpb_core.model_calls import ImagePart, Message, TextPart
+from bpb_core.reply_json import extract
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.prompt import common_prompt, reply_instruction
+
+
+class BilliardsQuestion(ABC):
+    """Base of q1, q2 and q3.
+
+    Subclasses set the class attributes and implement the four abstract methods below.
+    """
+
+    name: ClassVar[str] = ""
+    default_cot: ClassVar[bool] = False
+    title: ClassVar[str] = ""
+
+    @abstractmethod
+    def question(self, scene: Scene, options: PromptOptions) -> str:
+        """The task's question and answer format with an example."""
+
+    @abstractmethod
+    def example(self, scene: Scene) -> str:
+        """A JSON example of the answer format for this scene."""
+
+    @abstractmethod
+    def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
+        """Check a decoded JSON value; return it normalised or raise ParseFailure."""
+
+    @abstractmethod
+    def expected(self, truth: FinalState) -> dict[str, Any]:
+        """The correct answer, in the task's answer format, from the ground truth."""
+
+    def prompt_text(self, scene: Scene, options: PromptOptions) -> str:
+        """The whole text of the prompt."""
+        return "\n\n".join(
+            [
+                common_prompt(scene, options),
+                f"Task {self.name.upper()}: {self.question(scene, options)}",
+                reply_instruction(options, self.example(scene)),
+            ]
+        )
+
+    def messages(
+        self, scene: Scene, image: bytes | None, options: PromptOptions
+    ) -> tuple[Message, ...]:
+        """One user message: the scene image (unless ``state`` mode) and the prompt text.
+
+        Raises:
+            BadInput: An image input mode without image bytes.
+        """
+        text = TextPart(self.prompt_text(scene, options))
+        if options.input_mode == "state":
+            return (Message("user", (text,)),)
+        if image is None:
+            raise BadInput(
+                f"{scene.scene_id}: init.png: input mode {options.input_mode!r} needs it"
+            )
+        return (Message("user", (ImagePart(image), text)),)
+
+    def parse(self, text: str, scene: Scene, options: PromptOptions) -> ParsedAnswer:
+        """Extract the answer (first balanced object, or last valid one with CoT) and validate.
+
+        Raises:
+            ParseFailure: Nothing in ``text`` validates; never any other exception.
+        """
+        try:
+            value, rule = extract(text, lambda v: self.validate(v, scene), cot=options.cot)
+        except ParseFailure:
+            raise
+        except Exception as exc:  # a validator bug must still surface as a parse failure
+            raise ParseFailure(f"{self.name}: {type(exc).__name__}: {exc}") from None
+        return ParsedAnswer(value, rule)

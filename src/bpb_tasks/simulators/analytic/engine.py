@@ -1,0 +1,224 @@
+"""The ``analytic`` simulator: exact event-driven billiards (SPEC sections 2-3).
+
+Physics conventions (the data contract; the dataset card quotes them):
+
+* Balls slide with constant deceleration ``a = mu g`` along their velocity: the speed falls as
+  ``v0 - a t`` and the distance covered is ``s(t) = v0 t - a t^2 / 2`` until the ball stops at
+  ``v0 / a``; it then rests until hit. No spin, no rolling.
+* Ball-ball contact: the centre distance reaches ``2R`` while the pair approaches (normal relative
+  velocity towards each other). The collision is elastic, frictionless, equal masses: the normal
+  components of the velocities are exchanged. A pair that starts touching or overlapping (up to
+  1e-9 m) collides at once if it approaches and is ignored if it recedes (Bannerman et al. 2014);
+  detection and resolution use the same approach test, so a processed collision never recurs.
+  A contact with zero normal relative speed (grazing tangency, a ball stopping exactly at contact
+  distance) is not a collision.
+* Wall contact: the centre is ``R`` from the wall while the ball moves towards it. The normal
+  velocity component is reversed and scaled by ``wall_restitution`` (default 1). A ball lying
+  against a wall or leaving it has not hit it; one touching it and moving into it hits at once.
+* Pockets: a ball is pocketed at the first instant its centre is within the pocket radius
+  (tangency counts) and is removed from the table; its position is then ``None``.
+* Events in the closed interval ``[0, horizon]`` count. Simultaneous events are processed in the
+  order (time, kind, ids): kinds ``ball < wall < pocket < stop``; ball events by the lower then
+  the higher id; a ball's wall events by the order TOP, BOTTOM, LEFT, RIGHT (so an exact corner
+  hit records both walls, the TOP/BOTTOM one first); pockets by their index in the scene.
+* A moving ball against a resting one, a wall or a pocket has a closed-form contact time; only two
+  moving balls need a quartic, solved by root isolation and bracketed refinement
+  (:mod:`bpb_tasks.simulators.analytic.roots`). After an event only the changed balls' events are
+  re-predicted (queued events of a changed ball are invalidated by a version counter). Balls at rest
+  cost nothing until something moves towards them.
+
+* The outcome's event log holds ``ball`` (ids: the two balls, lower first), ``wall`` (ids: the
+  ball; ``wall`` names it), ``pocket`` and ``stop`` (a moving ball comes to rest; no label uses
+  it) events with the centres at that instant. Each ball's ``segments`` cover ``[0, horizon]``
+  (or until pocketed): a new piece starts at every change of its motion (collision, wall,
+  stop), so a piece is either pure deceleration or rest.
+
+The same code runs on float64 or on 50-digit mpmath numbers (``precision=50``), the reference.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+from bpb_core.errors import BpbError
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
+from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.simulators.analytic.motion import Body
+from bpb_tasks.simulators.analytic.numeric import Number, Numeric, backend
+from bpb_tasks.simulators.analytic.prediction import (
+    BALL,
+    BOTTOM,
+    POCKET,
+    RIGHT,
+    STOP,
+    TOP,
+    WALL,
+    Predictor,
+)
+
+KIND_NAMES = ("ball", "wall", "pocket", "stop")
+DEFAULT_MAX_EVENTS = 100_000
+
+
+class SimulationError(BpbError):
+    """The simulation exceeded its event budget (a scene the simulator cannot finish)."""
+
+
+class AnalyticSimulator:
+    """Exact event-driven simulator, registered as ``analytic``.
+
+    Args:
+        precision: ``None``/``"float64"`` (default) or a number of decimal digits for mpmath.
+        max_events: Bound on processed events; exceeding it raises :class:`SimulationError`.
+    """
+
+    name = "analytic"
+
+    def __init__(
+        self, precision: str | int | None = None, max_events: int = DEFAULT_MAX_EVENTS
+    ) -> None:
+        self.numeric = backend(precision)
+        self.max_events = max_events
+
+    def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
+        """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
+        end = scene.horizon if horizon is None else horizon
+        return _Simulation(scene, self.numeric, self.max_events).run(end)
+
+
+class _Simulation(Predictor):
+    """One run: prediction (:class:`Predictor`), event processing and the event log."""
+
+    def __init__(self, scene: Scene, numeric: Numeric, max_events: int) -> None:
+        super().__init__(scene, numeric)
+        self.max_events = max_events
+        self.events: list[Event] = []
+        self.ended: dict[int, Number] = {}
+
+    # --- processing ----------------------------------------------------------------------------
+    def changed(self, b: Body, t: Number, vx: Number, vy: Number) -> None:
+        """Give ``b`` a new velocity at ``t`` (it must already be at its position at ``t``)."""
+        self.motion.set_velocity(b, t, vx, vy)
+        b.version += 1
+        b.seg.append((t, b.x, b.y, vx, vy))
+
+    def collide(self, p: Body, q: Body, t: Number) -> bool:
+        motion = self.motion
+        px, py, ps = motion.state(p, t)
+        qx, qy, qs = motion.state(q, t)
+        nx, ny = qx - px, qy - py
+        norm = self.sqrt(nx * nx + ny * ny)
+        nx, ny = nx / norm, ny / norm
+        pvx, pvy, qvx, qvy = p.ux * ps, p.uy * ps, q.ux * qs, q.uy * qs
+        vn = (pvx - qvx) * nx + (pvy - qvy) * ny
+        if not vn > 0:
+            return False  # not approaching: no collision (same test as detection)
+        p.x, p.y, q.x, q.y = px, py, qx, qy
+        self.changed(p, t, pvx - vn * nx, pvy - vn * ny)
+        self.changed(q, t, qvx + vn * nx, qvy + vn * ny)
+        self.log(t, BALL, (p, q))
+        self.predict_all(p, t)
+        self.predict_all(q, t, skip=p)
+        return True
+
+    def bounce(self, b: Body, t: Number, wall: int) -> None:
+        self.motion.advance(b, t)
+        xmin, xmax, ymin, ymax = self.bounds
+        vx, vy = b.ux * b.speed, b.uy * b.speed
+        if wall in (TOP, BOTTOM):
+            b.y = ymax if wall == TOP else ymin
+            vy = -vy * self.restitution
+        else:
+            b.x = xmax if wall == RIGHT else xmin
+            vx = -vx * self.restitution
+        self.changed(b, t, vx, vy)
+        self.log(t, WALL, (b,), WALLS[wall])
+        self.predict_all(b, t)
+
+    def pocket(self, b: Body, t: Number) -> None:
+        self.motion.advance(b, t)
+        b.alive = False
+        b.version += 1
+        self.ended[b.index] = t
+        self.log(t, POCKET, (b,))
+
+    def stop(self, b: Body, t: Number) -> None:
+        self.motion.advance(b, t)
+        self.changed(b, t, b.speed * 0, b.speed * 0)
+        self.log(t, STOP, (b,))
+        self.predict_pairs(b, t)
+
+    def log(self, t: Number, kind: int, bodies: tuple[Body, ...], wall: str | None = None) -> None:
+        self.events.append(
+            Event(
+                float(t),
+                KIND_NAMES[kind],
+                tuple(b.id for b in bodies),
+                wall,
+                tuple((float(b.x), float(b.y)) for b in bodies),
+            )
+        )
+
+    def run(self, horizon_in: float) -> Outcome:
+        zero, horizon = self.numeric.num(0.0), self.numeric.num(horizon_in)
+        for b, (vx, vy) in zip(self.bodies, self.initial, strict=True):
+            self.motion.set_velocity(b, zero, vx, vy)
+            b.seg.append((zero, b.x, b.y, vx, vy))
+        for b in self.bodies:
+            if b.speed > 0:
+                self.predict_single(b)
+            else:
+                self.pocket_at_start(b)
+        for b in self.bodies:
+            if b.speed > 0:
+                self.predict_pairs(b, zero, None)
+        self.loop(horizon)
+        return self.outcome(horizon_in, horizon)
+
+    def loop(self, horizon: Number) -> None:
+        bodies, queue, count = self.bodies, self.queue, 0
+        while queue and queue[0][0] <= horizon:
+            t, kind, i, k, ver_i, ver_k = heapq.heappop(queue)
+            b = bodies[i]
+            if b.version != ver_i or not b.alive:
+                continue
+            if kind == BALL:
+                other = bodies[k]
+                if other.version != ver_k or not other.alive or not self.collide(b, other, t):
+                    continue
+            elif kind == WALL:
+                self.bounce(b, t, k)
+            elif kind == POCKET:
+                self.pocket(b, t)
+            else:
+                self.stop(b, t)
+            count += 1
+            if count > self.max_events:
+                raise SimulationError(
+                    f"more than {self.max_events} events before t={float(horizon)}"
+                )
+
+    def outcome(self, horizon_in: float, horizon: Number) -> Outcome:
+        positions: dict[int, tuple[float, float] | None] = {}
+        segments: dict[int, tuple[Segment, ...]] = {}
+        exact = self.numeric.num is not float
+        for b in self.bodies:
+            if b.alive:
+                x, y, _ = self.motion.state(b, horizon)
+                positions[b.id] = (float(x), float(y)) if exact else (x, y)
+            else:
+                positions[b.id] = None
+            segments[b.id] = self.segments_of(b, self.ended.get(b.index, horizon), exact)
+        return Outcome(horizon_in, positions, tuple(self.events), segments)
+
+    def segments_of(self, b: Body, end: Number, exact: bool) -> tuple[Segment, ...]:
+        """``b``'s pieces of motion as public floats (the last one ends at ``end``)."""
+        decel = float(self.motion.decel)
+        seg = b.seg
+        out = []
+        for i, (t0, x, y, vx, vy) in enumerate(seg):
+            t1 = seg[i + 1][0] if i + 1 < len(seg) else end
+            if exact:
+                t0, t1, x, y, vx, vy = (float(v) for v in (t0, t1, x, y, vx, vy))
+            out.append(Segment(t0, t1, (x, y), (vx, vy), decel))
+        return tuple(out)
