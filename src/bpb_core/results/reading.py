@@ -76,7 +76,8 @@ class RunFolder:
     def truth(self, key: SceneKey) -> tuple[Any, Any]:
         """The scene and its ground truth (cached; datasets are immutable once written)."""
         assert self.family is not None, "read_run resolves the family"
-        return read_truth(self.dataset, key, self.family.scene_model, self.family.truth_model)
+        models: tuple[Any, Any] = (self.family.scene_model, self.family.truth_model)
+        return read_truth(self.dataset, key, *models)
 
 
 def find_runs(
@@ -167,9 +168,7 @@ def _expected_keys(manifest: dict[str, Any], dataset: Path) -> tuple[SceneKey, .
 
 
 @lru_cache(maxsize=65536)
-def read_truth(
-    dataset: Path, key: SceneKey, scene_model: type[Any], truth_model: type[Any]
-) -> tuple[Any, Any]:
+def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any) -> tuple[Any, Any]:
     """The scene and its ground truth, read with the family's models (cached; datasets are
     immutable once written).
 

@@ -133,7 +133,11 @@ class BilliardsFamily:
         return config.simulator
 
     def sample(
-        self, rng: random.Random, horizon: float, index: int, config: Mapping[str, Any]
+        self,
+        rng: random.Random,
+        horizon: float,
+        index: int,
+        config: DatasetConfig | Mapping[str, Any],
     ) -> Scene:
         """Draw scene ``index`` at ``horizon`` from ``rng`` (normally :func:`scene_rng`)."""
         resolved = self.load_config(config)

@@ -114,8 +114,8 @@ class LabelScorer(ABC):
     def explain(self, rows: pd.DataFrame) -> list[str]:
         """``ball 3: said F, truth T`` for each wrong unit."""
         wrong = rows[~rows["correct"].astype(bool)]
-        return [
-            f"{self.noun}{r.unit}: {'no answer' if pd.isna(r.pred) else f'said {r.pred}'}, "
-            f"truth {r.truth}"
-            for r in wrong.itertuples()
-        ]
+        lines = []
+        for unit, pred, truth in zip(wrong["unit"], wrong["pred"], wrong["truth"], strict=True):
+            said = f"said {pred}" if isinstance(pred, str) else "no answer"
+            lines.append(f"{self.noun}{unit}: {said}, truth {truth}")
+        return lines
