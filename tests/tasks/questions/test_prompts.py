@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from runner_scenes import make_scene, png_bytes
+from support.runner_scenes import make_scene, png_bytes
 
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ImagePart, Message, ModelRequest, ModelResponse, TextPart

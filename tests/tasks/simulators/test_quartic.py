@@ -7,7 +7,7 @@ import math
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from phys_helpers import R, scene
+from support.phys_helpers import R, scene
 
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.numeric import FLOAT64

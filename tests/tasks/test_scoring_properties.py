@@ -9,7 +9,7 @@ from typing import Any
 import pandas as pd
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from reports_fixture import make_final, make_scene
+from support.reports_fixture import make_final, make_scene
 
 from bpb_core.bench.score import _loop_correct, synthetic_units
 from bpb_core.registry import make_registry

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
-from dataset_small import SMALL
+from support.dataset_small import SMALL
 
 from bpb_core.dataset import generate_dataset, load_dataset
 from bpb_core.dataset.jobs import worker_setup

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from phys_helpers import R, kinds, scene, state_at
+from support.phys_helpers import R, kinds, scene, state_at
 
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError

@@ -8,7 +8,7 @@ import math
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from phys_helpers import R, seg_state, state_at
+from support.phys_helpers import R, seg_state, state_at
 
 from bpb_tasks.billiards.outcome import Outcome
 from bpb_tasks.billiards.scene import Scene

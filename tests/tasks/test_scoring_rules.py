@@ -6,7 +6,7 @@ from typing import Any
 
 import pandas as pd
 import pytest
-from reports_fixture import make_final, make_scene
+from support.reports_fixture import make_final, make_scene
 
 from bpb_core.registry import make_registry
 from bpb_core.scored_units import SCORER_INPUT

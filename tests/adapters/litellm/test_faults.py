@@ -6,7 +6,7 @@ import base64
 from pathlib import Path
 
 import pytest
-from runner_fake_openai import fake_server
+from support.fake_openai import fake_server
 
 from bpb_core.model_calls import AdapterOptions
 from bpb_core.registry import make_registry

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from phys_helpers import R, scene
+from support.phys_helpers import R, scene
 
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry

@@ -8,7 +8,7 @@ import json
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from runner_scenes import make_scene
+from support.runner_scenes import make_scene
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
-from runner_fake_openai import fake_server
+from support.fake_openai import fake_server
 
 from bpb_core.run_folder import iter_answers
 

@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from runner_fake_openai import fake_server
-from runner_scenes import make_scene, png_bytes
+from support.fake_openai import fake_server
+from support.runner_scenes import make_scene, png_bytes
 
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import redact

@@ -1,0 +1,110 @@
+"""Fixtures shared by every test folder.
+
+Test helpers live in the ``support`` package (``tests/`` is on ``pythonpath``); only fixtures are
+here, because conftest modules share one name across folders and are never imported.
+
+- ``registry``: a fresh registry of the installed plugins, built per test (no process-global
+  plugin state).
+- ``site``, ``install``, ``run_bpb``: throw-away plugin distributions installed for real (a
+  package folder and a ``*.dist-info`` with ``entry_points.txt`` on ``PYTHONPATH``), and the
+  real ``bpb`` console script run with them.
+- ``dataset``: two horizons x three scenes with analytic ground truth and a small ``init.png``.
+- ``small_dataset``: 6 scenes with images made by ``generate_dataset`` on 2 workers.
+- ``runs``: the oracle, stasis and model run folders of the hand-made report fixture.
+- ``secret_key``: an OpenAI key in the environment that must never reach a file.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from support.dataset_small import SMALL
+from support.plugin_dist import InstallFn, install_fake_dist
+from support.reports_fixture import (
+    all_answers,
+    model_answers,
+    oracle_answer,
+    stasis_answer,
+    write_dataset,
+    write_run,
+)
+from support.runner_scenes import make_dataset
+
+from bpb_core.registry import PluginWarning, Registry, make_registry
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+@pytest.fixture
+def registry() -> Registry:
+    """A fresh registry of the installed plugins."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PluginWarning)
+        return make_registry()
+
+
+@pytest.fixture
+def site(tmp_path: Path) -> Path:
+    """An empty site directory that :func:`run_bpb` puts on ``PYTHONPATH``."""
+    return tmp_path / "site"
+
+
+@pytest.fixture
+def install(site: Path) -> InstallFn:
+    """Install a fake distribution into ``site``."""
+
+    def _install(dist: str, version: str, modules: dict[str, str], eps: dict[str, str]) -> None:
+        install_fake_dist(site, dist, version, modules, eps)
+
+    return _install
+
+
+@pytest.fixture
+def run_bpb(site: Path) -> Callable[..., subprocess.CompletedProcess[str]]:
+    """Run the real ``bpb`` console script with ``site`` on its path."""
+
+    def _run(*args: str) -> subprocess.CompletedProcess[str]:
+        env = {**os.environ, "PYTHONPATH": str(site)}
+        return subprocess.run([BPB, *args], capture_output=True, text=True, env=env, timeout=120)
+
+    return _run
+
+
+@pytest.fixture(scope="session")
+def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two horizons x three scenes: init.json, final.json (analytic) and a small init.png."""
+    return make_dataset(tmp_path_factory.mktemp("runner") / "data")
+
+
+@pytest.fixture(scope="session")
+def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """6 scenes with images, generated on 2 worker processes."""
+    from bpb_core.dataset import generate_dataset
+
+    out = tmp_path_factory.mktemp("small") / "ds"
+    return generate_dataset(out, **SMALL, workers=2)  # type: ignore[arg-type]
+
+
+@pytest.fixture
+def runs(tmp_path: Path) -> Path:
+    """``tmp_path/runs`` holding the oracle, stasis and model run folders."""
+    data = write_dataset(tmp_path / "data")
+    out = tmp_path / "runs"
+    write_run(out / "baseline_oracle", "baseline:oracle", data, all_answers(oracle_answer))
+    write_run(out / "baseline_stasis", "baseline:stasis", data, all_answers(stasis_answer))
+    write_run(out / "litellm_model", "litellm:model", data, model_answers())
+    return out
+
+
+@pytest.fixture
+def secret_key(monkeypatch: pytest.MonkeyPatch) -> str:
+    """An OpenAI key in the environment that must never reach a file."""
+    key = "sk-bpbtest-0123456789abcdefSECRET"
+    monkeypatch.setenv("OPENAI_API_KEY", key)
+    return key
