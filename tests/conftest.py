@@ -24,6 +24,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+
+from bpb_core.registry import PluginWarning, Registry, make_registry
 from support.dataset_small import SMALL
 from support.plugin_dist import InstallFn, install_fake_dist
 from support.reports_fixture import (
@@ -35,8 +37,6 @@ from support.reports_fixture import (
     write_run,
 )
 from support.runner_scenes import make_dataset
-
-from bpb_core.registry import PluginWarning, Registry, make_registry
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 

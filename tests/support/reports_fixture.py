@@ -20,9 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.layout import scene_dir
-from bpb_core.registry import make_registry
 from bpb_tasks.billiards.scene import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth import BallPosition, FinalState, Q1Label, Q2Label, Stability
+from support.questions import questions
 
 Pos = tuple[float, float]
 START: dict[int, Pos] = {k: (0.3 + 0.2 * k, 0.5) for k in range(7)}
@@ -43,7 +43,7 @@ TRUTH: dict[str, dict[str, Any]] = {
 }
 SCENES = [(1.0, 0), (1.0, 1), (2.0, 0), (2.0, 1)]
 
-_TASKS = make_registry()
+_TASKS = questions()
 
 
 def make_scene(horizon: float, index: int) -> Scene:
@@ -103,7 +103,7 @@ def write_run(
 
 def oracle_answer(sid: str, task: str) -> dict[str, Any]:
     horizon, index = float(sid[1]), int(sid[-4:])
-    return _TASKS.task(task).expected(make_final(make_scene(horizon, index)))
+    return _TASKS[task].expected(make_final(make_scene(horizon, index)))
 
 
 def stasis_answer(sid: str, task: str) -> dict[str, Any]:

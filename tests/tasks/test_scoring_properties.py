@@ -6,23 +6,22 @@ from __future__ import annotations
 import random
 from typing import Any
 
-import pandas as pd
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from support.reports_fixture import make_final, make_scene
 
-from bpb_core.bench.score import _loop_correct, synthetic_units
-from bpb_core.registry import make_registry
-from bpb_core.scored_units import SCORER_INPUT
+from bpb_tasks.q1.scorer import Q1Scorer
+from bpb_tasks.q2.scorer import Q2Scorer
 from bpb_tasks.q3.scorer import Q3Scorer
-from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
+from support.questions import questions
+from support.reports_fixture import make_final, make_scene
+from support.scoring import correct_by_unit, loop_correct, synthetic_units
 
 SCORERS: dict[str, Any] = {"q1": Q1Scorer(), "q2": Q2Scorer(), "q3": Q3Scorer()}
 SCENE = make_scene(2.0, 0)
 FINAL = make_final(SCENE)
 KEYS = {"q1": "answers", "q2": "answers", "q3": "predictions"}
 
-_TASKS = make_registry()
+TASKS = questions()
 
 
 @settings(max_examples=40, deadline=None)
@@ -30,14 +29,11 @@ _TASKS = make_registry()
 def test_vectorised_score_equals_row_by_row_rules(task: str, rows: int, seed: int) -> None:
     frame = synthetic_units(task, rows, seed)
     vector = SCORERS[task].score(frame)["correct"].tolist()
-    assert vector == _loop_correct(frame, task)
+    assert vector == loop_correct(frame, task)
 
 
 def correct_of(task: str, answer: Any) -> list[bool]:
-    rows = SCORERS[task].units(answer, FINAL, SCENE)
-    frame = pd.DataFrame(rows, columns=list(rows[0]._fields)).assign(status="ok")
-    frame = frame.astype(SCORER_INPUT)
-    return [bool(x) for x in SCORERS[task].score(frame)["correct"]]
+    return list(correct_by_unit(SCORERS[task], answer, FINAL, SCENE).values())
 
 
 @settings(max_examples=60, deadline=None)
@@ -45,7 +41,7 @@ def correct_of(task: str, answer: Any) -> list[bool]:
 def test_order_and_unknown_entries_do_not_change_scores(
     task: str, rnd: random.Random, data: st.DataObject
 ) -> None:
-    truth = _TASKS.task(task).expected(FINAL)
+    truth = TASKS[task].expected(FINAL)
     assert all(correct_of(task, truth))  # the truth itself is right everywhere
     entries = list(truth[KEYS[task]])
     rnd.shuffle(entries)

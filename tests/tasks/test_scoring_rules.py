@@ -6,12 +6,13 @@ from typing import Any
 
 import pandas as pd
 import pytest
-from support.reports_fixture import make_final, make_scene
 
-from bpb_core.registry import make_registry
-from bpb_core.scored_units import SCORER_INPUT
+from bpb_core.registry import Registry
+from bpb_tasks.q1.scorer import Q1Scorer
+from bpb_tasks.q2.scorer import Q2Scorer
 from bpb_tasks.q3.scorer import Q3Scorer
-from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
+from support.reports_fixture import make_final, make_scene
+from support.scoring import correct_by_unit, unit_frame
 
 SCENE = make_scene(2.0, 0)  # truth: Q1 T for balls 1, 2; Q2 T for LEFT, TOP; ball 2 pocketed
 FINAL = make_final(SCENE)
@@ -19,11 +20,7 @@ R = SCENE.physics.ball_radius
 
 
 def scored(scorer: Any, answer: Any, status: str = "ok") -> dict[str, bool]:
-    rows = scorer.units(answer, FINAL, SCENE)
-    frame = pd.DataFrame(rows, columns=list(rows[0]._fields)).assign(status=status)
-    frame = frame.astype({k: v for k, v in SCORER_INPUT.items() if k != "status"})
-    result = scorer.score(frame[list(SCORER_INPUT)])
-    return dict(zip(frame["unit"], result["correct"], strict=True))
+    return correct_by_unit(scorer, answer, FINAL, SCENE, status)
 
 
 def q1(**labels: Any) -> dict[str, Any]:
@@ -114,9 +111,8 @@ def test_q3_radius_rule_nulls_and_invalid_positions() -> None:
 def test_q3_position_for_pocketed_ball_is_wrong_and_distance_reported() -> None:
     truth = truth_positions()
     preds = [{"id": k, "pos": list(v) if v else [1.1, 0.5]} for k, v in truth.items()]
-    rows = Q3Scorer().units({"predictions": preds}, FINAL, SCENE)
-    frame = pd.DataFrame(rows).assign(status="ok").astype({"unit": "str", "truth": "str"})
-    out = Q3Scorer().score(frame.astype({"pred": "str"}))
+    frame = unit_frame(Q3Scorer(), {"predictions": preds}, FINAL, SCENE)
+    out = Q3Scorer().score(frame)
     assert out["correct"].tolist() == [True, True, False, True, True, True, True]
     assert out["distance"].iloc[0] == 0.0 and pd.isna(out["distance"].iloc[2])
 
@@ -128,8 +124,8 @@ def test_q3_duplicate_id_is_wrong() -> None:
     assert scored(Q3Scorer(), {"predictions": preds})["4"] is False
 
 
-def test_scorers_are_registered_through_entry_points() -> None:
-    registry = make_registry()
+def test_scorers_are_registered_through_entry_points(registry: Registry) -> None:
     for task in ("q1", "q2", "q3"):
-        (found,) = registry.scorers_for(task)
-        assert registry.scorer(found.info.name).task == task
+        scorer = registry.scorer_for(task)
+        assert scorer.task == task
+        assert registry.get("scorer", task).distribution == "bpb"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import json
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -122,11 +123,30 @@ def read_manifest(root: Path) -> DatasetManifest:
     return read_model(root / MANIFEST, DatasetManifest)
 
 
+def family_name(root: Path) -> str | None:
+    """The scene family named by ``root/dataset.json`` (``config.family``), or ``None`` when
+    there is no manifest or it names none (a hand-made folder of scenes).
+
+    Raises:
+        BadInput: ``dataset.json`` exists but is not JSON.
+    """
+    path = root / MANIFEST
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError) as exc:
+        raise BadInput(f"{path}: cannot read dataset manifest: {exc}") from None
+    config = data.get("config") if isinstance(data, dict) else None
+    name = config.get("family") if isinstance(config, dict) else None
+    return name if isinstance(name, str) and name else None
+
+
 def dataset_family(
     manifest: DatasetManifest | None, root: Path, registry: Registry | None = None
 ) -> SceneFamily:
-    """The scene family that made the dataset at ``root`` (the default family for a folder of
-    scenes with no manifest).
+    """The scene family that made the dataset at ``root``: the one its manifest names, else
+    the default family (a folder of scenes with no manifest).
 
     Raises:
         BadInput: The family is not installed.
@@ -134,7 +154,7 @@ def dataset_family(
     from bpb_core.registry import make_registry
 
     registry = registry if registry is not None else make_registry()
-    name = manifest.family if manifest is not None else None
+    name = manifest.family if manifest is not None else family_name(root)
     if name is None:
         name = registry.default_family()
     elif name not in registry.names("scene_family"):

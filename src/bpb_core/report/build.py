@@ -14,8 +14,8 @@ when given an output folder::
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from html import escape
 from dataclasses import dataclass, field
+from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 

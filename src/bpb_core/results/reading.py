@@ -19,12 +19,11 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
-from bpb_core.dataset.reader import dataset_family, read_manifest
+from bpb_core.dataset.reader import dataset_family
 from bpb_core.errors import BadInput
 from bpb_core.layout import (
     FINAL,
     INIT,
-    MANIFEST,
     RUN_MANIFEST,
     SceneKey,
     iter_scene_keys,
@@ -132,8 +131,7 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
 
 
 def _family(dataset: Path, registry: Registry | None) -> SceneFamily:
-    manifest = read_manifest(dataset) if (dataset / MANIFEST).is_file() else None
-    return dataset_family(manifest, dataset, registry)
+    return dataset_family(None, dataset, registry)
 
 
 def _option(manifest: dict[str, Any], name: str) -> Any:

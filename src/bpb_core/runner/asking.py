@@ -11,9 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.dataset.reader import dataset_family, read_manifest
+from bpb_core.dataset.reader import dataset_family
 from bpb_core.errors import BadInput
-from bpb_core.layout import MANIFEST
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef, select_scenes
 
@@ -38,8 +37,7 @@ def data_family(data: Path, registry: Registry) -> SceneFamily:
     Raises:
         BadInput: The manifest is invalid or its family is not installed.
     """
-    manifest = read_manifest(data) if (data / MANIFEST).is_file() else None
-    return dataset_family(manifest, data, registry)
+    return dataset_family(None, data, registry)
 
 
 def default_tasks(data: Path, registry: Registry) -> list[str]:

@@ -12,6 +12,7 @@ from typing import Any, get_args
 from aiohttp import web
 
 from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.layout import FINAL, INIT, iter_scene_keys
 from bpb_core.model_calls import Message, TextPart
 from bpb_core.reply_json import balanced_objects
 
@@ -40,12 +41,13 @@ class PromptIndex:
             self._build(data)
 
     def _build(self, data: Path) -> None:
-        from bpb_core.dataset.reader import load_dataset
+        from bpb_core.dataset.reader import dataset_family
         from bpb_core.registry import make_registry
+        from bpb_core.validated_files import read_model
 
         registry = make_registry()
-        dataset = load_dataset(data, registry=registry)
-        tasks = {name: registry.task(name) for name in registry.tasks_for(dataset.family.name)}
+        family = dataset_family(None, data, registry)
+        tasks = {name: registry.task(name) for name in registry.tasks_for(family.name)}
         variants = [
             PromptOptions(mode, cot, numeric, escalation)
             for mode in get_args(InputMode)
@@ -53,7 +55,9 @@ class PromptIndex:
             for numeric in (False, True)
             for escalation in _ESCALATIONS
         ]
-        for key, scene, truth in dataset:
+        for key in iter_scene_keys(data):
+            scene = read_model(key.dir(data) / INIT, family.scene_model)
+            truth = read_model(key.dir(data) / FINAL, family.truth_model)
             for name, task in tasks.items():
                 answer = json.dumps(task.expected(truth))
                 for options in variants:

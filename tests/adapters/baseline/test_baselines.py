@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from bpb_core.registry import make_registry
-from bpb_core.results import load_frame, summary
-from bpb_core.runner import evaluate, run_eval, slug
+from bpb_core.results import load_results, summary
 from bpb_core.run_folder import iter_answers
+from bpb_core.runner import evaluate, run_eval, slug
 from bpb_core.runner.options import RunOptions
 from bpb_tasks.billiards.scene import Scene
 
@@ -26,7 +26,8 @@ def runs(dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_oracle_scores_100_percent_on_every_task(runs: Path) -> None:
-    table = summary(load_frame([runs / "baseline_oracle"])).iloc[0]
+    results = load_results([runs / "baseline_oracle"])
+    table = summary(results.units, results.suites).iloc[0]
     assert (table["q1"], table["q2"], table["q3"], table["total"]) == (1.0, 1.0, 1.0, 1.0)
 
 

@@ -6,13 +6,13 @@ import base64
 from pathlib import Path
 
 import pytest
-from support.fake_openai import fake_server
 
 from bpb_core.model_calls import AdapterOptions
 from bpb_core.registry import make_registry
-from bpb_core.runner import run_eval
 from bpb_core.run_folder import iter_answers, read_attempts
+from bpb_core.runner import run_eval
 from bpb_core.runner.options import RetryPolicy, RunOptions
+from support.fake_openai import fake_server
 
 REGISTRY = make_registry()
 MODEL = "litellm:openai/fake-model"

@@ -8,14 +8,14 @@ import sys
 from pathlib import Path
 
 import pytest
-from support.fake_openai import fake_server
-from support.runner_scenes import make_scene, png_bytes
 
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import redact
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest
 from bpb_core.registry import make_registry
+from support.fake_openai import fake_server
+from support.runner_scenes import make_scene, png_bytes
 
 REGISTRY = make_registry()
 

@@ -8,14 +8,15 @@ import json
 from pathlib import Path
 
 import pytest
-from support.dataset_small import SMALL
 
 from bpb_core.dataset import generate_dataset, load_dataset
 from bpb_core.dataset.jobs import worker_setup
 from bpb_core.dataset.worker import Job, produce
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
+from bpb_core.registry import Registry
 from bpb_tasks.billiards.config import DatasetConfig
+from support.dataset_small import SMALL
 
 SCENE_FILES = {"init.json", "final.json", "init.png", "final.png", "trajectory.png"}
 
@@ -71,9 +72,10 @@ def test_another_seed_gives_another_dataset(small_dataset: Path, tmp_path: Path)
 
 
 def test_a_scene_regenerated_alone_equals_the_one_in_the_dataset(
-    small_dataset: Path, tmp_path: Path
+    small_dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
-    setup = worker_setup(tmp_path, SMALL["seed"], DatasetConfig(), images=True)  # type: ignore[arg-type]
+    seed = int(SMALL["seed"])  # type: ignore[call-overload]
+    setup = worker_setup(registry, "billiards", tmp_path, seed, DatasetConfig(), images=True)
     result = produce(setup, setup.family_cls(), setup.simulator_cls(), Job(3.0, 2))
     for rel, digest in result.files:
         assert hashlib.sha256((small_dataset / rel).read_bytes()).hexdigest() == digest

@@ -14,7 +14,11 @@ import pandas as pd
 import pytest
 from PIL import Image
 
-from bpb_core.results import CALL_DTYPES, UNIT_DTYPES
+from bpb_core.results import CALL_DTYPES, META_DTYPES
+from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
+from bpb_tasks.q3.scorer import COLUMNS as Q3_COLUMNS
+
+UNIT_DTYPES = {**META_DTYPES, **SCORER_INPUT, **Q3_COLUMNS, **SCORER_OUTPUT}
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 CHROMIUM_FLAGS = [
@@ -30,7 +34,7 @@ def bpb(*args: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="module")
 def report_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from reports_fixture import (
+    from support.reports_fixture import (
         all_answers,
         model_answers,
         oracle_answer,
@@ -67,7 +71,13 @@ def test_json_summary_for_scripts(report_dir: Path) -> None:
     board = {row["run"]: row for row in summary["leaderboard"]}
     assert board["baseline_oracle"]["total"] == 1.0
     assert board["baseline_stasis"]["total"] == pytest.approx(0.7125)
-    stasis = {row["run"]: row for row in summary["stasis"]}
+    assert summary["suites"] == {"total": {"q1": 0.3, "q2": 0.3, "q3": 0.4}}
+    diagnostics = summary["diagnostics"]
+    assert sorted(diagnostics) == [
+        "q1_confusion", "q2_confusion", "q3_distance", "q3_distance_by_horizon",
+        "q3_tolerance", "stasis",
+    ]  # fmt: skip
+    stasis = {row["run"]: row for row in diagnostics["stasis"]}
     assert stasis["baseline_stasis"]["motion_stasis"] == 1.0
 
 
@@ -106,6 +116,8 @@ def test_html_is_self_contained(report_dir: Path) -> None:
         list((report_dir / "out" / "gallery").glob("*.png"))
     )
     assert "Failure gallery" in page and "litellm_model" in page
+    for title in ("Stasis index", "Q1 confusion", "Q2 confusion", "Q3 distance error (m)"):
+        assert title in page  # every diagnostic of the tasks that ran has a section
 
 
 def _chromium() -> str | None:

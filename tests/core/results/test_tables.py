@@ -2,24 +2,33 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
 from bpb_core.errors import BadInput
-from bpb_core.results import CALL_DTYPES, UNIT_DTYPES, load_results, summary
+from bpb_core.results import CALL_DTYPES, META_DTYPES, load_results, summary
 from bpb_core.results.tables import accuracy, by_horizon, leaderboard
+from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
+from bpb_tasks.q3.scorer import COLUMNS as Q3_COLUMNS
 
 
 def board(runs: Path, **kwargs: object) -> pd.DataFrame:
-    return leaderboard(load_results(runs).units, **kwargs).set_index("run")  # type: ignore[arg-type]
+    results = load_results(runs)
+    return leaderboard(results.units, results.suites, **kwargs).set_index("run")  # type: ignore[arg-type]
 
 
 def test_frames_have_the_documented_dtypes(runs: Path) -> None:
     res = load_results(runs)
-    assert {k: str(v) for k, v in res.units.dtypes.items()} == UNIT_DTYPES
+    # base columns, then each scorer's own (q3's positions), then the scorer output
+    expected = {**META_DTYPES, **SCORER_INPUT, **Q3_COLUMNS, **SCORER_OUTPUT}
+    assert {k: str(v) for k, v in res.units.dtypes.items()} == expected
+    assert list(res.units.columns) == list(expected)
     assert {k: str(v) for k, v in res.calls.dtypes.items()} == CALL_DTYPES
+    assert res.units.loc[res.units["task"] == "q1", "truth_x"].isna().all()
+    assert [s.name for s in res.suites] == ["total"]
     # 3 runs x 4 scenes x (6 + 4 + 7) units; 3 runs x 4 scenes x 3 tasks calls
     assert len(res.units) == 3 * 4 * 17 and len(res.calls) == 3 * 4 * 3
 
@@ -60,7 +69,8 @@ def test_stable_subset_drops_unstable_scenes(runs: Path) -> None:
 
 
 def test_summary_lists_best_first_with_answered_total(runs: Path) -> None:
-    table = summary(load_results(runs).units)
+    results = load_results(runs)
+    table = summary(results.units, results.suites)
     assert table["run"].tolist() == ["baseline_oracle", "baseline_stasis", "litellm_model"]
     model = table.set_index("run").loc["litellm_model"]
     assert model["total_answered"] == pytest.approx(0.3 + 0.3 * 0.75 + 0.4 * 27 / 28)
@@ -70,7 +80,7 @@ def test_bad_run_folders_are_reported_by_file(tmp_path: Path, runs: Path) -> Non
     with pytest.raises(BadInput, match="no such run folder"):
         load_results(tmp_path / "nope")
     (runs / "litellm_model" / "h1" / "scene_0000" / "q1.json").write_text("{not json")
-    with pytest.raises(BadInput, match=r"q1\.json: cannot read answer file"):
+    with pytest.raises(BadInput, match=r"q1\.json: not an answer file: Invalid JSON"):
         load_results(runs)
 
 
@@ -78,3 +88,31 @@ def test_relative_dataset_path_is_resolved_from_the_run_folder(runs: Path) -> No
     manifest = runs / "baseline_oracle" / "run.json"
     manifest.write_text(manifest.read_text().replace(str(runs.parent / "data"), "../../data"))
     assert board(runs / "baseline_oracle").loc["baseline_oracle", "total"] == 1.0
+
+
+def test_without_a_suite_there_is_no_total_and_tasks_rank_by_their_mean(runs: Path) -> None:
+    units = load_results(runs).units
+    table = leaderboard(units)
+    assert "total" not in table.columns
+    assert list(table.columns[4:7]) == ["q1", "q2", "q3"]
+    assert table["run"].tolist()[0] == "baseline_oracle"
+
+
+def _select(runs: Path, **options: object) -> None:
+    manifest = runs / "litellm_model" / "run.json"
+    data = json.loads(manifest.read_text())
+    data["options"] = options
+    manifest.write_text(json.dumps(data))
+
+
+def test_run_options_select_the_scenes_expected(runs: Path) -> None:
+    _select(runs, horizons=[1.0])
+    calls = load_results(runs / "litellm_model").calls
+    assert sorted(set(calls["scene_id"])) == ["h1_0000", "h1_0001"]
+    _select(runs, horizons=None, limit=1)
+    calls = load_results(runs / "litellm_model").calls
+    assert sorted(set(calls["scene_id"])) == ["h1_0000", "h2_0000"]
+    # h2_0000 has no answer files: expected, so it counts as missing, not as absent
+    missing = calls[calls["scene_id"] == "h2_0000"]["status"]
+    assert set(missing) == {"missing"}
+    assert board(runs / "litellm_model").loc["litellm_model", "completeness"] == 0.5

@@ -11,9 +11,9 @@ import time
 from pathlib import Path
 
 import pytest
-from support.fake_openai import fake_server
 
 from bpb_core.run_folder import iter_answers
+from support.fake_openai import fake_server
 
 BPB = str(Path(sys.executable).parent / "bpb")
 KEY = "sk-bpbtest-0123456789abcdefSECRET"

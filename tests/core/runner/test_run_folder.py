@@ -7,7 +7,6 @@ import time
 from pathlib import Path
 
 from bpb_core.layout import SceneKey
-from bpb_core.runner.limits import RateLimiter
 from bpb_core.run_folder import (
     AnswerRecord,
     AttemptLog,
@@ -15,6 +14,7 @@ from bpb_core.run_folder import (
     read_attempts,
     write_answer,
 )
+from bpb_core.runner.limits import RateLimiter
 
 
 def test_torn_last_line_is_skipped_and_closed_before_appending(tmp_path: Path) -> None:

@@ -9,32 +9,30 @@ from pathlib import Path
 import pytest
 
 from bpb_core.errors import BadInput
-from bpb_core.registry import make_registry
-from bpb_core.runner import run_eval
+from bpb_core.registry import Registry
 from bpb_core.run_folder import completed
+from bpb_core.runner import run_eval
 from bpb_core.runner.options import RunOptions
-
-REGISTRY = make_registry()
 
 
 def test_missing_image_names_the_file_and_state_mode_needs_none(
-    dataset: Path, tmp_path: Path
+    dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
     data = tmp_path / "data"
     shutil.copytree(dataset, data)
     (data / "h1/scene_0001/init.png").unlink()
     with pytest.raises(BadInput, match=r"h1/scene_0001/init.png: missing"):
         run_eval(
-            data, "baseline:stasis", tmp_path / "a", RunOptions(concurrency=1), registry=REGISTRY
+            data, "baseline:stasis", tmp_path / "a", RunOptions(concurrency=1), registry=registry
         )
     result = run_eval(
-        data, "baseline:stasis", tmp_path / "b", RunOptions(input_mode="state"), registry=REGISTRY
+        data, "baseline:stasis", tmp_path / "b", RunOptions(input_mode="state"), registry=registry
     )
     assert sum(c["ok"] for c in result.statuses.values()) == 18
 
 
 def test_corrupt_scene_names_file_and_field_and_keeps_finished_answers(
-    dataset: Path, tmp_path: Path
+    dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
     data = tmp_path / "data"
     shutil.copytree(dataset, data)
@@ -44,16 +42,18 @@ def test_corrupt_scene_names_file_and_field_and_keeps_finished_answers(
     path.write_text(json.dumps(scene))
     with pytest.raises(BadInput, match=r"h3/scene_0002/init.json: balls"):
         run_eval(
-            data, "baseline:oracle", tmp_path / "run", RunOptions(concurrency=1), registry=REGISTRY
+            data, "baseline:oracle", tmp_path / "run", RunOptions(concurrency=1), registry=registry
         )
     assert len(completed(tmp_path / "run")) >= 3  # scenes before the bad one stay answered
 
 
-def test_unknown_task_and_bad_concurrency(dataset: Path, tmp_path: Path) -> None:
+def test_unknown_task_and_bad_concurrency(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
     with pytest.raises(BadInput, match="known tasks: q1, q2, q3"):
-        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(tasks=("q4",)), registry=REGISTRY)
+        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(tasks=("q4",)), registry=registry)
     with pytest.raises(BadInput, match="--concurrency"):
-        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(concurrency=0), registry=REGISTRY)
+        run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(concurrency=0), registry=registry)
 
 
 class _Buggy:
@@ -63,8 +63,10 @@ class _Buggy:
         raise KeyError("oops")
 
 
-def test_an_adapter_bug_is_recorded_per_pair_not_fatal(dataset: Path, tmp_path: Path) -> None:
-    result = run_eval(dataset, _Buggy(), tmp_path, RunOptions(tasks=("q1",)), registry=REGISTRY)
+def test_an_adapter_bug_is_recorded_per_pair_not_fatal(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    result = run_eval(dataset, _Buggy(), tmp_path, RunOptions(tasks=("q1",)), registry=registry)
     assert result.api_errors == 6
     record = json.loads((tmp_path / "h1/scene_0000/q1.json").read_text())
     assert record["status"] == "api_error" and "KeyError" in record["error"]

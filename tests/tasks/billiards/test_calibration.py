@@ -38,7 +38,7 @@ def test_generate_with_calibrate_records_new_ranges(tmp_path: Path) -> None:
     assert manifest.calibration is not None
     found = manifest.calibration["6"]
     assert manifest.config["speed_ranges"]["6"] == {"low": found["low"], "high": found["high"]}
-    assert manifest.summary["h6"].speed_range == (found["low"], found["high"])
+    assert manifest.summary["h6"].speed_range == [found["low"], found["high"]]
     assert 0.3 <= found["rate"] <= 0.7
 
 

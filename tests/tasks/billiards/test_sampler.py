@@ -9,7 +9,8 @@ from hypothesis import strategies as st
 
 from bpb_core.registry import make_registry
 from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.sampler import BilliardsFamily, scene_rng
+from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.billiards.sampler import scene_rng
 
 CONFIG = DatasetConfig()
 FAMILY = BilliardsFamily()

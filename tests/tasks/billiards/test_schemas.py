@@ -7,12 +7,13 @@ from pathlib import Path
 
 from bpb_tasks.billiards.scene import Scene, scene_json_schema
 from bpb_tasks.billiards.truth import FinalState, final_json_schema
+from support.paths import DOCS
 
-SCHEMAS = Path(__file__).resolve().parents[2] / "docs" / "schemas"
+SCHEMAS = DOCS / "schemas"
 
 
 def test_committed_schemas_match_the_code() -> None:
-    # Regenerate with: python -c "from bpb_tasks.billiards.scene import ..." (see docs/dataset-card.md)
+    # Regenerate as docs/dataset-card.md says (scene_json_schema, final_json_schema)
     assert json.loads((SCHEMAS / "init.schema.json").read_text()) == scene_json_schema()
     assert json.loads((SCHEMAS / "final.schema.json").read_text()) == final_json_schema()
 

@@ -8,16 +8,15 @@ import json
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from support.runner_scenes import make_scene
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
-from bpb_core.registry import make_registry
 from bpb_core.reply_json import balanced_objects
+from support.questions import questions
+from support.runner_scenes import make_scene
 
 SCENE = make_scene(3.0, 0)
-REGISTRY = make_registry()
-TASKS = {name: REGISTRY.task(name) for name in ("q1", "q2", "q3")}
+TASKS = questions()
 NO_COT, COT = PromptOptions(cot=False), PromptOptions(cot=True)
 Q1 = {"answers": [{"id": i, "answer": "T" if i == 2 else "F"} for i in range(1, 7)]}
 Q2 = {"answers": [{"wall": w, "answer": "F"} for w in ("TOP", "BOTTOM", "LEFT", "RIGHT")]}

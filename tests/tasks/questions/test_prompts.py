@@ -9,16 +9,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from support.runner_scenes import make_scene, png_bytes
 
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ImagePart, Message, ModelRequest, ModelResponse, TextPart
-from bpb_core.registry import make_registry
+from bpb_core.registry import Registry
 from bpb_core.runner import run_eval
 from bpb_core.runner.options import RunOptions
 from bpb_tasks.billiards.truth import FinalState
+from support.questions import questions
+from support.runner_scenes import make_scene, png_bytes
 
-REGISTRY = make_registry()
+TASKS = questions()
 SCENE = make_scene(3.0, 1)
 
 
@@ -28,7 +29,7 @@ def _text(messages: tuple[Message, ...]) -> str:
 
 @pytest.mark.parametrize("task", ["q1", "q2", "q3"])
 def test_prompt_states_constants_laws_table_pockets_horizon_and_format(task: str) -> None:
-    text = _text(REGISTRY.task(task).messages(SCENE, png_bytes(1), PromptOptions()))
+    text = _text(TASKS[task].messages(SCENE, png_bytes(1), PromptOptions()))
     for needle in [
         "mu = 0.002",
         "g = 9.8",
@@ -54,7 +55,7 @@ def test_prompt_states_constants_laws_table_pockets_horizon_and_format(task: str
 
 
 def test_input_modes_carry_image_and_or_state() -> None:
-    task, image = REGISTRY.task("q1"), png_bytes(7)
+    task, image = TASKS["q1"], png_bytes(7)
     (img_only,) = task.messages(SCENE, image, PromptOptions(input_mode="image"))
     (both,) = task.messages(SCENE, image, PromptOptions(input_mode="image+state"))
     (state,) = task.messages(SCENE, None, PromptOptions(input_mode="state"))
@@ -66,7 +67,7 @@ def test_input_modes_carry_image_and_or_state() -> None:
 
 
 def test_cot_default_and_force_numeric_wording() -> None:
-    q1, q3 = REGISTRY.task("q1"), REGISTRY.task("q3")
+    q1, q3 = TASKS["q1"], TASKS["q3"]
     assert q1.default_cot and not q3.default_cot
     assert "Think step by step" in _text(q1.messages(SCENE, None, PromptOptions("state", True)))
     plain = _text(q3.messages(SCENE, None, PromptOptions("state")))
@@ -97,7 +98,9 @@ def _flip(final: FinalState) -> FinalState:
 
 
 @pytest.mark.parametrize("mode", ["image", "state", "image+state"])
-def test_prompt_never_depends_on_ground_truth(dataset: Path, tmp_path: Path, mode: str) -> None:
+def test_prompt_never_depends_on_ground_truth(
+    dataset: Path, tmp_path: Path, mode: str, registry: Registry
+) -> None:
     other = tmp_path / "other"
     shutil.copytree(dataset, other)
     for final_path in other.glob("h*/scene_*/final.json"):
@@ -105,8 +108,8 @@ def test_prompt_never_depends_on_ground_truth(dataset: Path, tmp_path: Path, mod
         final_path.write_text(flipped.model_dump_json())
     options = RunOptions(input_mode=mode, retry=RunOptions().retry.__class__(max_reasks=0))
     first, second = Recorder(), Recorder()
-    run_eval(dataset, first, tmp_path / "a", options, registry=REGISTRY)
-    run_eval(other, second, tmp_path / "b", options, registry=REGISTRY)
+    run_eval(dataset, first, tmp_path / "a", options, registry=registry)
+    run_eval(other, second, tmp_path / "b", options, registry=registry)
     assert first.seen and first.seen == second.seen
     final = FinalState.model_validate_json((dataset / "h3/scene_0000/final.json").read_text())
     cue_final = next(p.pos for p in final.predictions if p.id == 0)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 
 import pytest
-from support.phys_helpers import R, kinds, scene, state_at
 
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
+from support.phys_helpers import R, kinds, scene, state_at
 
 SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]
 IDS = ["float64", "mpmath50"]

@@ -8,13 +8,13 @@ import math
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from support.phys_helpers import R, seg_state, state_at
 
 from bpb_tasks.billiards.outcome import Outcome
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scene, random_scenes
+from support.phys_helpers import R, seg_state, state_at
 
 FLOAT = AnalyticSimulator()
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import pytest
-from support.phys_helpers import R, scene
 
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
@@ -14,6 +13,7 @@ from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.bench_scenes import random_scenes
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
+from support.phys_helpers import R, scene
 
 EXACT = AnalyticSimulator()
 

@@ -7,11 +7,11 @@ import math
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from support.phys_helpers import R, scene
 
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.numeric import FLOAT64
 from bpb_tasks.simulators.analytic.roots import first_contact, quadratic_roots
+from support.phys_helpers import R, scene
 
 
 def path(x: float, y: float, vx: float, vy: float, a: float, t: np.ndarray) -> np.ndarray:

@@ -12,10 +12,10 @@ import pytest
 from bpb_core.dataset import generate_dataset
 from bpb_core.layout import FINAL, INIT, iter_scene_keys
 from bpb_core.results import load_results
-from bpb_core.results.diagnostics import stasis_index
 from bpb_core.results.tables import leaderboard
 from bpb_core.runner import run_eval
 from bpb_core.runner.options import RunOptions
+from bpb_tasks.paper.stasis import stasis_index
 
 
 def expected_stasis(data: Path) -> dict[str, float]:
@@ -49,8 +49,9 @@ def test_generated_dataset_oracle_and_stasis_runs(tmp_path: Path) -> None:
     for name in ("oracle", "stasis"):
         out = tmp_path / "runs" / f"baseline_{name}"
         run_eval(Path(data), f"baseline:{name}", out, RunOptions(input_mode="state"))
-    units = load_results(tmp_path / "runs").units
-    board = leaderboard(units).set_index("run")
+    results = load_results(tmp_path / "runs")
+    units = results.units
+    board = leaderboard(units, results.suites).set_index("run")
     assert board.loc["baseline_oracle", ["q1", "q2", "q3", "total"]].tolist() == [1.0] * 4
     expected = expected_stasis(Path(data))
     for metric, value in expected.items():
