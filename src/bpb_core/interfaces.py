@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from bpb_core.model_calls import Message, ModelRequest, ModelResponse
     from bpb_core.picture import ScenePicture
-    from bpb_core.results.frames import Results
+    from bpb_core.registration import SuiteInfo
     from bpb_core.scored_units import UnitRow
 
 InputMode = Literal["image", "image+state", "state"]
@@ -347,6 +347,25 @@ class DrawsOverlay(Protocol):
         ...
 
 
+class ScoredResults(Protocol):
+    """What a diagnostic reads: the scored frames (see :mod:`bpb_core.results.frames`)."""
+
+    @property
+    def units(self) -> pd.DataFrame:
+        """One row per scored unit of every expected (run, scene, task)."""
+        ...
+
+    @property
+    def calls(self) -> pd.DataFrame:
+        """One row per (run, scene, task) with status, tokens, cost and latency."""
+        ...
+
+    @property
+    def suites(self) -> tuple[SuiteInfo, ...]:
+        """The installed suites all of whose tasks appear in ``units``."""
+        ...
+
+
 @runtime_checkable
 class Diagnostic(Protocol):
     """A table derived from scored results, shown in reports when one of its tasks ran.
@@ -363,7 +382,7 @@ class Diagnostic(Protocol):
     percent: tuple[str, ...]
     terminal: tuple[str, ...]
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         """The table: one row per run (or per run and something else), with the run columns
         ``run, adapter, model, baseline`` first."""
         ...

@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 from bpb_core import __version__
 
@@ -42,3 +43,42 @@ def test_unknown_command_is_a_usage_error() -> None:
 def test_bad_list_kind_is_a_usage_error() -> None:
     result = run("list", "gizmos")
     assert result.returncode == 2
+
+
+BUGGY_PLUGIN = """
+from bpb_core import AdapterInfo, hookimpl, lazy
+
+@hookimpl
+def bpb_model_adapters():
+    yield AdapterInfo("buggy", lazy("buggy_impl:make"), "Crashes when built")
+"""
+BUGGY_IMPL = """
+def make(model, options):
+    raise RuntimeError("the plugin's own bug")
+"""
+
+
+def test_an_internal_error_is_one_line_and_exit_3(
+    install: Any, run_bpb: Any, dataset: Path, tmp_path: Path
+) -> None:
+    install("bpb-buggy", "0.1", {"buggy_hooks": BUGGY_PLUGIN, "buggy_impl": BUGGY_IMPL},
+            {"buggy": "buggy_hooks"})  # fmt: skip
+    done = run_bpb("run", "--data", str(dataset), "--adapter", "buggy:x", "--out", str(tmp_path))
+    assert done.returncode == 3
+    lines = done.stderr.strip().splitlines()
+    assert lines == [
+        "internal error: RuntimeError: the plugin's own bug (set BPB_DEBUG=1 for a traceback)"
+    ]
+
+
+def test_list_shows_every_kind_of_component() -> None:
+    suites = run("list", "suites")
+    assert suites.returncode == 0
+    assert suites.stdout.startswith("total\tThe paper's total score: 0.3 Q1 + 0.3 Q2 + 0.4 Q3")
+    diagnostics = run("list", "diagnostics").stdout.split("\n")
+    assert [line.split("\t")[0] for line in diagnostics if line][:2] == [
+        "q1_confusion",
+        "q2_confusion",
+    ]
+    families = run("list", "scene-families").stdout
+    assert families.startswith("billiards\t")

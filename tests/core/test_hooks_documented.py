@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import inspect
 
-from support.paths import DOCS as DOCS_DIR
-
 from bpb_core import hookspecs
 from bpb_core.registration import SuiteInfo
 from bpb_core.registry import Registry
+from support.paths import DOCS as DOCS_DIR
 
 DOCS = DOCS_DIR / "plugins.md"
 

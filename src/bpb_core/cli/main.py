@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from bpb_core import __version__
+from bpb_core.version import __version__
 
 # name -> (module, attribute, one-line help); the help is here so listing needs no import.
 COMMANDS: dict[str, tuple[str, str, str]] = {

@@ -14,7 +14,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core import __version__
+from bpb_core.version import __version__
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST
 from bpb_core.run_folder import read_manifest, write_manifest

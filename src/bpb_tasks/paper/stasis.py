@@ -17,7 +17,7 @@ from bpb_core.results.tables import RUN_COLUMNS
 from bpb_tasks.questions.label_diagnostics import labelled
 
 if TYPE_CHECKING:
-    from bpb_core.results.frames import Results
+    from bpb_core.interfaces import ScoredResults
 
 SHARES = ("contact_stasis", "q1_stasis", "q2_stasis", "motion_stasis")
 
@@ -75,7 +75,7 @@ class StasisIndex:
     percent: tuple[str, ...] = SHARES
     terminal: tuple[str, ...] = ("contact_stasis", "motion_stasis", "contacts", "moved")
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         return stasis_index(results.units)
 
     def chart(self, table: pd.DataFrame) -> bytes | None:

@@ -15,7 +15,7 @@ import pandas as pd
 from bpb_core.results.tables import RUN_COLUMNS
 
 if TYPE_CHECKING:
-    from bpb_core.results.frames import Results
+    from bpb_core.interfaces import ScoredResults
 
 DEFAULT_TOLERANCES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
 """Tolerances of :func:`tolerance_curve`, in ball radii (1.0 is the Q3 rule)."""
@@ -76,7 +76,7 @@ class Q3Distance:
     percent: tuple[str, ...] = ()
     terminal: tuple[str, ...] = ()
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         return distance_errors(results.units)
 
     def chart(self, table: pd.DataFrame) -> bytes | None:
@@ -89,7 +89,7 @@ class Q3DistanceByHorizon(Q3Distance):
     name = "q3_distance_by_horizon"
     title = "Q3 distance error by horizon (m)"
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         return distance_errors(results.units, by_horizon=True)
 
 
@@ -101,7 +101,7 @@ class Q3Tolerance:
     percent: tuple[str, ...] = ("accuracy",)
     terminal: tuple[str, ...] = ()
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         return tolerance_curve(results.units)
 
     def chart(self, table: pd.DataFrame) -> bytes | None:

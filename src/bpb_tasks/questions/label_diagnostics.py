@@ -14,7 +14,7 @@ import pandas as pd
 from bpb_core.results.tables import RUN_COLUMNS
 
 if TYPE_CHECKING:
-    from bpb_core.results.frames import Results
+    from bpb_core.interfaces import ScoredResults
 
 PERCENT = ("precision", "recall", "f1")
 
@@ -66,7 +66,7 @@ class ConfusionDiagnostic:
     percent: tuple[str, ...] = PERCENT
     terminal: tuple[str, ...] = ()
 
-    def table(self, results: Results) -> pd.DataFrame:
+    def table(self, results: ScoredResults) -> pd.DataFrame:
         """The confusion table of :attr:`task` (see :func:`confusion`)."""
         return confusion(results.units, self.task, per_unit=self.per_unit)
 

@@ -75,6 +75,7 @@ def test_head_on_and_event_at_horizon_margins() -> None:
     st = annotate(s)
     assert st.min_graze_cos == pytest.approx(1.0)
     wall = scene([(1.75, 0.5, 1.5, 0.0)], radius=0.25, mu=0.0625, g=8.0, width=4.0, pockets=[])
-    assert annotate(wall, delta=1e-4).horizon_gap is not None
+    # RIGHT wall at x = 3.75 is reached when 1.5 t - 0.25 t^2 = 2, at t = 2; horizon 5
+    assert annotate(wall, delta=1e-4).horizon_gap == pytest.approx(3.0, abs=1e-12)
     at_t = annotate(wall.model_copy(update={"horizon": 2.0}))
     assert at_t.horizon_gap == 0.0 and not at_t.stable and "q2:RIGHT" in at_t.flips
