@@ -101,7 +101,7 @@ def bpb_scorers() -> Iterable[ScorerInfo]:  # type: ignore[empty-body]
 
 @hookspec
 def bpb_suites() -> Iterable[SuiteInfo]:  # type: ignore[empty-body]
-    """Register suites: weighted totals over tasks (the paper's 0.3 Q1 + 0.3 Q2 + 0.4 Q3).
+    """Register suites: weighted totals over tasks (a paper's headline score).
 
     Reports show every suite all of whose tasks ran, beside the task scores.
 

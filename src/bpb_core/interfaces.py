@@ -8,7 +8,8 @@ the family's models, hands them to the family's simulator and to the tasks, and 
 below carry a family's own scene, ground truth or config objects.
 
 Optional capabilities of a scene family are separate protocols (:class:`Calibrating`,
-:class:`Tallying`, :class:`DrawingStats`, :class:`Predicting`, :class:`Picturing`); core checks
+:class:`Tallying`, :class:`DrawingStats`, :class:`Predicting`, :class:`Picturing`,
+:class:`Comparing`); core checks
 for them with ``isinstance`` and does without when a family lacks one.
 """
 
@@ -165,7 +166,9 @@ class SceneFamily(Protocol):
         self, config: Any, simulator: Simulator, seed: int, horizon: float, index: int
     ) -> GeneratedScene:
         """Scene ``index`` at ``horizon``, drawn from a generator seeded by (seed, horizon,
-        index) alone, simulated and annotated."""
+        index) alone, simulated and annotated. Its ``scene_id`` must be
+        :func:`bpb_core.layout.scene_id` ``(horizon, index)`` (``h2_0003``): the name of the
+        folder it lands in."""
         ...
 
     def physics(self, config: Any) -> dict[str, Any]:
@@ -253,11 +256,43 @@ class Picturing(Protocol):
 
 
 @runtime_checkable
+class Comparing(Protocol):
+    """A family whose simulators can be compared on speed and error (``bpb bench sim``).
+
+    Core runs every contestant on the same scenes, times it and hands each outcome to
+    :meth:`compare` with the reference's outcome; tables, plot and docs come from core.
+
+    Attributes:
+        bench_contestants: Simulators compared by default, each ``name`` or
+            ``name:key=value,...`` (options as ``bpb simulate`` takes them).
+        bench_reference: The simulator (same form) whose outcomes count as the truth.
+        bench_description: One sentence on the scenes :meth:`bench_scenes` draws.
+        bench_measures: One sentence on what :meth:`compare`'s numbers mean.
+    """
+
+    bench_contestants: tuple[str, ...]
+    bench_reference: str
+    bench_description: str
+    bench_measures: str
+
+    def bench_scenes(self, count: int, seed: int) -> list[Any]:
+        """``count`` scenes of the family's scene model, the same for the same ``seed``."""
+        ...
+
+    def compare(self, outcome: Any, reference: Any, scene: Any) -> dict[str, float]:
+        """How far ``outcome`` is from ``reference`` (both from :meth:`Simulator.run` on
+        ``scene``): the key ``error`` holds a distance (max and median over scenes are
+        reported); every other key counts disagreements (summed over scenes), named and
+        ordered as the table's columns."""
+        ...
+
+
+@runtime_checkable
 class Task(Protocol):
     """A question about a scene of one family (the family its record names).
 
     Attributes:
-        name: Short name (``q1``).
+        name: Short name (what ``--tasks`` takes).
         default_cot: Whether chain of thought is on by default.
     """
 
@@ -291,6 +326,18 @@ class ModelAdapter(Protocol):
 
 
 @runtime_checkable
+class KnowsFamilies(Protocol):
+    """An offline adapter that answers from the scene itself, so it can answer only the scene
+    families it knows (``bpb run`` checks before the first call, and leaves it out of its
+    default adapters for a family it does not know)."""
+
+    def cannot_answer(self, family: SceneFamily) -> str | None:
+        """``None`` when it can answer questions about ``family``'s scenes, else why not (one
+        line, e.g. what it could answer instead)."""
+        ...
+
+
+@runtime_checkable
 class Scorer(Protocol):
     """Scores one task's answers against ground truth, in two steps.
 
@@ -307,7 +354,7 @@ class Scorer(Protocol):
     A unit can only be correct when the call's ``status`` is ``ok``.
 
     Attributes:
-        name: Scorer name (``q1``).
+        name: Scorer name.
         task: Name of the task it scores.
         scene_rule: How unit results make a scene's score: ``mean`` (share of correct units)
             or ``all`` (1 only when every unit is correct).
@@ -371,7 +418,7 @@ class Diagnostic(Protocol):
     """A table derived from scored results, shown in reports when one of its tasks ran.
 
     Attributes:
-        name: File and JSON name (``q1_confusion``).
+        name: File and JSON name.
         title: Section heading.
         percent: Columns shown as percentages.
         terminal: Columns ``bpb report`` prints in the terminal (empty: HTML and files only).

@@ -3,7 +3,7 @@
 Dataset: ``DIR/dataset.json``, ``DIR/index.csv``, ``DIR/stats/``,
 ``DIR/h{t}/scene_{i:04d}/{init.json, final.json, init.png, final.png, trajectory.png}``.
 Run: ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl``,
-``RUN_DIR/h{t}/scene_{i:04d}/{q1,q2,q3}.json``.
+``RUN_DIR/h{t}/scene_{i:04d}/{task}.json``.
 """
 
 from __future__ import annotations

@@ -48,10 +48,11 @@ class ModelRequest:
 
     Attributes:
         messages: The conversation to send.
-        task: Name of the task asked (``q1``); offline baselines answer by it.
+        task: Name of the task asked; offline baselines answer by it.
         scene: The scene asked about. Only offline baselines may look at it; an adapter that
             talks to a model must send ``messages`` and nothing else.
         family: Name of the scene's family (offline baselines ask it for predictions).
+        simulator: The simulator the dataset's ground truth comes from (offline baselines).
         temperature: Sampling temperature (the paper's protocol uses 0).
         max_tokens: Output token cap, ``None`` for the provider default.
         timeout: Seconds before the call counts as timed out.
@@ -62,6 +63,7 @@ class ModelRequest:
     task: str
     scene: Any = None
     family: str | None = None
+    simulator: str | None = None
     temperature: float = 0.0
     max_tokens: int | None = None
     timeout: float = 120.0

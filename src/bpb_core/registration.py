@@ -47,7 +47,7 @@ class ComponentInfo:
     """Common fields of every registration record.
 
     Attributes:
-        name: The name users type (``q1``, ``analytic``, ``litellm``).
+        name: The name users type (``analytic``, ``litellm``).
         load: Zero-argument callable returning the component class or factory.
         summary: One line for ``bpb plugins`` and ``bpb list``.
     """

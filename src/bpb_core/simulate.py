@@ -5,18 +5,19 @@ beside them is simulated) or dataset folders (every ``h{t}/scene_{i}`` in datase
 are read with the models of the simulator's scene family, and results come back in input order,
 one ground truth (the family's ``final.json`` model) per scene. Every user mistake is a
 :class:`~bpb_core.errors.BadInput` naming the file and the field, e.g.
-``scenes/x.json: balls[2].pos: ball 2 at [2.5, 0.4] is off the table``.
+``scenes/x.json: <field path>: what is wrong``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput
-from bpb_core.layout import FINAL, INIT, iter_scene_keys
+from bpb_core.layout import FINAL, INIT, MANIFEST, iter_scene_keys
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -69,12 +70,13 @@ class Prepared:
 
 def prepare(
     horizon: float | None,
-    simulator: str | Simulator,
+    simulator: str | Simulator | None,
     registry: Registry | None,
     options: Mapping[str, Any] | None,
-    family: str | None = None,
+    files: Sequence[Path] = (),
 ) -> Prepared:
-    """Resolve ``simulator`` (a name or an object) and its scene family.
+    """Resolve ``simulator`` (a name, an object, or ``None``: the simulator the scenes' dataset
+    was made with, else the default family's) and its scene family.
 
     Raises:
         BadInput: A bad horizon, an unknown simulator or an option it does not take.
@@ -84,17 +86,31 @@ def prepare(
     if horizon is not None and not horizon > 0:
         raise BadInput(f"--horizon: must be positive, got {horizon}")
     reg = registry if registry is not None else make_registry()
+    if simulator is None:
+        family, config = _made_with(files, reg)
+        simulator = family.simulator_name(config)
     if isinstance(simulator, str):
-        name = reg.simulator_info(simulator).family or family or reg.default_family()
+        name = reg.simulator_info(simulator).family or reg.default_family()
         return Prepared(reg.simulator(simulator, **dict(options or {})), reg.scene_family(name))
-    return Prepared(simulator, reg.scene_family(family or reg.default_family()))
+    return Prepared(simulator, reg.scene_family(reg.default_family()))
+
+
+def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any]:
+    """The family and config of the dataset the first scene file belongs to (the default
+    family and its default config for loose scene files)."""
+    for folder in list(files[0].parents)[:3] if files else []:
+        if (folder / MANIFEST).is_file():
+            family = dataset_family(None, folder, registry)
+            return family, dataset_config(folder, family)
+    family = registry.scene_family(registry.default_family())
+    return family, family.load_config(None)
 
 
 def simulate_paths(
     paths: Iterable[str | Path],
     *,
     horizon: float | None = None,
-    simulator: str | Simulator = "analytic",
+    simulator: str | Simulator | None = None,
     stability: bool = False,
     registry: Registry | None = None,
     options: Mapping[str, Any] | None = None,
@@ -104,7 +120,8 @@ def simulate_paths(
     Args:
         paths: ``init.json``/``final.json`` files, scene folders or dataset folders.
         horizon: Override every scene's own horizon.
-        simulator: A registered simulator name or a simulator object.
+        simulator: A registered simulator name, a simulator object, or ``None`` for the one
+            the scenes' dataset was made with (the default family's for loose files).
         stability: Also compute the stability annotation of each scene.
         registry: Registry to look the name up in (default: installed plugins).
         options: Options for the simulator (``dt`` for ``pymunk``, ``precision`` for analytic).
@@ -112,8 +129,9 @@ def simulate_paths(
     Raises:
         BadInput: A path does not exist or a scene file is invalid (file and field named).
     """
-    job = prepare(horizon, simulator, registry, options)
-    for path in scene_files(paths):
+    files = scene_files(paths)
+    job = prepare(horizon, simulator, registry, options, files)
+    for path in files:
         scene = read_model(path, job.family.scene_model)
         yield simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
 
@@ -126,7 +144,7 @@ def simulate_lines(
     paths: Iterable[str | Path],
     *,
     horizon: float | None = None,
-    simulator: str | Simulator = "analytic",
+    simulator: str | Simulator | None = None,
     stability: bool = False,
     registry: Registry | None = None,
     options: Mapping[str, Any] | None = None,
@@ -139,8 +157,8 @@ def simulate_lines(
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
     global _JOB
-    job = prepare(horizon, simulator, registry, options)
     files = scene_files(paths)
+    job = prepare(horizon, simulator, registry, options, files)
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
     if count <= 1:

@@ -30,7 +30,7 @@ def describe_validation_error(exc: ValidationError) -> str:
 
 
 def field_path(loc: Sequence[str | int]) -> str:
-    """``("balls", 2, "pos")`` -> ``balls[2].pos``."""
+    """``("items", 2, "pos")`` -> ``items[2].pos``."""
     out = ""
     for part in loc:
         out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))

@@ -1,9 +1,9 @@
 """The baseline adapters: reference predictions rendered as JSON text answers.
 
-``baseline:oracle`` answers from the scene family's own ground truth (its default simulator run
-on the scene: the ceiling, and an end-to-end check); the other models (``stasis``, ``straight``,
-``random`` for billiards) are predictions the family offers
-(:class:`~bpb_core.interfaces.Predicting`). Either way the adapter answers a task with the part
+``baseline:oracle`` answers from the scene family's own ground truth (the dataset's simulator run
+on the scene: the ceiling, and an end-to-end check); any other model names a prediction the
+scene's family offers (:class:`~bpb_core.interfaces.Predicting`; ``stasis``, ``straight`` and
+``random`` for billiards). Either way the adapter answers a task with the part
 the task's ``expected()`` cuts from the prediction, as JSON text, so its answers take the same
 parse path as a real model's. Nothing here knows a particular family or task.
 """
@@ -25,7 +25,6 @@ if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.registry import Registry
 
-MODELS = ("stasis", "straight", "random", "oracle")
 ORACLE = "oracle"
 
 
@@ -60,23 +59,29 @@ class BaselineAdapter:
             self._cache[key] = build(self._registry)
         return self._cache[key]
 
-    def _predict(self, family_name: str, scene: Any, rng: random.Random) -> Any:
-        family: SceneFamily = self._component(
-            f"f:{family_name}", lambda r: r.scene_family(family_name)
-        )
+    def cannot_answer(self, family: SceneFamily) -> str | None:
+        """``None`` when ``family`` offers this prediction (every family has the oracle), else
+        what it offers."""
+        offered = (ORACLE, *(family.predictors if isinstance(family, Predicting) else ()))
+        if self.model in offered:
+            return None
+        known = ", ".join(f"baseline:{name}" for name in offered)
+        return f"the {family.name} scene family offers no such prediction; known: {known}"
+
+    def _predict(self, request: ModelRequest, rng: random.Random) -> Any:
+        name = str(request.family)
+        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
         if self.model == ORACLE:
+            simulator_name = request.simulator or family.simulator_name(family.load_config(None))
             simulator: Simulator = self._component(
-                f"s:{family_name}",
-                lambda r: r.simulator(family.simulator_name(family.load_config(None))),
+                f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
             )
-            return family.ground_truth(scene, simulator, stability=False)
-        if not isinstance(family, Predicting) or self.model not in family.predictors:
-            offered = [ORACLE, *(family.predictors if isinstance(family, Predicting) else ())]
-            raise RequestRejected(
-                f"{self.name}: the {family_name} family offers no such prediction "
-                f"(it offers: {', '.join(offered)})"
-            )
-        return family.predict(self.model, scene, rng)
+            return family.ground_truth(request.scene, simulator, stability=False)
+        why = self.cannot_answer(family)
+        if why is not None:
+            raise RequestRejected(f"{self.name}: {why}")
+        assert isinstance(family, Predicting)
+        return family.predict(self.model, request.scene, rng)
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the scene in ``request`` (baselines never read the prompt)."""
@@ -84,7 +89,7 @@ class BaselineAdapter:
         if request.scene is None or request.family is None:
             raise RequestRejected(f"{self.name} needs the scene and its family in the request")
         rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
-        truth = self._predict(request.family, request.scene, rng)
+        truth = self._predict(request, rng)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         return ModelResponse(
             text=json.dumps(task.expected(truth)),
@@ -97,8 +102,8 @@ class BaselineAdapter:
 
 
 def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter:
-    """Build ``baseline:<model>`` (stasis, straight, random or oracle)."""
-    if model not in MODELS:
-        known = ", ".join(f"baseline:{m}" for m in MODELS)
-        raise BadInput(f"--adapter baseline:{model}: unknown baseline; known: {known}")
+    """Build ``baseline:<model>``: ``oracle`` or a prediction the scene family offers (checked
+    against the dataset's family before a run starts)."""
+    if not model.strip():
+        raise BadInput("--adapter baseline:: give a model, e.g. baseline:oracle")
     return BaselineAdapter(f"baseline:{model}", model, options.seed)

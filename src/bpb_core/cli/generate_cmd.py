@@ -75,8 +75,8 @@ class RichProgress:
 
 
 def show_summary(root: Path, manifest: DatasetManifest) -> None:
-    """Print per-horizon counts: scenes, the family's own figures (such as the realised
-    cue-ball collision rate), unstable scenes."""
+    """Print per-horizon counts: scenes, the scene family's own figures (such as a realised
+    collision rate), unstable scenes."""
     from rich.table import Table
 
     from bpb_core.layout import horizon_label
@@ -119,7 +119,7 @@ def _figure(name: str, value: object) -> str:
 @click.option("--stable-only", is_flag=True, help="Draw until N stable scenes per horizon.")
 @click.option("--workers", type=int, default=None, help="Processes [default: all cores].")
 @click.option("--no-images", is_flag=True, help="Skip the PNGs (JSON and stats only).")
-@click.option("--calibrate", is_flag=True, help="Recompute the cue-speed ranges first.")
+@click.option("--calibrate", is_flag=True, help="Recalibrate the family's sampling first.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing dataset at --out.")
 def generate(
     out: Path,

@@ -56,8 +56,8 @@ class LazyGroup(click.Group):
 @click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="bpb")
 def cli() -> None:
-    """bpb: BilliardPhys-Bench. Generate billiards scenes with exact physics ground truth, ask
-    multimodal LLMs what happens, score them and report where they fail."""
+    """bpb: generate scenes with exact physics ground truth,
+    ask multimodal LLMs what happens, score them and report where they fail."""
 
 
 def main(argv: list[str] | None = None) -> None:

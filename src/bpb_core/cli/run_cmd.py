@@ -73,9 +73,23 @@ def _adapter_options(
     return AdapterOptions(api_base=api_base, seed=seed, prices=price_table, aliases=alias_table)
 
 
+def _offline_adapters(registry: Registry, data: Path) -> list[str]:
+    """Every model of every offline adapter that can answer the dataset's scene family."""
+    from bpb_core.interfaces import KnowsFamilies
+    from bpb_core.runner.asking import data_family
+
+    family = data_family(data, registry)
+    chosen = []
+    for spec in registry.offline_specs():
+        adapter = registry.adapter(spec)
+        if not isinstance(adapter, KnowsFamilies) or adapter.cannot_answer(family) is None:
+            chosen.append(spec)
+    if not chosen:
+        raise BadInput(f"--adapter: none given and no offline adapter answers {family.name} scenes")
+    return chosen
+
+
 def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> None:
-    if not adapters:
-        raise BadInput("--adapter: none given and no offline adapter is installed")
     from bpb_core.model_calls import split_spec
 
     for task in tasks:
@@ -188,11 +202,11 @@ def run(**kw: Any) -> None:
 
     registry = load_registry()
     tasks = _csv(kw["tasks"], "--tasks")
-    adapters = list(kw["adapters"]) or registry.offline_specs()
-    _check_names(registry, tasks, adapters)
+    _check_names(registry, tasks, list(kw["adapters"]))
     out: Path = kw["out"]
     data = _data(kw["data"], out, kw["seed"], registry)
     tasks = tasks or default_tasks(data, registry)
+    adapters = list(kw["adapters"]) or _offline_adapters(registry, data)
     options = RunOptions(
         tasks=tuple(tasks),
         horizons=_horizons(kw["horizons"]),

@@ -11,7 +11,13 @@ import click
 @click.command("simulate")
 @click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=str))
 @click.option("--horizon", type=float, default=None, help="Override each scene's own horizon (s).")
-@click.option("--simulator", "simulator", default="analytic", show_default=True, help="Simulator.")
+@click.option(
+    "--simulator",
+    "simulator",
+    default=None,
+    help="Simulator [default: the one the dataset was made with; the default family's for loose "
+    "scene files].",
+)
 @click.option("--dt", type=float, default=None, help="Time step (s) of fixed-step simulators.")
 @click.option(
     "--precision", default=None, help="analytic only: 'float64' (default) or digits for mpmath."
@@ -26,7 +32,7 @@ import click
 def simulate(
     paths: tuple[str, ...],
     horizon: float | None,
-    simulator: str,
+    simulator: str | None,
     dt: float | None,
     precision: str | None,
     stability: bool,

@@ -142,6 +142,25 @@ def family_name(root: Path) -> str | None:
     return name if isinstance(name, str) and name else None
 
 
+def dataset_config(root: Path, family: SceneFamily) -> Any:
+    """The family's config the dataset at ``root`` was made with (its defaults for a folder of
+    scenes with no manifest, or a manifest without a config).
+
+    Raises:
+        BadInput: The recorded config is not valid for the family (names the field).
+    """
+    path = root / MANIFEST
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return family.load_config(None)
+    config = data.get("config") if isinstance(data, dict) else None
+    if not isinstance(config, dict):
+        return family.load_config(None)
+    fields = getattr(family.config_model, "model_fields", {})
+    return family.load_config({k: v for k, v in config.items() if k != "family" or k in fields})
+
+
 def dataset_family(
     manifest: DatasetManifest | None, root: Path, registry: Registry | None = None
 ) -> SceneFamily:

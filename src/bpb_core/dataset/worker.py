@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
+from bpb_core.errors import BpbError
 from bpb_core.interfaces import Calibrating, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -90,18 +91,23 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
 def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
     """Make, write and hash one scene; return its row and file hashes."""
     made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
+    name = scene_id(job.horizon, job.index)
+    if made.truth.scene_id != name:
+        raise BpbError(
+            f"scene family {family.name!r}: made scene {made.truth.scene_id!r} for {name!r}; "
+            "make_scene must name scene i at horizon t bpb_core.layout.scene_id(t, i)"
+        )
     values = tuple((column, made.row[column]) for column in family.index_columns)
-    stable = made.truth.stable
-    row = IndexRow(scene_id(job.horizon, job.index), job.horizon, job.index, values, stable)
-    if not job.keep_unstable and stable is False:
+    row = IndexRow(name, job.horizon, job.index, values, made.truth.stable)
+    if not job.keep_unstable and row.stable is False:
         return SceneResult(row, ())
     folder = scene_dir(setup.root, job.horizon, job.index)
     folder.mkdir(parents=True, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
-    for name, data in made.files(setup.images).items():
-        (folder / name).write_bytes(data)
-        files.append((f"{rel}/{name}", sha256_bytes(data)))
+    for file_name, data in made.files(setup.images).items():
+        (folder / file_name).write_bytes(data)
+        files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
 
 

@@ -171,7 +171,7 @@ def write_report(
         frame.to_csv(files[f"table:{name}"], index=False)
     files.update(_export_frames(results, out))
     page = html.render(
-        title="BilliardPhys-Bench report",
+        title="bpb report",
         runs=results.runs,
         headline=[("Leaderboard (strict)", _headline(tables, results))],
         sections=_sections(tables, report.diagnostics),

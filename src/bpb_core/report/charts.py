@@ -134,8 +134,8 @@ def leaderboards(
     ci: pd.DataFrame | None = None,
     titles: Mapping[str, str] | None = None,
 ) -> bytes:
-    """One leaderboard per metric (the paper's four: Q1, Q2, Q3, total): horizontal bars,
-    best on top."""
+    """One leaderboard per metric (each task, then each suite): horizontal bars, best on
+    top."""
     titles = titles or {}
     ncols = min(len(metrics), 2)
     nrows = (len(metrics) + ncols - 1) // ncols

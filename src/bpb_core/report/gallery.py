@@ -1,10 +1,11 @@
 """The failure gallery: the worst answered scenes, with truth and prediction drawn on the scene.
 
 Which scenes: per run, the answered scenes with the lowest score (weighted by the first suite
-that applies, else the mean over tasks). What is shown comes from the plugins: the scene family
-draws the scene (:class:`~bpb_core.interfaces.Picturing`), each task's scorer marks truth and
-prediction on it (:class:`~bpb_core.interfaces.DrawsOverlay`) and says in words what was wrong
-(:class:`~bpb_core.interfaces.ExplainsErrors`). Core only chooses the scenes and lays them out.
+whose tasks the scene was asked, else the mean over its tasks). What is shown comes from the
+plugins: the scene family draws the scene (:class:`~bpb_core.interfaces.Picturing`), each
+task's scorer marks truth and prediction on it (:class:`~bpb_core.interfaces.DrawsOverlay`) and
+says in words what was wrong (:class:`~bpb_core.interfaces.ExplainsErrors`). Core only chooses
+the scenes and lays them out.
 """
 
 from __future__ import annotations
@@ -48,16 +49,16 @@ def worst_cases(
     Runs take turns (models before baselines, each run's worst scene first), so one bad run
     does not fill the gallery; only scenes answered in every task and not fully right qualify.
     """
-    wide = scene_totals(units, suites[0] if suites else None)
+    wide = scene_totals(units, suites)
     wide = wide[wide[SCORE] < 1.0].sort_values([SCORE, "scene_id"], kind="stable")
     wide["turn"] = wide.groupby("run", observed=True).cumcount()
     ranked = wide.sort_values(["turn", "baseline", SCORE, "run"], kind="stable")
     return ranked.head(count).drop(columns="turn").reset_index(drop=True)
 
 
-def scene_totals(units: pd.DataFrame, suite: SuiteInfo | None) -> pd.DataFrame:
-    """One row per fully answered (run, scene): each task's score and ``score``, the suite's
-    weighted score over the tasks present (equal weights without a suite)."""
+def scene_totals(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFrame:
+    """One row per fully answered (run, scene): each task's score and ``score``, the weighted
+    score of the first suite whose tasks the scene was asked (else the mean over its tasks)."""
     scenes = scene_scores(units)
     wide = scenes.pivot_table(
         index=["run", "baseline", "horizon", "index", "scene_id"],
@@ -71,11 +72,16 @@ def scene_totals(units: pd.DataFrame, suite: SuiteInfo | None) -> pd.DataFrame:
     wide = wide.reset_index()
     keys = pd.MultiIndex.from_frame(wide[["run", "horizon", "index"]])
     wide = wide[all_ok.reindex(keys).fillna(False).to_numpy(dtype=bool)].copy()
-    present = sorted(str(t) for t in scenes["task"].unique())
-    weights: Mapping[str, float] = suite.weights if suite else dict.fromkeys(present, 1.0)
-    tasks = [t for t in weights if t in wide.columns]
-    total = sum(weights[t] for t in tasks)
-    wide[SCORE] = sum(weights[t] * wide[t] for t in tasks) / total if tasks else float("nan")
+    tasks = sorted(str(t) for t in scenes["task"].unique())
+    score = pd.Series(float("nan"), index=wide.index)
+    for suite in suites:
+        if not set(suite.weights) <= set(wide.columns):
+            continue
+        asked = wide[list(suite.weights)].notna().all(axis=1) & score.isna()
+        weighted = sum(w * wide[t] for t, w in suite.weights.items())
+        score = score.where(~asked, weighted)
+    mean = wide[[t for t in tasks if t in wide.columns]].mean(axis=1)
+    wide[SCORE] = score.fillna(mean)
     return wide
 
 
@@ -89,9 +95,7 @@ def build_cases(results: Results, scorers: Mapping[str, Scorer], count: int = 8)
         rows = units[(units["run"] == run.label) & (units["scene_id"] == sid)]
         key = SceneKey(float(row["horizon"]), int(row["index"]))
         tasks = [t for t in results.tasks if t in row and not pd.isna(row[t])]
-        scores = {t: float(row[t]) for t in tasks}
-        if results.suites:
-            scores[results.suites[0].name] = float(row[SCORE])
+        scores = {t: float(row[t]) for t in tasks} | {SCORE: float(row[SCORE])}
         by_task = {t: rows[rows["task"] == t] for t in tasks}
         wrong = {
             t: scorer.explain(by_task[t]) for t in tasks

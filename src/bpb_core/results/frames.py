@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.errors import BadInput
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs
 from bpb_core.run_folder import AnswerRecord, read_answer
@@ -128,10 +129,19 @@ def load_frame(
 
 
 def _extra_columns(scorers: Iterable[Scorer]) -> dict[str, str]:
+    """The scorers' own columns; two scorers may share a column only with the same dtype."""
     columns: dict[str, str] = {}
+    owner: dict[str, str] = {}
     for scorer in scorers:
         for name, dtype in scorer.columns.items():
-            columns.setdefault(name, dtype)
+            if name in (*SCORER_INPUT, *SCORER_OUTPUT, *META_DTYPES):
+                raise BadInput(f"scorer {scorer.name!r}: column {name!r} is one of bpb's own")
+            if columns.setdefault(name, dtype) != dtype:
+                raise BadInput(
+                    f"scorers {owner[name]!r} and {scorer.name!r}: column {name!r} has dtype "
+                    f"{columns[name]} in one and {dtype} in the other"
+                )
+            owner.setdefault(name, scorer.name)
     return columns
 
 

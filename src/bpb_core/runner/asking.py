@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.dataset.reader import dataset_family
+from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef, select_scenes
@@ -23,12 +23,14 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Asking:
-    """The family, the options with their tasks resolved, the task objects and the scenes."""
+    """The family, the options with their tasks resolved, the task objects, the scenes, and
+    the simulator the dataset's ground truth comes from (for offline baselines)."""
 
     family: SceneFamily
     options: RunOptions
     tasks: dict[str, Task]
     scenes: list[SceneRef]
+    simulator: str
 
 
 def data_family(data: Path, registry: Registry) -> SceneFamily:
@@ -64,4 +66,5 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     resolved = dataclasses.replace(options, tasks=tuple(names))
     tasks = {name: registry.task(name) for name in names}
     scenes = select_scenes(data, family, options.horizons, options.limit)
-    return Asking(family, resolved, tasks, scenes)
+    simulator = family.simulator_name(dataset_config(data, family))
+    return Asking(family, resolved, tasks, scenes, simulator)

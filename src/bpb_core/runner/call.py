@@ -104,6 +104,7 @@ class PairCall:
             self.task,
             self.scene,
             self.state.family,
+            self.state.simulator,
             options.temperature,
             options.max_tokens,
             self.timeout,

@@ -14,12 +14,12 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.version import __version__
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST
 from bpb_core.run_folder import read_manifest, write_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
+from bpb_core.version import __version__
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry

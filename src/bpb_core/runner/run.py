@@ -18,9 +18,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
+from bpb_core.interfaces import KnowsFamilies
 from bpb_core.model_calls import AdapterOptions
 from bpb_core.run_folder import AttemptLog, completed
-from bpb_core.runner.asking import asking
+from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.call import PairCall
 from bpb_core.runner.limits import RateLimiter
 from bpb_core.runner.manifest import finish_manifest, start_manifest
@@ -98,7 +99,7 @@ def _state(
     options: RunOptions,
     run_dir: Path,
     progress: Progress,
-    family: str,
+    asked: Asking,
 ) -> RunState:
     if options.concurrency < 1:
         raise BadInput(f"--concurrency: must be at least 1, got {options.concurrency}")
@@ -113,7 +114,8 @@ def _state(
         limiter=RateLimiter(options.rpm),
         slots=asyncio.Semaphore(options.concurrency),
         rng=random.Random(options.seed),
-        family=family,
+        family=asked.family.name,
+        simulator=asked.simulator,
     )
 
 
@@ -136,11 +138,14 @@ async def run_eval_async(
     options, tasks, refs = asked.options, asked.tasks, asked.scenes
     model = _adapter(registry, adapter, adapter_options, options)
     spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
+    why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
+    if why is not None:
+        raise BadInput(f"--adapter {spec}: {why}")
     run_dir.mkdir(parents=True, exist_ok=True)
     done = completed(run_dir)
     plan = _plan(refs, options.tasks, done)
     manifest = start_manifest(run_dir, spec, data, options, registry, len(refs))
-    state = _state(model, spec, tasks, options, run_dir, progress, asked.family.name)
+    state = _state(model, spec, tasks, options, run_dir, progress, asked)
     _announce(state, refs, plan, done)
     try:
         await _drive(state, plan)

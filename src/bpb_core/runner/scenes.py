@@ -42,7 +42,7 @@ class SceneRef:
         return read_model(self.folder / INIT, self.family.scene_model)
 
     def image(self) -> bytes:
-        """The bytes of the family's input image (``init.png`` for billiards).
+        """The bytes of the family's input image.
 
         Raises:
             BadInput: The image is missing (image input modes need it).

@@ -50,6 +50,7 @@ class RunState:
     model_id: str = ""
     statuses: dict[str, dict[str, int]] = field(default_factory=dict)
     family: str = ""
+    simulator: str | None = None
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and

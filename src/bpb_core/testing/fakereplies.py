@@ -85,11 +85,11 @@ def _content(fault: str, answer: str) -> tuple[str, str]:
     if fault == "cot":
         reasoning = (
             'Reasoning: the format looks like {"answers": [...]}; a draft {not json} and '
-            'a brace in a string "}" do not count. The cue ball rolls on. Final answer: '
+            'a brace in a string "}" do not count. Everything moves on. Final answer: '
         )
         return reasoning + answer, "stop"
     if fault == "malformed":
-        return "The cue ball probably hits something, but I cannot say which.", "stop"
+        return "Something probably happens, but I cannot say what.", "stop"
     if fault == "partial":
         value = json.loads(answer)
         key = next(iter(value))

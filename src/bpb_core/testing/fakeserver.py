@@ -13,7 +13,7 @@ told to:
 - ``nonjson``: a 200 whose body is HTML; ``malformed``: prose with no JSON;
 - ``partial``: JSON missing items; ``length``: an answer cut off with finish_reason ``length``.
 
-Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/q1":
+Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/TASK":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``).
 Run it with ``python -m bpb_core.testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.

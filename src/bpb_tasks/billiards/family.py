@@ -4,7 +4,7 @@ Everything core needs to generate, read and check billiards datasets comes throu
 :class:`BilliardsFamily`: the config model, the sampler (seeded per scene), the simulation with
 ground truth and stability annotation, the three images, the index columns and per-horizon
 counts, the stats figures, speed calibration, the reference predictions behind the ``baseline``
-adapter and the failure gallery's picture.
+adapter, the failure gallery's picture and the simulator comparison of ``bpb bench sim``.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from typing import Any
 
 from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
+from bpb_tasks.billiards import bench_compare
 from bpb_tasks.billiards.calibrate import Calibration, calibrate_horizon
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping, horizon_key, load_config
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
@@ -113,6 +114,10 @@ class BilliardsFamily:
     image_names = IMAGE_NAMES
     index_columns = INDEX_COLUMNS
     predictors = ("stasis", "straight", "random")
+    bench_contestants = bench_compare.CONTESTANTS
+    bench_reference = bench_compare.REFERENCE
+    bench_description = bench_compare.DESCRIPTION
+    bench_measures = bench_compare.MEASURES
 
     def load_config(self, source: Any) -> DatasetConfig:
         """A :class:`DatasetConfig` from a config, a mapping of its fields, a JSON/TOML file or
@@ -224,3 +229,11 @@ class BilliardsFamily:
         from bpb_tasks.billiards.picture import scene_picture
 
         return scene_picture(dataset, folder, scene)
+
+    def bench_scenes(self, count: int, seed: int) -> list[Scene]:
+        """``count`` random 7-ball scenes of the stream ``seed`` (``bpb bench sim``)."""
+        return list(bench_compare.random_scenes(count, seed))
+
+    def compare(self, outcome: Outcome, reference: Outcome, scene: Scene) -> dict[str, float]:
+        """Final-position error and label disagreements of ``outcome`` against ``reference``."""
+        return bench_compare.compare(outcome, reference, scene)

@@ -1,0 +1,152 @@
+"""Figures of ``bpb bench sim``: the markdown section of docs/benchmarks.md and the PNG plot.
+
+Both are built from a :class:`~bpb_core.bench.sim.SimBench` alone; the column names, the
+description of the scenes and the meaning of the measures are the scene family's.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+from bpb_core.bench.sim import SimBench, SimRow
+
+HEADING = "## Simulators (`bpb bench sim`)"
+WIDTH = 100
+
+
+def count_text(value: float) -> str:
+    """A summed disagreement count: ``3`` when whole, else three significant digits."""
+    return str(int(value)) if float(value).is_integer() else f"{value:.3g}"
+
+
+def row_name(row: SimRow) -> str:
+    """The contestant's spec, marked when it is the reference."""
+    return f"{row.name} (reference)" if row.reference else row.name
+
+
+def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
+    """The benchmark section (heading included), with machine and date."""
+    reference = next((r.name for r in result.rows if r.reference), "?")
+    intro = (
+        f"{result.scenes} {result.description} (scene family `{result.family}`, seed "
+        f"{result.seed}); every simulator runs every scene in turn (runs under 5 ms repeated up "
+        "to 5 times, the quickest counted; ms/scene is the mean over scenes). Each outcome is "
+        f"compared with the reference `{reference}`: {result.measures}. Max and median of the "
+        "error over scenes; the other columns are summed over scenes."
+    )
+    lines = [HEADING, "", f"{result.day}, {result.machine}.", "", _wrap(intro), ""]
+    lines += _table(result)
+    reading = _reading(result)
+    if reading:
+        lines += ["", _wrap(reading)]
+    if result.simulate_ms is not None:
+        lines += ["", _wrap(_simulate_text(result))]
+    if plot:
+        lines += ["", f"![speed against error]({plot})"]
+    return "\n".join(lines) + "\n"
+
+
+def _wrap(text: str) -> str:
+    return textwrap.fill(text, WIDTH, break_on_hyphens=False)
+
+
+def _table(result: SimBench) -> list[str]:
+    head = ["simulator", "ms/scene", "max error", "median error", *result.columns]
+    lines = ["| " + " | ".join(head) + " |", "| --- |" + " ---: |" * (len(head) - 1)]
+    for row in result.rows:
+        cells = [row_name(row), f"{row.ms_per_scene:.3g}", f"{row.max_error:.2e}"]
+        cells += [f"{row.median_error:.2e}", *(count_text(row.counts[c]) for c in result.columns)]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def _reading(result: SimBench) -> str:
+    """Plain-language reading of the table, computed from it."""
+    reference = next((r for r in result.rows if r.reference), None)
+    others = sorted(
+        (r for r in result.rows if not r.reference), key=lambda r: (r.max_error, r.ms_per_scene)
+    )
+    if reference is None or not others:
+        return ""
+    best = others[0]
+    text = (
+        f"Reading: `{best.name}` comes closest to the reference (max error "
+        f"{best.max_error:.1e}, {count_text(sum(best.counts.values()))} disagreements in all) at "
+        f"{best.ms_per_scene:.3g} ms per scene, "
+        f"{_speed(best.ms_per_scene, reference.ms_per_scene)} the reference."
+    )
+    if len(others) > 1:
+        runner = min(others[1:], key=lambda r: (r.median_error, r.ms_per_scene))
+        text += (
+            f" The most accurate of the others, `{runner.name}`, is "
+            f"{_speed(runner.ms_per_scene, best.ms_per_scene)} `{best.name}`, "
+            f"with median error {runner.median_error:.1e}, max error {runner.max_error:.1e} "
+            f"and {count_text(sum(runner.counts.values()))} disagreements."
+        )
+    return text
+
+
+def _speed(ms: float, other_ms: float) -> str:
+    """``22.5x faster than`` or ``3.1x slower than``."""
+    if ms <= 0 or other_ms <= 0:
+        return "not comparable in speed with"
+    if ms <= other_ms:
+        return f"{other_ms / ms:.3g}x faster than"
+    return f"{ms / other_ms:.3g}x slower than"
+
+
+def _simulate_text(result: SimBench) -> str:
+    assert result.simulate_ms is not None
+    figures = ", ".join(
+        f"{label}: **{ms:.3f} ms/scene**" for label, ms in result.simulate_ms.items()
+    )
+    return (
+        f"`bpb simulate` with `{result.simulate_with}` over {result.simulate_scenes} scene "
+        "files (read, validate, simulate, build and serialise the ground truth; start-up "
+        f"excluded; best of 3 interleaved rounds): {figures}."
+    )
+
+
+def update_section(path: Path, section: str) -> None:
+    """Replace the section starting with :data:`HEADING` in ``path`` (or append it)."""
+    text = path.read_text() if path.exists() else "# Benchmarks\n"
+    start = text.find(HEADING)
+    if start < 0:
+        text = text.rstrip("\n") + "\n\n" + section
+    else:
+        end = text.find("\n## ", start + len(HEADING))
+        rest = "" if end < 0 else text[end + 1 :]
+        text = text[:start] + section + ("\n" + rest if rest else "")
+    path.write_text(text)
+
+
+def plot(result: SimBench, path: Path) -> None:
+    """Speed against error, log-log: one point per contestant (max error, with the median);
+    the reference (error 0 by definition) is left out."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    floor = 1e-17
+    fig, ax = plt.subplots(figsize=(8, 5), dpi=150)
+    for row in (r for r in result.rows if not r.reference):
+        x = row.ms_per_scene
+        high, mid = max(row.max_error, floor), max(row.median_error, floor)
+        ax.plot([x, x], [mid, high], color="0.6", lw=1)
+        ax.scatter([x], [high], s=45, zorder=3, label=f"{row.name}: {x:.3g} ms, max {high:.1e}")
+        ax.scatter([x], [mid], s=80, marker="_", color="k", zorder=3)
+    ax.scatter([], [], s=80, marker="_", color="k", label="median error over scenes")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.margins(x=0.15, y=0.15)
+    ax.set_xlabel("time per scene (ms, log scale)")
+    ax.set_ylabel("error against the reference (log scale)")
+    ax.set_title(f"{result.family} simulators: speed against error ({result.scenes} scenes)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right", title="dot = max error over scenes", title_fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)

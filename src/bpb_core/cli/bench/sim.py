@@ -1,0 +1,108 @@
+"""``bpb bench sim``: simulators side by side (speed, error against a reference, disagreements)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+if TYPE_CHECKING:
+    from bpb_core.bench.sim import SimBench
+
+
+@click.command("sim")
+@click.option("--scenes", default=100, show_default=True, help="Scenes to compare on.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the scenes.")
+@click.option("--family", default=None, help="Scene family [default: the default family].")
+@click.option(
+    "--contestant",
+    "contestants",
+    multiple=True,
+    help="Simulator as NAME or NAME:KEY=VALUE,... (repeatable) [default: the family's list, "
+    "e.g. analytic and pymunk:dt=0.01].",
+)
+@click.option("--reference", default=None, help="Reference simulator [default: the family's].")
+@click.option(
+    "--simulate-scenes",
+    default=1000,
+    show_default=True,
+    help="Scene files for the `bpb simulate` timing (0 skips it).",
+)
+@click.option(
+    "--simulate-with", default=None, help="Simulator timed through `bpb simulate` [default: the "
+    "first contestant].",
+)  # fmt: skip
+@click.option("--plot", type=click.Path(path_type=Path), default=None, help="Write the PNG here.")
+@click.option(
+    "--markdown",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Update the simulator section of this benchmarks.md.",
+)
+def bench_sim(
+    scenes: int,
+    seed: int,
+    family: str | None,
+    contestants: tuple[str, ...],
+    reference: str | None,
+    simulate_scenes: int,
+    simulate_with: str | None,
+    plot: Path | None,
+    markdown: Path | None,
+) -> None:
+    """Time simulators of one scene family on the same scenes and compare with a reference."""
+    from rich.progress import Progress
+
+    from bpb_core.bench import sim_report
+    from bpb_core.bench.sim import bench_simulators, with_simulate_timing
+    from bpb_core.cli.console import load_registry, stderr
+
+    registry = load_registry()
+    with Progress(console=stderr(), transient=True) as bar:
+        task = bar.add_task("simulating", total=scenes)
+        result = bench_simulators(
+            scenes,
+            seed,
+            contestants,
+            reference,
+            family=family,
+            registry=registry,
+            progress=lambda done, _total: bar.update(task, completed=done),
+        )
+    if simulate_scenes > 0:
+        timed = simulate_with or next(r.name for r in result.rows if not r.reference)
+        result = with_simulate_timing(result, simulate_scenes, timed, registry)
+    _show(result)
+    if plot is not None:
+        sim_report.plot(result, plot)
+    if markdown is not None:
+        rel = None if plot is None else _relative(plot, markdown.parent)
+        sim_report.update_section(markdown, sim_report.markdown(result, rel))
+
+
+def _show(result: SimBench) -> None:
+    from rich.table import Table
+
+    from bpb_core.bench.sim_report import count_text, row_name
+    from bpb_core.cli.console import stdout
+
+    title = f"bpb bench sim: {result.scenes} {result.family} scenes, {result.machine}, {result.day}"
+    table = Table(title=title)
+    for column in ("simulator", "ms/scene", "max error", "median error", *result.columns):
+        first = column == "simulator"
+        table.add_column(column, justify="left" if first else "right", no_wrap=first)
+    for row in result.rows:
+        cells = [f"{row.ms_per_scene:.3g}", f"{row.max_error:.1e}", f"{row.median_error:.1e}"]
+        counts = [count_text(row.counts[c]) for c in result.columns]
+        table.add_row(row_name(row), *cells, *counts)
+    stdout().print(table)
+    for label, ms in (result.simulate_ms or {}).items():
+        stdout().print(f"bpb simulate ({result.simulate_with}), {label}: {ms:.3f} ms/scene")
+
+
+def _relative(path: Path, base: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(base.resolve()))
+    except ValueError:
+        return str(path)
