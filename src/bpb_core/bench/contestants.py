@@ -1,6 +1,6 @@
 """Contestants of ``bpb bench sim``: simulator specs, the family that compares them, timing.
 
-A contestant is ``name`` or ``name:key=value,...`` (``pymunk:dt=0.01``, ``analytic:precision=50``):
+A contestant is ``name`` or ``name:key=value,...`` (``mysim``, ``mysim:dt=0.01,order=2``):
 a registered simulator and the options it is built with, as ``bpb simulate`` takes them.
 """
 

@@ -3,13 +3,15 @@
 All timings of one call run on the same machine in one process tree, one after the other, with
 the same number of worker processes, so machine noise hits them alike:
 
-* ``generate``: a full dataset (scenes, ground truth, stability, 3 PNGs per scene, stats);
-* ``generate --no-images``: the same without PNGs (what rendering costs is the difference);
-* ``pillow default``: Pillow alone encoding as many images of the same canvas size, RGB with
-  Pillow's default PNG settings (what a straightforward renderer pays just to save files);
-* ``pillow as bpb``: the same images encoded as bpb stores them (8-bit palette, zlib level 1).
+* ``generate``: a full dataset of the default scene family (scenes, ground truth and whatever
+  the family adds: its images, stats);
+* ``generate --no-images``: the same without images (what rendering costs is the difference);
+* ``pillow default``: Pillow alone encoding as many images of the same size, RGB with Pillow's
+  default PNG settings (what a straightforward renderer pays just to save files);
+* ``pillow palette``: the same images encoded as 8-bit palette PNGs at zlib level 1.
 
-The images encoded by the Pillow baselines are real rendered scenes (decoded from the dataset).
+The images encoded by the Pillow baselines are the dataset's own (its family's
+``image_names``, decoded). A family without images gets no Pillow rows.
 """
 
 from __future__ import annotations
@@ -38,11 +40,16 @@ class GenerateTiming:
     scenes: int
     images: int
     workers: int
-    size: tuple[int, int]
+    size: tuple[int, int] | None
     generate_s: float
     no_images_s: float
-    pillow_default_s: float
-    pillow_bpb_s: float
+    pillow_default_s: float | None
+    pillow_bpb_s: float | None
+
+    @property
+    def images_per_scene(self) -> float:
+        """Images written per scene."""
+        return self.images / self.scenes if self.scenes else 0.0
 
 
 @dataclass(frozen=True)
@@ -81,9 +88,13 @@ def _pillow_seconds(sources: list[bytes], count: int, workers: int, as_bpb: bool
         return time.perf_counter() - started
 
 
-def _sample_images(root: Path) -> list[bytes]:
-    found = sorted(root.glob("h*/scene_*/*.png"))[:SAMPLE_IMAGES]
-    return [p.read_bytes() for p in found]
+def _images(root: Path) -> list[Path]:
+    """The dataset's image files (the names its scene family declares), in scene order."""
+    from bpb_core.dataset import load_dataset
+
+    dataset = load_dataset(root)
+    found = (dataset.path(key, name) for key in dataset.keys for name in dataset.family.image_names)
+    return [path for path in found if path.is_file()]
 
 
 def measure_generate(
@@ -106,11 +117,13 @@ def measure_generate(
             root / "bare", per_horizon, horizons, seed, workers=n_workers, images=False
         )
         no_images_s = time.perf_counter() - started
-        sources = _sample_images(full)
-    scenes = per_horizon * len(horizons)
+        images = _images(full)
+        sources = [p.read_bytes() for p in images[:SAMPLE_IMAGES]]
+    scenes, count = per_horizon * len(horizons), len(images)
+    if not sources:
+        return GenerateTiming(scenes, 0, n_workers, None, generate_s, no_images_s, None, None)
     with Image.open(io.BytesIO(sources[0])) as first:
         size = first.size
-    count = 3 * scenes
     return GenerateTiming(
         scenes=scenes,
         images=count,

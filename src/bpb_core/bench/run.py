@@ -7,8 +7,10 @@ A phase's rate is ``count / (last arrival - first arrival + latency)``: requests
 time from the first arrival until the last reply was due; the ideal is ``concurrency / latency``.
 Process start-up and litellm's import come before the first arrival and do not count.
 
-Memory: the peak resident set (``ru_maxrss`` from ``wait4``) of a ``bpb run`` subprocess making
-``3 x scenes`` calls against the server with no latency.
+Both clients ask what ``bpb run`` asks by default: every default task of the dataset's scene
+family (image input when the family has images, else state). Memory: the peak resident set
+(``ru_maxrss`` from ``wait4``) of a ``bpb run`` subprocess making ``tasks x scenes`` calls
+against the server with no latency. :func:`bench_dataset` makes (or reuses) the dataset.
 """
 
 from __future__ import annotations
@@ -20,11 +22,12 @@ import sys
 import tempfile
 import time
 import urllib.request
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bpb_core.runner.scenes import select_scenes
+from bpb_core.bench.run_bare import input_mode
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
 
@@ -73,6 +76,34 @@ def _child(args: list[str]) -> tuple[int, float]:
     return process.returncode, usage.ru_maxrss / 1024
 
 
+def bench_dataset(
+    work: Path, per_horizon: int, on_generate: Callable[[Path, int], None] | None = None
+) -> Path:
+    """A dataset with images of ``per_horizon`` scenes per horizon (1-5 s) under ``work``:
+    one made earlier with at least as many scenes (runs take the first N per horizon), else a
+    new one ``bench-run-data-N`` (``on_generate`` is told its path and scene count first)."""
+    from bpb_core.dataset import generate_dataset
+
+    for found in sorted(work.glob("bench-run-data-*")):
+        size = found.name.rsplit("-", 1)[-1]
+        if size.isdigit() and int(size) >= per_horizon and (found / "dataset.json").exists():
+            return found
+    data = work / f"bench-run-data-{per_horizon}"
+    if on_generate is not None:
+        on_generate(data, 5 * per_horizon)
+    return generate_dataset(data, per_horizon, [1, 2, 3, 4, 5], seed=0)
+
+
+def planned_calls(data: Path, scenes_per_horizon: int) -> int:
+    """Calls of a default ``bpb run`` on the first ``scenes_per_horizon`` scenes per horizon."""
+    from bpb_core.registry import make_registry
+    from bpb_core.runner.asking import asking
+    from bpb_core.runner.options import RunOptions
+
+    ask = asking(data, RunOptions(limit=scenes_per_horizon), make_registry())
+    return len(ask.tasks) * len(ask.scenes)
+
+
 def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> list[str]:
     return [
         sys.executable,
@@ -93,6 +124,8 @@ def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> 
         str(limit),
         "--timeout",
         "60",
+        "--input-mode",
+        input_mode(data),
     ]
 
 
@@ -130,8 +163,7 @@ def bench_throughput(
     The two clients alternate for ``rounds`` rounds (bare, bpb, bare, bpb, ...) so drifting
     machine load hits both alike; each result pools its rounds (total requests / total time).
     """
-    refs = select_scenes(data, None, scenes_per_horizon)
-    calls = 3 * len(refs)
+    calls = planned_calls(data, scenes_per_horizon)
     server = _Server(latency)
     bare: list[Phase] = []
     ours: list[Phase] = []
@@ -157,7 +189,7 @@ def bench_throughput(
 
 
 def bench_memory(data: Path, scenes_per_horizon: int, concurrency: int = 64) -> Phase:
-    """Peak RSS of a ``bpb run`` of ``3 x scenes`` calls against a zero-latency server."""
+    """Peak RSS of a ``bpb run`` of ``tasks x scenes`` calls against a zero-latency server."""
     server = _Server(0.0)
     try:
         with tempfile.TemporaryDirectory() as tmp:

@@ -1,9 +1,9 @@
 """The reference client of ``bpb bench run``: a bare ``litellm.acompletion`` loop.
 
 It sends ``n`` requests with ``concurrency`` in flight and nothing else: no parsing, no files.
-For a fair comparison the requests carry what ``bpb run`` sends: the first scene's image and its
-q1, q2 and q3 prompts, in turn. Run as
-``python -m bpb_core.bench.run_bare API_BASE N CONCURRENCY DATA``.
+For a fair comparison the requests carry what ``bpb run`` sends: the messages of each default
+task of the dataset's scene family about its first scene (with its image, when the family has
+images), in turn. Run as ``python -m bpb_core.bench.run_bare API_BASE N CONCURRENCY DATA``.
 """
 
 from __future__ import annotations
@@ -16,33 +16,57 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.model_calls import ImagePart, Message, TextPart
 
-def prompts(data: Path) -> list[tuple[bytes, str]]:
-    """The image and the q1, q2, q3 prompt texts of the dataset's first scene."""
-    from bpb_core.interfaces import PromptOptions
+
+def input_mode(data: Path) -> InputMode:
+    """``image`` when the dataset's scene family has images, else ``state``."""
     from bpb_core.registry import make_registry
-    from bpb_core.runner.scenes import select_scenes
+    from bpb_core.runner.asking import data_family
 
-    ref = select_scenes(data, None, 1)[0]
-    scene, image, registry = ref.load(), ref.image(), make_registry()
+    return "image" if data_family(data, make_registry()).input_image else "state"
+
+
+def requests(data: Path) -> list[list[dict[str, Any]]]:
+    """The chat messages of each default task about the dataset's first scene, as litellm
+    takes them."""
+    from bpb_core.registry import make_registry
+    from bpb_core.runner.asking import asking
+    from bpb_core.runner.options import RunOptions
+
+    ask = asking(data, RunOptions(limit=1), make_registry())
+    ref = ask.scenes[0]
+    scene = ref.load()
+    image = ref.image() if ask.family.input_image else None
+    mode: InputMode = "image" if image is not None else "state"
     out = []
-    for name in ("q1", "q2", "q3"):
-        task = registry.task(name)
-        out.append((image, task.prompt_text(scene, PromptOptions(cot=task.default_cot))))
+    for task in ask.tasks.values():
+        prompt = PromptOptions(input_mode=mode, cot=task.default_cot)
+        out.append([_message(m) for m in task.messages(scene, image, prompt)])
     return out
 
 
-def _messages(image: bytes, text: str) -> list[dict[str, Any]]:
-    uri = "data:image/png;base64," + base64.b64encode(image).decode("ascii")
-    content = [{"type": "image_url", "image_url": {"url": uri}}, {"type": "text", "text": text}]
-    return [{"role": "user", "content": content}]
+def _message(message: Message) -> dict[str, Any]:
+    """One message in the OpenAI chat format (text alone as a string, as the adapter does)."""
+    if all(isinstance(p, TextPart) for p in message.parts):
+        text = "\n\n".join(p.text for p in message.parts if isinstance(p, TextPart))
+        return {"role": message.role, "content": text}
+    return {"role": message.role, "content": [_part(p) for p in message.parts]}
+
+
+def _part(part: TextPart | ImagePart) -> dict[str, Any]:
+    if isinstance(part, TextPart):
+        return {"type": "text", "text": part.text}
+    uri = f"data:{part.media_type};base64," + base64.b64encode(part.data).decode("ascii")
+    return {"type": "image_url", "image_url": {"url": uri}}
 
 
 async def bare_loop(api_base: str, n: int, concurrency: int, data: Path) -> int:
     """Send ``n`` requests, ``concurrency`` at a time; return how many succeeded."""
     os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
     litellm: Any = importlib.import_module("litellm")
-    bodies = [_messages(image, text) for image, text in prompts(data)]
+    bodies = requests(data)
     slots = asyncio.Semaphore(concurrency)
     ok = 0
 

@@ -30,7 +30,8 @@ if TYPE_CHECKING:
 
 TARGET_SECONDS = 2.0
 Progress = Callable[[str], None]
-"""Called with what is being done next (``q1: scoring``)."""
+"""Called with what is being done next (``<task>: timing``)."""
+
 
 @dataclass(frozen=True)
 class ScoreTiming:
@@ -97,7 +98,11 @@ def _timings(task: str, sample: ScoreSample, rows: int, repeats: int) -> list[Sc
     return [
         ScoreTiming(task, "vectorised", rows, min(vector), statistics.median(vector), share),
         ScoreTiming(
-            task, "answers -> units (scaled)", rows, min(cut) * scale, statistics.median(cut) * scale
+            task,
+            "answers -> units (scaled)",
+            rows,
+            min(cut) * scale,
+            statistics.median(cut) * scale,
         ),
     ]
 

@@ -2,7 +2,7 @@
 
 The family (a :class:`~bpb_core.interfaces.Comparing` one) draws the scenes, names the default
 contestants and the reference, and says how far an outcome is from the reference's. Contestants
-are given as ``name`` or ``name:key=value,...`` (``pymunk:dt=0.01``). Every scene is run by the
+are given as ``name`` or ``name:key=value,...`` (``mysim:dt=0.01``). Every scene is run by the
 reference and then by every contestant in turn (interleaved, so machine noise hits all alike);
 runs under 5 ms are repeated up to 5 times and the quickest counts. Per contestant the result
 holds the mean time per scene, the max and median of the family's ``error`` over scenes and the

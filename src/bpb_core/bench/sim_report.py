@@ -91,9 +91,9 @@ def _speed(ms: float, other_ms: float) -> str:
     """``22.5x faster than`` or ``3.1x slower than``."""
     if ms <= 0 or other_ms <= 0:
         return "not comparable in speed with"
-    if ms <= other_ms:
-        return f"{other_ms / ms:.3g}x faster than"
-    return f"{ms / other_ms:.3g}x slower than"
+    ratio = max(ms, other_ms) / min(ms, other_ms)
+    times = f"{ratio:,.0f}x" if ratio >= 100 else f"{ratio:.3g}x"
+    return f"{times} faster than" if ms <= other_ms else f"{times} slower than"
 
 
 def _simulate_text(result: SimBench) -> str:

@@ -20,7 +20,7 @@ from bpb_core.version import __version__
 COMMANDS: dict[str, tuple[str, str, str]] = {
     "plugins": ("bpb_core.cli.plugins_cmd", "plugins", "List installed plugins and versions."),
     "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
-    "bench": ("bpb_core.cli.bench_cmd", "bench", "Benchmarks (speed against error)."),
+    "bench": ("bpb_core.cli.bench", "bench", "Benchmarks (speed against error)."),
     "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
     "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),

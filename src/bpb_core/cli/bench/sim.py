@@ -19,8 +19,8 @@ if TYPE_CHECKING:
     "--contestant",
     "contestants",
     multiple=True,
-    help="Simulator as NAME or NAME:KEY=VALUE,... (repeatable) [default: the family's list, "
-    "e.g. analytic and pymunk:dt=0.01].",
+    help="Simulator as NAME or NAME:KEY=VALUE,... such as NAME:dt=0.01 (repeatable) "
+    "[default: the family's list].",
 )
 @click.option("--reference", default=None, help="Reference simulator [default: the family's].")
 @click.option(
