@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.bench_scenes import random_scene
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.bench.score_sample import ScoreSample, sample_units, scored_tasks
+from bpb_core.bench.score_sample import HORIZONS, ScoreSample, sample_units, scored_tasks
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -78,7 +78,7 @@ def bench_score(
     with tempfile.TemporaryDirectory(prefix="bpb-bench-score-") as tmp:
         for family, tasks in scored_tasks(reg).items():
             if progress is not None:
-                progress(f"{family}: generating {5 * per_horizon} scenes")
+                progress(f"{family}: generating {len(HORIZONS) * per_horizon} scenes")
             data = Path(tmp) / family
             samples = sample_units(reg, family, tasks, data, per_horizon=per_horizon, seed=seed)
             for task, sample in samples.items():

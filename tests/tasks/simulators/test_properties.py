@@ -9,11 +9,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
 from bpb_tasks.billiards.outcome import Outcome
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.bench_scenes import random_scene, random_scenes
 from support.phys_helpers import R, seg_state, state_at
 
 FLOAT = AnalyticSimulator()

@@ -8,10 +8,10 @@ import pytest
 
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
+from bpb_tasks.billiards.bench_compare import random_scenes
 from bpb_tasks.billiards.stability import annotate
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.bench_scenes import random_scenes
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
 from support.phys_helpers import R, scene
 

@@ -71,7 +71,8 @@ def bench_sim(
             progress=lambda done, _total: bar.update(task, completed=done),
         )
     if simulate_scenes > 0:
-        timed = simulate_with or next(r.name for r in result.rows if not r.reference)
+        others = [r.name for r in result.rows if not r.reference]
+        timed = simulate_with or (others or [result.rows[0].name])[0]
         result = with_simulate_timing(result, simulate_scenes, timed, registry)
     _show(result)
     if plot is not None:

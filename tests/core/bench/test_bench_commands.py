@@ -1,0 +1,85 @@
+"""``bpb bench``, ``bench startup``, ``bench generate`` and ``bench run`` through the real CLI,
+at tiny sizes."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from bpb_core.registry import Registry
+
+BENCHMARKS = ("generate", "run", "score", "sim", "startup")
+
+
+def test_bench_help_lists_every_benchmark_without_importing_one() -> None:
+    probe = (
+        "import sys\nfrom bpb_core.cli.main import cli\n"
+        "try:\n    cli.main(['bench', '--help'], standalone_mode=False)\n"
+        "except SystemExit:\n    pass\n"
+        "print(' '.join(m for m in sys.modules if m.startswith(('bpb_core.bench', "
+        "'bpb_core.cli.bench.'))))"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    *help_text, imported = done.stdout.splitlines()
+    listed = [line.split()[0] for line in help_text if line.startswith("  ") and line.split()]
+    assert [name for name in listed if name in BENCHMARKS] == list(BENCHMARKS)
+    assert imported == ""
+
+
+def test_unknown_benchmark_is_a_usage_error(bench: Callable[..., Any]) -> None:
+    done = bench("nosuch")
+    assert done.returncode == 2 and "nosuch" in done.stderr
+
+
+def test_bench_startup_reports_medians_and_their_difference(bench: Callable[..., Any]) -> None:
+    done = bench("startup", "--runs", "2")
+    assert done.returncode == 0, done.stderr
+    assert "2 interleaved runs" in done.stdout
+    bare, help_ms, version = (
+        float(done.row(c)[0]) for c in ("python -c pass", "bpb --help", "bpb --version")
+    )
+    assert 0 < bare < 5000 and 0 < help_ms < 5000 and 0 < version < 5000
+    overhead = float(done.row("overhead of bpb --help")[0])
+    assert abs(overhead - (help_ms - bare)) <= 0.11  # each figure is rounded to 0.1 ms
+
+
+def test_bench_generate_times_each_variant(bench: Callable[..., Any], registry: Registry) -> None:
+    done = bench("generate", "--per-horizon", "2", "--workers", "1")
+    assert done.returncode == 0, done.stderr
+    images = len(registry.scene_family(registry.default_family()).image_names) * 10
+    assert f"10 scenes, {images} images of " in done.stdout and "1 worker" in done.stdout
+    assert len(done.rows) == 4
+    for name, seconds, per_scene in done.rows:
+        assert float(seconds) > 0, name
+        # ms per scene of 10 scenes; seconds are rounded to 0.01
+        assert abs(float(per_scene) - 100 * float(seconds)) <= 0.51, name
+    with_images = done.rows[0][1]
+    assert float(with_images) > float(done.row("bpb generate --no-images")[0])
+
+
+def test_bench_generate_rejects_bad_sizes(bench: Callable[..., Any]) -> None:
+    done = bench("generate", "--per-horizon", "0")
+    assert done.returncode == 2 and "--per-horizon" in done.stderr
+
+
+def test_bench_run_counts_every_request_of_both_clients(
+    tmp_path: Path, bench: Callable[..., Any], registry: Registry
+) -> None:
+    args = ["--concurrency", "4", "--latency", "0.05", "--throughput-scenes", "1"]
+    args += ["--memory-scenes", "1", "--rounds", "1", "--work", str(tmp_path)]
+    done = bench("run", *args, timeout=180)
+    assert done.returncode == 0, done.stderr + done.stdout
+    assert re.search(r"generating 5 scenes with images in .*bench-run-data-1", done.stderr)
+    calls = len(registry.tasks_for(registry.default_family(), default_only=True)) * 5
+    assert float(done.row("ideal")[2]) == 80.0  # 4 in flight / 0.05 s
+    for client in ("bare litellm loop", "bpb run", "bpb run (memory)"):
+        requests, seconds, rate, *_, rss, code = done.row(client)
+        assert (int(requests), code) == (calls, "0"), client
+        assert float(rate) > 0 and float(seconds) > 0 and float(rss) > 10, client
+    for client in ("bare litellm loop", "bpb run"):  # the memory run has no latency to wait
+        assert float(done.row(client)[2]) <= 80.0, client  # the server's delay bounds the rate
+    assert (tmp_path / "bench-run-data-1" / "dataset.json").is_file()  # kept for reuse

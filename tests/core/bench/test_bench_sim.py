@@ -1,0 +1,192 @@
+"""``bpb bench sim``: contestants of any comparing scene family against its reference."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+from PIL import Image
+
+from bpb_core.bench import sim_report
+from bpb_core.bench.contestants import parse_contestant
+from bpb_core.bench.sim import bench_simulators
+from bpb_core.errors import BadInput, UnknownName
+from bpb_core.hookspecs import hookimpl
+from bpb_core.registration import SceneFamilyInfo, SimulatorInfo
+from bpb_core.registry import Registry, make_registry
+from bpb_core.simulate import simulate_lines
+from bpb_tasks.billiards.bench_compare import random_scenes
+
+
+def test_parse_contestant_reads_typed_options() -> None:
+    assert parse_contestant("analytic").options == {}
+    entry = parse_contestant("pymunk:dt=0.01,precision=50,mode=fast")
+    assert entry.name == "pymunk" and entry.spec == "pymunk:dt=0.01,precision=50,mode=fast"
+    assert entry.options == {"dt": 0.01, "precision": 50, "mode": "fast"}
+    with pytest.raises(BadInput, match="name:key=value"):
+        parse_contestant("pymunk:dt")
+
+
+def test_billiards_reference_is_exact_and_analytic_close(registry: Registry) -> None:
+    result = bench_simulators(4, 3, ("analytic", "pymunk:dt=0.01"), registry=registry)
+    assert [row.name for row in result.rows] == [
+        "analytic:precision=50",
+        "analytic",
+        "pymunk:dt=0.01",
+    ]
+    assert [row.reference for row in result.rows] == [True, False, False]
+    assert result.columns == ("q1", "q2", "pocketed", "q3")
+    reference, analytic, pymunk = result.rows
+    assert reference.max_error == 0.0 and not any(reference.counts.values())
+    assert analytic.max_error < 1e-9 and not any(analytic.counts.values())
+    assert pymunk.median_error > 1e3 * analytic.median_error
+    assert all(row.ms_per_scene > 0 for row in result.rows)
+
+
+def test_a_contestant_of_another_family_or_unknown_is_refused(registry: Registry) -> None:
+    with pytest.raises(UnknownName, match="nosuch"):
+        bench_simulators(1, contestants=("nosuch",), registry=registry)
+    with pytest.raises(BadInput, match="dt"):
+        bench_simulators(1, contestants=("analytic:dt=0.1",), registry=registry)
+
+
+# A scene family that is not billiards: a point moving at constant speed on a line.
+@dataclass(frozen=True)
+class Mover:
+    scene_id: str
+    horizon: float
+    x: float
+    v: float
+
+
+class Exact:
+    name = "exact"
+
+    def run(self, scene: Mover, horizon: float | None = None) -> float:
+        return scene.x + scene.v * (scene.horizon if horizon is None else horizon)
+
+
+class Stepper(Exact):
+    name = "stepper"
+
+    def __init__(self, dt: float = 0.1) -> None:
+        self.dt = dt
+
+    def run(self, scene: Mover, horizon: float | None = None) -> float:
+        steps = int((scene.horizon if horizon is None else horizon) / self.dt)
+        return scene.x + scene.v * steps * self.dt
+
+
+class Line:
+    name = "line"
+    bench_contestants = ("exact", "stepper:dt=0.3")
+    bench_reference = "exact"
+    bench_description = "points moving on a line"
+    bench_measures = "error = distance; past = scenes ending on the other side of 0"
+
+    def bench_scenes(self, count: int, seed: int) -> list[Mover]:
+        return [Mover(f"s{i}", 1.0 + i, -0.95 if i == 0 else i, 1.0 + seed) for i in range(count)]
+
+    def compare(self, outcome: float, reference: float, scene: Any) -> dict[str, float]:
+        return {"error": abs(outcome - reference), "past": float((outcome > 0) != (reference > 0))}
+
+
+class LinePlugin:
+    @hookimpl
+    def bpb_scene_families(self) -> list[SceneFamilyInfo]:
+        return [SceneFamilyInfo("line", lambda: Line, "points on a line", default=True)]
+
+    @hookimpl
+    def bpb_simulators(self) -> list[SimulatorInfo]:
+        return [
+            SimulatorInfo("exact", lambda: Exact, "closed form", family="line"),
+            SimulatorInfo("stepper", lambda: Stepper, "fixed steps", family="line"),
+        ]
+
+
+def test_any_comparing_family_is_benchmarked_with_its_own_columns(tmp_path: Path) -> None:
+    registry = make_registry([LinePlugin()], entry_points=False)
+    result = bench_simulators(5, 0, registry=registry)
+    assert result.family == "line" and result.columns == ("past",)
+    reference, stepper = result.rows
+    assert (reference.name, reference.reference, reference.max_error) == ("exact", True, 0.0)
+    # horizons 1..5 at dt 0.3 fall short by 0.1, 0.2, 0.0, 0.1, 0.2 s at speed 1
+    assert stepper.max_error == pytest.approx(0.2) and stepper.median_error == pytest.approx(0.1)
+    assert stepper.counts == {"past": 1.0}  # scene 0 ends at +0.05; the stepper leaves it at -0.05
+    doc = tmp_path / "benchmarks.md"
+    sim_report.update_section(doc, sim_report.markdown(result, None))
+    text = doc.read_text()
+    assert "| stepper:dt=0.3 |" in text and "| past |" in text and "points moving" in text
+
+
+def test_a_family_that_cannot_compare_is_bad_input() -> None:
+    class Plain:
+        name = "plain"
+
+    class PlainPlugin:
+        @hookimpl
+        def bpb_scene_families(self) -> list[SceneFamilyInfo]:
+            return [SceneFamilyInfo("plain", lambda: Plain, "no comparison")]
+
+    registry = make_registry([PlainPlugin()], entry_points=False)
+    with pytest.raises(BadInput, match="plain scene family cannot compare simulators"):
+        bench_simulators(2, registry=registry)
+
+
+def test_markdown_section_is_replaced_not_duplicated(tmp_path: Path, registry: Registry) -> None:
+    result = bench_simulators(2, 1, ("analytic",), registry=registry)
+    doc = tmp_path / "benchmarks.md"
+    doc.write_text(
+        "# Benchmarks\n\n## Simulators (`bpb bench sim`)\n\nold\n\n## Runner\n\nkeep me\n"
+    )
+    sim_report.update_section(doc, sim_report.markdown(result))
+    sim_report.update_section(doc, sim_report.markdown(result))
+    text = doc.read_text()
+    assert text.count(sim_report.HEADING) == 1 and "keep me" in text and "old" not in text
+    assert "| analytic |" in text and "| analytic:precision=50 (reference) |" in text
+    assert result.machine in text and text.index(sim_report.HEADING) < text.index("## Runner")
+
+
+def test_bench_sim_command_writes_table_plot_and_docs(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    plot, doc = tmp_path / "img" / "bench_sim.png", tmp_path / "benchmarks.md"
+    done = bench(
+        "sim", "--scenes", "2", "--simulate-scenes", "20",
+        "--contestant", "analytic", "--contestant", "pymunk:dt=0.01",
+        "--plot", plot, "--markdown", doc,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert [row[0] for row in done.rows] == [
+        "analytic:precision=50 (reference)",
+        "analytic",
+        "pymunk:dt=0.01",
+    ]
+    ms, max_error, median_error, *counts = done.row("pymunk:dt=0.01")
+    assert float(ms) > 0 and float(max_error) >= float(median_error) > 0 and len(counts) == 4
+    assert "bpb simulate (analytic), 1 worker, wall:" in done.stdout
+    with Image.open(plot) as image:
+        assert image.size[0] >= 1000
+    text = doc.read_text()
+    assert "![speed against error](img/bench_sim.png)" in text
+    assert "| pymunk:dt=0.01 |" in text and "`bpb simulate` with `analytic` over 20" in text
+
+
+def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -> None:
+    done = bench("sim", "--scenes", "1", "--contestant", "pymunk:dt")
+    assert done.returncode == 2 and "--contestants: 'pymunk:dt'" in done.stderr
+
+
+def test_parallel_simulate_lines_keep_input_order(tmp_path: Path) -> None:
+    paths = []
+    for i, scene in enumerate(random_scenes(40, seed=9)):
+        paths.append(tmp_path / f"s{i}.json")
+        paths[-1].write_text(scene.model_dump_json())
+    paths.reverse()
+    one = list(simulate_lines(paths, workers=1))
+    two = list(simulate_lines(paths, workers=2))
+    assert one == two and len(one) == 40
+    assert '"scene_id":"r9_00039"' in one[0]
