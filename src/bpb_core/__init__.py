@@ -92,104 +92,46 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:
     from bpb_core.errors import (
         BadInput as BadInput,
-    )
-    from bpb_core.errors import (
         BpbError as BpbError,
-    )
-    from bpb_core.errors import (
         ParseFailure as ParseFailure,
     )
     from bpb_core.hookspecs import (
         hookimpl as hookimpl,
-    )
-    from bpb_core.hookspecs import (
         hookspec as hookspec,
     )
     from bpb_core.interfaces import (
         Diagnostic as Diagnostic,
-    )
-    from bpb_core.interfaces import (
         GeneratedScene as GeneratedScene,
-    )
-    from bpb_core.interfaces import (
         GroundTruth as GroundTruth,
-    )
-    from bpb_core.interfaces import (
         ModelAdapter as ModelAdapter,
-    )
-    from bpb_core.interfaces import (
         ParsedAnswer as ParsedAnswer,
-    )
-    from bpb_core.interfaces import (
         PromptOptions as PromptOptions,
-    )
-    from bpb_core.interfaces import (
         Scene as Scene,
-    )
-    from bpb_core.interfaces import (
         SceneFamily as SceneFamily,
-    )
-    from bpb_core.interfaces import (
         Scorer as Scorer,
-    )
-    from bpb_core.interfaces import (
         Simulator as Simulator,
-    )
-    from bpb_core.interfaces import (
         Task as Task,
     )
     from bpb_core.library import (
         Dataset as Dataset,
-    )
-    from bpb_core.library import (
         Results as Results,
-    )
-    from bpb_core.library import (
         build_report as build_report,
-    )
-    from bpb_core.library import (
         evaluate as evaluate,
-    )
-    from bpb_core.library import (
         generate_dataset as generate_dataset,
-    )
-    from bpb_core.library import (
         leaderboard as leaderboard,
-    )
-    from bpb_core.library import (
         load_dataset as load_dataset,
-    )
-    from bpb_core.library import (
         load_frame as load_frame,
-    )
-    from bpb_core.library import (
         load_results as load_results,
-    )
-    from bpb_core.library import (
         run_eval as run_eval,
-    )
-    from bpb_core.library import (
         simulate_paths as simulate_paths,
     )
     from bpb_core.model_calls import (
         AdapterOptions as AdapterOptions,
-    )
-    from bpb_core.model_calls import (
         ImagePart as ImagePart,
-    )
-    from bpb_core.model_calls import (
         Message as Message,
-    )
-    from bpb_core.model_calls import (
         ModelRequest as ModelRequest,
-    )
-    from bpb_core.model_calls import (
         ModelResponse as ModelResponse,
-    )
-    from bpb_core.model_calls import (
         TextPart as TextPart,
-    )
-    from bpb_core.model_calls import (
         Usage as Usage,
     )
     from bpb_core.picture import (
@@ -197,35 +139,17 @@ if TYPE_CHECKING:
     )
     from bpb_core.registration import (
         AdapterInfo as AdapterInfo,
-    )
-    from bpb_core.registration import (
         DiagnosticInfo as DiagnosticInfo,
-    )
-    from bpb_core.registration import (
         SceneFamilyInfo as SceneFamilyInfo,
-    )
-    from bpb_core.registration import (
         ScorerInfo as ScorerInfo,
-    )
-    from bpb_core.registration import (
         SimulatorInfo as SimulatorInfo,
-    )
-    from bpb_core.registration import (
         SuiteInfo as SuiteInfo,
-    )
-    from bpb_core.registration import (
         TaskInfo as TaskInfo,
-    )
-    from bpb_core.registration import (
         lazy as lazy,
     )
     from bpb_core.registry import (
         PluginWarning as PluginWarning,
-    )
-    from bpb_core.registry import (
         Registry as Registry,
-    )
-    from bpb_core.registry import (
         make_registry as make_registry,
     )
     from bpb_core.reply_json import (
@@ -233,8 +157,6 @@ if TYPE_CHECKING:
     )
     from bpb_core.runner.options import (
         RetryPolicy as RetryPolicy,
-    )
-    from bpb_core.runner.options import (
         RunOptions as RunOptions,
     )
     from bpb_core.runner.progress import (

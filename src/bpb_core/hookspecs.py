@@ -94,8 +94,8 @@ def bpb_scorers() -> Iterable[ScorerInfo]:  # type: ignore[empty-body]
     Returns:
         :class:`~bpb_core.registration.ScorerInfo` records; ``load()`` gives a class
         implementing :class:`~bpb_core.interfaces.Scorer` (and optionally
-        :class:`~bpb_core.interfaces.ExplainsErrors` and
-        :class:`~bpb_core.interfaces.DrawsOverlay` for the failure gallery).
+        :class:`~bpb_core.capabilities.ExplainsErrors` and
+        :class:`~bpb_core.capabilities.DrawsOverlay` for the failure gallery).
     """
 
 

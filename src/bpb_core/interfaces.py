@@ -15,17 +15,14 @@ for them with ``isinstance`` and does without when a family lacks one.
 
 from __future__ import annotations
 
-import random
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.model_calls import Message, ModelRequest, ModelResponse
-    from bpb_core.picture import ScenePicture
     from bpb_core.registration import SuiteInfo
     from bpb_core.scored_units import UnitRow
 
@@ -184,110 +181,6 @@ class SceneFamily(Protocol):
 
 
 @runtime_checkable
-class Calibrating(Protocol):
-    """A family whose sampling can be tuned to a target (``bpb generate --calibrate``)."""
-
-    def calibrate_horizon(self, config: Any, simulator: Simulator, horizon: float) -> Any:
-        """Calibrate one horizon (runs in a worker process; return a picklable value)."""
-        ...
-
-    def apply_calibration(
-        self, config: Any, results: Mapping[float, Any]
-    ) -> tuple[Any, dict[str, Any]]:
-        """The config updated with the per-horizon results, and the manifest's record."""
-        ...
-
-
-class HorizonTally(Protocol):
-    """Running per-horizon counts a family keeps while scenes arrive."""
-
-    def add(self, row: Mapping[str, object]) -> None:
-        """Count one kept scene (its ``index.csv`` cells)."""
-        ...
-
-    def summary(self) -> dict[str, Any]:
-        """Fields added to the horizon's entry of the manifest's ``summary``."""
-        ...
-
-
-@runtime_checkable
-class Tallying(Protocol):
-    """A family that summarises each horizon in the manifest."""
-
-    def new_tally(self, config: Any, horizon: float) -> HorizonTally:
-        """An empty tally for ``horizon``."""
-        ...
-
-
-@runtime_checkable
-class DrawingStats(Protocol):
-    """A family that draws figures of the whole dataset into ``stats/``."""
-
-    def write_stats(
-        self, root: Path, config: Any, tallies: Mapping[float, HorizonTally]
-    ) -> list[str]:
-        """Write the figures under ``root`` and return their paths relative to it."""
-        ...
-
-
-@runtime_checkable
-class Predicting(Protocol):
-    """A family that offers reference predictions (the ``baseline`` adapter's models).
-
-    Attributes:
-        predictors: Names it knows besides ``oracle`` (which every family has: its own
-            ground truth).
-    """
-
-    predictors: tuple[str, ...]
-
-    def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
-        """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
-        ...
-
-
-@runtime_checkable
-class Picturing(Protocol):
-    """A family that can draw a scene for the report's failure gallery."""
-
-    def picture(self, dataset: Path, folder: Path, scene: Any) -> ScenePicture:
-        """The scene drawn as an RGB image with its coordinate mapping."""
-        ...
-
-
-@runtime_checkable
-class Comparing(Protocol):
-    """A family whose simulators can be compared on speed and error (``bpb bench sim``).
-
-    Core runs every contestant on the same scenes, times it and hands each outcome to
-    :meth:`compare` with the reference's outcome; tables, plot and docs come from core.
-
-    Attributes:
-        bench_contestants: Simulators compared by default, each ``name`` or
-            ``name:key=value,...`` (options as ``bpb simulate`` takes them).
-        bench_reference: The simulator (same form) whose outcomes count as the truth.
-        bench_description: One sentence on the scenes :meth:`bench_scenes` draws.
-        bench_measures: One sentence on what :meth:`compare`'s numbers mean.
-    """
-
-    bench_contestants: tuple[str, ...]
-    bench_reference: str
-    bench_description: str
-    bench_measures: str
-
-    def bench_scenes(self, count: int, seed: int) -> list[Any]:
-        """``count`` scenes of the family's scene model, the same for the same ``seed``."""
-        ...
-
-    def compare(self, outcome: Any, reference: Any, scene: Any) -> dict[str, float]:
-        """How far ``outcome`` is from ``reference`` (both from :meth:`Simulator.run` on
-        ``scene``): the key ``error`` holds a distance (max and median over scenes are
-        reported); every other key counts disagreements (summed over scenes), named and
-        ordered as the table's columns."""
-        ...
-
-
-@runtime_checkable
 class Task(Protocol):
     """A question about a scene of one family (the family its record names).
 
@@ -322,18 +215,6 @@ class ModelAdapter(Protocol):
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Send one request and return the reply."""
-        ...
-
-
-@runtime_checkable
-class KnowsFamilies(Protocol):
-    """An offline adapter that answers from the scene itself, so it can answer only the scene
-    families it knows (``bpb run`` checks before the first call, and leaves it out of its
-    default adapters for a family it does not know)."""
-
-    def cannot_answer(self, family: SceneFamily) -> str | None:
-        """``None`` when it can answer questions about ``family``'s scenes, else why not (one
-        line, e.g. what it could answer instead)."""
         ...
 
 
@@ -373,24 +254,6 @@ class Scorer(Protocol):
 
     def score(self, units: pd.DataFrame) -> pd.DataFrame:
         """Columns ``correct`` and ``distance`` for every row of ``units``."""
-        ...
-
-
-@runtime_checkable
-class ExplainsErrors(Protocol):
-    """A scorer that says in words what an answer got wrong (the failure gallery's text)."""
-
-    def explain(self, rows: pd.DataFrame) -> list[str]:
-        """One line per wrong unit of one (run, scene) in ``rows`` (its units of this task)."""
-        ...
-
-
-@runtime_checkable
-class DrawsOverlay(Protocol):
-    """A scorer that marks truth and prediction on the scene's picture (the failure gallery)."""
-
-    def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
-        """Draw on ``picture.image`` and add legend entries to ``picture.legend``."""
         ...
 
 

@@ -1,7 +1,7 @@
 """A scene drawn for the failure gallery: an RGB image, its coordinate mapping and a legend.
 
-A scene family makes the picture (:class:`~bpb_core.interfaces.Picturing`); each task's scorer
-draws its marks on it (:class:`~bpb_core.interfaces.DrawsOverlay`) and adds legend entries;
+A scene family makes the picture (:class:`~bpb_core.capabilities.Picturing`); each task's scorer
+draws its marks on it (:class:`~bpb_core.capabilities.DrawsOverlay`) and adds legend entries;
 core puts the legend in a band above the image, so no mark covers the scene.
 """
 

@@ -31,14 +31,7 @@ from bpb_core.registration import (
 )
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import (
-        Diagnostic,
-        ModelAdapter,
-        SceneFamily,
-        Scorer,
-        Simulator,
-        Task,
-    )
+    from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
     from bpb_core.model_calls import AdapterOptions
 
 ENTRY_POINT_GROUP = "bpb"

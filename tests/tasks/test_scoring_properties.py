@@ -6,8 +6,7 @@ from __future__ import annotations
 import random
 from typing import Any
 
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from bpb_tasks.q1.scorer import Q1Scorer
 from bpb_tasks.q2.scorer import Q2Scorer

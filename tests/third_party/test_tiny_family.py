@@ -15,18 +15,17 @@ from typing import Any, NamedTuple
 import pytest
 from bpb_tiny import hooks  # importable here too: pytest puts tests/third_party on sys.path
 
-from bpb_core.errors import ParseFailure
-from bpb_core.interfaces import (
+from bpb_core.capabilities import (
     Calibrating,
     DrawingStats,
     DrawsOverlay,
     ExplainsErrors,
     Picturing,
     Predicting,
-    PromptOptions,
-    SceneFamily,
     Tallying,
 )
+from bpb_core.errors import ParseFailure
+from bpb_core.interfaces import PromptOptions, SceneFamily
 from bpb_core.registry import make_registry
 from bpb_core.results.frames import load_results
 from support.fake_openai import fake_server

@@ -14,8 +14,7 @@ from pathlib import Path
 import pytest
 from bpb_firsthit.scorer import FirstHitScorer
 from bpb_firsthit.task import FirstHitTask, first_hit
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from bpb_core import ParseFailure, PromptOptions, make_registry
 from bpb_tasks.billiards.scene import Ball, Scene

@@ -2,7 +2,7 @@
 
 ``baseline:oracle`` answers from the scene family's own ground truth (the dataset's simulator run
 on the scene: the ceiling, and an end-to-end check); any other model names a prediction the
-scene's family offers (:class:`~bpb_core.interfaces.Predicting`; ``stasis``, ``straight`` and
+scene's family offers (:class:`~bpb_core.capabilities.Predicting`; ``stasis``, ``straight`` and
 ``random`` for billiards). Either way the adapter answers a task with the part
 the task's ``expected()`` cuts from the prediction, as JSON text, so its answers take the same
 parse path as a real model's. Nothing here knows a particular family or task.
@@ -17,8 +17,8 @@ import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Predicting
 from bpb_core.errors import BadInput, RequestRejected
-from bpb_core.interfaces import Predicting
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
 
 if TYPE_CHECKING:

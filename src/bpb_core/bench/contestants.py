@@ -11,8 +11,8 @@ import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Comparing
 from bpb_core.errors import BadInput
-from bpb_core.interfaces import Comparing
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Simulator

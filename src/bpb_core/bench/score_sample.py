@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from bpb_core.capabilities import Predicting
 from bpb_core.errors import BadInput
-from bpb_core.interfaces import Predicting
 from bpb_core.scored_units import SCORER_INPUT, UnitRow
 
 if TYPE_CHECKING:

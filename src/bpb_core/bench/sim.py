@@ -1,6 +1,6 @@
 """``bpb bench sim``: simulators of one scene family, speed against error, on the same scenes.
 
-The family (a :class:`~bpb_core.interfaces.Comparing` one) draws the scenes, names the default
+The family (a :class:`~bpb_core.capabilities.Comparing` one) draws the scenes, names the default
 contestants and the reference, and says how far an outcome is from the reference's. Contestants
 are given as ``name`` or ``name:key=value,...`` (``mysim:dt=0.01``). Every scene is run by the
 reference and then by every contestant in turn (interleaved, so machine noise hits all alike);
@@ -30,7 +30,8 @@ from bpb_core.bench.contestants import (
 from bpb_core.errors import BadInput, PluginError
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import Comparing, Simulator
+    from bpb_core.capabilities import Comparing
+    from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
 
 ERROR = "error"

@@ -75,7 +75,7 @@ def _adapter_options(
 
 def _offline_adapters(registry: Registry, data: Path) -> list[str]:
     """Every model of every offline adapter that can answer the dataset's scene family."""
-    from bpb_core.interfaces import KnowsFamilies
+    from bpb_core.capabilities import KnowsFamilies
     from bpb_core.runner.asking import data_family
 
     family = data_family(data, registry)

@@ -8,8 +8,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.runner.progress import ProgressEvent
 
 if TYPE_CHECKING:
-    from rich.progress import Progress as RichBar
-    from rich.progress import TaskID
+    from rich.progress import Progress as RichBar, TaskID
 
 
 @dataclass

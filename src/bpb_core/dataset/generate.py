@@ -16,6 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Calibrating, DrawingStats, Tallying
 from bpb_core.dataset.jobs import (
     GenerateProgress,
     NoProgress,
@@ -28,7 +29,7 @@ from bpb_core.dataset.manifest import DatasetManifest
 from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
 from bpb_core.errors import BadInput
-from bpb_core.interfaces import Calibrating, DrawingStats, SceneFamily, Tallying
+from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST
 
 if TYPE_CHECKING:

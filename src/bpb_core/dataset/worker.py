@@ -12,9 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
 from bpb_core.errors import BpbError
-from bpb_core.interfaces import Calibrating, SceneFamily, Simulator
+from bpb_core.interfaces import SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
 

@@ -13,6 +13,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import IO, Any
 
+from bpb_core.capabilities import HorizonTally
 from bpb_core.dataset.manifest import (
     CHECKSUMS,
     DatasetManifest,
@@ -22,7 +23,6 @@ from bpb_core.dataset.manifest import (
     sha256_bytes,
 )
 from bpb_core.dataset.worker import SceneResult
-from bpb_core.interfaces import HorizonTally
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")

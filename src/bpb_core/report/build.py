@@ -21,8 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.report import charts as ch
-from bpb_core.report import gallery, html
+from bpb_core.report import charts as ch, gallery, html
 from bpb_core.results.frames import Results, load_results
 from bpb_core.results.tables import (
     accuracy,

@@ -2,9 +2,9 @@
 
 Which scenes: per run, the answered scenes with the lowest score (weighted by the first suite
 whose tasks the scene was asked, else the mean over its tasks). What is shown comes from the
-plugins: the scene family draws the scene (:class:`~bpb_core.interfaces.Picturing`), each
-task's scorer marks truth and prediction on it (:class:`~bpb_core.interfaces.DrawsOverlay`) and
-says in words what was wrong (:class:`~bpb_core.interfaces.ExplainsErrors`). Core only chooses
+plugins: the scene family draws the scene (:class:`~bpb_core.capabilities.Picturing`), each
+task's scorer marks truth and prediction on it (:class:`~bpb_core.capabilities.DrawsOverlay`) and
+says in words what was wrong (:class:`~bpb_core.capabilities.ExplainsErrors`). Core only chooses
 the scenes and lays them out.
 """
 
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from bpb_core.interfaces import DrawsOverlay, ExplainsErrors, Picturing
+from bpb_core.capabilities import DrawsOverlay, ExplainsErrors, Picturing
 from bpb_core.layout import SceneKey
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.tables import scene_scores

@@ -17,8 +17,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import KnowsFamilies
 from bpb_core.errors import BadInput
-from bpb_core.interfaces import KnowsFamilies
 from bpb_core.model_calls import AdapterOptions
 from bpb_core.run_folder import AttemptLog, completed
 from bpb_core.runner.asking import Asking, asking

@@ -6,8 +6,7 @@ import contextlib
 import json
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions

@@ -6,8 +6,7 @@ import itertools
 import math
 
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
 from bpb_tasks.billiards.outcome import Outcome
