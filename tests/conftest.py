@@ -28,14 +28,7 @@ import pytest
 from bpb_core.registry import PluginWarning, Registry, make_registry
 from support.dataset_small import SMALL
 from support.plugin_dist import InstallFn, install_fake_dist
-from support.reports_fixture import (
-    all_answers,
-    model_answers,
-    oracle_answer,
-    stasis_answer,
-    write_dataset,
-    write_run,
-)
+from support.reports_fixture import write_runs
 from support.runner_scenes import make_dataset
 
 BPB = str(Path(sys.executable).with_name("bpb"))
@@ -94,12 +87,7 @@ def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture
 def runs(tmp_path: Path) -> Path:
     """``tmp_path/runs`` holding the oracle, stasis and model run folders."""
-    data = write_dataset(tmp_path / "data")
-    out = tmp_path / "runs"
-    write_run(out / "baseline_oracle", "baseline:oracle", data, all_answers(oracle_answer))
-    write_run(out / "baseline_stasis", "baseline:stasis", data, all_answers(stasis_answer))
-    write_run(out / "litellm_model", "litellm:model", data, model_answers())
-    return out
+    return write_runs(tmp_path)
 
 
 @pytest.fixture

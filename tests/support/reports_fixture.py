@@ -136,3 +136,13 @@ def model_answers() -> dict[tuple[str, str], dict[str, Any] | None]:
         "usage": {"input_tokens": 100, "output_tokens": 20, "reasoning_tokens": 50},
     }
     return out
+
+
+def write_runs(root: Path) -> Path:
+    """``root/data`` and ``root/runs`` holding the oracle, stasis and model run folders."""
+    data = write_dataset(root / "data")
+    runs = root / "runs"
+    write_run(runs / "baseline_oracle", "baseline:oracle", data, all_answers(oracle_answer))
+    write_run(runs / "baseline_stasis", "baseline:stasis", data, all_answers(stasis_answer))
+    write_run(runs / "litellm_model", "litellm:model", data, model_answers())
+    return runs

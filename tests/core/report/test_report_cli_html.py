@@ -34,21 +34,10 @@ def bpb(*args: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="module")
 def report_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from support.reports_fixture import (
-        all_answers,
-        model_answers,
-        oracle_answer,
-        stasis_answer,
-        write_dataset,
-        write_run,
-    )
+    from support.reports_fixture import write_runs
 
     root = tmp_path_factory.mktemp("report")
-    data = write_dataset(root / "data")
-    runs = root / "runs"
-    write_run(runs / "baseline_oracle", "baseline:oracle", data, all_answers(oracle_answer))
-    write_run(runs / "baseline_stasis", "baseline:stasis", data, all_answers(stasis_answer))
-    write_run(runs / "litellm_model", "litellm:model", data, model_answers())
+    runs = write_runs(root)
     done = bpb("report", str(runs), "--out", str(root / "out"), "--bootstrap", "200")
     assert done.returncode == 0, done.stderr
     (root / "stdout.txt").write_text(done.stdout)
