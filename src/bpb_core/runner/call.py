@@ -83,18 +83,28 @@ class PairCall:
             self.escalation,
         )
         self.tally.attempts += 1
-        started = time.perf_counter()
+        delay: float | None = None
         try:
-            response = await self.state.send(self._request(prompt))
+            async with self.state.slot():  # held until the reply is logged and written
+                started = time.perf_counter()
+                try:
+                    response = await self.state.adapter.complete(self._request(prompt))
+                except ModelError as error:
+                    delay = await self._failed(error, time.perf_counter() - started)
+                except Exception as exc:  # an adapter bug: record it for this pair, keep going
+                    bug = RequestRejected(
+                        f"adapter {self.state.spec} raised {type(exc).__name__}: {exc}"
+                    )
+                    delay = await self._failed(bug, time.perf_counter() - started)
+                else:
+                    return await self._replied(response, prompt)
         except NotSent:
             self.state.not_sent(self.task)
             return True
-        except ModelError as error:
-            return await self._failed(error, time.perf_counter() - started)
-        except Exception as exc:  # an adapter bug: record it for this pair, keep the run going
-            bug = RequestRejected(f"adapter {self.state.spec} raised {type(exc).__name__}: {exc}")
-            return await self._failed(bug, time.perf_counter() - started)
-        return await self._replied(response, prompt)
+        if delay is None:
+            return True
+        await asyncio.sleep(delay)  # the backoff waits outside the slot
+        return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
         messages = self.state.tasks[self.task].messages(self.scene, self.image, prompt)
@@ -154,8 +164,9 @@ class PairCall:
         self._retrying("format")
         return False
 
-    async def _failed(self, error: ModelError, elapsed: float) -> bool:
-        """Log a failed call; back off and return False when it is worth another try."""
+    async def _failed(self, error: ModelError, elapsed: float) -> float | None:
+        """Log a failed call; settle the pair and return None, or return the seconds to back
+        off before another try."""
         self.last_error = f"{type(error).__name__}: {error}"
         policy = self.state.options.retry
         retry = error.retryable and self.retries < policy.max_retries
@@ -166,13 +177,12 @@ class PairCall:
             self.state.stop_reason = "auth"
         if delay is None or isinstance(error, AuthenticationFailed):
             await self._settle("api_error")
-            return True
+            return None
         self.retries += 1
         if isinstance(error, ModelTimeout):
             self.timeout *= policy.timeout_growth
         self._retrying(type(error).__name__)
-        await asyncio.sleep(delay)
-        return False
+        return delay
 
     def _backoff(self, error: ModelError) -> float:
         """Seconds to wait: the server's Retry-After, else exponential with full jitter."""

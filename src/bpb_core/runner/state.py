@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import random
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,7 +13,7 @@ from typing import Any, TypeVar
 
 from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
-from bpb_core.model_calls import ModelRequest, ModelResponse
+from bpb_core.model_calls import ModelResponse
 from bpb_core.run_folder import AttemptLog, UsageRecord
 from bpb_core.runner.limits import RateLimiter
 from bpb_core.runner.options import RunOptions
@@ -68,8 +69,12 @@ class RunState:
             self.stop_reason = "max-cost"
         return self.stop_reason is None
 
-    async def send(self, request: ModelRequest) -> ModelResponse:
-        """Call the adapter within the concurrency and rate limits.
+    @contextlib.asynccontextmanager
+    async def slot(self) -> AsyncIterator[None]:
+        """Hold one of the ``--concurrency`` slots, within the rate limit.
+
+        The caller keeps the slot until the reply is logged and its answer file written, so a run
+        killed at any instant has at most ``--concurrency`` paid replies that no file records.
 
         Raises:
             NotSent: The run stopped sending while this call waited for a slot.
@@ -78,7 +83,7 @@ class RunState:
             await self.limiter.wait()
             if not self.may_send():  # checked again here: the cap may be hit while we queued
                 raise NotSent
-            return await self.adapter.complete(request)
+            yield
 
     def account(self, response: ModelResponse) -> None:
         """Add a reply's tokens and cost to the run totals."""
