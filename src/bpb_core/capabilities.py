@@ -7,6 +7,8 @@ without when it is missing.
   :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
   gallery's picture), :class:`Comparing` (``bpb bench sim``).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
+- An adapter that talks to a model: :class:`Preflighting` (a check before the first call) and
+  :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
 """
 
@@ -137,6 +139,26 @@ class KnowsFamilies(Protocol):
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when it can answer questions about ``family``'s scenes, else why not (one
         line, e.g. what it could answer instead)."""
+        ...
+
+
+@runtime_checkable
+class Preflighting(Protocol):
+    """An adapter that can tell before its first call that no call can succeed (no key, an
+    unknown provider, a module missing); ``bpb run`` checks every adapter before sending any."""
+
+    def preflight(self) -> str | None:
+        """``None`` when calls may be sent, else one line saying what to fix."""
+        ...
+
+
+@runtime_checkable
+class Describing(Protocol):
+    """An adapter whose answers depend on settings beyond its name (model arguments such as a
+    reasoning effort): they are recorded in run.json and a resume with others is refused."""
+
+    def settings(self) -> dict[str, Any]:
+        """JSON-ready settings that shape the answers (never a secret)."""
         ...
 
 

@@ -91,6 +91,9 @@ class ModelResponse:
         latency: Seconds from request to reply.
         model_id: The provider's model id that answered.
         finish_reason: ``stop``, ``length`` (cut off by the token limit) and so on.
+        sent: The parameters that actually went on the wire (``None`` when not known).
+        dropped: Requested parameters the provider route did not send (``temperature`` ...).
+        reasoning: Reasoning text the provider returned, if any.
     """
 
     text: str
@@ -99,6 +102,9 @@ class ModelResponse:
     latency: float = 0.0
     model_id: str = ""
     finish_reason: str | None = None
+    sent: dict[str, Any] | None = None
+    dropped: tuple[str, ...] = ()
+    reasoning: str | None = None
 
 
 @dataclass(frozen=True)
@@ -111,6 +117,10 @@ class AdapterOptions:
         prices: Per-model price overrides, USD per token: ``{"input": .., "output": ..}``.
         aliases: Extra model-name aliases, ``{"claude-opus-4.7": "anthropic/..."}``.
         extra: Adapter-specific settings from the config file.
+        model_args: Arguments passed through to the provider (``reasoning_effort``,
+            ``thinking``, ``max_tokens``, ``temperature``, ``extra_headers`` ...).
+        label: Names the option set in run folders and reports (default: made from
+            ``model_args``).
     """
 
     api_base: str | None = None
@@ -118,6 +128,8 @@ class AdapterOptions:
     prices: dict[str, dict[str, float]] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
     extra: dict[str, Any] = field(default_factory=dict)
+    model_args: dict[str, Any] = field(default_factory=dict)
+    label: str | None = None
 
 
 def split_spec(spec: str) -> tuple[str, str]:

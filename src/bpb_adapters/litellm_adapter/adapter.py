@@ -11,16 +11,19 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import dataclasses
 import importlib
 import os
 import time
+import uuid
 from collections import OrderedDict
-from collections.abc import Mapping
 from typing import Any
 
+from bpb_adapters.litellm_adapter import args as model_args, prices, wire
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import map_error
-from bpb_core.errors import ModelError, ModelTimeout, ServerError
+from bpb_adapters.litellm_adapter.preflight import preflight, provider_of, quick_preflight
+from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
     AdapterOptions,
     ImagePart,
@@ -32,6 +35,7 @@ from bpb_core.model_calls import (
 )
 
 _TIMEOUT_GRACE = 5.0  # our own watchdog beyond the HTTP timeout, in case a layer ignores it
+_REASONING_CAP = 8000  # characters of reasoning text kept per reply
 
 
 def _import_litellm() -> Any:
@@ -41,6 +45,7 @@ def _import_litellm() -> Any:
     litellm.suppress_debug_info = True
     litellm.set_verbose = False
     litellm.telemetry = False
+    wire.install(litellm)
     return litellm
 
 
@@ -69,17 +74,55 @@ class LiteLLMAdapter:
 
     Args:
         model: The name the user gave (an alias or a litellm model string).
-        options: ``api_base``, price overrides and aliases.
+        options: ``api_base``, model arguments, price overrides and aliases.
+
+    Raises:
+        BadInput: A price override is malformed.
     """
 
     def __init__(self, model: str, options: AdapterOptions) -> None:
-        self.name = f"litellm:{model}"
         self.model = resolve(model, options.aliases)
-        self._requested = model
+        self.args = dict(options.model_args)
+        tag = options.label if options.label is not None else model_args.label(self.args)
+        self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base
-        self._prices = options.prices
-        self._litellm = _import_litellm()
         self._uris = _DataUris()
+        self._override = options.prices.get(model) or options.prices.get(self.model)
+        if self._override is not None:
+            try:
+                prices.litellm_entry(self._override, None)
+            except ValueError as exc:
+                raise BadInput(f"price of {model}: {exc}") from None
+        self._loaded: Any = None
+        self._priced = False
+
+    @property
+    def _litellm(self) -> Any:
+        """litellm, imported on first use (a failing preflight need not pay for it)."""
+        if self._loaded is None:
+            self._loaded = _import_litellm()
+            self._priced = prices.has_price(self._loaded.model_cost, self.model)
+            if self._override is not None:
+                provider = provider_of(self._loaded, self.model, self._api_base)
+                prices.register(self._loaded, self.model, provider, self._override)
+                self._priced = True
+        return self._loaded
+
+    @property
+    def priced(self) -> bool:
+        """Whether a cost can be given for this model (bundled map or an override)."""
+        return self._litellm is not None and self._priced
+
+    def preflight(self) -> str | None:
+        """Provider known, key present, route modules importable (one line if not)."""
+        quick = quick_preflight(self.model, self._api_base, self.args)
+        if quick is not None:
+            return quick
+        return preflight(self._litellm, self.model, self._api_base, self.args)
+
+    def settings(self) -> dict[str, Any]:
+        """The model id and the model arguments (secrets masked), for run.json."""
+        return {"model": self.model, "model_args": model_args.recorded(self.args)}
 
     def _content(self, message: Message) -> str | list[dict[str, Any]]:
         if all(isinstance(p, TextPart) for p in message.parts):
@@ -93,16 +136,18 @@ class LiteLLMAdapter:
         return parts
 
     def _kwargs(self, request: ModelRequest) -> dict[str, Any]:
+        requested: dict[str, Any] = {"temperature": request.temperature}
+        if request.max_tokens is not None:
+            requested["max_tokens"] = request.max_tokens
+        requested.update(self.args)  # a model's own arguments win over the run's
         kwargs: dict[str, Any] = {
             "model": self.model,
             "messages": [{"role": m.role, "content": self._content(m)} for m in request.messages],
-            "temperature": request.temperature,
+            **requested,
             "timeout": request.timeout,
             "max_retries": 0,
             "drop_params": True,
         }
-        if request.max_tokens is not None:
-            kwargs["max_tokens"] = request.max_tokens
         if self._api_base:
             kwargs["api_base"] = self._api_base
         return kwargs
@@ -110,16 +155,23 @@ class LiteLLMAdapter:
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Send ``request``; raise a :mod:`bpb_core.errors` model error on failure."""
         started = time.perf_counter()
+        kwargs = self._kwargs(request)
+        call_id = kwargs["litellm_call_id"] = uuid.uuid4().hex
         try:
             async with asyncio.timeout(request.timeout + _TIMEOUT_GRACE):
-                raw = await self._litellm.acompletion(**self._kwargs(request))
+                raw = await self._litellm.acompletion(**kwargs)
         except TimeoutError:
             raise ModelTimeout(f"no reply within {request.timeout:g} s") from None
         except ModelError:
             raise
         except Exception as exc:
             raise map_error(exc) from None
-        return self._response(raw, time.perf_counter() - started)
+        finally:
+            sent = wire.take(call_id)
+        asked = {k: kwargs[k] for k in kwargs if k not in _PLUMBING}
+        dropped = () if sent is None else wire.dropped(asked, sent)
+        reply = self._response(raw, time.perf_counter() - started)
+        return dataclasses.replace(reply, sent=sent, dropped=dropped)
 
     def _response(self, raw: Any, latency: float) -> ModelResponse:
         try:
@@ -128,20 +180,19 @@ class LiteLLMAdapter:
         except (AttributeError, IndexError, TypeError) as exc:
             raise ServerError(f"reply has no message: {type(exc).__name__}") from None
         usage = usage_of(raw)
+        reasoning = getattr(choice.message, "reasoning_content", None)
         return ModelResponse(
             text=text,
             usage=usage,
-            cost=self._cost(raw, usage),
+            cost=self._cost(raw),
             latency=latency,
             model_id=str(getattr(raw, "model", "") or self.model),
             finish_reason=getattr(choice, "finish_reason", None),
+            reasoning=str(reasoning)[:_REASONING_CAP] if reasoning else None,
         )
 
-    def _cost(self, raw: Any, usage: Usage) -> float | None:
-        override = self._prices.get(self._requested) or self._prices.get(self.model)
-        if override is not None:
-            return price(override, usage)
-        if not _has_price(self._litellm.model_cost, self.model):
+    def _cost(self, raw: Any) -> float | None:
+        if not self._priced:
             return None
         try:
             return float(self._litellm.completion_cost(completion_response=raw, model=self.model))
@@ -149,19 +200,9 @@ class LiteLLMAdapter:
             return None
 
 
-def _has_price(table: Mapping[str, Any], model: str) -> bool:
-    for key in (model, model.split("/", 1)[-1]):
-        entry = table.get(key)
-        if entry and entry.get("input_cost_per_token") is not None:
-            return True
-    return False
-
-
-def price(override: Mapping[str, float], usage: Usage) -> float:
-    """Cost in USD from per-token prices ``{"input": .., "output": ..}``."""
-    return (usage.input_tokens or 0) * override.get("input", 0.0) + (
-        usage.output_tokens or 0
-    ) * override.get("output", 0.0)
+_PLUMBING = frozenset(
+    {"model", "messages", "timeout", "max_retries", "drop_params", "api_base", "litellm_call_id"}
+)
 
 
 def usage_of(raw: Any) -> Usage:

@@ -4,7 +4,8 @@ The runner decides what to retry from the bpb error class alone: 429 becomes
 :class:`RateLimited` carrying the server's Retry-After, 5xx and unreadable bodies
 :class:`ServerError`, timeouts :class:`ModelTimeout`, dropped connections
 :class:`ConnectionFailure`, 401/403 :class:`AuthenticationFailed` and other 4xx
-:class:`RequestRejected`.
+:class:`RequestRejected`. An import error inside litellm (a provider route's module missing) is
+:class:`RequestRejected` too, whatever litellm wrapped it in: it cannot heal by retrying.
 """
 
 from __future__ import annotations
@@ -70,6 +71,19 @@ def _status(exc: BaseException) -> int | None:
     return status if isinstance(status, int) else None
 
 
+def _cannot_heal(exc: BaseException) -> bool:
+    """An import error inside litellm (a provider route's module is missing), whatever litellm
+    wrapped it in: retrying cannot install the module."""
+    seen: BaseException | None = exc
+    for _ in range(5):
+        if seen is None:
+            break
+        if isinstance(seen, ImportError):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return "No module named" in str(exc)
+
+
 def map_error(exc: BaseException) -> ModelError:
     """The bpb model error for an exception raised by ``litellm.acompletion``."""
     from litellm.exceptions import (
@@ -81,6 +95,8 @@ def map_error(exc: BaseException) -> ModelError:
     )
 
     message = _message(exc)
+    if _cannot_heal(exc):
+        return RequestRejected(message)
     if isinstance(exc, RateLimitError) or _status(exc) == 429:
         return RateLimited(message, retry_after=retry_after(exc))
     if isinstance(exc, Timeout | TimeoutError):

@@ -16,6 +16,7 @@ import click
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
+    from bpb_core.cli.run_file import AdapterPlan, Prepared
     from bpb_core.model_calls import AdapterOptions
     from bpb_core.registry import Registry
     from bpb_core.runner.options import RunOptions
@@ -51,6 +52,17 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
             raise BadInput(f"--cot: {sorted(unknown)} not among --tasks {tasks}")
         return {t: t in chosen for t in tasks}
     return {} if enable is None else {t: enable for t in tasks}
+
+
+def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
+    from bpb_core.cli.run_file import command_line_plans, model_args, read_run_file
+
+    base = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
+    cli_args = model_args(kw["model_args"])
+    plans = command_line_plans(adapters, base, cli_args)
+    if kw["config"] is not None:
+        plans += read_run_file(kw["config"], base, cli_args)
+    return plans
 
 
 def _adapter_options(
@@ -194,6 +206,18 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     help='JSON {"model": {"input": usd_per_token, "output": usd_per_token}}.',
 )
 @click.option("--alias", "aliases", multiple=True, help="NAME=LITELLM_MODEL, repeatable.")
+@click.option(
+    "--model-arg",
+    "model_args",
+    multiple=True,
+    help="KEY=VALUE passed to the provider, repeatable: reasoning_effort=high, max_tokens=16000, "
+    "thinking.budget_tokens=8000, extra_headers.NAME=VALUE (VALUE parsed as JSON if it can be).",
+)
+@click.option(
+    "--config",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="TOML run file listing adapters, each with its own options (see docs/providers.md).",
+)
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
     from bpb_core.cli.console import load_registry
@@ -204,9 +228,13 @@ def run(**kw: Any) -> None:
     tasks = _csv(kw["tasks"], "--tasks")
     _check_names(registry, tasks, list(kw["adapters"]))
     out: Path = kw["out"]
+    plans = _plans(kw, list(kw["adapters"]))
+    _check_names(registry, [], [p.spec for p in plans])
+    ready = _prepare(registry, plans) if plans else []  # preflight: before any data or call
     data = _data(kw["data"], out, kw["seed"], registry)
     tasks = tasks or default_tasks(data, registry)
-    adapters = list(kw["adapters"]) or _offline_adapters(registry, data)
+    if not ready:
+        ready = _prepare(registry, _plans(kw, _offline_adapters(registry, data)))
     options = RunOptions(
         tasks=tuple(tasks),
         horizons=_horizons(kw["horizons"]),
@@ -222,38 +250,40 @@ def run(**kw: Any) -> None:
         seed=kw["seed"],
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
-    adapter_options = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
     if kw["dry_run"]:
-        _show_dry_run(data, out, adapters, options, registry)
+        _show_dry_run(data, out, [p.name for p in ready], options, registry)
         return
-    results = _run_all(data, out, adapters, options, adapter_options, registry)
+    results = _run_all(data, out, ready, options, registry)
     raise click.exceptions.Exit(_finish(results, registry))
 
 
+def _prepare(registry: Registry, plans: list[AdapterPlan]) -> list[Prepared]:
+    from bpb_core.cli.run_file import prepare
+
+    return prepare(registry, plans)
+
+
 def _run_all(
-    data: Path,
-    out: Path,
-    adapters: list[str],
-    options: RunOptions,
-    adapter_options: AdapterOptions,
-    registry: Registry,
+    data: Path, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> list[RunResult]:
+    import dataclasses
+
     from bpb_core.cli.run_display import RichProgress, make_bar
     from bpb_core.runner import run_eval, slug
 
     results = []
     with make_bar() as bar:
         display = RichProgress(bar)
-        for spec in adapters:
+        for item in ready:
             results.append(
                 run_eval(
                     data,
-                    spec,
-                    out / slug(spec),
-                    options,
+                    item.adapter,
+                    out / slug(item.name),
+                    dataclasses.replace(options, **item.plan.run),
                     registry=registry,
-                    adapter_options=adapter_options,
                     progress=display,
+                    spec=item.name,
                 )
             )
     return results

@@ -53,7 +53,10 @@ class RichProgress:
         return self._rows[key]
 
     def update(self, event: ProgressEvent) -> None:
-        """Apply one event to its row."""
+        """Apply one event to its row (a warning is printed above the bars)."""
+        if event.kind == "warning":
+            self._bar.console.print(f"[yellow]warning:[/] {event.adapter}: {event.reason}")
+            return
         row = self._row(event)
         if event.kind == "planned":
             row.total += event.count

@@ -125,9 +125,11 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
         raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
     keys = _expected_keys(manifest, dataset)
     names = tuple(str(t) for t in tasks)
-    return RunFolder(
-        path, label or path.name, adapter, model, names, dataset, keys, manifest, family
-    )
+    label = label or path.name
+    dropped = manifest.get("dropped_params") or []
+    if dropped:  # the model did not get what the protocol asked (temperature 0 above all)
+        label = f"{label} [dropped: {', '.join(map(str, dropped))}]"
+    return RunFolder(path, label, adapter, model, names, dataset, keys, manifest, family)
 
 
 def _family(dataset: Path, registry: Registry | None) -> SceneFamily:

@@ -150,7 +150,11 @@ class PairCall:
             model_id=response.model_id,
             rule=parsed.rule,
             error=parsed.error,
+            sent=response.sent,
+            dropped=list(response.dropped),
+            reasoning=response.reasoning,
         )
+        self.state.note_dropped(self.task, response.dropped)
         if parsed.outcome == "ok":
             await self._settle("ok", parsed.value, parsed.rule)
             return True

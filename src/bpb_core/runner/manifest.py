@@ -1,7 +1,8 @@
 """``run.json``: what a run was asked to do, with what software, and when.
 
-Resuming a run folder with different answer-shaping settings (adapter, dataset, input mode,
-chain of thought, force-numeric) would mix incomparable answers, so it is refused as bad input.
+Resuming a run folder with different answer-shaping settings (adapter, its model arguments,
+dataset, input mode, chain of thought, force-numeric) would mix incomparable answers, so it is
+refused as bad input.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Describing
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST
 from bpb_core.run_folder import read_manifest, write_manifest
@@ -25,7 +27,7 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
     from bpb_core.runner.state import RunState
 
-_GUARDED = ("adapter", "dataset_hash", "input_mode", "cot", "force_numeric")
+_GUARDED = ("adapter", "adapter_settings", "dataset_hash", "input_mode", "cot", "force_numeric")
 
 
 def now() -> str:
@@ -83,7 +85,13 @@ def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> No
 
 
 def start_manifest(
-    run_dir: Path, spec: str, data: Path, options: RunOptions, registry: Registry, scenes: int
+    run_dir: Path,
+    spec: str,
+    data: Path,
+    options: RunOptions,
+    registry: Registry,
+    scenes: int,
+    adapter: object = None,
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
@@ -93,6 +101,7 @@ def start_manifest(
     manifest: dict[str, Any] = {
         "adapter": spec,
         "model_id": None,
+        "adapter_settings": adapter.settings() if isinstance(adapter, Describing) else None,
         "tasks": list(options.tasks),
         "options": _options(options, registry),
         "dataset": str(data.resolve()),
@@ -108,6 +117,7 @@ def start_manifest(
         _check_resume(run_dir, old, manifest)
         manifest["started"] = old.get("started", manifest["started"])
         manifest["model_id"] = old.get("model_id")
+        manifest["dropped_params"] = old.get("dropped_params", [])
         manifest["sessions"] = [*old.get("sessions", []), now()]
     else:
         manifest["sessions"] = [manifest["started"]]
@@ -120,6 +130,7 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
     manifest["finished"] = now()
     manifest["model_id"] = state.model_id or manifest.get("model_id")
     manifest["stopped"] = state.stop_reason
+    manifest["dropped_params"] = sorted(set(manifest.get("dropped_params", [])) | state.dropped)
     manifest["last_session"] = {
         "statuses": state.statuses,
         "cost": None if state.unpriced else state.spent,

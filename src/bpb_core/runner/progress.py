@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
-EventKind = Literal["planned", "skipped", "retry", "done"]
+EventKind = Literal["planned", "skipped", "retry", "done", "warning"]
 
 
 @dataclass(frozen=True)
@@ -14,7 +14,9 @@ class ProgressEvent:
 
     ``planned`` carries ``count`` calls to make; ``skipped`` ``count`` calls already complete
     from an earlier run; ``retry`` one failed attempt about to be repeated; ``done`` a final
-    ``status`` with the tokens and cost of all its attempts.
+    ``status`` with the tokens and cost of all its attempts; ``warning`` something the user
+    should know about the whole run, in ``reason`` (sent once per adapter, e.g. a requested
+    parameter the provider route dropped).
     """
 
     adapter: str

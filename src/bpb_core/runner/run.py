@@ -12,12 +12,13 @@ from __future__ import annotations
 import asyncio
 import hashlib
 import random
+import re
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import KnowsFamilies
+from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
 from bpb_core.run_folder import AttemptLog, completed
@@ -37,8 +38,28 @@ if TYPE_CHECKING:
 
 
 def slug(spec: str) -> str:
-    """Folder name of an adapter spec: ``litellm:openai/gpt-5`` -> ``litellm_openai_gpt-5``."""
-    return spec.replace(":", "_").replace("/", "_")
+    """Folder name of an adapter spec: ``litellm:openai/gpt-5`` -> ``litellm_openai_gpt-5``;
+    an option set in brackets joins it: ``litellm:gpt-5.4 [effort=high]`` ->
+    ``litellm_gpt-5.4_effort=high``."""
+    return re.sub(r"[^A-Za-z0-9._=,+-]+", "_", spec).strip("_")
+
+
+def run_name(spec: str, adapter: ModelAdapter) -> str:
+    """The name a run of ``adapter`` goes by: its own ``name`` when that extends ``spec`` with
+    an option set (``litellm:gpt-5.4 [effort=high]``), else ``spec``."""
+    name = getattr(adapter, "name", None)
+    return name if isinstance(name, str) and name.startswith(spec) else spec
+
+
+def check_adapter(spec: str, adapter: ModelAdapter) -> None:
+    """Raise :class:`BadInput` when ``adapter`` says before any call that no call can succeed.
+
+    Raises:
+        BadInput: One line: what to fix (a missing key, an unknown provider, a module).
+    """
+    problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
+    if problem:
+        raise BadInput(f"--adapter {spec}: {problem}")
 
 
 def _plan(
@@ -128,6 +149,7 @@ async def run_eval_async(
     registry: Registry | None = None,
     adapter_options: AdapterOptions | None = None,
     progress: Progress | None = None,
+    spec: str | None = None,
 ) -> RunResult:
     """Async form of :func:`run_eval` (for callers already inside an event loop)."""
     from bpb_core.registry import make_registry
@@ -137,14 +159,17 @@ async def run_eval_async(
     asked = asking(data, options or RunOptions(), registry)
     options, tasks, refs = asked.options, asked.tasks, asked.scenes
     model = _adapter(registry, adapter, adapter_options, options)
-    spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
+    if spec is None:
+        spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
+        spec = run_name(spec, model)
     why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
     if why is not None:
         raise BadInput(f"--adapter {spec}: {why}")
+    check_adapter(spec, model)
     run_dir.mkdir(parents=True, exist_ok=True)
     done = completed(run_dir)
     plan = _plan(refs, options.tasks, done)
-    manifest = start_manifest(run_dir, spec, data, options, registry, len(refs))
+    manifest = start_manifest(run_dir, spec, data, options, registry, len(refs), model)
     state = _state(model, spec, tasks, options, run_dir, progress, asked)
     _announce(state, refs, plan, done)
     try:
@@ -214,7 +239,8 @@ def run_eval(
         adapter: An adapter spec (``baseline:oracle``, ``litellm:gpt-5``) or an adapter object.
         run_dir: The run folder (created; resumed when it holds an earlier run).
         options: Run options.
-        **kwargs: ``registry``, ``adapter_options``, ``progress``.
+        **kwargs: ``registry``, ``adapter_options``, ``progress``, ``spec`` (the run's name
+            when ``adapter`` is an object).
 
     Returns:
         Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.

@@ -52,6 +52,7 @@ class RunState:
     statuses: dict[str, dict[str, int]] = field(default_factory=dict)
     family: str = ""
     simulator: str | None = None
+    dropped: set[str] = field(default_factory=set)
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
@@ -94,6 +95,22 @@ class RunState:
             self.spent += response.cost
         if response.model_id:
             self.model_id = response.model_id
+
+    def note_dropped(self, task: str, names: tuple[str, ...]) -> None:
+        """Warn once per run about each requested parameter the provider route dropped."""
+        new = sorted(set(names) - self.dropped)
+        if not new:
+            return
+        self.dropped.update(new)
+        self.progress.update(
+            ProgressEvent(
+                self.spec,
+                task,
+                "warning",
+                reason=f"requested {', '.join(new)} not sent to the model (dropped by the "
+                "provider route); run.json and the report mark this run",
+            )
+        )
 
     def not_sent(self, task: str) -> None:
         """Record a pair left unsent (cost cap or auth stop); it stays resumable."""

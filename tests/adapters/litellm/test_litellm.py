@@ -44,9 +44,13 @@ def test_known_model_is_priced_offline_and_override_wins(tmp_path: Path, secret_
                                 prices={"gpt-4o": {"input": 1e-6, "output": 2e-6}})  # fmt: skip
         override = asyncio.run(REGISTRY.adapter("litellm:gpt-4o", custom).complete(_request()))
         assert override.cost == pytest.approx(1000 * 1e-6 + 50 * 2e-6)
+        cached = {"gpt-4o": {"input": 1e-6, "output": 2e-6, "cache_read": 1e-7}}
+        cheap = REGISTRY.adapter("litellm:gpt-4o", AdapterOptions(server.api_base, prices=cached))
+        reply = asyncio.run(cheap.complete(_request()))  # 100 of the 1000 input tokens cached
+        assert reply.cost == pytest.approx(900 * 1e-6 + 100 * 1e-7 + 50 * 2e-6)
         unknown = REGISTRY.adapter("litellm:openai/no-such-model-xyz", base)
         assert asyncio.run(unknown.complete(_request("q3"))).cost is None
-        assert server.stats()["images"] == 3
+        assert server.stats()["images"] == 4
 
 
 def test_secrets_are_redacted(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -1,0 +1,89 @@
+"""What litellm actually sent: the provider's request body, caught by a litellm callback.
+
+litellm maps OpenAI-style arguments onto each provider's own fields (``reasoning_effort`` becomes
+Anthropic's ``output_config.effort`` or Gemini's ``thinkingConfig``) and, with ``drop_params``,
+silently leaves out what a model does not take (``temperature`` for reasoning models). The body it
+logs just before the HTTP call is the truth; bpb records its parameters (never the messages) and
+names each requested argument that did not reach the wire.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+_KEEP = 2048  # bodies waiting to be taken; a call takes its own right after it returns
+_CONTENT = frozenset(
+    {"messages", "contents", "input", "system", "system_instruction", "systemInstruction"}
+)
+# Where an OpenAI-style argument may land on another provider's wire.
+_LANDS_AS: dict[str, tuple[str, ...]] = {
+    "reasoning_effort": (
+        "reasoning_effort",
+        "effort",
+        "reasoning",
+        "thinkingLevel",
+        "thinkingBudget",
+        "thinking",
+    ),
+    "thinking": ("thinking", "thinkingConfig", "thinkingBudget", "reasoning"),
+    "max_tokens": ("max_tokens", "max_completion_tokens", "max_output_tokens", "maxOutputTokens"),
+    "top_p": ("top_p", "topP"),
+    "top_k": ("top_k", "topK"),
+    "stop": ("stop", "stop_sequences", "stopSequences"),
+}
+_NOT_IN_BODY = frozenset({"extra_headers", "api_key", "api_version", "extra_body"})
+
+_bodies: OrderedDict[str, dict[str, Any]] = OrderedDict()
+
+
+def install(litellm: Any) -> None:
+    """Register the catching callback with litellm once per process."""
+    from litellm.integrations.custom_logger import CustomLogger
+
+    class _Catcher(CustomLogger):
+        def log_pre_api_call(self, model: Any, messages: Any, kwargs: Any) -> None:
+            call_id = kwargs.get("litellm_call_id")
+            body = (kwargs.get("additional_args") or {}).get("complete_input_dict")
+            if isinstance(call_id, str) and isinstance(body, Mapping):
+                _bodies[call_id] = params_of(body)
+                while len(_bodies) > _KEEP:
+                    _bodies.popitem(last=False)
+
+    if not any(type(cb).__name__ == "_Catcher" for cb in litellm.callbacks):
+        litellm.callbacks.append(_Catcher())
+
+
+def take(call_id: str) -> dict[str, Any] | None:
+    """The parameters sent by the call ``call_id`` (``None`` when litellm logged no body)."""
+    return _bodies.pop(call_id, None)
+
+
+def params_of(body: Mapping[str, Any]) -> dict[str, Any]:
+    """The request body without its conversation (text and images are never recorded)."""
+    return {k: v for k, v in body.items() if k not in _CONTENT and k != "tools"}
+
+
+def _keys(value: Any) -> Iterator[tuple[str, Any]]:
+    if isinstance(value, Mapping):
+        for key, inner in value.items():
+            yield str(key), inner
+            yield from _keys(inner)
+
+
+def dropped(requested: Mapping[str, Any], sent: Mapping[str, Any]) -> tuple[str, ...]:
+    """Requested arguments missing from the wire, or sent with another value (``temperature``
+    asked as 0 and sent as 1 counts as dropped)."""
+    found: dict[str, list[Any]] = {}
+    for key, value in _keys(sent):
+        found.setdefault(key, []).append(value)
+    lost = []
+    for name, value in requested.items():
+        if name in _NOT_IN_BODY or value is None:
+            continue
+        missing = not any(n in found for n in _LANDS_AS.get(name, (name,)))
+        changed = name in found and not isinstance(value, Mapping) and value not in found[name]
+        if missing or changed:
+            lost.append(name)
+    return tuple(sorted(lost))

@@ -1,0 +1,185 @@
+"""Run files (``bpb run --config paper.toml``) and ``--model-arg``: one option set per adapter.
+
+A run file lists adapters, each with its own options::
+
+    [defaults]                      # optional: applies to every adapter below
+    timeout = 300
+
+    [[adapter]]
+    spec = "litellm:gpt-5.4"        # required
+    label = "effort=high"           # optional: names the option set (default: made from args)
+    api_base = "http://127.0.0.1:8000/v1"
+    timeout = 600                   # seconds per call
+    concurrency = 4                 # calls in flight
+    rpm = 60                        # requests per minute
+    args = {reasoning_effort = "high", max_tokens = 16000}
+    headers = {"anthropic-beta" = "..."}
+    price = {input = 2.5e-6, output = 1.5e-5, cache_read = 2.5e-7}
+
+``args`` go to the provider unchanged (``thinking = {type = "enabled", budget_tokens = 8000}``),
+``headers`` as extra HTTP headers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from bpb_core.errors import BadInput
+from bpb_core.model_calls import AdapterOptions
+
+_RUN_KEYS = {"timeout": (int, float), "concurrency": (int,), "rpm": (int, float)}
+_KEYS = {"spec", "label", "api_base", "args", "headers", "price", *_RUN_KEYS}
+
+
+@dataclass(frozen=True)
+class AdapterPlan:
+    """One adapter of a run with its own options.
+
+    Attributes:
+        spec: ``name:model``.
+        options: What the adapter factory receives (api_base, model arguments, prices, label).
+        run: Per-adapter overrides of the run options (``timeout``, ``concurrency``, ``rpm``).
+    """
+
+    spec: str
+    options: AdapterOptions
+    run: dict[str, Any] = field(default_factory=dict)
+
+
+def _value(text: str) -> Any:
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def model_args(items: Iterable[str]) -> dict[str, Any]:
+    """``--model-arg KEY=VALUE`` items as a dict; values are JSON when they parse (``16000``,
+    ``true``, ``{"budget_tokens": 8000}``), else strings; ``a.b=1`` nests as ``{"a": {"b": 1}}``.
+
+    Raises:
+        BadInput: An item without ``=`` or with an empty key.
+    """
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip() or any(not part for part in key.split(".")):
+            raise BadInput(f"--model-arg {item!r}: expected KEY=VALUE, e.g. reasoning_effort=high")
+        *path, last = key.strip().split(".")
+        target = out
+        for part in path:
+            inner = target.setdefault(part, {})
+            if not isinstance(inner, dict):
+                raise BadInput(f"--model-arg {item!r}: {part} is already a value")
+            target = inner
+        target[last] = _value(text)
+    return out
+
+
+def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
+    unknown = sorted(set(table) - _KEYS)
+    if unknown:
+        raise BadInput(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(_KEYS))}")
+    if spec_required and not isinstance(table.get("spec"), str):
+        raise BadInput(f"{where}.spec: required, a string like 'litellm:gpt-5.4'")
+    for key, types in _RUN_KEYS.items():
+        value = table.get(key)
+        if value is not None and (not isinstance(value, types) or isinstance(value, bool)):
+            raise BadInput(f"{where}.{key}: expected a number, got {value!r}")
+        if value is not None and value <= 0:
+            raise BadInput(f"{where}.{key}: must be positive, got {value!r}")
+    for key in ("args", "headers", "price"):
+        if key in table and not isinstance(table[key], dict):
+            raise BadInput(f"{where}.{key}: expected a table")
+
+
+def _plan(
+    table: Mapping[str, Any], base: AdapterOptions, cli_args: Mapping[str, Any]
+) -> AdapterPlan:
+    args = {**table.get("args", {}), **cli_args}
+    if table.get("headers"):
+        args["extra_headers"] = {str(k): str(v) for k, v in table["headers"].items()}
+    spec = str(table["spec"])
+    prices = dict(base.prices)
+    if "price" in table:
+        prices[spec.partition(":")[2]] = dict(table["price"])
+    options = dataclasses.replace(
+        base,
+        api_base=table.get("api_base", base.api_base),
+        model_args=args,
+        label=table.get("label"),
+        prices=prices,
+    )
+    return AdapterPlan(spec, options, {k: table[k] for k in _RUN_KEYS if k in table})
+
+
+def read_run_file(
+    path: Path, base: AdapterOptions, cli_args: Mapping[str, Any]
+) -> list[AdapterPlan]:
+    """The adapters of a run file; ``cli_args`` (``--model-arg``) override each one's args.
+
+    Raises:
+        BadInput: The file is unreadable, not TOML, or a field is wrong (named in the message).
+    """
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise BadInput(f"{path}: not a readable TOML run file ({exc})") from None
+    unknown = sorted(set(data) - {"defaults", "adapter"})
+    if unknown:
+        raise BadInput(f"{path}: unknown table {unknown[0]!r}; expected [defaults], [[adapter]]")
+    defaults = data.get("defaults", {})
+    _check(f"{path}: defaults", defaults, spec_required=False)
+    adapters = data.get("adapter")
+    if not isinstance(adapters, list) or not adapters:
+        raise BadInput(f"{path}: no [[adapter]] entries")
+    plans = []
+    for number, table in enumerate(adapters, 1):
+        merged = {**defaults, **table}
+        _check(f"{path}: adapter {number}", merged, spec_required=True)
+        plans.append(_plan(merged, base, cli_args))
+    return plans
+
+
+def command_line_plans(
+    specs: Iterable[str], base: AdapterOptions, cli_args: Mapping[str, Any]
+) -> list[AdapterPlan]:
+    """Plans for ``--adapter`` specs, each with the ``--model-arg`` arguments."""
+    options = dataclasses.replace(base, model_args=dict(cli_args))
+    return [AdapterPlan(spec, options) for spec in specs]
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """An adapter built and checked before the first call of the run."""
+
+    name: str
+    adapter: Any
+    plan: AdapterPlan
+
+
+def prepare(registry: Any, plans: list[AdapterPlan]) -> list[Prepared]:
+    """Build every adapter and run its preflight, all before any call is sent.
+
+    Raises:
+        BadInput: A preflight failed (a key missing, an unknown provider, a module missing), or
+            two adapters would share a run folder name.
+    """
+    from bpb_core.runner.run import check_adapter, run_name
+
+    ready: list[Prepared] = []
+    for plan in plans:
+        adapter = registry.adapter(plan.spec, plan.options)
+        check_adapter(plan.spec, adapter)
+        ready.append(Prepared(run_name(plan.spec, adapter), adapter, plan))
+    names = [p.name for p in ready]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise BadInput(f"--adapter {twice[0]}: given twice with the same options; add a label")
+    return ready
