@@ -13,6 +13,7 @@ import asyncio
 import base64
 import dataclasses
 import importlib
+import logging
 import os
 import time
 import uuid
@@ -45,6 +46,7 @@ def _import_litellm() -> Any:
     litellm.suppress_debug_info = True
     litellm.set_verbose = False
     litellm.telemetry = False
+    logging.getLogger("LiteLLM").setLevel(logging.ERROR)  # bpb reports through its own channels
     wire.install(litellm)
     return litellm
 

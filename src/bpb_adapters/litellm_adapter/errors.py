@@ -112,5 +112,6 @@ def map_error(exc: BaseException) -> ModelError:
         if status in (408, 409):
             return ServerError(message)  # request timeout / conflict: transient by definition
         return RequestRejected(message)
-    # 5xx, invalid bodies and anything unexpected from the HTTP stack: transient, bounded retries
-    return ServerError(message)
+    # 5xx (with the server's Retry-After, e.g. 503 or Anthropic's 529 overload), invalid bodies
+    # and anything unexpected from the HTTP stack: transient, bounded retries
+    return ServerError(message, retry_after=retry_after(exc))

@@ -74,7 +74,8 @@ def _keys(value: Any) -> Iterator[tuple[str, Any]]:
 
 def dropped(requested: Mapping[str, Any], sent: Mapping[str, Any]) -> tuple[str, ...]:
     """Requested arguments missing from the wire, or sent with another value (``temperature``
-    asked as 0 and sent as 1 counts as dropped)."""
+    asked as 0 and sent as 1 counts as dropped; so does ``thinking.budget_tokens`` when the
+    route sends adaptive thinking instead)."""
     found: dict[str, list[Any]] = {}
     for key, value in _keys(sent):
         found.setdefault(key, []).append(value)
@@ -86,4 +87,6 @@ def dropped(requested: Mapping[str, Any], sent: Mapping[str, Any]) -> tuple[str,
         changed = name in found and not isinstance(value, Mapping) and value not in found[name]
         if missing or changed:
             lost.append(name)
+        elif isinstance(value, Mapping):  # thinking = {budget_tokens = 8000}: each leaf counts
+            lost += [f"{name}.{k}" for k, v in _keys(value) if v not in found.get(k, [])]
     return tuple(sorted(lost))

@@ -16,7 +16,8 @@ from bpb_core.layout import FINAL, INIT, iter_scene_keys
 from bpb_core.model_calls import Message, TextPart
 from bpb_core.reply_json import balanced_objects
 
-HTTP_FAULTS = {"429": 429, "500": 500, "401": 401, "400": 400, "503": 503}
+HTTP_FAULTS = {"429": 429, "500": 500, "401": 401, "400": 400, "503": 503, "529": 529}
+_HINTED = ("429", "503", "529")  # faults whose reply carries Retry-After
 UNKNOWN = "unknown/unknown"
 _ESCALATIONS = (0, 1, 2)
 
@@ -100,6 +101,11 @@ def _content(fault: str, answer: str) -> tuple[str, str]:
     return answer, "stop"
 
 
+def reply_content(fault: str, answer: str) -> tuple[str, str]:
+    """The reply text for ``fault`` and its finish reason (``stop`` or ``length``)."""
+    return _content(fault, answer)
+
+
 def model_reply(model: str, fault: str, answer: str) -> dict[str, Any]:
     """A chat.completion body whose content depends on ``fault``."""
     content, finish = _content(fault, answer)
@@ -130,7 +136,7 @@ async def fault_reply(
 ) -> web.StreamResponse | None:
     """The reply for a transport or HTTP fault, or ``None`` when the body is a normal one."""
     if fault in HTTP_FAULTS:
-        headers = {"Retry-After": f"{retry_after:g}"} if fault == "429" else {}
+        headers = {"Retry-After": f"{retry_after:g}"} if fault in _HINTED else {}
         error = {"error": {"message": f"injected {fault}", "type": "fake", "code": fault}}
         return web.json_response(error, status=HTTP_FAULTS[fault], headers=headers)
     if fault == "nonjson":

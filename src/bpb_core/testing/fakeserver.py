@@ -1,13 +1,15 @@
 """A local OpenAI-compatible chat server with fault injection, for tests and ``bpb bench run``.
 
-It answers ``POST /v1/chat/completions`` the way a model would: pointed at a dataset, it knows
-every prompt bpb could send about it (:class:`~bpb_core.testing.fakereplies.PromptIndex`), so it
-recognises the scene and task it is asked and answers correctly from the ground truth; an unknown
-prompt is answered with the example answer the prompt itself shows. It injects the faults it was
-told to:
+It answers ``POST /v1/chat/completions`` (and, in their own wire formats, Anthropic's
+``/v1/messages``, Gemini's ``/v1beta/models/MODEL:generateContent`` and OpenAI's
+``/v1/responses``: :mod:`bpb_core.testing.protocols`) the way a model would: pointed at a
+dataset, it knows every prompt bpb could send about it
+(:class:`~bpb_core.testing.fakereplies.PromptIndex`), so it recognises the scene and task it
+is asked and answers correctly from the ground truth; an unknown prompt is answered with the
+example answer the prompt itself shows. It injects the faults it was told to:
 
 - ``ok``: a correct answer (``cot``: reasoning with braces, then the answer);
-- ``429`` (with Retry-After), ``500``, ``401``, ``400``: HTTP errors;
+- ``429``, ``503``, ``529`` (with Retry-After), ``500``, ``401``, ``400``: HTTP errors;
 - ``hang``: no reply for ``hang`` seconds (past the client's timeout), then a correct one;
 - ``truncated``: the body stops before its Content-Length and the connection drops;
 - ``nonjson``: a 200 whose body is HTML; ``malformed``: prose with no JSON;
@@ -15,7 +17,8 @@ told to:
 
 Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/TASK":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
-``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``).
+``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``);
+``GET /requests`` what the recent requests carried (parameters, headers, image blocks; no text).
 Run it with ``python -m bpb_core.testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
 """
 
@@ -34,6 +37,11 @@ from typing import Any
 from aiohttp import web
 
 from bpb_core.testing.fakereplies import PromptIndex, fault_reply, model_reply
+from bpb_core.testing.protocols import add_protocol_routes, image_blocks
+
+_CONVERSATION = frozenset({"messages", "contents", "input", "system", "system_instruction"})
+_KEEP_REQUESTS = 200
+_SECRET_HEADERS = frozenset({"authorization", "x-api-key", "x-goog-api-key", "api-key"})
 
 
 def prompt_text(body: dict[str, Any]) -> tuple[str, int]:
@@ -66,6 +74,7 @@ class FakeOpenAI:
         self.auth_seen = 0
         self.phase = "default"
         self.phases: dict[str, dict[str, Any]] = {}
+        self.requests: list[dict[str, Any]] = []
 
     def configure(self, config: dict[str, Any]) -> None:
         """Replace the fault plan (keys ``faults``, ``schedule``, ``retry_after``, ``hang``)."""
@@ -89,13 +98,13 @@ class FakeOpenAI:
         phase["count"] += 1
         phase["last"] = now
 
-    async def chat(self, request: web.Request) -> web.StreamResponse:
-        """``POST /v1/chat/completions``."""
-        body = await request.json()
+    async def answer(
+        self, request: web.Request, text: str, images: int
+    ) -> tuple[str, str] | web.StreamResponse:
+        """The fault and correct answer for a prompt, or the reply of a transport/HTTP fault."""
         self._arrive()
-        if request.headers.get("Authorization"):
+        if request.headers.get("Authorization") or request.headers.get("x-api-key"):
             self.auth_seen += 1
-        text, images = prompt_text(body)
         self.images += images
         key, answer = self.prompts.lookup(text)
         seen = self.counts[key]
@@ -107,9 +116,37 @@ class FakeOpenAI:
         if fault == "hang":
             await asyncio.sleep(self.hang)
         special = await fault_reply(request, fault, self.retry_after)
-        if special is not None:
-            return special
-        return web.json_response(model_reply(body.get("model", "fake"), fault, answer))
+        return special if special is not None else (fault, answer)
+
+    async def chat(self, request: web.Request) -> web.StreamResponse:
+        """``POST /v1/chat/completions``."""
+        body = await request.json()
+        self.record(request, "openai-chat", body)
+        outcome = await self.answer(request, *prompt_text(body))
+        if isinstance(outcome, web.StreamResponse):
+            return outcome
+        return web.json_response(model_reply(body.get("model", "fake"), *outcome))
+
+    def record(self, request: web.Request, protocol: str, body: dict[str, Any]) -> None:
+        """Keep what a request carried, without its text or image bytes (``GET /requests``)."""
+        self.requests.append(
+            {
+                "protocol": protocol,
+                "path": request.path,
+                "query": dict(request.query),
+                "headers": {
+                    k.lower(): "***" if k.lower() in _SECRET_HEADERS else v
+                    for k, v in request.headers.items()
+                },
+                "params": {k: v for k, v in body.items() if k not in _CONVERSATION},
+                "images": image_blocks(body),
+            }
+        )
+        del self.requests[:-_KEEP_REQUESTS]
+
+    async def requests_seen(self, request: web.Request) -> web.Response:
+        """``GET /requests``: the recorded requests, oldest first."""
+        return web.json_response(self.requests)
 
     async def stats(self, request: web.Request) -> web.Response:
         """``GET /stats``: counts per key, totals and phases."""
@@ -139,6 +176,8 @@ class FakeOpenAI:
         app.router.add_post("/v1/chat/completions", self.chat)
         app.router.add_post("/chat/completions", self.chat)
         app.router.add_get("/stats", self.stats)
+        app.router.add_get("/requests", self.requests_seen)
+        add_protocol_routes(app, self)
         app.router.add_post("/phase", self.set_phase)
         app.router.add_post("/config", self.set_config)
         return app

@@ -1,0 +1,202 @@
+"""The fake server's other wire protocols: Anthropic Messages, Gemini generateContent and
+OpenAI Responses, each read and answered in the provider's documented JSON format.
+
+Each handler pulls the prompt text and images out of the provider's own request shape, asks the
+server for the fault and correct answer (:meth:`FakeOpenAI.answer`), and replies with the
+provider's body, including its usage fields: Anthropic ``usage.cache_read_input_tokens`` and a
+``thinking`` block, Gemini ``usageMetadata.thoughtsTokenCount`` and a ``thought`` part, Responses
+``output_tokens_details.reasoning_tokens`` and a ``reasoning`` item. Every protocol reports 1000
+input tokens (100 of them cached) and 50 output tokens (20 of them reasoning), as the chat
+endpoint does.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+from aiohttp import web
+
+from bpb_core.testing.fakereplies import reply_content
+
+if TYPE_CHECKING:
+    from bpb_core.testing.fakeserver import FakeOpenAI
+
+THOUGHT = "Thinking about where each object goes."
+_FINISH = {
+    "anthropic": {"stop": "end_turn", "length": "max_tokens"},
+    "gemini": {"stop": "STOP", "length": "MAX_TOKENS"},
+}
+
+
+def _walk(value: Any) -> list[dict[str, Any]]:
+    """Every JSON object inside ``value``, depth first."""
+    found: list[dict[str, Any]] = []
+    if isinstance(value, dict):
+        found.append(value)
+        for inner in value.values():
+            found.extend(_walk(inner))
+    elif isinstance(value, list):
+        for inner in value:
+            found.extend(_walk(inner))
+    return found
+
+
+def image_blocks(body: dict[str, Any]) -> list[dict[str, Any]]:
+    """The image blocks of a request in any protocol, with their bytes left out."""
+    blocks = []
+    for obj in _walk(body):
+        kind = obj.get("type")
+        if kind == "image_url":  # OpenAI chat
+            url = str(obj.get("image_url", {}).get("url", ""))
+            blocks.append({"format": "openai-chat", "media": url.split(";")[0][5:]})
+        elif kind == "input_image":  # OpenAI Responses
+            url = str(obj.get("image_url", ""))
+            blocks.append({"format": "openai-responses", "media": url.split(";")[0][5:]})
+        elif kind == "image" and isinstance(obj.get("source"), dict):  # Anthropic
+            source = obj["source"]
+            blocks.append(
+                {"format": f"anthropic-{source.get('type')}", "media": source.get("media_type")}
+            )
+        for key in ("inline_data", "inlineData"):  # Gemini
+            if isinstance(obj.get(key), dict):
+                inline = obj[key]
+                media = inline.get("mime_type") or inline.get("mimeType")
+                blocks.append({"format": "gemini-inline", "media": media})
+    return blocks
+
+
+def _texts(body: dict[str, Any], keys: tuple[str, ...]) -> str:
+    return "\n".join(
+        str(obj[k]) for obj in _walk(body) for k in keys if isinstance(obj.get(k), str)
+    )
+
+
+async def anthropic_messages(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
+    """``POST /v1/messages``."""
+    body = await request.json()
+    server.record(request, "anthropic", body)
+    text = _texts({"s": body.get("system"), "m": body.get("messages")}, ("text",))
+    outcome = await server.answer(request, text, len(image_blocks(body)))
+    if isinstance(outcome, web.StreamResponse):
+        return outcome
+    content, finish = reply_content(*outcome)
+    blocks: list[dict[str, Any]] = []
+    if body.get("thinking"):
+        blocks.append({"type": "thinking", "thinking": THOUGHT, "signature": "fake-signature"})
+    blocks.append({"type": "text", "text": content})
+    return web.json_response(
+        {
+            "id": f"msg_fake{time.time_ns()}",
+            "type": "message",
+            "role": "assistant",
+            "model": body.get("model", "fake"),
+            "content": blocks,
+            "stop_reason": _FINISH["anthropic"][finish],
+            "stop_sequence": None,
+            "usage": {
+                "input_tokens": 900,
+                "cache_read_input_tokens": 100,
+                "cache_creation_input_tokens": 0,
+                "output_tokens": 50,
+            },
+        }
+    )
+
+
+async def gemini_generate(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
+    """``POST /v1beta/models/{model}:generateContent``."""
+    body = await request.json()
+    server.record(request, "gemini", body)
+    text = _texts(
+        {
+            "s": body.get("system_instruction") or body.get("systemInstruction"),
+            "c": body.get("contents"),
+        },
+        ("text",),
+    )
+    outcome = await server.answer(request, text, len(image_blocks(body)))
+    if isinstance(outcome, web.StreamResponse):
+        return outcome
+    content, finish = reply_content(*outcome)
+    model = request.match_info["model"].split(":")[0]
+    return web.json_response(
+        {
+            "candidates": [
+                {
+                    "content": {
+                        "role": "model",
+                        "parts": [{"text": THOUGHT, "thought": True}, {"text": content}],
+                    },
+                    "finishReason": _FINISH["gemini"][finish],
+                    "index": 0,
+                }
+            ],
+            "usageMetadata": {
+                "promptTokenCount": 1000,
+                "cachedContentTokenCount": 100,
+                "candidatesTokenCount": 30,
+                "thoughtsTokenCount": 20,
+                "totalTokenCount": 1050,
+            },
+            "modelVersion": model,
+        }
+    )
+
+
+async def openai_responses(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
+    """``POST /v1/responses``."""
+    body = await request.json()
+    server.record(request, "openai-responses", body)
+    text = _texts({"i": body.get("instructions"), "m": body.get("input")}, ("text",))
+    outcome = await server.answer(request, text, len(image_blocks(body)))
+    if isinstance(outcome, web.StreamResponse):
+        return outcome
+    content, finish = reply_content(*outcome)
+    return web.json_response(
+        {
+            "id": f"resp_fake{time.time_ns()}",
+            "object": "response",
+            "created_at": int(time.time()),
+            "status": "completed" if finish == "stop" else "incomplete",
+            "incomplete_details": None if finish == "stop" else {"reason": "max_output_tokens"},
+            "model": body.get("model", "fake"),
+            "output": [
+                {
+                    "type": "reasoning",
+                    "id": "rs_fake",
+                    "summary": [{"type": "summary_text", "text": THOUGHT}],
+                },
+                {
+                    "type": "message",
+                    "id": "msg_fake",
+                    "status": "completed",
+                    "role": "assistant",
+                    "content": [{"type": "output_text", "text": content, "annotations": []}],
+                },
+            ],
+            "usage": {
+                "input_tokens": 1000,
+                "input_tokens_details": {"cached_tokens": 100},
+                "output_tokens": 50,
+                "output_tokens_details": {"reasoning_tokens": 20},
+                "total_tokens": 1050,
+            },
+        }
+    )
+
+
+def add_protocol_routes(app: web.Application, server: FakeOpenAI) -> None:
+    """Route the three provider protocols to ``server``."""
+
+    def bind(handler: Any) -> Any:
+        async def route(request: web.Request) -> web.StreamResponse:
+            response: web.StreamResponse = await handler(server, request)
+            return response
+
+        return route
+
+    app.router.add_post("/v1/messages", bind(anthropic_messages))
+    app.router.add_post("/v1beta/models/{model}", bind(gemini_generate))
+    app.router.add_post("/v1/responses", bind(openai_responses))
+    app.router.add_post("/responses", bind(openai_responses))
