@@ -110,10 +110,13 @@ class AdapterInfo(ComponentInfo):
         models: Models worth listing (``stasis``, ``oracle``); empty when any string goes.
         offline: Needs no network and no key: ``bpb run`` without ``--adapter`` runs every
             listed model of every offline adapter.
+        catalog: A loader (see :func:`lazy`) of a function returning ``(model, description)``
+            rows for ``bpb list adapters`` (aliases of an adapter that takes any string).
     """
 
     models: tuple[str, ...] = ()
     offline: bool = False
+    catalog: Callable[[], Any] | None = None
     kind: Kind = field(init=False, default="adapter")
 
 

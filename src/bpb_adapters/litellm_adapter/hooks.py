@@ -14,4 +14,5 @@ def bpb_model_adapters() -> Iterator[AdapterInfo]:
         "litellm",
         lazy("bpb_adapters.litellm_adapter.adapter:make_adapter"),
         "Any litellm model string (openai/..., anthropic/..., gemini/...) or a known alias",
+        catalog=lazy("bpb_adapters.litellm_adapter.catalog:catalog"),
     )

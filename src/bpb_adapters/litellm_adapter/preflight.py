@@ -21,17 +21,17 @@ _ROUTE_MODULES: dict[str, tuple[str, ...]] = {"responses": ("mcp.types",)}
 
 
 @functools.cache
-def _bundled_names() -> frozenset[str]:
-    """Model names in litellm's bundled price map, read without importing litellm (seconds)."""
+def bundled_map() -> dict[str, Any]:
+    """litellm's bundled price map, read without importing litellm (which takes seconds)."""
     spec = importlib.util.find_spec("litellm")
     if spec is None or not spec.submodule_search_locations:
-        return frozenset()
+        return {}
     path = Path(next(iter(spec.submodule_search_locations)))
     try:
         table = json.loads((path / "model_prices_and_context_window_backup.json").read_bytes())
     except (OSError, ValueError):
-        return frozenset()
-    return frozenset(table)
+        return {}
+    return table if isinstance(table, dict) else {}
 
 
 def _unknown(model: str) -> str:
@@ -44,7 +44,7 @@ def _unknown(model: str) -> str:
 def quick_preflight(model: str, api_base: str | None, args: Mapping[str, Any]) -> str | None:
     """The checks that need no litellm import: a bare name litellm's map does not hold (and no
     ``api_base`` to route by) has no provider; a known provider's key variable must be set."""
-    names = _bundled_names()
+    names = bundled_map()
     if "/" not in model and api_base is None and names and model not in names:
         return _unknown(model)
     return missing_key(model, args)

@@ -66,8 +66,11 @@ def list_components(what: str) -> None:
     registry = load_registry()
     kind = LIST_KINDS[what]
     for entry in registry.entries(kind).values():
-        names = [entry.info.name]
+        names = [(entry.info.name, entry.info.summary)]
         if isinstance(entry.info, AdapterInfo) and entry.info.models:
-            names = [f"{entry.info.name}:{m}" for m in entry.info.models]
-        for name in names:
-            click.echo(f"{name}\t{entry.info.summary}")
+            names = [(f"{entry.info.name}:{m}", entry.info.summary) for m in entry.info.models]
+        if isinstance(entry.info, AdapterInfo) and entry.info.catalog is not None:
+            rows = entry.info.catalog()()
+            names += [(f"{entry.info.name}:{model}", text) for model, text in rows]
+        for name, text in names:
+            click.echo(f"{name}\t{text}")

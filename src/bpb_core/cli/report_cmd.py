@@ -169,7 +169,9 @@ def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
 
 
 def _name(run: str, baseline: bool) -> str:
-    return f"[dim]{run} (baseline)[/]" if baseline else run
+    from rich.markup import escape  # run names carry option sets in brackets: [effort=high]
+
+    return f"[dim]{escape(run)} (baseline)[/]" if baseline else escape(run)
 
 
 def _pct(value: Any) -> str:

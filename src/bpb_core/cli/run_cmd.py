@@ -290,6 +290,8 @@ def _run_all(
 
 
 def _finish(results: list[RunResult], registry: Registry) -> int:
+    from rich.markup import escape
+
     from bpb_core.cli.console import stderr
     from bpb_core.cli.run_summary import show_summary
 
@@ -298,14 +300,14 @@ def _finish(results: list[RunResult], registry: Registry) -> int:
     for result in results:
         if result.stopped == "auth":
             stderr().print(
-                f"[red]error:[/] {result.adapter}: authentication failed, run stopped "
-                f"(check the provider key in the environment): {result.error}"
+                f"[red]error:[/] {escape(result.adapter)}: authentication failed, run stopped "
+                f"(check the provider key in the environment): {escape(result.error or '')}"
             )
             code = 2
         elif result.api_errors or result.not_sent:
             why = "max cost reached; " if result.stopped == "max-cost" else ""
             stderr().print(
-                f"[yellow]{result.adapter}:[/] {why}{result.api_errors} api errors, "
+                f"[yellow]{escape(result.adapter)}:[/] {why}{result.api_errors} api errors, "
                 f"{result.not_sent} not sent; re-run the same command to resume"
             )
             code = max(code, 1)
@@ -315,6 +317,7 @@ def _finish(results: list[RunResult], registry: Registry) -> int:
 def _show_dry_run(
     data: Path, out: Path, adapters: list[str], options: RunOptions, registry: Registry
 ) -> None:
+    from rich.markup import escape
     from rich.table import Table
 
     from bpb_core.cli.console import stdout
@@ -333,7 +336,7 @@ def _show_dry_run(
         plan = dry_run(data, out / slug(spec), options, registry)
         for task in options.tasks:
             table.add_row(
-                spec,
+                escape(spec),
                 task,
                 str(plan.calls.get(task, 0)),
                 str(plan.done.get(task, 0)),

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rich.markup import escape
+
 from bpb_core.runner.progress import ProgressEvent
 
 if TYPE_CHECKING:
@@ -48,14 +50,16 @@ class RichProgress:
     def _row(self, event: ProgressEvent) -> _Row:
         key = (event.adapter, event.task)
         if key not in self._rows:
-            task_id = self._bar.add_task(f"{event.adapter} {event.task}", total=0, stats="")
+            name = escape(f"{event.adapter} {event.task}")
+            task_id = self._bar.add_task(name, total=0, stats="")
             self._rows[key] = _Row(task_id)
         return self._rows[key]
 
     def update(self, event: ProgressEvent) -> None:
         """Apply one event to its row (a warning is printed above the bars)."""
         if event.kind == "warning":
-            self._bar.console.print(f"[yellow]warning:[/] {event.adapter}: {event.reason}")
+            text = escape(f"{event.adapter}: {event.reason}")
+            self._bar.console.print(f"[yellow]warning:[/] {text}")
             return
         row = self._row(event)
         if event.kind == "planned":

@@ -13,6 +13,7 @@ _NOT_SCORES = ("run", "adapter", "model", "baseline", "expected")
 
 def show_summary(run_dirs: list[Path], registry: Registry) -> None:
     """Write ``scores.csv`` into each run folder and print the leaderboard summary."""
+    from rich.markup import escape
     from rich.table import Table
 
     from bpb_core.cli.console import stderr, stdout
@@ -31,7 +32,10 @@ def show_summary(run_dirs: list[Path], registry: Registry) -> None:
     table = Table(*columns, title="bpb run: scores (strict; completeness = answered share)")
     for _, row in frame.iterrows():
         table.add_row(
-            *(f"{row[c]:.3f}" if isinstance(row[c], float) else str(row[c]) for c in columns)
+            *(
+                f"{row[c]:.3f}" if isinstance(row[c], float) else escape(str(row[c]))
+                for c in columns
+            )
         )
     stdout().print(table)
     parents = sorted({str(d.parent) for d in run_dirs})
