@@ -1,0 +1,127 @@
+"""Run files (``--config``) and ``--model-arg``: parsed as documented, bad input named in one
+line, and a resume with other model arguments refused."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from hypothesis import given, strategies as st
+
+from bpb_core.cli.run_file import model_args, read_run_file
+from bpb_core.errors import BadInput
+from bpb_core.model_calls import AdapterOptions
+
+RunBpb = Callable[..., subprocess.CompletedProcess[str]]
+GOOD = """
+[defaults]
+timeout = 300
+api_base = "http://127.0.0.1:1/v1"
+
+[[adapter]]
+spec = "litellm:gpt-5.4"
+args = {reasoning_effort = "high"}
+headers = {"x-team" = "physics"}
+concurrency = 2
+
+[[adapter]]
+spec = "litellm:claude-opus-4.5"
+api_base = "http://127.0.0.1:1"
+label = "budget"
+args = {thinking = {type = "enabled", budget_tokens = 8000}}
+price = {input = 1e-6, output = 2e-6, cache_read = 1e-7}
+"""
+
+
+def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:
+    path = tmp_path / "sweep.toml"
+    path.write_text(GOOD)
+    first, second = read_run_file(path, AdapterOptions(seed=3), {"max_tokens": 9000})
+    assert first.spec == "litellm:gpt-5.4" and first.run == {"timeout": 300, "concurrency": 2}
+    assert first.options.model_args == {
+        "reasoning_effort": "high",
+        "max_tokens": 9000,  # --model-arg applies to every adapter
+        "extra_headers": {"x-team": "physics"},
+    }
+    assert first.options.api_base == "http://127.0.0.1:1/v1" and first.options.seed == 3
+    assert second.options.api_base == "http://127.0.0.1:1" and second.options.label == "budget"
+    assert second.options.model_args["thinking"] == {"type": "enabled", "budget_tokens": 8000}
+    assert second.options.prices["claude-opus-4.5"]["cache_read"] == 1e-7
+
+
+@pytest.mark.parametrize(
+    ("text", "field"),
+    [
+        ('[[adapter]]\nspec = "litellm:x"\ntemperature = 0', "unknown key 'temperature'"),
+        ('[[adapter]]\nspec = "litellm:x"\ntimeout = "slow"', "adapter 1.timeout"),
+        ('[[adapter]]\nspec = "litellm:x"\nconcurrency = 0', "adapter 1.concurrency"),
+        ("[[adapter]]\nargs = {a = 1}", "adapter 1.spec"),
+        ('[[adapter]]\nspec = "litellm:x"\nargs = 3', "adapter 1.args"),
+        ("[defaults]\ntimeout = 3", "no [[adapter]]"),
+        ('[adapters]\nspec = "x"', "unknown table 'adapters'"),
+        ("[[adapter]\n", "not a readable TOML"),
+    ],
+)
+def test_bad_run_files_name_the_field(tmp_path: Path, text: str, field: str) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(BadInput, match=r"bad\.toml") as caught:
+        read_run_file(path, AdapterOptions(), {})
+    assert field in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_model_args_parse_json_values_and_nest_dotted_keys() -> None:
+    items = ["reasoning_effort=high", "max_tokens=16000", "thinking.budget_tokens=8000",
+             "thinking.type=enabled", 'stop=["END"]', "extra_headers.x-a=1"]  # fmt: skip
+    parsed = model_args(items)
+    assert parsed == {
+        "reasoning_effort": "high",
+        "max_tokens": 16000,
+        "thinking": {"budget_tokens": 8000, "type": "enabled"},
+        "stop": ["END"],
+        "extra_headers": {"x-a": 1},
+    }
+    for bad in ("noequals", "=1", "a..b=1"):
+        with pytest.raises(BadInput, match="--model-arg"):
+            model_args([bad])
+
+
+KEYS = st.from_regex(r"[a-z_][a-z0-9_-]{0,11}", fullmatch=True)
+VALUES = st.one_of(st.integers(), st.booleans(), st.text(max_size=20), st.floats(allow_nan=False))
+
+
+@given(st.dictionaries(KEYS, VALUES, max_size=5))
+def test_model_args_round_trip_any_json_value(args: dict[str, object]) -> None:
+    items = [f"{key}={json.dumps(value)}" for key, value in args.items()]
+    assert model_args(items) == args
+
+
+@pytest.mark.slow
+def test_resume_with_other_model_arguments_is_refused(
+    run_bpb: RunBpb, dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from support.fake_openai import fake_server
+
+    monkeypatch.setenv("OPENAI_API_KEY", "sk-bpbtest-0123456789abcdefSECRET")
+    with fake_server(dataset) as server:
+        base = ["run", "--data", str(dataset), "--out", str(tmp_path), "--limit", "1",
+                "--api-base", server.api_base, "--adapter", "litellm:openai/fake"]  # fmt: skip
+        first = run_bpb(*base, "--model-arg", "top_p=0.5")
+        assert first.returncode == 0, first.stderr
+        folder = tmp_path / "litellm_openai_fake_top_p=0.5"
+        manifest = json.loads((folder / "run.json").read_text())
+        assert manifest["adapter_settings"]["model_args"] == {"top_p": 0.5}
+        # Same folder name through an explicit label, other arguments: refused, nothing sent.
+        sent = server.stats()["total"]
+        config = tmp_path / "other.toml"
+        config.write_text(
+            f'[[adapter]]\nspec = "litellm:openai/fake"\nlabel = "top_p=0.5"\n'
+            f'api_base = "{server.api_base}"\nargs = {{top_p = 0.9}}\n'
+        )
+        again = run_bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--limit", "1",
+                        "--config", str(config))  # fmt: skip
+        assert again.returncode == 2 and "adapter_settings" in again.stderr
+        assert server.stats()["total"] == sent
