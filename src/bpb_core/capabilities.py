@@ -7,8 +7,11 @@ without when it is missing.
   :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
   gallery's picture), :class:`Comparing` (``bpb bench sim``).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
-- An adapter that talks to a model: :class:`Preflighting` (a check before the first call) and
-  :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json).
+- An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
+  :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
+  :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
+  :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
+  ``--dry-run``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
 """
 
@@ -23,6 +26,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
+    from bpb_core.model_calls import Message
     from bpb_core.picture import ScenePicture
 
 
@@ -159,6 +163,26 @@ class Describing(Protocol):
 
     def settings(self) -> dict[str, Any]:
         """JSON-ready settings that shape the answers (never a secret)."""
+        ...
+
+
+@runtime_checkable
+class Pricing(Protocol):
+    """An adapter that knows before any call whether its replies will carry a cost."""
+
+    @property
+    def priced(self) -> bool:
+        """True when a price is known (bundled or overridden) for the model."""
+        ...
+
+
+@runtime_checkable
+class Estimating(Protocol):
+    """An adapter that can estimate a request before sending it (``bpb run --dry-run``)."""
+
+    def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
+        """Input tokens of ``messages`` by the provider's own counting (its image rule
+        included) and their input cost in USD (``None`` when no price is known)."""
         ...
 
 

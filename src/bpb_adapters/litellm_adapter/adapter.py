@@ -23,6 +23,7 @@ from typing import Any
 from bpb_adapters.litellm_adapter import args as model_args, prices, wire
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import map_error
+from bpb_adapters.litellm_adapter.estimate import estimate
 from bpb_adapters.litellm_adapter.preflight import preflight, provider_of, quick_preflight
 from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
@@ -114,6 +115,11 @@ class LiteLLMAdapter:
     def priced(self) -> bool:
         """Whether a cost can be given for this model (bundled map or an override)."""
         return self._litellm is not None and self._priced
+
+    def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
+        """Input tokens and input cost of ``messages`` by the provider's rules."""
+        provider = provider_of(self._litellm, self.model, self._api_base)
+        return estimate(self._litellm, self.model, provider, messages, self.priced)
 
     def preflight(self) -> str | None:
         """Provider known, key present, route modules importable (one line if not)."""

@@ -214,6 +214,11 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     "thinking.budget_tokens=8000, extra_headers.NAME=VALUE (VALUE parsed as JSON if it can be).",
 )
 @click.option(
+    "--allow-unpriced",
+    is_flag=True,
+    help="Let --max-cost run adapters without a price (their calls are not counted).",
+)
+@click.option(
     "--config",
     type=click.Path(path_type=Path, dir_okay=False),
     help="TOML run file listing adapters, each with its own options (see docs/providers.md).",
@@ -230,11 +235,16 @@ def run(**kw: Any) -> None:
     out: Path = kw["out"]
     plans = _plans(kw, list(kw["adapters"]))
     _check_names(registry, [], [p.spec for p in plans])
-    ready = _prepare(registry, plans) if plans else []  # preflight: before any data or call
+    check = not kw["dry_run"]  # a dry run sends nothing, so it needs no key
+    ready = _prepare(registry, plans, check) if plans else []  # preflight: before any call
     data = _data(kw["data"], out, kw["seed"], registry)
     tasks = tasks or default_tasks(data, registry)
     if not ready:
-        ready = _prepare(registry, _plans(kw, _offline_adapters(registry, data)))
+        ready = _prepare(registry, _plans(kw, _offline_adapters(registry, data)), check)
+    if kw["max_cost"] is not None and not kw["allow_unpriced"] and not kw["dry_run"]:
+        from bpb_core.cli.run_file import refuse_unpriced
+
+        refuse_unpriced(ready)
     options = RunOptions(
         tasks=tuple(tasks),
         horizons=_horizons(kw["horizons"]),
@@ -251,16 +261,16 @@ def run(**kw: Any) -> None:
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
     if kw["dry_run"]:
-        _show_dry_run(data, out, [p.name for p in ready], options, registry)
+        _show_dry_run(data, out, ready, options, registry)
         return
     results = _run_all(data, out, ready, options, registry)
     raise click.exceptions.Exit(_finish(results, registry))
 
 
-def _prepare(registry: Registry, plans: list[AdapterPlan]) -> list[Prepared]:
+def _prepare(registry: Registry, plans: list[AdapterPlan], check: bool) -> list[Prepared]:
     from bpb_core.cli.run_file import prepare
 
-    return prepare(registry, plans)
+    return prepare(registry, plans, check=check)
 
 
 def _run_all(
@@ -315,7 +325,7 @@ def _finish(results: list[RunResult], registry: Registry) -> int:
 
 
 def _show_dry_run(
-    data: Path, out: Path, adapters: list[str], options: RunOptions, registry: Registry
+    data: Path, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> None:
     from rich.markup import escape
     from rich.table import Table
@@ -330,16 +340,19 @@ def _show_dry_run(
         "calls",
         "already done",
         "est. input tokens",
-        title="bpb run --dry-run (nothing sent)",
+        "est. input USD",
+        title="bpb run --dry-run (nothing sent; output tokens not included)",
     )
-    for spec in adapters:
-        plan = dry_run(data, out / slug(spec), options, registry)
+    for item in ready:
+        plan = dry_run(data, out / slug(item.name), options, registry, item.adapter)
         for task in options.tasks:
+            cost = plan.input_cost.get(task, 0.0)
             table.add_row(
-                escape(spec),
+                escape(item.name),
                 task,
                 str(plan.calls.get(task, 0)),
                 str(plan.done.get(task, 0)),
                 f"{plan.input_tokens.get(task, 0):,}",
+                "no price" if cost is None else f"${cost:.4f}",
             )
     stdout().print(table)

@@ -164,8 +164,9 @@ class Prepared:
     plan: AdapterPlan
 
 
-def prepare(registry: Any, plans: list[AdapterPlan]) -> list[Prepared]:
-    """Build every adapter and run its preflight, all before any call is sent.
+def prepare(registry: Any, plans: list[AdapterPlan], *, check: bool = True) -> list[Prepared]:
+    """Build every adapter and run its preflight (unless ``check`` is false: a dry run needs no
+    key), all before any call is sent.
 
     Raises:
         BadInput: A preflight failed (a key missing, an unknown provider, a module missing), or
@@ -176,10 +177,27 @@ def prepare(registry: Any, plans: list[AdapterPlan]) -> list[Prepared]:
     ready: list[Prepared] = []
     for plan in plans:
         adapter = registry.adapter(plan.spec, plan.options)
-        check_adapter(plan.spec, adapter)
+        if check:
+            check_adapter(plan.spec, adapter)
         ready.append(Prepared(run_name(plan.spec, adapter), adapter, plan))
     names = [p.name for p in ready]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise BadInput(f"--adapter {twice[0]}: given twice with the same options; add a label")
     return ready
+
+
+def refuse_unpriced(ready: list[Prepared]) -> None:
+    """``--max-cost`` cannot cap what it cannot price: refuse adapters without a price.
+
+    Raises:
+        BadInput: Names every adapter without a price and the ways out.
+    """
+    from bpb_core.capabilities import Pricing
+
+    unpriced = [p.name for p in ready if isinstance(p.adapter, Pricing) and not p.adapter.priced]
+    if unpriced:
+        raise BadInput(
+            f"--max-cost: no price known for {', '.join(unpriced)}; give one (--prices, or "
+            "price = {...} in the run file) or pass --allow-unpriced to let them run uncounted"
+        )

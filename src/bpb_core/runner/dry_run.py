@@ -1,8 +1,9 @@
 """What a run would send, without sending it (``bpb run --dry-run``).
 
-The token estimate counts prompt characters / 4 plus an image estimate from the PNG size
-(OpenAI's tile rule: 85 + 170 per 512-pixel tile after scaling to fit 2048x768); it is a
-planning figure, not a bill.
+The token estimate is the adapter's own when it can give one (:class:`Estimating`: the
+provider's tokenizer and image rule, and the input cost); otherwise prompt characters / 4 plus
+an image estimate from the PNG size (OpenAI's tile rule: 85 + 170 per 512-pixel tile after
+scaling to fit 2048x768). It is a planning figure, not a bill: output tokens are not included.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bpb_core.capabilities import Estimating
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
 from bpb_core.run_folder import completed
@@ -31,11 +33,21 @@ class DryRun:
         calls: Calls to send per task (pairs already complete are not counted).
         done: Pairs already complete per task.
         input_tokens: Estimated input tokens per task (first attempts only).
+        input_cost: Estimated input cost in USD per task (``None``: no price known, or the
+            adapter cannot estimate).
     """
 
     calls: dict[str, int] = field(default_factory=dict)
     done: dict[str, int] = field(default_factory=dict)
     input_tokens: dict[str, int] = field(default_factory=dict)
+    input_cost: dict[str, float | None] = field(default_factory=dict)
+
+    def add(self, task: str, tokens: int, cost: float | None) -> None:
+        """Count one call of ``task``."""
+        self.calls[task] = self.calls.get(task, 0) + 1
+        self.input_tokens[task] = self.input_tokens.get(task, 0) + tokens
+        before = self.input_cost.get(task, 0.0)
+        self.input_cost[task] = None if before is None or cost is None else before + cost
 
 
 def image_tokens(png: bytes) -> int:
@@ -50,8 +62,15 @@ def image_tokens(png: bytes) -> int:
     return int(85 + 170 * tiles)
 
 
-def dry_run(data: Path, run_dir: Path, options: RunOptions, registry: Registry) -> DryRun:
-    """Count the calls and estimate the input tokens of a run without sending anything."""
+def dry_run(
+    data: Path,
+    run_dir: Path,
+    options: RunOptions,
+    registry: Registry,
+    adapter: object = None,
+) -> DryRun:
+    """Count the calls and estimate the input tokens (and, when ``adapter`` can estimate, the
+    input cost) of a run without sending anything."""
     plan = DryRun()
     asked = asking(data, options, registry)
     options, tasks = asked.options, asked.tasks
@@ -65,13 +84,10 @@ def dry_run(data: Path, run_dir: Path, options: RunOptions, registry: Registry) 
                 continue
             cot = options.cot.get(name, task.default_cot)
             prompt = PromptOptions(options.input_mode, cot, options.force_numeric)
-            chars = sum(
-                len(p.text)
-                for m in task.messages(scene, image, prompt)
-                for p in m.parts
-                if isinstance(p, TextPart)
-            )
-            tokens = chars // 4 + (0 if image is None else image_tokens(image))
-            plan.calls[name] = plan.calls.get(name, 0) + 1
-            plan.input_tokens[name] = plan.input_tokens.get(name, 0) + tokens
+            messages = task.messages(scene, image, prompt)
+            if isinstance(adapter, Estimating):
+                plan.add(name, *adapter.estimate(messages))
+                continue
+            chars = sum(len(p.text) for m in messages for p in m.parts if isinstance(p, TextPart))
+            plan.add(name, chars // 4 + (0 if image is None else image_tokens(image)), None)
     return plan
