@@ -148,6 +148,9 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 @click.option("--concurrency", type=click.IntRange(min=1), default=8, show_default=True)
 @click.option("--rpm", type=click.FloatRange(min=0, min_open=True), help="Requests per minute cap.")
 @click.option(
+    "--tpm", type=click.FloatRange(min=0, min_open=True), help="Tokens per minute cap (in + out)."
+)
+@click.option(
     "--out",
     type=click.Path(path_type=Path),
     default=Path(DEFAULT_OUT),
@@ -251,6 +254,7 @@ def run(**kw: Any) -> None:
         limit=kw["limit"],
         concurrency=kw["concurrency"],
         rpm=kw["rpm"],
+        tpm=kw["tpm"],
         cot=_cot(tasks, kw["enable_cot"], kw["cot_tasks"]),
         max_tokens=kw["max_tokens"],
         timeout=kw["timeout"],

@@ -12,6 +12,7 @@ A run file lists adapters, each with its own options::
     timeout = 600                   # seconds per call
     concurrency = 4                 # calls in flight
     rpm = 60                        # requests per minute
+    tpm = 200000                    # tokens per minute (input plus output)
     args = {reasoning_effort = "high", max_tokens = 16000}
     headers = {"anthropic-beta" = "..."}
     price = {input = 2.5e-6, output = 1.5e-5, cache_read = 2.5e-7}
@@ -33,7 +34,12 @@ from typing import Any
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
 
-_RUN_KEYS = {"timeout": (int, float), "concurrency": (int,), "rpm": (int, float)}
+_RUN_KEYS = {
+    "timeout": (int, float),
+    "concurrency": (int,),
+    "rpm": (int, float),
+    "tpm": (int, float),
+}
 _KEYS = {"spec", "label", "api_base", "args", "headers", "price", *_RUN_KEYS}
 
 
@@ -44,7 +50,8 @@ class AdapterPlan:
     Attributes:
         spec: ``name:model``.
         options: What the adapter factory receives (api_base, model arguments, prices, label).
-        run: Per-adapter overrides of the run options (``timeout``, ``concurrency``, ``rpm``).
+        run: Per-adapter overrides of the run options (``timeout``, ``concurrency``, ``rpm``,
+            ``tpm``).
     """
 
     spec: str

@@ -37,6 +37,7 @@ class RunOptions:
         limit: First N scenes per horizon (``None`` for all).
         concurrency: Calls in flight at once.
         rpm: Requests-per-minute cap (``None`` for none).
+        tpm: Tokens-per-minute cap, input plus output (``None`` for none).
         cot: Per-task chain-of-thought overrides; a task not listed uses its default.
         max_tokens: Output token cap per call.
         timeout: Seconds per call before it times out (grows on retries).
@@ -53,6 +54,7 @@ class RunOptions:
     limit: int | None = None
     concurrency: int = 8
     rpm: float | None = None
+    tpm: float | None = None
     cot: Mapping[str, bool] = field(default_factory=dict)
     max_tokens: int | None = None
     timeout: float = 120.0

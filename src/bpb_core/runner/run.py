@@ -24,7 +24,7 @@ from bpb_core.model_calls import AdapterOptions
 from bpb_core.run_folder import AttemptLog, completed
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.call import PairCall
-from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.limits import RateLimiter, TokenBudget
 from bpb_core.runner.manifest import finish_manifest, start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
@@ -133,6 +133,7 @@ def _state(
         log=AttemptLog(run_dir),
         progress=progress,
         limiter=RateLimiter(options.rpm),
+        budget=TokenBudget(options.tpm),
         slots=asyncio.Semaphore(options.concurrency),
         rng=random.Random(options.seed),
         family=asked.family.name,

@@ -15,7 +15,7 @@ from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
 from bpb_core.model_calls import ModelResponse
 from bpb_core.run_folder import AttemptLog, UsageRecord
-from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.limits import RateLimiter, TokenBudget
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.progress import Progress, ProgressEvent
 
@@ -40,6 +40,7 @@ class RunState:
     limiter: RateLimiter
     slots: asyncio.Semaphore
     rng: random.Random
+    budget: TokenBudget = field(default_factory=lambda: TokenBudget(None))
     io: ThreadPoolExecutor = field(
         default_factory=lambda: ThreadPoolExecutor(1, thread_name_prefix="bpb-io")
     )
@@ -82,13 +83,16 @@ class RunState:
         """
         async with self.slots:
             await self.limiter.wait()
+            await self.budget.wait()
             if not self.may_send():  # checked again here: the cap may be hit while we queued
                 raise NotSent
             yield
 
     def account(self, response: ModelResponse) -> None:
         """Add a reply's tokens and cost to the run totals."""
-        self.tokens += (response.usage.input_tokens or 0) + (response.usage.output_tokens or 0)
+        used = (response.usage.input_tokens or 0) + (response.usage.output_tokens or 0)
+        self.tokens += used
+        self.budget.spent(used)
         if response.cost is None:
             self.unpriced = True
         else:

@@ -1,4 +1,4 @@
-"""Run-folder storage and pacing: atomic answers, torn log lines, the rpm cap."""
+"""Run-folder storage and pacing: atomic answers, torn log lines, the rpm and tpm caps."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from bpb_core.run_folder import (
     read_attempts,
     write_answer,
 )
-from bpb_core.runner.limits import RateLimiter
+from bpb_core.runner.limits import RateLimiter, TokenBudget
 
 
 def test_torn_last_line_is_skipped_and_closed_before_appending(tmp_path: Path) -> None:
@@ -52,3 +52,18 @@ def test_rpm_cap_spaces_request_starts() -> None:
 
     assert 0.35 < asyncio.run(go()) < 1.0
     assert asyncio.run(asyncio.wait_for(RateLimiter(None).wait(), 0.1)) is None
+
+
+def test_tpm_cap_holds_calls_once_the_minute_budget_is_drawn() -> None:
+    async def go() -> tuple[float, float]:
+        budget = TokenBudget(tpm=12000)  # 200 tokens per second, a bucket of 12000
+        await asyncio.wait_for(budget.wait(), 0.1)  # nothing known yet: no draw
+        budget.spent(100)  # replies use 100 tokens on average: 120 calls fill the bucket
+        started = time.monotonic()
+        await asyncio.gather(*(budget.wait() for _ in range(120)))
+        full = time.monotonic() - started
+        await asyncio.gather(*(budget.wait() for _ in range(2)))  # 100 tokens leak in 0.5 s
+        return full, time.monotonic() - started
+
+    full, held = asyncio.run(go())
+    assert full < 0.5 and 0.7 < held < 3.0
