@@ -129,8 +129,13 @@ class LiteLLMAdapter:
         return preflight(self._litellm, self.model, self._api_base, self.args)
 
     def settings(self) -> dict[str, Any]:
-        """The model id and the model arguments (secrets masked), for run.json."""
-        return {"model": self.model, "model_args": model_args.recorded(self.args)}
+        """The model id, the model arguments (secrets masked) and the api_base, for run.json
+        (a resume may change the api_base: it does not shape answers)."""
+        return {
+            "model": self.model,
+            "model_args": model_args.recorded(self.args),
+            "api_base": self._api_base,
+        }
 
     def _content(self, message: Message) -> str | list[dict[str, Any]]:
         if all(isinstance(p, TextPart) for p in message.parts):

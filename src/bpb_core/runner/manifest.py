@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from bpb_core.runner.state import RunState
 
 _GUARDED = ("adapter", "adapter_settings", "dataset_hash", "input_mode", "cot", "force_numeric")
+_UNGUARDED_SETTINGS = ("api_base",)
 
 
 def now() -> str:
@@ -73,10 +74,17 @@ def _options(options: RunOptions, registry: Registry) -> dict[str, Any]:
     return data
 
 
+def _guarded(manifest: dict[str, Any], key: str) -> Any:
+    value = manifest.get(key, manifest.get("options", {}).get(key))
+    if key == "adapter_settings" and isinstance(value, dict):  # where it is sent may change
+        value = {k: v for k, v in value.items() if k not in _UNGUARDED_SETTINGS}
+    return value
+
+
 def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> None:
     for key in _GUARDED:
-        before = old.get(key, old.get("options", {}).get(key))
-        after = new.get(key, new["options"].get(key))
+        before = _guarded(old, key)
+        after = _guarded(new, key)
         if before is not None and before != after:
             raise BadInput(
                 f"{run_dir / RUN_MANIFEST}: {key}: this folder holds a run with {before!r}, not "
