@@ -47,7 +47,21 @@ def quick_preflight(model: str, api_base: str | None, args: Mapping[str, Any]) -
     names = bundled_map()
     if "/" not in model and api_base is None and names and model not in names:
         return _unknown(model)
-    return missing_key(model, args)
+    entry = names.get(model) or names.get(model.split("/", 1)[-1]) or {}
+    route = "responses" if entry.get("mode") == "responses" else "chat"
+    return missing_key(model, args) or _missing_module(model, route)
+
+
+def _missing_module(model: str, route: str) -> str | None:
+    for module in _ROUTE_MODULES.get(route, ()):
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            return (
+                f"{model}: litellm's {route} route needs the module {exc.name or module!r}, "
+                "which is not installed (pip install 'bpb[litellm]')"
+            )
+    return None
 
 
 def provider_of(litellm: Any, model: str, api_base: str | None = None) -> str | None:
@@ -91,13 +105,4 @@ def preflight(
         if missing:
             names = " or ".join(missing)
             return f"{model}: environment variable {names} is not set (the {provider} API key)"
-    for module in _ROUTE_MODULES.get(route_of(litellm, model, provider), ()):
-        try:
-            importlib.import_module(module)
-        except ImportError as exc:
-            name = exc.name or module
-            return (
-                f"{model}: litellm's {route_of(litellm, model, provider)} route needs the "
-                f"module {name!r}, which is not installed (pip install 'bpb[litellm]')"
-            )
-    return None
+    return _missing_module(model, route_of(litellm, model, provider))
