@@ -119,11 +119,14 @@ def start_manifest(
         "plugins": _plugins(registry),
         "started": now(),
         "finished": None,
+        "order_seed": options.seed,
     }
     old = read_manifest(run_dir)
     if old is not None:
         _check_resume(run_dir, old, manifest)
         manifest["started"] = old.get("started", manifest["started"])
+        if isinstance(old.get("order_seed"), int):  # the resumed run goes on in its own order
+            manifest["order_seed"] = old["order_seed"]
         manifest["model_id"] = old.get("model_id")
         manifest["dropped_params"] = old.get("dropped_params", [])
         manifest["sessions"] = [*old.get("sessions", []), now()]

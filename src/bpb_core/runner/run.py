@@ -2,9 +2,10 @@
 
 :func:`run_eval` runs one adapter into one run folder; :func:`evaluate` runs several, each into
 ``OUT/<slug>/``. Re-running the same call resumes: (scene, task) pairs whose answer file says
-``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. Scenes stream
-through a bounded window, so memory does not grow with the dataset, and each scene's image is
-read once for all its tasks.
+``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. The (scene,
+task) pairs are sent in a seeded random order (:mod:`bpb_core.runner.order`), so a run stopped
+early holds a uniform sample; they stream through a bounded window, so memory does not grow with
+the dataset.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from bpb_core.runner.call import PairCall
 from bpb_core.runner.limits import RateLimiter, TokenBudget
 from bpb_core.runner.manifest import finish_manifest, start_manifest
 from bpb_core.runner.options import RunOptions
+from bpb_core.runner.order import Pair, call_order
 from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
 from bpb_core.runner.result import RunResult
 from bpb_core.runner.scenes import SceneRef
@@ -62,49 +64,37 @@ def check_adapter(spec: str, adapter: ModelAdapter) -> None:
         raise BadInput(f"--adapter {spec}: {problem}")
 
 
-def _plan(
-    refs: list[SceneRef], tasks: Sequence[str], done: set[tuple[str, str]]
-) -> list[tuple[SceneRef, list[str]]]:
-    plan = []
-    for ref in refs:
-        todo = [t for t in tasks if (ref.scene_id, t) not in done]
-        if todo:
-            plan.append((ref, todo))
-    return plan
-
-
-async def _scene(state: RunState, ref: SceneRef, todo: list[str]) -> None:
+async def _pair(state: RunState, ref: SceneRef, task: str) -> None:
     if not state.may_send():
-        for task in todo:
-            state.not_sent(task)
+        state.not_sent(task)
         return
     scene = await state.offload(ref.load)
     image = None if state.options.input_mode == "state" else await state.offload(ref.image)
     sha = None if image is None else hashlib.sha256(image).hexdigest()
-    await asyncio.gather(*(PairCall(state, ref, scene, image, sha, t).run() for t in todo))
+    await PairCall(state, ref, scene, image, sha, task).run()
 
 
-async def _drive(state: RunState, plan: list[tuple[SceneRef, list[str]]]) -> None:
-    """Run the scenes through a bounded window; the first scene error stops new scenes, lets
-    the ones in flight finish (their answers are kept) and is raised."""
+async def _drive(state: RunState, plan: list[Pair]) -> None:
+    """Run the pairs, in the plan's order, through a bounded window; the first scene error
+    stops new pairs, lets the ones in flight finish (their answers are kept) and is raised."""
     window = asyncio.Semaphore(max(2 * state.options.concurrency, 4))
     running: set[asyncio.Task[None]] = set()
     failures: list[BaseException] = []
 
-    async def one(ref: SceneRef, todo: list[str]) -> None:
+    async def one(ref: SceneRef, task: str) -> None:
         try:
-            await _scene(state, ref, todo)
+            await _pair(state, ref, task)
         except Exception as exc:  # re-raised below, after the scenes in flight finish
             failures.append(exc)
         finally:
             window.release()
 
-    for ref, todo in plan:
+    for ref, task in plan:
         await window.acquire()
         if failures:
             window.release()
             break
-        job = asyncio.create_task(one(ref, todo))
+        job = asyncio.create_task(one(ref, task))
         running.add(job)
         job.add_done_callback(running.discard)
     if running:
@@ -169,8 +159,8 @@ async def run_eval_async(
     check_adapter(spec, model)
     run_dir.mkdir(parents=True, exist_ok=True)
     done = completed(run_dir)
-    plan = _plan(refs, options.tasks, done)
     manifest = start_manifest(run_dir, spec, data, options, registry, len(refs), model)
+    plan = call_order(refs, options.tasks, done, manifest["order_seed"])
     state = _state(model, spec, tasks, options, run_dir, progress, asked)
     _announce(state, refs, plan, done)
     try:
@@ -197,13 +187,13 @@ def _adapter(
 def _announce(
     state: RunState,
     refs: list[SceneRef],
-    plan: list[tuple[SceneRef, list[str]]],
+    plan: list[Pair],
     done: set[tuple[str, str]],
 ) -> None:
     ids = {ref.scene_id for ref in refs}
     for task in state.options.tasks:
         before = sum(1 for scene_id, t in done if t == task and scene_id in ids)
-        todo = sum(1 for _, names in plan if task in names)
+        todo = sum(1 for _, name in plan if name == task)
         state.progress.update(ProgressEvent(state.spec, task, "skipped", count=before))
         state.progress.update(ProgressEvent(state.spec, task, "planned", count=todo))
 
