@@ -66,16 +66,39 @@ def answer_path(run_dir: Path, key: SceneKey, task: str) -> Path:
     return key.dir(run_dir) / f"{task}.json"
 
 
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write ``data`` as JSON to ``path`` through a temporary file and a rename."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    text = json.dumps(data, indent=1) + "\n"
+def make_run_folder(run_dir: Path) -> None:
+    """Create the run folder (and its parents) and check that it can be written.
+
+    Raises:
+        BadInput: The path, or one of its parents, is a file, or it cannot be written (one line
+            naming the path).
+    """
+    for parent in (run_dir, *run_dir.parents):
+        if parent.exists() and not parent.is_dir():
+            raise BadInput(f"{parent}: --out: not a folder (a file is in the way of {run_dir})")
     try:
-        tmp.write_text(text, encoding="utf-8")
+        run_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BadInput(f"{run_dir}: --out: cannot create the folder: {exc.strerror}") from None
+    if not os.access(run_dir, os.W_OK | os.X_OK):
+        raise BadInput(f"{run_dir}: --out: the folder is not writable")
+
+
+def write_bytes_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename, so a reader (or a run
+    killed half-way) sees the old file or the new one, never a torn one."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_bytes(data)
     except FileNotFoundError:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp.write_text(text, encoding="utf-8")
+        tmp.write_bytes(data)
     os.replace(tmp, path)
+
+
+def write_json_atomic(path: Path, data: Any) -> None:
+    """Write ``data`` as JSON to ``path`` through a temporary file and a rename."""
+    write_bytes_atomic(path, (json.dumps(data, indent=1) + "\n").encode("utf-8"))
 
 
 def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:

@@ -300,6 +300,8 @@ def _run_all(
                     spec=item.name,
                 )
             )
+            if results[-1].stopped == "interrupted":  # Ctrl-C / SIGTERM stops every adapter
+                break
     return results
 
 
@@ -319,7 +321,9 @@ def _finish(results: list[RunResult], registry: Registry) -> int:
             )
             code = 2
         elif result.api_errors or result.not_sent:
-            why = "max cost reached; " if result.stopped == "max-cost" else ""
+            why = {"max-cost": "max cost reached; ", "interrupted": "interrupted; "}.get(
+                result.stopped or "", ""
+            )
             stderr().print(
                 f"[yellow]{escape(result.adapter)}:[/] {why}{result.api_errors} api errors, "
                 f"{result.not_sent} not sent; re-run the same command to resume"

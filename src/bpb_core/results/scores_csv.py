@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 from bpb_core.results.frames import load_results
 from bpb_core.results.tables import summary
+from bpb_core.run_folder import write_bytes_atomic
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -23,5 +24,6 @@ def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> 
     results = load_results(list(run_dirs), registry=registry)
     frame = results.units
     for run in results.runs:
-        frame[frame["run"] == run.label].to_csv(run.path / "scores.csv", index=False)
+        text = frame[frame["run"] == run.label].to_csv(index=False)
+        write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
     return summary(frame, results.suites)

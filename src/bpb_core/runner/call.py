@@ -131,6 +131,7 @@ class PairCall:
             "escalation": self.escalation,
             "timeout": self.timeout,
             "image_sha256": self.image_sha,
+            "config": self.state.config_hash,
             **fields,
         }
         await self.state.offload(self.state.log.append, entry)
@@ -149,6 +150,7 @@ class PairCall:
             latency=response.latency,
             model_id=response.model_id,
             rule=parsed.rule,
+            answer=parsed.value,
             error=parsed.error,
             sent=response.sent,
             dropped=list(response.dropped),

@@ -2,12 +2,16 @@
 
 Resuming a run folder with different answer-shaping settings (adapter, its model arguments,
 dataset, input mode, chain of thought, force-numeric) would mix incomparable answers, so it is
-refused as bad input.
+refused as bad input. The guard is kept twice: in ``run.json`` (written atomically) and as a
+configuration hash on every line of the attempts log, which guards a folder that lost its
+``run.json``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import platform
 import sys
 from datetime import UTC, datetime
@@ -17,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Describing
 from bpb_core.errors import BadInput
-from bpb_core.layout import RUN_MANIFEST
+from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
 from bpb_core.run_folder import read_manifest, write_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
@@ -81,6 +85,24 @@ def _guarded(manifest: dict[str, Any], key: str) -> Any:
     return value
 
 
+def config_hash(manifest: dict[str, Any]) -> str:
+    """A digest of a run's answer-shaping settings; every attempt logged carries it, so the
+    attempts log alone can refuse a resume that would mix answers."""
+    shaping = {key: _guarded(manifest, key) for key in _GUARDED}
+    text = json.dumps(shaping, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def _check_log(run_dir: Path, logged: set[str], new: str) -> None:
+    other = sorted(logged - {new})
+    if other:
+        raise BadInput(
+            f"{run_dir / ATTEMPTS}: holds attempts of another configuration (hash {other[0]}, "
+            f"this run {new}) and {RUN_MANIFEST} is missing; use another --out to keep answers "
+            "comparable"
+        )
+
+
 def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> None:
     for key in _GUARDED:
         before = _guarded(old, key)
@@ -100,8 +122,12 @@ def start_manifest(
     registry: Registry,
     scenes: int,
     adapter: object = None,
+    logged: set[str] | None = None,
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
+
+    ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
+    they alone guard the resume.
 
     Raises:
         BadInput: The folder holds a run with other answer-shaping settings.
@@ -121,8 +147,11 @@ def start_manifest(
         "finished": None,
         "order_seed": options.seed,
     }
+    manifest["config_hash"] = config_hash(manifest)
     old = read_manifest(run_dir)
-    if old is not None:
+    if old is None:
+        _check_log(run_dir, logged or set(), manifest["config_hash"])
+    else:
         _check_resume(run_dir, old, manifest)
         manifest["started"] = old.get("started", manifest["started"])
         if isinstance(old.get("order_seed"), int):  # the resumed run goes on in its own order
@@ -130,7 +159,7 @@ def start_manifest(
         manifest["model_id"] = old.get("model_id")
         manifest["dropped_params"] = old.get("dropped_params", [])
         manifest["sessions"] = [*old.get("sessions", []), now()]
-    else:
+    if old is None:
         manifest["sessions"] = [manifest["started"]]
     write_manifest(run_dir, manifest)
     return manifest

@@ -11,7 +11,6 @@ the dataset.
 from __future__ import annotations
 
 import asyncio
-import hashlib
 import random
 import re
 from collections import Counter
@@ -22,10 +21,12 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
-from bpb_core.run_folder import AttemptLog, completed
+from bpb_core.run_folder import AttemptLog, completed, make_run_folder
 from bpb_core.runner.asking import Asking, asking
-from bpb_core.runner.call import PairCall
+from bpb_core.runner.drive import drive
+from bpb_core.runner.history import read_history, recover_answers
 from bpb_core.runner.limits import RateLimiter, TokenBudget
+from bpb_core.runner.lock import run_lock
 from bpb_core.runner.manifest import finish_manifest, start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.order import Pair, call_order
@@ -62,45 +63,6 @@ def check_adapter(spec: str, adapter: ModelAdapter) -> None:
     problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
     if problem:
         raise BadInput(f"--adapter {spec}: {problem}")
-
-
-async def _pair(state: RunState, ref: SceneRef, task: str) -> None:
-    if not state.may_send():
-        state.not_sent(task)
-        return
-    scene = await state.offload(ref.load)
-    image = None if state.options.input_mode == "state" else await state.offload(ref.image)
-    sha = None if image is None else hashlib.sha256(image).hexdigest()
-    await PairCall(state, ref, scene, image, sha, task).run()
-
-
-async def _drive(state: RunState, plan: list[Pair]) -> None:
-    """Run the pairs, in the plan's order, through a bounded window; the first scene error
-    stops new pairs, lets the ones in flight finish (their answers are kept) and is raised."""
-    window = asyncio.Semaphore(max(2 * state.options.concurrency, 4))
-    running: set[asyncio.Task[None]] = set()
-    failures: list[BaseException] = []
-
-    async def one(ref: SceneRef, task: str) -> None:
-        try:
-            await _pair(state, ref, task)
-        except Exception as exc:  # re-raised below, after the scenes in flight finish
-            failures.append(exc)
-        finally:
-            window.release()
-
-    for ref, task in plan:
-        await window.acquire()
-        if failures:
-            window.release()
-            break
-        job = asyncio.create_task(one(ref, task))
-        running.add(job)
-        job.add_done_callback(running.discard)
-    if running:
-        await asyncio.gather(*running)
-    if failures:
-        raise failures[0]
 
 
 def _state(
@@ -157,18 +119,26 @@ async def run_eval_async(
     if why is not None:
         raise BadInput(f"--adapter {spec}: {why}")
     check_adapter(spec, model)
-    run_dir.mkdir(parents=True, exist_ok=True)
-    done = completed(run_dir)
-    manifest = start_manifest(run_dir, spec, data, options, registry, len(refs), model)
-    plan = call_order(refs, options.tasks, done, manifest["order_seed"])
-    state = _state(model, spec, tasks, options, run_dir, progress, asked)
-    _announce(state, refs, plan, done)
-    try:
-        await _drive(state, plan)
-    finally:
-        state.io.shutdown(wait=True)
-        state.log.close()
-        finish_manifest(run_dir, manifest, state)
+    make_run_folder(run_dir)
+    with run_lock(run_dir):
+        pairs = ((ref.scene_id, task) for ref in refs for task in options.tasks)
+        history = read_history(run_dir, spec, pairs)
+        manifest = start_manifest(
+            run_dir, spec, data, options, registry, len(refs), model, history.configs
+        )
+        state = _state(model, spec, tasks, options, run_dir, progress, asked)
+        state.config_hash, state.history = manifest["config_hash"], history
+        try:
+            done = completed(run_dir)
+            plan = call_order(refs, options.tasks, done, manifest["order_seed"])
+            done |= recover_answers(run_dir, history, plan, state)
+            plan = [(ref, task) for ref, task in plan if (ref.scene_id, task) not in done]
+            _announce(state, refs, plan, done)
+            await drive(state, plan)
+        finally:
+            state.io.shutdown(wait=True)
+            state.log.close()
+            finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)
 
 

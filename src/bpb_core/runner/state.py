@@ -9,7 +9,7 @@ from collections.abc import AsyncIterator, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
@@ -18,6 +18,9 @@ from bpb_core.run_folder import AttemptLog, UsageRecord
 from bpb_core.runner.limits import RateLimiter, TokenBudget
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.progress import Progress, ProgressEvent
+
+if TYPE_CHECKING:
+    from bpb_core.runner.history import History
 
 T = TypeVar("T")
 
@@ -54,6 +57,9 @@ class RunState:
     family: str = ""
     simulator: str | None = None
     dropped: set[str] = field(default_factory=set)
+    config_hash: str = ""
+    history: History | None = None
+    interrupts: int = 0
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
@@ -64,8 +70,12 @@ class RunState:
         """Whether ``task`` asks for chain of thought in this run."""
         return self.options.cot.get(task, self.tasks[task].default_cot)
 
+    def prior(self, scene_id: str, task: str) -> Tally:
+        """The pair's attempts and usage from earlier sessions (counted on in this one)."""
+        return Tally() if self.history is None else self.history.prior(scene_id, task)
+
     def may_send(self) -> bool:
-        """False once the run must stop sending (cost cap reached or auth failed)."""
+        """False once the run must stop sending (cost cap reached, auth failed, interrupted)."""
         cap = self.options.max_cost
         if cap is not None and self.spent >= cap and self.stop_reason is None:
             self.stop_reason = "max-cost"

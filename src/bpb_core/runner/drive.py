@@ -1,0 +1,59 @@
+"""Send a run's pairs in the plan's order through a bounded window of tasks."""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+
+from bpb_core.runner.call import PairCall
+from bpb_core.runner.interrupt import interruptible
+from bpb_core.runner.order import Pair
+from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.state import RunState
+
+
+async def _pair(state: RunState, ref: SceneRef, task: str) -> None:
+    if not state.may_send():
+        state.not_sent(task)
+        return
+    scene = await state.offload(ref.load)
+    image = None if state.options.input_mode == "state" else await state.offload(ref.image)
+    sha = None if image is None else hashlib.sha256(image).hexdigest()
+    tally = state.prior(ref.scene_id, task)
+    await PairCall(state, ref, scene, image, sha, task, tally=tally).run()
+
+
+async def drive(state: RunState, plan: list[Pair]) -> None:
+    """Run the pairs, in the plan's order, through a bounded window.
+
+    The first scene error stops new pairs, lets the ones in flight finish (their answers are
+    kept) and is raised. SIGINT/SIGTERM stop new pairs too (see
+    :mod:`bpb_core.runner.interrupt`); a pair abandoned by a second signal stays unsent.
+    """
+    window = asyncio.Semaphore(max(2 * state.options.concurrency, 4))
+    running: set[asyncio.Task[None]] = set()
+    failures: list[BaseException] = []
+
+    async def one(ref: SceneRef, task: str) -> None:
+        try:
+            await _pair(state, ref, task)
+        except asyncio.CancelledError:  # abandoned by a second interrupt: resumable
+            state.not_sent(task)
+        except Exception as exc:  # re-raised below, after the scenes in flight finish
+            failures.append(exc)
+        finally:
+            window.release()
+
+    with interruptible(state, running):
+        for ref, task in plan:
+            await window.acquire()
+            if failures:
+                window.release()
+                break
+            job = asyncio.create_task(one(ref, task))
+            running.add(job)
+            job.add_done_callback(running.discard)
+        if running:
+            await asyncio.gather(*running, return_exceptions=True)
+    if failures:
+        raise failures[0]

@@ -1,0 +1,137 @@
+"""What earlier sessions of a run folder left in its attempts log, read in one pass.
+
+The attempts log is the run's source of truth: every reply is appended (and flushed) before its
+answer file is written. Reading it back gives three things a resumed run needs:
+
+- the configuration hashes of earlier sessions, so a folder whose ``run.json`` is gone still
+  cannot mix answers of another adapter, dataset, input mode or prompt setting;
+- an ``ok`` reply whose answer file never got written (a kill between the two), which is
+  recovered from the log instead of being paid for again;
+- the attempts, tokens, cost and latency of every earlier session of a pair, so a pair retried
+  in a later session counts all of them (usage tables and retries span sessions).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from bpb_core.run_folder import AnswerRecord, read_attempts, write_answer
+from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.state import RunState, Tally
+
+_USAGE = ("input_tokens", "output_tokens", "reasoning_tokens", "cached_tokens")
+REPLIED = ("ok", "parse_error")
+
+
+@dataclass
+class PairHistory:
+    """The logged attempts of one (scene, task): their totals, and its last ``ok`` reply."""
+
+    tally: Tally = field(default_factory=Tally)
+    ok: dict[str, Any] | None = None
+
+    def add(self, entry: dict[str, Any]) -> None:
+        """Count one logged attempt."""
+        tally = self.tally
+        tally.attempts += 1
+        if entry.get("outcome") not in REPLIED:
+            return
+        tally.responses += 1
+        usage = entry.get("usage") or {}
+        for name in _USAGE:
+            value = usage.get(name) if isinstance(usage, dict) else None
+            if isinstance(value, int):
+                setattr(tally.usage, name, getattr(tally.usage, name) + value)
+        cost = entry.get("cost")
+        if tally.cost is not None:
+            tally.cost = tally.cost + cost if isinstance(cost, (int, float)) else None
+        latency = entry.get("latency")
+        tally.latency += float(latency) if isinstance(latency, (int, float)) else 0.0
+        if entry.get("outcome") == "ok" and isinstance(entry.get("answer"), dict):
+            self.ok = entry
+
+
+@dataclass
+class History:
+    """Configuration hashes seen and per-pair histories of one run folder."""
+
+    configs: set[str] = field(default_factory=set)
+    pairs: dict[tuple[str, str], PairHistory] = field(default_factory=dict)
+
+    def prior(self, scene_id: str, task: str) -> Tally:
+        """A copy of the pair's totals so far (zero when it was never sent)."""
+        found = self.pairs.get((scene_id, task))
+        if found is None:
+            return Tally()
+        old = found.tally
+        return Tally(old.attempts, old.responses, old.usage.model_copy(), old.cost, old.latency)
+
+
+def read_history(run_dir: Path, adapter: str, keep: Iterable[tuple[str, str]] = ()) -> History:
+    """Read the attempts log of ``run_dir`` once.
+
+    Args:
+        run_dir: The run folder.
+        adapter: The run's name; attempts logged under another name are ignored for totals
+            (their configuration hash still counts).
+        keep: ``(scene_id, task)`` pairs to collect totals for (others are only hashed).
+    """
+    wanted = set(keep)
+    history = History()
+    for entry in read_attempts(run_dir):
+        config = entry.get("config")
+        if isinstance(config, str):
+            history.configs.add(config)
+        pair = (str(entry.get("scene_id")), str(entry.get("task")))
+        if pair in wanted and entry.get("adapter") == adapter:
+            history.pairs.setdefault(pair, PairHistory()).add(entry)
+    return history
+
+
+def recover_answers(
+    run_dir: Path,
+    history: History,
+    pending: Iterable[tuple[SceneRef, str]],
+    state: RunState,
+) -> set[tuple[str, str]]:
+    """Write the answer file of every pending pair whose ``ok`` reply is already in the log.
+
+    Args:
+        run_dir: The run folder.
+        history: Its attempts log, read by :func:`read_history`.
+        pending: The pairs without a finished answer file.
+        state: The run (its name, input mode and chain of thought per task, which the
+            configuration hash guarantees the logged session shared).
+
+    Returns:
+        The ``(scene_id, task)`` pairs recovered (never sent again).
+    """
+    recovered = set()
+    for ref, task in pending:
+        found = history.pairs.get((ref.scene_id, task))
+        if found is None or found.ok is None:
+            continue
+        tally, entry = found.tally, found.ok
+        record = AnswerRecord(
+            scene_id=ref.scene_id,
+            horizon=ref.key.horizon,
+            index=ref.key.index,
+            task=task,
+            adapter=state.spec,
+            status="ok",
+            answer=entry["answer"],
+            rule=entry.get("rule"),
+            finish_reason=entry.get("finish_reason"),
+            attempts=tally.attempts,
+            usage=tally.usage.model_copy(),
+            cost=tally.cost if tally.responses else None,
+            latency=tally.latency,
+            input_mode=state.options.input_mode,
+            cot=state.cot(task),
+        )
+        write_answer(run_dir, ref.key, record)
+        recovered.add((ref.scene_id, task))
+    return recovered

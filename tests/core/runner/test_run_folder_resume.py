@@ -1,0 +1,124 @@
+"""Resume safety in process: stale locks, the log's config guard, recovery, usage, Ctrl-C."""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import json
+import os
+import signal
+from pathlib import Path
+
+import pytest
+
+from bpb_core.errors import BadInput, ServerError
+from bpb_core.model_calls import ModelRequest, ModelResponse, Usage
+from bpb_core.registry import Registry
+from bpb_core.run_folder import iter_answers, read_attempts
+from bpb_core.runner import RetryPolicy, RunOptions, run_eval
+
+
+@dataclasses.dataclass
+class Counting:
+    """The oracle's answers with usage and a price; counts calls, fails or interrupts on cue."""
+
+    oracle: object
+    name: str = "fake:counting"
+    calls: int = 0
+    fail_first: int = 0
+    interrupt_at: int = 0
+    signals: int = 1
+
+    async def complete(self, request: ModelRequest) -> ModelResponse:
+        self.calls += 1
+        if self.calls == self.interrupt_at:
+            for _ in range(self.signals):
+                os.kill(os.getpid(), signal.SIGINT)
+            await asyncio.sleep(0.2 * self.signals)  # a call still in flight
+        if self.calls <= self.fail_first:
+            raise ServerError("503 try later")
+        right: ModelResponse = await self.oracle.complete(request)  # type: ignore[attr-defined]
+        return dataclasses.replace(right, cost=0.5, usage=Usage(100, 10), latency=0.25)
+
+
+def _run(data: Path, run_dir: Path, registry: Registry, adapter: Counting, **kw: object) -> object:
+    options = RunOptions(concurrency=1, retry=RetryPolicy(max_retries=0), **kw)  # type: ignore[arg-type]
+    return run_eval(data, adapter, run_dir, options, registry=registry, spec=adapter.name)
+
+
+def _records(run_dir: Path) -> dict[str, object]:
+    return {f"{r.scene_id}/{r.task}": r for _, r in iter_answers(run_dir)}
+
+
+def test_a_lock_left_by_a_dead_run_is_taken_over(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "run.lock").write_text("999999\\n")  # no such process holds it
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    _run(dataset, tmp_path / "run", registry, adapter)
+    assert adapter.calls == 18 and (tmp_path / "run" / "run.lock").read_text() == ""
+
+
+def test_without_run_json_the_attempts_log_still_refuses_another_configuration(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    _run(dataset, run_dir, registry, adapter, input_mode="state", max_cost=1.4)
+    (run_dir / "run.json").unlink()
+    with pytest.raises(BadInput, match=r"attempts.jsonl: holds attempts of another config"):
+        _run(dataset, run_dir, registry, adapter, input_mode="image")
+    assert adapter.calls == 3
+    _run(dataset, run_dir, registry, adapter, input_mode="state")  # the same settings resume
+    assert adapter.calls == 18
+    assert {r.input_mode for r in _records(run_dir).values()} == {"state"}
+
+
+def test_an_ok_reply_whose_answer_file_is_missing_is_recovered_not_resent(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    _run(dataset, run_dir, registry, adapter)
+    before = _records(run_dir)
+    for name in ("h1/scene_0000/q1.json", "h3/scene_0002/q3.json"):
+        (run_dir / name).unlink()  # as if killed between the log line and the answer file
+    _run(dataset, run_dir, registry, adapter)
+    assert adapter.calls == 18
+    assert _records(run_dir) == before
+
+
+def test_usage_and_retries_count_every_session(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"), fail_first=18)
+    _run(dataset, run_dir, registry, adapter)  # every pair fails once (no retries)
+    _run(dataset, run_dir, registry, adapter)
+    records = _records(run_dir).values()
+    assert all(r.status == "ok" and r.attempts == 2 for r in records)
+    assert {(r.usage.input_tokens, r.cost, r.latency) for r in records} == {(100, 0.5, 0.25)}
+    adapter.fail_first = 40  # a third session over a folder with some pairs failing twice
+    (run_dir / "h1/scene_0001/q2.json").unlink()  # recovered from the log with both attempts
+    _run(dataset, run_dir, registry, adapter)
+    assert _records(run_dir)["h1_0001/q2"].attempts == 2
+
+
+def test_ctrl_c_stops_sending_finishes_writing_and_records_interrupted(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"), interrupt_at=4)
+    result = _run(dataset, run_dir, registry, adapter)
+    assert result.stopped == "interrupted" and adapter.calls == 4  # type: ignore[attr-defined]
+    assert len(_records(run_dir)) == 4  # the call in flight at the signal was written
+    assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
+    # A second signal abandons the call in flight: not written, not logged, sent on resume.
+    twice = Counting(registry.adapter("baseline:oracle"), interrupt_at=5, signals=2)
+    result = _run(dataset, run_dir, registry, twice)
+    assert twice.calls == 5 and result.not_sent == 10  # type: ignore[attr-defined]
+    assert len(_records(run_dir)) == 8
+    logged = {f"{e['scene_id']}/{e['task']}" for e in read_attempts(run_dir)}
+    assert logged == set(_records(run_dir))
