@@ -2,7 +2,9 @@
 
 A reply may wrap its answer in prose, code fences or a chain of thought that itself contains
 braces. :func:`balanced_objects` yields every top-level balanced ``{...}`` substring, matching
-braces outside JSON strings only, so a ``}`` inside ``"a } b"`` does not close an object.
+braces outside JSON strings only, so a ``}`` inside ``"a } b"`` does not close an object. The
+search is one pass (linear in the reply, so a reply of 30,000 unclosed ``{`` costs no more than
+one of 30,000 letters) and replies over :data:`MAX_REPLY_CHARS` are refused outright.
 :func:`extract` applies the rule that fits the prompt:
 
 - ``first``: without chain of thought, the first balanced object must validate (the paper's rule);
@@ -13,6 +15,7 @@ braces outside JSON strings only, so a ``}`` inside ``"a } b"`` does not close a
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
@@ -21,53 +24,62 @@ from bpb_core.errors import ParseFailure
 T = TypeVar("T")
 RULE_FIRST = "first"
 RULE_LAST_VALID = "last-valid"
-_MAX_OBJECTS = 200  # bound the work on adversarial text full of braces
+MAX_REPLY_CHARS = 1_048_576
+"""Longer replies are a parse failure at once (no answer of any task is near this long)."""
+MAX_OBJECTS = 200
+"""Candidates kept, from the left: a reply holding more top-level objects is not an answer."""
+MAX_BRACES = 10_000
+"""Braces looked at inside objects before the search stops (bounds the work on text made of
+braces; an answer with its reasoning holds a few hundred)."""
+# Inside an object: skip (possessively, so a failed match never backtracks) everything but
+# braces and quotes, and whole JSON strings, up to the next brace. No match: a string that
+# never closes, or no brace left; either way nothing open can close any more.
+_NEXT_BRACE = re.compile(r'[^{}"]*+(?:"[^"\\]*+(?:\\.[^"\\]*+)*+"[^{}"]*+)*+([{}])', re.S)
 
 
-def _object_end(text: str, start: int) -> int | None:
-    """Index just past the ``}`` closing the ``{`` at ``start``, or ``None`` if it never closes."""
-    depth = 0
-    in_string = False
-    escaped = False
-    for i in range(start, len(text)):
-        ch = text[i]
-        if in_string:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch == "{":
-            depth += 1
-        elif ch == "}":
-            depth -= 1
-            if depth == 0:
-                return i + 1
-    return None
+def _spans(text: str) -> list[tuple[int, int]]:
+    """``(start, end)`` of the top-level balanced objects, in one pass over ``text``.
+
+    Braces are matched with a stack; inside an object a JSON string is skipped whole, so its
+    braces do not count. A closed object is top-level when no closed object holds it: it is kept
+    on a list per stack level and dropped when the brace below it closes. Braces left open at
+    the end never close; the objects inside them are top-level, as if the scan had resumed after
+    each unclosed brace. Work is linear in ``len(text)`` and bounded by :data:`MAX_BRACES`.
+    """
+    stack: list[int] = []
+    levels: list[list[tuple[int, int]]] = [[]]  # levels[k]: closed objects with k open below
+    position = 0
+    for _ in range(MAX_BRACES):
+        if len(levels[0]) >= MAX_OBJECTS:
+            break
+        if stack:
+            found = _NEXT_BRACE.match(text, position)
+            if found is None:
+                break
+            index = found.start(1)
+        else:  # outside every object only an opening brace matters (quotes are prose)
+            index = text.find("{", position)
+            if index < 0:
+                break
+        position = index + 1
+        if text[index] == "{":
+            stack.append(index)
+            levels.append([])
+        else:
+            levels.pop()  # objects inside this one are not top-level
+            levels[-1].append((stack.pop(), index + 1))
+    return sorted(span for level in levels for span in level)[:MAX_OBJECTS]
 
 
 def balanced_objects(text: str) -> Iterator[str]:
-    """Yield top-level balanced ``{...}`` substrings of ``text`` from left to right.
+    """Yield the top-level balanced ``{...}`` substrings of ``text`` from left to right.
 
-    An opening brace that never closes is skipped and the scan resumes after it, so an
-    unterminated fragment in the reasoning does not hide a later complete answer.
+    Braces inside JSON strings do not count. An opening brace that never closes is skipped,
+    so an unterminated fragment in the reasoning does not hide a later complete answer. At
+    most :data:`MAX_OBJECTS` are yielded; the search is linear in the length of ``text``.
     """
-    position = 0
-    found = 0
-    while found < _MAX_OBJECTS:
-        start = text.find("{", position)
-        if start < 0:
-            return
-        end = _object_end(text, start)
-        if end is None:
-            position = start + 1
-            continue
-        found += 1
+    for start, end in _spans(text):
         yield text[start:end]
-        position = end
 
 
 def _decode(candidate: str) -> Any:
@@ -93,6 +105,10 @@ def extract(text: str, validate: Callable[[Any], T], *, cot: bool) -> tuple[T, s
     """
     if not isinstance(text, str):
         raise ParseFailure("reply is not text")
+    if len(text) > MAX_REPLY_CHARS:
+        raise ParseFailure(
+            f"reply too long: {len(text):,} characters (at most {MAX_REPLY_CHARS:,})"
+        )
     candidates = list(balanced_objects(text))
     if not candidates:
         raise ParseFailure("no balanced {...} object in the reply")

@@ -140,7 +140,8 @@ class PairCall:
         self.tally.add(response)
         self.state.account(response)
         self.finish_reason = response.finish_reason
-        parsed = _parse(self, response, prompt)
+        # Parsing is linear but a reply may be up to a megabyte: keep the event loop serving.
+        parsed = await asyncio.to_thread(_parse, self, response, prompt)
         await self._log(
             outcome=parsed.outcome,
             text=response.text,

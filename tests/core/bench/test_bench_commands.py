@@ -12,7 +12,7 @@ from typing import Any
 
 from bpb_core.registry import Registry
 
-BENCHMARKS = ("generate", "run", "score", "sim", "startup")
+BENCHMARKS = ("extract", "generate", "run", "score", "sim", "startup")
 
 
 def test_bench_help_lists_every_benchmark_without_importing_one() -> None:
@@ -33,6 +33,15 @@ def test_bench_help_lists_every_benchmark_without_importing_one() -> None:
 def test_unknown_benchmark_is_a_usage_error(bench: Callable[..., Any]) -> None:
     done = bench("nosuch")
     assert done.returncode == 2 and "nosuch" in done.stderr
+
+
+def test_bench_extract_times_every_adversarial_family(bench: Callable[..., Any]) -> None:
+    from bpb_core.bench.extract import FAMILIES
+
+    done = bench("extract", "--repeats", "1")
+    assert done.returncode in (0, 1), done.stderr  # 1: slower than the target on a busy machine
+    for family in FAMILIES:
+        assert len(done.row(family)) == 4, family
 
 
 def test_bench_startup_reports_medians_and_their_difference(bench: Callable[..., Any]) -> None:

@@ -13,6 +13,11 @@ import click
 
 # name -> (module, attribute, one-line help)
 BENCH_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "extract": (
+        "bpb_core.cli.bench.extract",
+        "bench_extract",
+        "Answer extraction on adversarial replies up to 1 MB (linear time).",
+    ),
     "generate": (
         "bpb_core.cli.bench.generate",
         "bench_generate",
