@@ -8,6 +8,7 @@ Run: ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl``,
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -85,3 +86,37 @@ def select_keys(
         taken[key.horizon] = taken.get(key.horizon, 0) + 1
         chosen.append(key)
     return chosen
+
+
+def check_writable_folder(path: Path, option: str = "--out") -> None:
+    """Check that ``path`` is, or can be created as, a folder this process can write.
+
+    Raises:
+        BadInput: ``path`` or an ancestor is a file, or the nearest existing ancestor is not
+            writable (one line naming that path and ``option``).
+    """
+    from bpb_core.errors import BadInput
+
+    for parent in (path, *path.parents):
+        if not parent.exists():
+            continue
+        if not parent.is_dir():
+            raise BadInput(f"{parent}: {option}: not a folder (a file is in the way of {path})")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise BadInput(f"{parent}: {option}: not writable")
+        return
+
+
+def make_folder(path: Path, option: str = "--out") -> None:
+    """Create the folder ``path`` (and its parents) after :func:`check_writable_folder`.
+
+    Raises:
+        BadInput: It cannot be created or written (one line naming the path and ``option``).
+    """
+    from bpb_core.errors import BadInput
+
+    check_writable_folder(path, option)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BadInput(f"{path}: {option}: cannot create the folder: {exc.strerror}") from None

@@ -20,7 +20,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from bpb_core.errors import BadInput
-from bpb_core.layout import ATTEMPTS, RUN_MANIFEST, SceneKey, iter_scene_keys
+from bpb_core.layout import ATTEMPTS, RUN_MANIFEST, SceneKey, iter_scene_keys, make_folder
 from bpb_core.validated_files import describe_validation_error
 
 Status = Literal["ok", "parse_error", "api_error"]
@@ -73,15 +73,7 @@ def make_run_folder(run_dir: Path) -> None:
         BadInput: The path, or one of its parents, is a file, or it cannot be written (one line
             naming the path).
     """
-    for parent in (run_dir, *run_dir.parents):
-        if parent.exists() and not parent.is_dir():
-            raise BadInput(f"{parent}: --out: not a folder (a file is in the way of {run_dir})")
-    try:
-        run_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise BadInput(f"{run_dir}: --out: cannot create the folder: {exc.strerror}") from None
-    if not os.access(run_dir, os.W_OK | os.X_OK):
-        raise BadInput(f"{run_dir}: --out: the folder is not writable")
+    make_folder(run_dir, "--out")
 
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:

@@ -10,13 +10,15 @@ one ground truth (the family's ``final.json`` model) per scene. Every user mista
 
 from __future__ import annotations
 
+import contextlib
+import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import dataset_config, dataset_family
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, BpbError
 from bpb_core.layout import FINAL, INIT, MANIFEST, iter_scene_keys
 from bpb_core.validated_files import read_model
 
@@ -83,8 +85,8 @@ def prepare(
     """
     from bpb_core.registry import make_registry
 
-    if horizon is not None and not horizon > 0:
-        raise BadInput(f"--horizon: must be positive, got {horizon}")
+    if horizon is not None and not 0 < horizon < math.inf:
+        raise BadInput(f"--horizon: must be a positive finite number, got {horizon}")
     reg = registry if registry is not None else make_registry()
     if simulator is None:
         family, config = _made_with(files, reg)
@@ -133,7 +135,9 @@ def simulate_paths(
     job = prepare(horizon, simulator, registry, options, files)
     for path in files:
         scene = read_model(path, job.family.scene_model)
-        yield simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+        with _naming(path):
+            truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+        yield truth
 
 
 _JOB: tuple[Prepared, float | None, bool] | None = None  # set before forking workers
@@ -157,6 +161,8 @@ def simulate_lines(
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
     global _JOB
+    if workers < 0:
+        raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
     files = scene_files(paths)
     job = prepare(horizon, simulator, registry, options, files)
     count = _worker_count(workers, len(files))
@@ -185,5 +191,20 @@ def _line(path: Path) -> str:
     assert _JOB is not None
     job, horizon, stability = _JOB
     scene = read_model(path, job.family.scene_model)
-    truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+    with _naming(path):
+        truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
     return truth.model_dump_json()
+
+
+@contextlib.contextmanager
+def _naming(path: Path) -> Iterator[None]:
+    """Turn a simulator's own error on a scene (an event cap overrun, a step budget) into bad
+    input naming the scene file."""
+    try:
+        yield
+    except BadInput as exc:
+        if str(path) in str(exc):
+            raise
+        raise BadInput(f"{path}: {exc}") from None
+    except BpbError as exc:
+        raise BadInput(f"{path}: {exc}") from None

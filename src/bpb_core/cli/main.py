@@ -67,6 +67,10 @@ def main(argv: list[str] | None = None) -> None:
     except click.exceptions.Abort:
         click.echo("aborted", err=True)
         code = 130
+    except click.UsageError as exc:  # one line, like every other bad input
+        where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
+        click.echo(f"error: {exc.format_message()}{where}", err=True)
+        code = 2
     except click.ClickException as exc:
         exc.show()
         code = 2 if exc.exit_code == 2 or isinstance(exc, click.UsageError) else exc.exit_code

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from bpb_core.cli.params import positive
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
@@ -146,10 +147,8 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 @click.option("--horizons", help="Comma-separated horizons to include (default: all).")
 @click.option("--limit", type=click.IntRange(min=1), help="First N scenes per horizon.")
 @click.option("--concurrency", type=click.IntRange(min=1), default=8, show_default=True)
-@click.option("--rpm", type=click.FloatRange(min=0, min_open=True), help="Requests per minute cap.")
-@click.option(
-    "--tpm", type=click.FloatRange(min=0, min_open=True), help="Tokens per minute cap (in + out)."
-)
+@click.option("--rpm", type=positive(), help="Requests per minute cap.")
+@click.option("--tpm", type=positive(), help="Tokens per minute cap (in + out).")
 @click.option(
     "--out",
     type=click.Path(path_type=Path),
@@ -171,7 +170,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 @click.option("--max-tokens", type=click.IntRange(min=1), help="Output token cap per call.")
 @click.option(
     "--timeout",
-    type=click.FloatRange(min=0, min_open=True),
+    type=positive(),
     default=120.0,
     show_default=True,
     help="Seconds per call (grows on retries).",
@@ -187,7 +186,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 @click.option("--api-base", help="Base URL of an OpenAI-compatible or provider endpoint.")
 @click.option("--dry-run", is_flag=True, help="Count calls and estimate tokens; send nothing.")
-@click.option("--max-cost", type=click.FloatRange(min=0), help="Stop sending once USD spent.")
+@click.option("--max-cost", type=positive(), help="Stop sending once USD spent.")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option(
     "--retries",
@@ -229,9 +228,11 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
     from bpb_core.cli.console import load_registry
+    from bpb_core.layout import check_writable_folder
     from bpb_core.runner.asking import default_tasks
     from bpb_core.runner.options import RetryPolicy, RunOptions
 
+    check_writable_folder(kw["out"], "--out")  # before any work: a file or unwritable path
     registry = load_registry()
     tasks = _csv(kw["tasks"], "--tasks")
     _check_names(registry, tasks, list(kw["adapters"]))

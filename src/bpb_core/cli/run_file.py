@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -99,8 +100,8 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
         value = table.get(key)
         if value is not None and (not isinstance(value, types) or isinstance(value, bool)):
             raise BadInput(f"{where}.{key}: expected a number, got {value!r}")
-        if value is not None and value <= 0:
-            raise BadInput(f"{where}.{key}: must be positive, got {value!r}")
+        if value is not None and not 0 < value < math.inf:  # nan and inf too (TOML has both)
+            raise BadInput(f"{where}.{key}: must be a positive finite number, got {value!r}")
     for key in ("args", "headers", "price"):
         if key in table and not isinstance(table[key], dict):
             raise BadInput(f"{where}.{key}: expected a table")

@@ -8,6 +8,7 @@ so the same arguments give byte-identical datasets whatever the number of worker
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import warnings
@@ -30,7 +31,7 @@ from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import SceneFamily
-from bpb_core.layout import MANIFEST
+from bpb_core.layout import MANIFEST, check_writable_folder
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -138,9 +139,9 @@ def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
     hs = [float(h) for h in horizons]
     if not hs:
         raise BadInput("horizons: give at least one horizon")
-    bad = [h for h in hs if not h > 0]
+    bad = [h for h in hs if not 0 < h < math.inf]
     if bad:
-        raise BadInput(f"horizons: must be positive seconds, got {bad[0]:g}")
+        raise BadInput(f"horizons: must be positive finite seconds, got {bad[0]:g}")
     if len(set(hs)) != len(hs):
         raise BadInput("horizons: a horizon is listed twice")
     return hs
@@ -152,10 +153,14 @@ def _prepare(target: Path, overwrite: bool) -> Path:
         if not (overwrite and is_dataset):
             hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
             raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
+    check_writable_folder(target)
     partial = target.parent / f".{target.name}.partial"
     if partial.exists():
         shutil.rmtree(partial)  # left over from an interrupted generation
-    partial.mkdir(parents=True)
+    try:
+        partial.mkdir(parents=True)
+    except OSError as exc:
+        raise BadInput(f"{target}: --out: cannot create the folder: {exc.strerror}") from None
     return partial
 
 

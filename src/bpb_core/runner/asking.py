@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput
-from bpb_core.runner.options import RunOptions
+from bpb_core.runner.options import RunOptions, check_options
 from bpb_core.runner.scenes import SceneRef, select_scenes
 
 if TYPE_CHECKING:
@@ -51,8 +51,9 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     """Resolve what a run on ``data`` with ``options`` asks.
 
     Raises:
-        BadInput: Not a dataset, an unknown task, or a task of another scene family.
+        BadInput: A bad option, not a dataset, an unknown task, or a task of another family.
     """
+    check_options(options)
     family = data_family(data, registry)
     names = options.tasks or tuple(registry.tasks_for(family.name, default_only=True))
     if not names:

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
 
 
@@ -64,3 +66,43 @@ class RunOptions:
     max_cost: float | None = None
     seed: int = 0
     retry: RetryPolicy = RetryPolicy()
+
+
+def _number(option: str, value: float | None, *, zero: bool = False) -> None:
+    if value is None:
+        return
+    low_ok = value >= 0 if zero else value > 0
+    if isinstance(value, bool) or not (math.isfinite(value) and low_ok):
+        need = "zero or a positive" if zero else "a positive"
+        raise BadInput(f"{option}: must be {need} finite number, got {value!r}")
+
+
+def check_options(options: RunOptions) -> None:
+    """Refuse options no run can use (library callers get the command line's checks).
+
+    Raises:
+        BadInput: One line naming the option: a count below 1, a non-finite or non-positive
+            number.
+    """
+    for option, count in (
+        ("--concurrency", options.concurrency),
+        ("--limit", options.limit),
+        ("--max-tokens", options.max_tokens),
+    ):
+        if count is not None and count < 1:
+            raise BadInput(f"{option}: must be at least 1, got {count}")
+    for option, value in (
+        ("--timeout", options.timeout),
+        ("--rpm", options.rpm),
+        ("--tpm", options.tpm),
+        ("--max-cost", options.max_cost),
+    ):
+        _number(option, value)
+    _number("--temperature", options.temperature, zero=True)
+    retry = options.retry
+    for option, value in (("--retries", retry.max_retries), ("--reasks", retry.max_reasks)):
+        if value < 0:
+            raise BadInput(f"{option}: must be 0 or more, got {value}")
+    _number("retry.base_delay", retry.base_delay, zero=True)
+    _number("retry.max_delay", retry.max_delay, zero=True)
+    _number("retry.timeout_growth", retry.timeout_growth)

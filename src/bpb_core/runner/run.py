@@ -74,8 +74,6 @@ def _state(
     progress: Progress,
     asked: Asking,
 ) -> RunState:
-    if options.concurrency < 1:
-        raise BadInput(f"--concurrency: must be at least 1, got {options.concurrency}")
     return RunState(
         adapter=adapter,
         spec=spec,

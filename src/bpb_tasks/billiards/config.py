@@ -19,18 +19,18 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import validate_mapping
-from bpb_tasks.billiards.scene import Physics, Pockets, Table
+from bpb_tasks.billiards.scene import MAX_SPEED, Physics, Pockets, Table
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class SpeedRange(_Strict):
     """Cue speeds (m/s) are drawn uniformly from ``[low, high]``."""
 
     low: float = Field(ge=0)
-    high: float = Field(gt=0)
+    high: float = Field(gt=0, le=MAX_SPEED)
 
     @model_validator(mode="after")
     def _ordered(self) -> SpeedRange:
@@ -55,6 +55,9 @@ class ImageConfig(_Strict):
     margin_top: int = Field(84, ge=20)
     margin_bottom: int = Field(96, ge=40)
     compress_level: int = Field(1, ge=0, le=9)
+
+
+MAX_IMAGE_SIDE = 20_000  # pixels of table per image side; beyond, one PNG needs gigabytes
 
 
 class CalibrationConfig(_Strict):
@@ -115,6 +118,17 @@ class DatasetConfig(_Strict):
     image: ImageConfig = Field(default_factory=ImageConfig)
     stability_delta: float = Field(1e-4, gt=0)
     calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
+
+    @model_validator(mode="after")
+    def _image_fits(self) -> DatasetConfig:
+        for side, metres in (("width", self.table.width), ("height", self.table.height)):
+            pixels = metres * self.image.px_per_m
+            if pixels > MAX_IMAGE_SIDE:
+                raise ValueError(
+                    f"table.{side}: {metres:g} m at image.px_per_m {self.image.px_per_m:g} makes "
+                    f"a {pixels:,.0f} px image side (at most {MAX_IMAGE_SIDE:,})"
+                )
+        return self
 
     def speed_range(self, horizon: float) -> SpeedRange:
         """The cue-speed range for ``horizon``; raises :class:`BadInput` if none is set."""

@@ -15,6 +15,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 Wall = Literal["TOP", "BOTTOM", "LEFT", "RIGHT"]
 WALLS: tuple[Wall, ...] = ("TOP", "BOTTOM", "LEFT", "RIGHT")
 TOUCH_TOLERANCE = 1e-9  # balls may touch within this many metres; deeper overlap is bad input
+MAX_SPEED = 100.0  # m/s; a hard break shot is about 15. Far beyond, v^2 overflows and the
+# event count of a horizon explodes, so such a scene is refused rather than simulated.
 
 DEFAULT_RADIUS = 0.028575
 DEFAULT_POCKETS: list[tuple[float, float]] = [
@@ -23,7 +25,7 @@ DEFAULT_POCKETS: list[tuple[float, float]] = [
 
 
 class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 Vec = tuple[float, float]
@@ -71,6 +73,13 @@ class Ball(StrictModel):
             raise ValueError("must be finite numbers")
         return value
 
+    @field_validator("vel")
+    @classmethod
+    def _speed(cls, value: Vec) -> Vec:
+        if math.hypot(*value) > MAX_SPEED:
+            raise ValueError(f"speed {math.hypot(*value):g} m/s is above {MAX_SPEED:g} m/s")
+        return value
+
 
 class Scene(StrictModel):
     """An initial state: the content of ``init.json``."""
@@ -96,9 +105,11 @@ class Scene(StrictModel):
 
 
 def check_geometry(scene: Scene) -> None:
-    """Raise ValueError naming the ball when ids repeat, a centre is off the table or balls
-    overlap by more than :data:`TOUCH_TOLERANCE`."""
+    """Raise ValueError naming the ball when there is no cue ball (id 0), ids repeat, a centre
+    is off the table or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
     radius = scene.physics.ball_radius
+    if all(ball.id != 0 for ball in scene.balls):
+        raise ValueError("balls: no cue ball (a ball with id 0)")
     seen: set[int] = set()
     for i, ball in enumerate(scene.balls):
         if ball.id in seen:

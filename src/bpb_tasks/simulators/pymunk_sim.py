@@ -20,9 +20,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from bpb_core.errors import BadInput
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import Scene
 
+MAX_STEPS = 10_000_000  # about an hour of stepping: refuse rather than run for days
 _WALL_NORMALS = {"TOP": (0.0, 1.0), "BOTTOM": (0.0, -1.0), "LEFT": (-1.0, 0.0), "RIGHT": (1.0, 0.0)}
 
 
@@ -36,10 +38,8 @@ class PymunkSimulator:
     name = "pymunk"
 
     def __init__(self, dt: float = 1e-3) -> None:
-        if not dt > 0:
-            from bpb_core.errors import BadInput
-
-            raise BadInput(f"--dt: must be positive, got {dt}")
+        if not 0 < dt < math.inf:
+            raise BadInput(f"--dt: must be a positive finite number, got {dt}")
         self.dt = dt
 
     def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
@@ -125,11 +125,33 @@ class _PymunkRun:
         self.events.append(Event(self.t, kind, ids, wall, positions))
         self.touched.update(ids)
 
+    def _check_budget(self, horizon: float) -> None:
+        """Refuse a run whose balls may still move after :data:`MAX_STEPS` steps.
+
+        Friction takes ``mu g`` per second off the root of the summed squared speeds (elastic
+        contacts keep it, so it bounds every ball's speed), so all balls rest by
+        ``sqrt(sum v^2) / (mu g)``; stepping stops then. Without friction they never rest.
+        """
+        speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in self.scene.balls)))
+        resting_by = speed / self.decel if self.decel > 0 else (0.0 if speed == 0 else math.inf)
+        steps = min(horizon, resting_by + 1.0) / self.dt
+        if steps > MAX_STEPS:
+            raise BadInput(
+                f"pymunk: {steps:.3g} steps of {self.dt:g} s to reach t={horizon:g} with balls "
+                f"still moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger --dt"
+            )
+
     def run(self, horizon: float) -> Outcome:
+        self._check_budget(horizon)
         steps = max(math.floor(horizon / self.dt + 1e-9), 0)
         last = horizon - steps * self.dt
-        sizes = [self.dt] * steps + ([last] if last > 1e-12 else [])
-        for size in sizes:
+        for index in range(steps + 1):
+            size = self.dt if index < steps else last
+            if size <= 1e-12:
+                break
+            if not self.active:  # nothing moves any more: the rest changes nothing
+                self.t = horizon
+                break
             self.t += size
             self.space.step(size)
             self._friction(size)

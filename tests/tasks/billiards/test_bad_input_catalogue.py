@@ -1,0 +1,81 @@
+"""The billiards rows of the bad-input catalogue: configs and scenes bpb would reject later (or
+never finish) are refused at once, exit 2, with one line naming the file and the field."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from support.runner_scenes import make_scene
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+CONFIGS = [
+    ("g.toml", "[physics]\ng = 1e400\n", "physics.g: Input should be a finite number"),
+    ("g.json", '{"physics": {"g": 1e400}}', "physics.g: Input should be a finite number"),
+    ("mu.toml", "[physics]\nmu = nan\n", "physics.mu: Input should be a finite number"),
+    ("r.toml", "[physics]\nball_radius = inf\n", "physics.ball_radius: Input should be a finite"),
+    ("speed.toml", '[speed_ranges."1"]\nlow = 1\nhigh = 1e300\n',
+     "speed_ranges.1.high: Input should be less than or equal to 100"),
+    ("table.toml", "[table]\nwidth = 100\n", "table.width: 100 m at image.px_per_m 600 makes"),
+]  # fmt: skip
+
+
+def _one_line(done: subprocess.CompletedProcess[str]) -> str:
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert "\n" not in line, line
+    return line
+
+
+@pytest.mark.parametrize(("name", "text", "expected"), CONFIGS, ids=[c[0] for c in CONFIGS])
+def test_bad_config_is_one_line_exit_2(name: str, text: str, expected: str, tmp_path: Path) -> None:
+    config = tmp_path / name
+    config.write_text(text)
+    done = subprocess.run([BPB, "generate", "--out", str(tmp_path / "ds"), "--config",
+                           str(config), "--horizons", "1", "--per-horizon", "1", "--no-images"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert f"{config}: {expected}" in _one_line(done)
+    assert not (tmp_path / "ds").exists()
+
+
+def _scene(**change: Any) -> dict[str, Any]:
+    scene: dict[str, Any] = json.loads(make_scene(1.0, 0).model_dump_json())
+    scene.update(change)
+    return scene
+
+
+def _bouncer() -> dict[str, Any]:
+    """A frictionless cue ball bouncing between the cushions at x = 0.5, away from pockets and
+    balls: it never rests, so a long horizon holds more events than any cap."""
+    balls = [{"id": 0, "pos": [0.5, 0.5], "vel": [0.0, 1.0]}, {"id": 1, "pos": [1.5, 0.5]}]
+    return _scene(physics={"mu": 0.0}, balls=balls)
+
+
+SCENES = [
+    ("nocue", lambda: _scene(balls=[b for b in _scene()["balls"] if b["id"] != 0]), [],
+     "balls: no cue ball (a ball with id 0)"),
+    ("fast", lambda: _scene(balls=[{"id": 0, "pos": [1.0, 0.5], "vel": [1e154, 0.0]}]), [],
+     "balls[0].vel: speed 1e+154 m/s is above 100 m/s"),
+    ("huge-g", lambda: _scene(physics={"g": float("inf")}), [],
+     "physics.g: Input should be a finite number"),
+    ("pymunk-mu0", _bouncer, ["--simulator", "pymunk", "--horizon", "1e9"],
+     "pymunk: 1e+12 steps of 0.001 s to reach t=1e+09 with balls still moving"),
+    ("event-cap", _bouncer, ["--horizon", "1e9"], "more than 100000 events before t=1000000000"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "build", "args", "expected"), SCENES, ids=[s[0] for s in SCENES])
+def test_bad_scene_is_one_line_exit_2_naming_the_file(
+    name: str, build: Any, args: list[str], expected: str, tmp_path: Path
+) -> None:
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(build()).replace("Infinity", "1e400"))
+    done = subprocess.run([BPB, "simulate", str(path), *args], capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+    assert f"{path}: {expected}" in _one_line(done)
