@@ -59,11 +59,17 @@ class AnswerRecord(BaseModel):
     error: str | None = None
     input_mode: str = "image"
     cot: bool = False
+    epoch: int = 1
 
 
-def answer_path(run_dir: Path, key: SceneKey, task: str) -> Path:
-    """Where the answer of ``task`` for scene ``key`` lives."""
-    return key.dir(run_dir) / f"{task}.json"
+def answer_name(task: str, epoch: int = 1) -> str:
+    """The answer file's stem: ``q1`` for the first epoch, ``q1.e2`` for the second."""
+    return task if epoch == 1 else f"{task}.e{epoch}"
+
+
+def answer_path(run_dir: Path, key: SceneKey, task: str, epoch: int = 1) -> Path:
+    """Where the answer of ``task`` (its ``epoch``-th sample) for scene ``key`` lives."""
+    return key.dir(run_dir) / f"{answer_name(task, epoch)}.json"
 
 
 def make_run_folder(run_dir: Path) -> None:
@@ -95,8 +101,11 @@ def write_json_atomic(path: Path, data: Any) -> None:
 
 def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
     """Store one (scene, task) result atomically; returns the file written."""
-    path = answer_path(run_dir, key, record.task)
-    write_json_atomic(path, record.model_dump(mode="json"))
+    path = answer_path(run_dir, key, record.task, record.epoch)
+    data = record.model_dump(mode="json")
+    if record.epoch == 1:  # files of runs without --epochs stay as they always were
+        del data["epoch"]
+    write_json_atomic(path, data)
     return path
 
 
@@ -132,8 +141,13 @@ def iter_answers(run_dir: Path) -> Iterator[tuple[SceneKey, AnswerRecord]]:
 
 
 def completed(run_dir: Path) -> set[tuple[str, str]]:
-    """``(scene_id, task)`` pairs already finished (``ok`` or ``parse_error``)."""
-    return {(r.scene_id, r.task) for _, r in iter_answers(run_dir) if r.status in COMPLETE}
+    """``(scene_id, task)`` pairs whose first epoch is finished (``ok`` or ``parse_error``)."""
+    return {(s, t) for s, t, e in completed_epochs(run_dir) if e == 1}
+
+
+def completed_epochs(run_dir: Path) -> set[tuple[str, str, int]]:
+    """``(scene_id, task, epoch)`` samples already finished (``ok`` or ``parse_error``)."""
+    return {(r.scene_id, r.task, r.epoch) for _, r in iter_answers(run_dir) if r.status in COMPLETE}
 
 
 class AttemptLog:

@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
     "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
+    "prompt": ("bpb_core.cli.prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
     "simulate": (
         "bpb_core.cli.simulate_cmd",
         "simulate",

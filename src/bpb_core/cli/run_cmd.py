@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from bpb_core.cli.params import positive
+from bpb_core.cli.params import FiniteFloat, positive
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
@@ -146,6 +146,24 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 @click.option("--horizons", help="Comma-separated horizons to include (default: all).")
 @click.option("--limit", type=click.IntRange(min=1), help="First N scenes per horizon.")
+@click.option("--scenes", help="Only these scene ids, comma-separated (h1_0003,h2_0010).")
+@click.option(
+    "--sample", type=click.IntRange(min=1), help="A random sample of N scenes (seeded by --seed)."
+)
+@click.option(
+    "--epochs",
+    type=click.IntRange(min=1),
+    default=1,
+    show_default=True,
+    help="Ask every (scene, task) K times (repeated samples, stored and scored apart).",
+)
+@click.option(
+    "--temperature",
+    type=FiniteFloat(min=0),
+    default=0.0,
+    show_default=True,
+    help="Sampling temperature (the paper: 0).",
+)
 @click.option("--concurrency", type=click.IntRange(min=1), default=8, show_default=True)
 @click.option("--rpm", type=positive(), help="Requests per minute cap.")
 @click.option("--tpm", type=positive(), help="Tokens per minute cap (in + out).")
@@ -253,6 +271,10 @@ def run(**kw: Any) -> None:
         tasks=tuple(tasks),
         horizons=_horizons(kw["horizons"]),
         limit=kw["limit"],
+        scenes=tuple(_csv(kw["scenes"], "--scenes")) if kw["scenes"] is not None else None,
+        sample=kw["sample"],
+        epochs=kw["epochs"],
+        temperature=kw["temperature"],
         concurrency=kw["concurrency"],
         rpm=kw["rpm"],
         tpm=kw["tpm"],

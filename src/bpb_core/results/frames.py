@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.errors import BadInput
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs
-from bpb_core.run_folder import AnswerRecord, read_answer
+from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
 from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT, UnitRow
 
 if TYPE_CHECKING:
@@ -44,10 +44,12 @@ META_DTYPES: dict[str, str] = {
     "horizon": "float64",
     "index": "int32",
     "scene_id": "category",
+    "epoch": "int32",
     "stable": "boolean",
     "scene_rule": "category",
 }
-"""Per-row columns of the units frame (``stable`` is NA when not annotated)."""
+"""Per-row columns of the units frame (``stable`` is NA when not annotated; ``epoch`` is 1
+unless the run asked every (scene, task) several times with ``--epochs``)."""
 
 CALL_DTYPES: dict[str, str] = {
     **{k: v for k, v in META_DTYPES.items() if k != "scene_rule"},
@@ -180,9 +182,9 @@ def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
         meta |= {"scene_id": key.scene_id, "stable": truth.stable}
-        folder = key.dir(run.path)
-        for task in run.tasks:
-            record = read_answer(folder / f"{task}.json")
+        for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
+            meta["epoch"] = epoch
+            record = read_answer(answer_path(run.path, key, task, epoch))
             status = "missing" if record is None else record.status
             answer = None if record is None else record.answer
             scorer = scorers[task]

@@ -50,6 +50,7 @@ class RunFolder:
     scene_keys: tuple[SceneKey, ...]
     manifest: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     family: SceneFamily | None = field(default=None, compare=False, repr=False)
+    epochs: int = 1
 
     @property
     def baseline(self) -> bool:
@@ -129,7 +130,9 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     dropped = manifest.get("dropped_params") or []
     if dropped:  # the model did not get what the protocol asked (temperature 0 above all)
         label = f"{label} [dropped: {', '.join(map(str, dropped))}]"
-    return RunFolder(path, label, adapter, model, names, dataset, keys, manifest, family)
+    epochs = _option(manifest, "epochs")
+    epochs = epochs if isinstance(epochs, int) and epochs >= 1 else 1
+    return RunFolder(path, label, adapter, model, names, dataset, keys, manifest, family, epochs)
 
 
 def _family(dataset: Path, registry: Registry | None) -> SceneFamily:
@@ -162,9 +165,12 @@ def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:
 def _expected_keys(manifest: dict[str, Any], dataset: Path) -> tuple[SceneKey, ...]:
     horizons = _option(manifest, "horizons") or None
     limit = _option(manifest, "limit") or None
-    return tuple(
-        select_keys(iter_scene_keys(dataset), horizons, None if limit is None else int(limit))
-    )
+    keys = select_keys(iter_scene_keys(dataset), horizons, None if limit is None else int(limit))
+    chosen = manifest.get("scene_ids")  # --scenes / --sample: only these were asked
+    if isinstance(chosen, list):
+        wanted = set(map(str, chosen))
+        keys = [key for key in keys if key.scene_id in wanted]
+    return tuple(keys)
 
 
 @lru_cache(maxsize=65536)

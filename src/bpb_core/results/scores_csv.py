@@ -23,7 +23,10 @@ def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> 
         return None
     results = load_results(list(run_dirs), registry=registry)
     frame = results.units
+    written = frame
+    if (frame["epoch"] == 1).all():  # without --epochs the file keeps its columns
+        written = frame.drop(columns="epoch")
     for run in results.runs:
-        text = frame[frame["run"] == run.label].to_csv(index=False)
+        text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
     return summary(frame, results.suites)

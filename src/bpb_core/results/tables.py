@@ -28,7 +28,7 @@ View = Literal["strict", "answered"]
 VIEWS: tuple[View, ...] = ("strict", "answered")
 UNANSWERED = ("api_error", "missing")
 RUN_COLUMNS = ["run", "adapter", "model", "baseline"]
-SCENE_KEYS = ["run", "task", "horizon", "index", "scene_id"]
+SCENE_KEYS = ["run", "task", "horizon", "index", "scene_id", "epoch"]
 
 
 def scene_scores(units: pd.DataFrame, *, stable_only: bool = False) -> pd.DataFrame:

@@ -7,6 +7,7 @@ another family's scenes is bad input, named with both families.
 from __future__ import annotations
 
 import dataclasses
+import random
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -66,6 +67,33 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
             )
     resolved = dataclasses.replace(options, tasks=tuple(names))
     tasks = {name: registry.task(name) for name in names}
-    scenes = select_scenes(data, family, options.horizons, options.limit)
+    scenes = _chosen(select_scenes(data, family, options.horizons, options.limit), options)
     simulator = family.simulator_name(dataset_config(data, family))
     return Asking(family, resolved, tasks, scenes, simulator)
+
+
+def _chosen(refs: list[SceneRef], options: RunOptions) -> list[SceneRef]:
+    """The scenes ``--scenes`` names, then a seeded ``--sample`` of them (dataset order kept).
+
+    Raises:
+        BadInput: An id not among the selected scenes, or a sample larger than the selection.
+    """
+    if options.scenes is not None:
+        by_id = {ref.scene_id: ref for ref in refs}
+        missing = [s for s in options.scenes if s not in by_id]
+        if missing:
+            raise BadInput(
+                f"--scenes: {missing[0]!r} is not a scene of the selection (ids look like "
+                f"{refs[0].scene_id}; --horizons and --limit apply first)"
+            )
+        wanted = set(options.scenes)
+        refs = [ref for ref in refs if ref.scene_id in wanted]
+    if options.sample is not None:
+        if options.sample > len(refs):
+            raise BadInput(
+                f"--sample: {options.sample} is more than the {len(refs)} scenes selected"
+            )
+        rng = random.Random(f"bpb-sample:{options.seed}")
+        keep = set(rng.sample(range(len(refs)), options.sample))
+        refs = [ref for i, ref in enumerate(refs) if i in keep]
+    return refs

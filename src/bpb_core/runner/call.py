@@ -57,6 +57,7 @@ class PairCall:
     image: bytes | None
     image_sha: str | None
     task: str
+    epoch: int = 1
     tally: Tally = field(default_factory=Tally)
     escalation: int = 0
     retries: int = 0
@@ -126,6 +127,7 @@ class PairCall:
             "time": time.time(),
             "scene_id": self.ref.scene_id,
             "task": self.task,
+            "epoch": self.epoch,
             "adapter": self.state.spec,
             "attempt": self.tally.attempts,
             "escalation": self.escalation,
@@ -226,6 +228,7 @@ class PairCall:
             error=None if status == "ok" else self.last_error,
             input_mode=self.state.options.input_mode,
             cot=self.state.cot(self.task),
+            epoch=self.epoch,
         )
         await self.state.offload(write_answer, self.state.run_dir, self.ref.key, record)
         self.state.count(self.task, status)

@@ -12,15 +12,15 @@ from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState
 
 
-async def _pair(state: RunState, ref: SceneRef, task: str) -> None:
+async def _pair(state: RunState, ref: SceneRef, task: str, epoch: int) -> None:
     if not state.may_send():
         state.not_sent(task)
         return
     scene = await state.offload(ref.load)
     image = None if state.options.input_mode == "state" else await state.offload(ref.image)
     sha = None if image is None else hashlib.sha256(image).hexdigest()
-    tally = state.prior(ref.scene_id, task)
-    await PairCall(state, ref, scene, image, sha, task, tally=tally).run()
+    tally = state.prior(ref.scene_id, task, epoch)
+    await PairCall(state, ref, scene, image, sha, task, epoch, tally=tally).run()
 
 
 async def drive(state: RunState, plan: list[Pair]) -> None:
@@ -34,9 +34,9 @@ async def drive(state: RunState, plan: list[Pair]) -> None:
     running: set[asyncio.Task[None]] = set()
     failures: list[BaseException] = []
 
-    async def one(ref: SceneRef, task: str) -> None:
+    async def one(ref: SceneRef, task: str, epoch: int) -> None:
         try:
-            await _pair(state, ref, task)
+            await _pair(state, ref, task, epoch)
         except asyncio.CancelledError:  # abandoned by a second interrupt: resumable
             state.not_sent(task)
         except Exception as exc:  # re-raised below, after the scenes in flight finish
@@ -45,12 +45,12 @@ async def drive(state: RunState, plan: list[Pair]) -> None:
             window.release()
 
     with interruptible(state, running):
-        for ref, task in plan:
+        for ref, task, epoch in plan:
             await window.acquire()
             if failures:
                 window.release()
                 break
-            job = asyncio.create_task(one(ref, task))
+            job = asyncio.create_task(one(ref, task, epoch))
             running.add(job)
             job.add_done_callback(running.discard)
         if running:

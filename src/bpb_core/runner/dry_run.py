@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING
 from bpb_core.capabilities import Estimating
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
-from bpb_core.run_folder import completed
+from bpb_core.run_folder import completed_epochs
 from bpb_core.runner.asking import asking
 from bpb_core.runner.options import RunOptions
 
 if TYPE_CHECKING:
+    from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 
 
@@ -62,6 +63,10 @@ def image_tokens(png: bytes) -> int:
     return int(85 + 170 * tiles)
 
 
+def _samples(tasks: dict[str, Task], epochs: int) -> list[tuple[str, Task, int]]:
+    return [(name, task, e) for e in range(1, epochs + 1) for name, task in tasks.items()]
+
+
 def dry_run(
     data: Path,
     run_dir: Path,
@@ -74,12 +79,12 @@ def dry_run(
     plan = DryRun()
     asked = asking(data, options, registry)
     options, tasks = asked.options, asked.tasks
-    done = completed(run_dir) if run_dir.exists() else set()
+    done = completed_epochs(run_dir) if run_dir.exists() else set()
     for ref in asked.scenes:
         scene = ref.load()
         image = None if options.input_mode == "state" else ref.image()
-        for name, task in tasks.items():
-            if (ref.scene_id, name) in done:
+        for name, task, epoch in _samples(tasks, options.epochs):
+            if (ref.scene_id, name, epoch) in done:
                 plan.done[name] = plan.done.get(name, 0) + 1
                 continue
             cot = options.cot.get(name, task.default_cot)

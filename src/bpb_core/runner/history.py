@@ -59,25 +59,26 @@ class History:
     """Configuration hashes seen and per-pair histories of one run folder."""
 
     configs: set[str] = field(default_factory=set)
-    pairs: dict[tuple[str, str], PairHistory] = field(default_factory=dict)
+    pairs: dict[tuple[str, str, int], PairHistory] = field(default_factory=dict)
 
-    def prior(self, scene_id: str, task: str) -> Tally:
-        """A copy of the pair's totals so far (zero when it was never sent)."""
-        found = self.pairs.get((scene_id, task))
+    def prior(self, scene_id: str, task: str, epoch: int = 1) -> Tally:
+        """A copy of the sample's totals so far (zero when it was never sent)."""
+        found = self.pairs.get((scene_id, task, epoch))
         if found is None:
             return Tally()
         old = found.tally
         return Tally(old.attempts, old.responses, old.usage.model_copy(), old.cost, old.latency)
 
 
-def read_history(run_dir: Path, adapter: str, keep: Iterable[tuple[str, str]] = ()) -> History:
+def read_history(run_dir: Path, adapter: str, keep: Iterable[tuple[str, str, int]] = ()) -> History:
     """Read the attempts log of ``run_dir`` once.
 
     Args:
         run_dir: The run folder.
         adapter: The run's name; attempts logged under another name are ignored for totals
             (their configuration hash still counts).
-        keep: ``(scene_id, task)`` pairs to collect totals for (others are only hashed).
+        keep: ``(scene_id, task, epoch)`` samples to collect totals for (others are only
+            hashed).
     """
     wanted = set(keep)
     history = History()
@@ -85,7 +86,8 @@ def read_history(run_dir: Path, adapter: str, keep: Iterable[tuple[str, str]] = 
         config = entry.get("config")
         if isinstance(config, str):
             history.configs.add(config)
-        pair = (str(entry.get("scene_id")), str(entry.get("task")))
+        epoch = entry.get("epoch", 1)
+        pair = (str(entry.get("scene_id")), str(entry.get("task")), epoch)
         if pair in wanted and entry.get("adapter") == adapter:
             history.pairs.setdefault(pair, PairHistory()).add(entry)
     return history
@@ -94,9 +96,9 @@ def read_history(run_dir: Path, adapter: str, keep: Iterable[tuple[str, str]] = 
 def recover_answers(
     run_dir: Path,
     history: History,
-    pending: Iterable[tuple[SceneRef, str]],
+    pending: Iterable[tuple[SceneRef, str, int]],
     state: RunState,
-) -> set[tuple[str, str]]:
+) -> set[tuple[str, str, int]]:
     """Write the answer file of every pending pair whose ``ok`` reply is already in the log.
 
     Args:
@@ -107,11 +109,11 @@ def recover_answers(
             configuration hash guarantees the logged session shared).
 
     Returns:
-        The ``(scene_id, task)`` pairs recovered (never sent again).
+        The ``(scene_id, task, epoch)`` samples recovered (never sent again).
     """
     recovered = set()
-    for ref, task in pending:
-        found = history.pairs.get((ref.scene_id, task))
+    for ref, task, epoch in pending:
+        found = history.pairs.get((ref.scene_id, task, epoch))
         if found is None or found.ok is None:
             continue
         tally, entry = found.tally, found.ok
@@ -131,7 +133,8 @@ def recover_answers(
             latency=tally.latency,
             input_mode=state.options.input_mode,
             cot=state.cot(task),
+            epoch=epoch,
         )
         write_answer(run_dir, ref.key, record)
-        recovered.add((ref.scene_id, task))
+        recovered.add((ref.scene_id, task, epoch))
     return recovered

@@ -1,10 +1,10 @@
 """``run.json``: what a run was asked to do, with what software, and when.
 
 Resuming a run folder with different answer-shaping settings (adapter, its model arguments,
-dataset, input mode, chain of thought, force-numeric) would mix incomparable answers, so it is
-refused as bad input. The guard is kept twice: in ``run.json`` (written atomically) and as a
-configuration hash on every line of the attempts log, which guards a folder that lost its
-``run.json``.
+dataset, input mode, chain of thought, force-numeric, temperature) would mix incomparable
+answers, so it is refused as bad input. The guard is kept twice: in ``run.json`` (written
+atomically) and as a configuration hash on every line of the attempts log, which guards a
+folder that lost its ``run.json``.
 """
 
 from __future__ import annotations
@@ -31,7 +31,15 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
     from bpb_core.runner.state import RunState
 
-_GUARDED = ("adapter", "adapter_settings", "dataset_hash", "input_mode", "cot", "force_numeric")
+_GUARDED = (
+    "adapter",
+    "adapter_settings",
+    "dataset_hash",
+    "input_mode",
+    "cot",
+    "force_numeric",
+    "temperature",
+)
 _UNGUARDED_SETTINGS = ("api_base",)
 
 
@@ -123,11 +131,13 @@ def start_manifest(
     scenes: int,
     adapter: object = None,
     logged: set[str] | None = None,
+    scene_ids: list[str] | None = None,
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
     ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
-    they alone guard the resume.
+    they alone guard the resume. ``scene_ids`` lists the scenes asked when ``--scenes`` or
+    ``--sample`` chose them (the results expect answers for these only).
 
     Raises:
         BadInput: The folder holds a run with other answer-shaping settings.
@@ -147,6 +157,8 @@ def start_manifest(
         "finished": None,
         "order_seed": options.seed,
     }
+    if options.scenes is not None or options.sample is not None:
+        manifest["scene_ids"] = scene_ids
     manifest["config_hash"] = config_hash(manifest)
     old = read_manifest(run_dir)
     if old is None:

@@ -47,8 +47,11 @@ class RunOptions:
         force_numeric: Ask for numbers where a task would otherwise allow null.
         input_mode: ``image``, ``image+state`` or ``state``.
         max_cost: Stop sending calls once the run has spent this many USD.
-        seed: Seed for adapters with randomness.
+        seed: Seed for adapters with randomness, for the call order and for ``sample``.
         retry: Retry policy.
+        scenes: Only these scene ids (``None`` for all selected by ``horizons``/``limit``).
+        sample: A seeded random sample of this many of the selected scenes (``None``: all).
+        epochs: Samples per (scene, task): each is asked ``epochs`` times, stored apart.
     """
 
     tasks: tuple[str, ...] = ()
@@ -66,6 +69,9 @@ class RunOptions:
     max_cost: float | None = None
     seed: int = 0
     retry: RetryPolicy = RetryPolicy()
+    scenes: tuple[str, ...] | None = None
+    sample: int | None = None
+    epochs: int = 1
 
 
 def _number(option: str, value: float | None, *, zero: bool = False) -> None:
@@ -88,6 +94,8 @@ def check_options(options: RunOptions) -> None:
         ("--concurrency", options.concurrency),
         ("--limit", options.limit),
         ("--max-tokens", options.max_tokens),
+        ("--sample", options.sample),
+        ("--epochs", options.epochs),
     ):
         if count is not None and count < 1:
             raise BadInput(f"{option}: must be at least 1, got {count}")
@@ -99,6 +107,8 @@ def check_options(options: RunOptions) -> None:
     ):
         _number(option, value)
     _number("--temperature", options.temperature, zero=True)
+    if options.scenes is not None and not options.scenes:
+        raise BadInput("--scenes: empty list")
     retry = options.retry
     for option, value in (("--retries", retry.max_retries), ("--reasks", retry.max_reasks)):
         if value < 0:

@@ -14,23 +14,29 @@ from collections.abc import Sequence
 
 from bpb_core.runner.scenes import SceneRef
 
-Pair = tuple[SceneRef, str]
+Pair = tuple[SceneRef, str, int]
+"""A scene, a task and the epoch (1 unless ``--epochs`` asks for repeated samples)."""
 
 
 def call_order(
-    refs: Sequence[SceneRef], tasks: Sequence[str], done: set[tuple[str, str]], seed: int
+    refs: Sequence[SceneRef],
+    tasks: Sequence[str],
+    done: set[tuple[str, str, int]],
+    seed: int,
+    epochs: int = 1,
 ) -> list[Pair]:
-    """The pairs still to send, in the run's seeded random order.
+    """The (scene, task, epoch) samples still to send, in the run's seeded random order.
 
     Args:
         refs: The scenes the run asks about.
         tasks: The tasks asked about each scene.
-        done: ``(scene_id, task)`` pairs already finished (dropped from the result).
+        done: ``(scene_id, task, epoch)`` samples already finished (dropped from the result).
         seed: The order seed (recorded in ``run.json``; a resume reuses it).
+        epochs: Samples per (scene, task).
 
     Returns:
-        ``(scene, task)`` pairs, a uniform random permutation of those not yet done.
+        A uniform random permutation of the samples not yet done.
     """
-    pairs = [(ref, task) for ref in refs for task in tasks]
+    pairs = [(ref, task, e) for e in range(1, epochs + 1) for ref in refs for task in tasks]
     random.Random(f"bpb-call-order:{seed}").shuffle(pairs)
-    return [(ref, task) for ref, task in pairs if (ref.scene_id, task) not in done]
+    return [(r, t, e) for r, t, e in pairs if (r.scene_id, t, e) not in done]

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
-from bpb_core.run_folder import AttemptLog, completed, make_run_folder
+from bpb_core.run_folder import AttemptLog, completed_epochs, make_run_folder
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
 from bpb_core.runner.history import read_history, recover_answers
@@ -119,18 +119,21 @@ async def run_eval_async(
     check_adapter(spec, model)
     make_run_folder(run_dir)
     with run_lock(run_dir):
-        pairs = ((ref.scene_id, task) for ref in refs for task in options.tasks)
+        epochs = range(1, options.epochs + 1)
+        pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
         history = read_history(run_dir, spec, pairs)
+        ids = [ref.scene_id for ref in refs]
         manifest = start_manifest(
-            run_dir, spec, data, options, registry, len(refs), model, history.configs
+            run_dir, spec, data, options, registry, len(refs), model, history.configs, ids
         )
         state = _state(model, spec, tasks, options, run_dir, progress, asked)
         state.config_hash, state.history = manifest["config_hash"], history
         try:
-            done = completed(run_dir)
-            plan = call_order(refs, options.tasks, done, manifest["order_seed"])
+            done = completed_epochs(run_dir)
+            seed = manifest["order_seed"]
+            plan = call_order(refs, options.tasks, done, seed, options.epochs)
             done |= recover_answers(run_dir, history, plan, state)
-            plan = [(ref, task) for ref, task in plan if (ref.scene_id, task) not in done]
+            plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
             _announce(state, refs, plan, done)
             await drive(state, plan)
         finally:
@@ -156,22 +159,22 @@ def _announce(
     state: RunState,
     refs: list[SceneRef],
     plan: list[Pair],
-    done: set[tuple[str, str]],
+    done: set[tuple[str, str, int]],
 ) -> None:
     ids = {ref.scene_id for ref in refs}
     for task in state.options.tasks:
-        before = sum(1 for scene_id, t in done if t == task and scene_id in ids)
-        todo = sum(1 for _, name in plan if name == task)
+        before = sum(1 for scene_id, t, _ in done if t == task and scene_id in ids)
+        todo = sum(1 for _, name, _ in plan if name == task)
         state.progress.update(ProgressEvent(state.spec, task, "skipped", count=before))
         state.progress.update(ProgressEvent(state.spec, task, "planned", count=todo))
 
 
-def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str]]) -> RunResult:
+def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str, int]]) -> RunResult:
     ids = {ref.scene_id for ref in refs}
     statuses: dict[str, Counter[str]] = {}
     for task in state.options.tasks:
         counts = Counter(state.statuses.get(task, {}))
-        counts["done_before"] = sum(1 for s, t in done if t == task and s in ids)
+        counts["done_before"] = sum(1 for s, t, _ in done if t == task and s in ids)
         statuses[task] = counts
     return RunResult(
         run_dir=state.run_dir,

@@ -70,9 +70,9 @@ class RunState:
         """Whether ``task`` asks for chain of thought in this run."""
         return self.options.cot.get(task, self.tasks[task].default_cot)
 
-    def prior(self, scene_id: str, task: str) -> Tally:
-        """The pair's attempts and usage from earlier sessions (counted on in this one)."""
-        return Tally() if self.history is None else self.history.prior(scene_id, task)
+    def prior(self, scene_id: str, task: str, epoch: int = 1) -> Tally:
+        """The sample's attempts and usage from earlier sessions (counted on in this one)."""
+        return Tally() if self.history is None else self.history.prior(scene_id, task, epoch)
 
     def may_send(self) -> bool:
         """False once the run must stop sending (cost cap reached, auth failed, interrupted)."""
