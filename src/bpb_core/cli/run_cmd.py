@@ -288,7 +288,9 @@ def run(**kw: Any) -> None:
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
     if kw["dry_run"]:
-        _show_dry_run(data, out, ready, options, registry)
+        from bpb_core.cli.dry_run_table import show_dry_run
+
+        show_dry_run(data, out, ready, options, registry)
         return
     results = _run_all(data, out, ready, options, registry)
     raise click.exceptions.Exit(_finish(results, registry))
@@ -353,37 +355,3 @@ def _finish(results: list[RunResult], registry: Registry) -> int:
             )
             code = max(code, 1)
     return code
-
-
-def _show_dry_run(
-    data: Path, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
-) -> None:
-    from rich.markup import escape
-    from rich.table import Table
-
-    from bpb_core.cli.console import stdout
-    from bpb_core.runner import slug
-    from bpb_core.runner.dry_run import dry_run
-
-    table = Table(
-        "adapter",
-        "task",
-        "calls",
-        "already done",
-        "est. input tokens",
-        "est. input USD",
-        title="bpb run --dry-run (nothing sent; output tokens not included)",
-    )
-    for item in ready:
-        plan = dry_run(data, out / slug(item.name), options, registry, item.adapter)
-        for task in options.tasks:
-            cost = plan.input_cost.get(task, 0.0)
-            table.add_row(
-                escape(item.name),
-                task,
-                str(plan.calls.get(task, 0)),
-                str(plan.done.get(task, 0)),
-                f"{plan.input_tokens.get(task, 0):,}",
-                "no price" if cost is None else f"${cost:.4f}",
-            )
-    stdout().print(table)
