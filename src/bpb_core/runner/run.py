@@ -108,8 +108,7 @@ async def run_eval_async(
     registry = registry or make_registry()
     progress = progress or NoProgress()
     asked = asking(data, options or RunOptions(), registry)
-    options, tasks, refs = asked.options, asked.tasks, asked.scenes
-    model = _adapter(registry, adapter, adapter_options, options)
+    model = _adapter(registry, adapter, adapter_options, asked.options)
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
@@ -119,27 +118,40 @@ async def run_eval_async(
     check_adapter(spec, model)
     make_run_folder(run_dir)
     with run_lock(run_dir):
-        epochs = range(1, options.epochs + 1)
-        pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
-        history = read_history(run_dir, spec, pairs)
-        ids = [ref.scene_id for ref in refs]
-        manifest = start_manifest(
-            run_dir, spec, data, options, registry, len(refs), model, history.configs, ids
-        )
-        state = _state(model, spec, tasks, options, run_dir, progress, asked)
-        state.config_hash, state.history = manifest["config_hash"], history
-        try:
-            done = completed_epochs(run_dir)
-            seed = manifest["order_seed"]
-            plan = call_order(refs, options.tasks, done, seed, options.epochs)
-            done |= recover_answers(run_dir, history, plan, state)
-            plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
-            _announce(state, refs, plan, done)
-            await drive(state, plan)
-        finally:
-            state.io.shutdown(wait=True)
-            state.log.close()
-            finish_manifest(run_dir, manifest, state)
+        return await _session(asked, data, model, spec, run_dir, registry, progress)
+
+
+async def _session(
+    asked: Asking,
+    data: Path,
+    model: ModelAdapter,
+    spec: str,
+    run_dir: Path,
+    registry: Registry,
+    progress: Progress,
+) -> RunResult:
+    """One session on a locked run folder: guard, recover, send the rest, record the end."""
+    options, refs = asked.options, asked.scenes
+    epochs = range(1, options.epochs + 1)
+    pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
+    history = read_history(run_dir, spec, pairs)
+    ids = [ref.scene_id for ref in refs]
+    manifest = start_manifest(
+        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids
+    )
+    state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
+    state.config_hash, state.history = manifest["config_hash"], history
+    try:
+        done = completed_epochs(run_dir)
+        plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
+        done |= recover_answers(run_dir, history, plan, state)
+        plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
+        _announce(state, refs, plan, done)
+        await drive(state, plan)
+    finally:
+        state.io.shutdown(wait=True)
+        state.log.close()
+        finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)
 
 
