@@ -14,7 +14,7 @@ from typing import Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BpbError
+from bpb_core.errors import BadInput, BpbError
 from bpb_core.interfaces import SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -91,8 +91,13 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
 
 def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
     """Make, write and hash one scene; return its row and file hashes."""
-    made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
     name = scene_id(job.horizon, job.index)
+    try:
+        made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
+    except BadInput:
+        raise
+    except BpbError as exc:  # e.g. an event budget overrun: the config makes unfinishable scenes
+        raise BadInput(f"config: scene {name}: {exc}; the simulator cannot finish it") from None
     if made.truth.scene_id != name:
         raise BpbError(
             f"scene family {family.name!r}: made scene {made.truth.scene_id!r} for {name!r}; "

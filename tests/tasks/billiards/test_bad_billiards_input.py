@@ -44,6 +44,20 @@ def test_bad_config_is_one_line_exit_2(name: str, text: str, expected: str, tmp_
     assert not (tmp_path / "ds").exists()
 
 
+@pytest.mark.slow
+def test_a_config_whose_scenes_never_end_names_the_scene(tmp_path: Path) -> None:
+    config = tmp_path / "endless.toml"  # no friction, no pockets: bounces up to the event cap
+    config.write_text('[physics]\nmu = 0.0\n[pockets]\nradius = 0.0\n'
+                      '[speed_ranges."100000"]\nlow = 1\nhigh = 2\n')  # fmt: skip
+    done = subprocess.run([BPB, "generate", "--out", str(tmp_path / "ds"), "--config",
+                           str(config), "--horizons", "100000", "--per-horizon", "1",
+                           "--no-images", "--workers", "1"],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    line = _one_line(done)
+    assert "config: scene h100000_0000: more than 100000 events before t=100000" in line
+    assert not (tmp_path / "ds").exists()
+
+
 def _scene(**change: Any) -> dict[str, Any]:
     scene: dict[str, Any] = json.loads(make_scene(1.0, 0).model_dump_json())
     scene.update(change)
