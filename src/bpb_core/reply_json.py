@@ -29,30 +29,72 @@ MAX_REPLY_CHARS = 1_048_576
 MAX_OBJECTS = 200
 """Candidates kept, from the left: a reply holding more top-level objects is not an answer."""
 MAX_BRACES = 10_000
-"""Braces looked at inside objects before the search stops (bounds the work on text made of
-braces; an answer with its reasoning holds a few hundred)."""
+"""Runs of braces (``{{{`` is one run) looked at before the search stops: bounds the work on
+text made of braces; an answer with its reasoning holds a few hundred."""
 # Inside an object: skip (possessively, so a failed match never backtracks) everything but
 # braces and quotes, and whole JSON strings, up to the next brace. No match: a string that
 # never closes, or no brace left; either way nothing open can close any more.
 _NEXT_BRACE = re.compile(r'[^{}"]*+(?:"[^"\\]*+(?:\\.[^"\\]*+)*+"[^{}"]*+)*+([{}])', re.S)
+_RUN = re.compile(r"\{+|\}+")
+
+
+class _Scan:
+    """Brace matching over runs of equal braces, keeping only the top-level closed objects.
+
+    ``opened`` holds runs of open braces as ``[first position, count]``; ``levels`` holds, by
+    rising depth, the closed objects found at that depth. Closing an object drops the levels
+    deeper than it (objects inside it are not top-level).
+    """
+
+    def __init__(self) -> None:
+        self.opened: list[list[int]] = []
+        self.depth = 0
+        self.levels: list[tuple[int, list[tuple[int, int]]]] = [(0, [])]
+
+    def open(self, index: int, count: int) -> None:
+        self.opened.append([index, count])
+        self.depth += count
+
+    def close(self, index: int, count: int) -> int:
+        """Close up to ``count`` braces at ``index``; returns how many closed."""
+        closed = left = min(count, self.depth)
+        outer = index
+        while left:
+            run = self.opened[-1]
+            if run[1] <= left:
+                self.opened.pop()
+                left -= run[1]
+                outer = run[0]
+            else:
+                run[1] -= left
+                outer, left = run[0] + run[1], 0
+        self.depth -= closed
+        while self.levels[-1][0] > self.depth:
+            self.levels.pop()
+        if self.levels[-1][0] < self.depth:
+            self.levels.append((self.depth, []))
+        self.levels[-1][1].append((outer, index + closed))
+        return closed
+
+    def spans(self) -> list[tuple[int, int]]:
+        return sorted(span for _, level in self.levels for span in level)[:MAX_OBJECTS]
 
 
 def _spans(text: str) -> list[tuple[int, int]]:
     """``(start, end)`` of the top-level balanced objects, in one pass over ``text``.
 
-    Braces are matched with a stack; inside an object a JSON string is skipped whole, so its
-    braces do not count. A closed object is top-level when no closed object holds it: it is kept
-    on a list per stack level and dropped when the brace below it closes. Braces left open at
-    the end never close; the objects inside them are top-level, as if the scan had resumed after
-    each unclosed brace. Work is linear in ``len(text)`` and bounded by :data:`MAX_BRACES`.
+    Braces are matched with a stack (of runs, so ``{`` x 30,000 is one step); inside an object a
+    JSON string is skipped whole, so its braces do not count. A closed object is top-level when
+    no closed object holds it. Braces left open at the end never close; the objects inside them
+    are top-level, as if the scan had resumed after each unclosed brace. Work is linear in
+    ``len(text)`` and bounded by :data:`MAX_BRACES`.
     """
-    stack: list[int] = []
-    levels: list[list[tuple[int, int]]] = [[]]  # levels[k]: closed objects with k open below
+    scan = _Scan()
     position = 0
     for _ in range(MAX_BRACES):
-        if len(levels[0]) >= MAX_OBJECTS:
+        if len(scan.levels[0][1]) >= MAX_OBJECTS:
             break
-        if stack:
+        if scan.depth:
             found = _NEXT_BRACE.match(text, position)
             if found is None:
                 break
@@ -61,14 +103,15 @@ def _spans(text: str) -> list[tuple[int, int]]:
             index = text.find("{", position)
             if index < 0:
                 break
-        position = index + 1
+        run = _RUN.match(text, index)
+        assert run is not None  # index is at a brace
+        count = run.end() - index
         if text[index] == "{":
-            stack.append(index)
-            levels.append([])
+            scan.open(index, count)
+            position = run.end()
         else:
-            levels.pop()  # objects inside this one are not top-level
-            levels[-1].append((stack.pop(), index + 1))
-    return sorted(span for level in levels for span in level)[:MAX_OBJECTS]
+            position = index + scan.close(index, count)
+    return scan.spans()
 
 
 def balanced_objects(text: str) -> Iterator[str]:

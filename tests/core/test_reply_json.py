@@ -98,9 +98,17 @@ def test_a_reply_over_the_size_cap_is_a_parse_failure() -> None:
 
 
 def test_unclosed_braces_before_the_answer() -> None:
-    text = "{" * 5_000 + ' reasoning... {"a": 1}'
+    # The reply that froze a run for 25 s: 30,000 unclosed braces, then the answer. A run of
+    # equal braces is one step, so it is found at once.
+    text = "{" * 30_000 + ' reasoning... {"a": 1}'
     assert extract(text, _validate, cot=True) == ({"a": 1}, "last-valid")
-    # The reply that froze a run for 25 s (30,000 unclosed braces) is searched up to
-    # MAX_BRACES braces only: a parse failure at once.
+    # Text made of separate braces is searched up to MAX_BRACES runs only: a parse failure.
     with pytest.raises(ParseFailure):
-        extract("{" * (MAX_BRACES + 1) + ' {"a": 1}', _validate, cot=True)
+        extract("{ " * (MAX_BRACES + 1) + ' {"a": 1}', _validate, cot=True)
+
+
+@pytest.mark.parametrize(
+    "text", ["{{{a}}}}}{{b}", "}}{{{x}{y}}", "{{{{a}} {b}", "{a}}}}{{{{{{c}}", "{{}}{{}{}}}{"]
+)
+def test_runs_of_braces_match_like_single_braces(text: str) -> None:
+    assert list(balanced_objects(text)) == _reference(text)
