@@ -10,8 +10,12 @@ from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
 from support.phys_helpers import R, kinds, scene, state_at
 
-SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]
-IDS = ["float64", "mpmath50"]
+SIMS = [
+    AnalyticSimulator(engine="python"),
+    AnalyticSimulator(precision=50),
+    AnalyticSimulator(engine="kernel"),
+]
+IDS = ["float64", "mpmath50", "kernel"]
 
 
 @pytest.fixture(params=SIMS, ids=IDS)
@@ -193,10 +197,11 @@ def test_degenerate_motion_never_crashes(balls: list[tuple[float, float, float, 
         assert kinds(out) == kinds(ref)
 
 
-def test_event_budget_is_enforced() -> None:
+@pytest.mark.parametrize("engine", ["python", "kernel"])
+def test_event_budget_is_enforced(engine: str) -> None:
     s = scene([(0.3, 0.4, 41.0, 17.0)], mu=0.0, horizon=5.0, pockets=[])
     with pytest.raises(SimulationError, match="more than 10 events"):
-        AnalyticSimulator(max_events=10).run(s)
+        AnalyticSimulator(max_events=10, engine=engine).run(s)
 
 
 def test_ball_resting_inside_a_pocket_is_pocketed_at_zero() -> None:

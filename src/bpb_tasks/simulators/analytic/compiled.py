@@ -1,0 +1,174 @@
+"""Scenes in, outcomes out: the Python side of the compiled event kernel.
+
+:func:`kernel_outcome` simulates one :class:`~bpb_tasks.billiards.scene.Scene` with
+:func:`~bpb_tasks.simulators.analytic.kernel.run_arrays` and builds the same
+:class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`simulate_many`
+is the batch API: many scenes in one compiled call, returning only what labels and final
+positions need (no event objects).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from bpb_core.errors import BpbError
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
+from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
+from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
+
+KINDS = ("ball", "wall", "pocket", "stop")
+AVAILABLE = HAVE_NUMBA
+
+
+class KernelBudgetError(BpbError):
+    """The compiled kernel exceeded its event budget."""
+
+
+def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's table constants and pocket centres of ``scene`` (same arithmetic as the
+    reference ``Predictor``)."""
+    phys, radius = scene.physics, scene.physics.ball_radius
+    decel = phys.mu * phys.g
+    r = scene.pockets.radius
+    prm = np.array(
+        [
+            decel,
+            decel / 2,
+            4 * radius * radius,
+            2 * radius,
+            1e-9,
+            radius,
+            scene.table.width - radius,
+            radius,
+            scene.table.height - radius,
+            phys.wall_restitution,
+            r,
+            r * r,
+        ]
+    )
+    pockets = np.array(scene.pockets.centers, dtype=float).reshape(-1, 2)
+    return prm, pockets
+
+
+def scene_arrays(scene: Scene) -> tuple[list[int], np.ndarray, np.ndarray]:
+    """Ball ids (sorted), positions and velocities of ``scene``."""
+    balls = sorted(scene.balls, key=lambda b: b.id)
+    pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
+    vel = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
+    return [b.id for b in balls], pos, vel
+
+
+def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
+    """Simulate ``scene`` to ``horizon`` with the kernel; the reference engine's Outcome."""
+    ids, pos, vel = scene_arrays(scene)
+    prm, pockets = table_params(scene)
+    events, pieces, final, status = run_arrays(pos, vel, prm, pockets, float(horizon), max_events)
+    if status:
+        raise KernelBudgetError(f"more than {max_events} events before t={float(horizon)}")
+    return build_outcome(ids, events, pieces, final, float(horizon), float(prm[0]))
+
+
+def build_outcome(
+    ids: Sequence[int],
+    events: np.ndarray,
+    pieces: np.ndarray,
+    final: np.ndarray,
+    horizon: float,
+    decel: float,
+) -> Outcome:
+    """An :class:`Outcome` from the kernel's arrays."""
+    log = []
+    for t, kind, a, b, wall, xa, ya, xb, yb in events.tolist():
+        if b >= 0:
+            log.append(Event(t, "ball", (ids[int(a)], ids[int(b)]), None, ((xa, ya), (xb, yb))))
+        else:
+            name = WALLS[int(wall)] if wall >= 0 else None
+            log.append(Event(t, KINDS[int(kind)], (ids[int(a)],), name, ((xa, ya),)))
+    rows = final.tolist()
+    positions = {ids[i]: (r[0], r[1]) if r[2] else None for i, r in enumerate(rows)}
+    per_ball: list[list[list[float]]] = [[] for _ in ids]
+    for row in pieces.tolist():
+        per_ball[int(row[0])].append(row)
+    segments = {}
+    for i, own in enumerate(per_ball):
+        end = rows[i][3]
+        segments[ids[i]] = tuple(
+            Segment(
+                p[1], own[j + 1][1] if j + 1 < len(own) else end, (p[2], p[3]), (p[4], p[5]), decel
+            )
+            for j, p in enumerate(own)
+        )
+    return Outcome(horizon, positions, tuple(log), segments)
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Results of :func:`simulate_many` for scenes ``0..n-1``.
+
+    Attributes:
+        positions: Per scene, ball id to final centre (``None`` when pocketed).
+        contacts: Per scene, ids of the balls the cue ball (id 0) touched.
+        walls: Per scene, the walls the cue ball touched.
+        events: Per scene, the number of events processed.
+    """
+
+    positions: list[dict[int, tuple[float, float] | None]]
+    contacts: list[set[int]]
+    walls: list[set[str]]
+    events: list[int]
+
+
+def simulate_many(
+    scenes: Sequence[Scene], horizons: Sequence[float] | None = None, max_events: int = 100_000
+) -> BatchResult:
+    """Simulate many scenes in one compiled call (they must share table, physics and pockets).
+
+    Raises:
+        ValueError: The scenes do not share one table.
+        KernelBudgetError: A scene exceeded ``max_events``.
+    """
+    if not scenes:
+        return BatchResult([], [], [], [])
+    first = scenes[0]
+    shape = (first.table, first.physics, first.pockets)
+    if any((s.table, s.physics, s.pockets) != shape for s in scenes):
+        raise ValueError("simulate_many: scenes must share table, physics and pockets")
+    arrays = [scene_arrays(s) for s in scenes]
+    starts = np.cumsum([0] + [len(a[0]) for a in arrays])
+    pos = np.concatenate([a[1] for a in arrays])
+    vel = np.concatenate([a[2] for a in arrays])
+    ends = [s.horizon for s in scenes] if horizons is None else list(horizons)
+    prm, pockets = table_params(first)
+    final, status, events = run_many_arrays(
+        pos, vel, starts, prm, pockets, np.array(ends, dtype=float), max_events
+    )
+    if status.any():
+        raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
+    return _batch(arrays, starts, final, events)
+
+
+def _batch(
+    arrays: list[tuple[list[int], np.ndarray, np.ndarray]],
+    starts: np.ndarray,
+    final: np.ndarray,
+    events: np.ndarray,
+) -> BatchResult:
+    rows = final.tolist()
+    positions = [
+        {i: (r[0], r[1]) if r[2] else None for i, r in zip(ids, rows[a:b], strict=True)}
+        for (ids, _, _), a, b in zip(arrays, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
+    ]
+    contacts: list[set[int]] = [set() for _ in arrays]
+    walls: list[set[str]] = [set() for _ in arrays]
+    counts = np.bincount(events[:, 0].astype(np.int64), minlength=len(arrays)).tolist()
+    for s, _, kind, a, b, wall, *_ in events.tolist():
+        ids = arrays[int(s)][0]
+        if kind == 0 and (ids[int(a)] == 0 or ids[int(b)] == 0):
+            contacts[int(s)].add(ids[int(b)] if ids[int(a)] == 0 else ids[int(a)])
+        elif kind == 1 and ids[int(a)] == 0:
+            walls[int(s)].add(WALLS[int(wall)])
+    return BatchResult(positions, contacts, walls, counts)
