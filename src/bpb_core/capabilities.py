@@ -18,7 +18,7 @@ without when it is missing.
 from __future__ import annotations
 
 import random
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -131,6 +131,19 @@ class Comparing(Protocol):
         ``scene``): the key ``error`` holds a distance (max and median over scenes are
         reported); every other key counts disagreements (summed over scenes), named and
         ordered as the table's columns."""
+        ...
+
+
+@runtime_checkable
+class WritesTruthLines(Protocol):
+    """A family that turns many validated scenes into ground-truth JSON lines at once, without
+    building its ground-truth model per scene (the fast path of ``bpb simulate``)."""
+
+    def truth_lines(
+        self, scenes: Sequence[Any], simulator: Simulator, horizon: float | None
+    ) -> list[str] | None:
+        """One JSON line per scene, equal in content to the ground truth's JSON, in order;
+        ``None`` when this simulator (or its options) has no fast path."""
         ...
 
 

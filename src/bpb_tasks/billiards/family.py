@@ -187,6 +187,15 @@ class BilliardsFamily:
 
         return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
 
+    def truth_lines(
+        self, scenes: Sequence[Scene], simulator: Simulator, horizon: float | None
+    ) -> list[str] | None:
+        """``final.json`` lines of many scenes from the compiled kernel (``None``: no fast path
+        for ``simulator``); see :mod:`bpb_tasks.billiards.truth_lines`."""
+        from bpb_tasks.billiards.truth_lines import truth_lines
+
+        return truth_lines(scenes, simulator, horizon)
+
     def calibrate_horizon(
         self, config: DatasetConfig, simulator: Simulator, horizon: float
     ) -> Calibration:

@@ -133,6 +133,16 @@ def simulate_many(
     """
     if not scenes:
         return BatchResult([], [], [], [])
+    arrays, starts, final, events = run_batch(scenes, horizons, max_events)
+    return _batch(arrays, starts, final, events)
+
+
+Batch = tuple[list[tuple[list[int], np.ndarray, np.ndarray]], np.ndarray, np.ndarray, np.ndarray]
+
+
+def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int) -> Batch:
+    """The kernel's raw batch results: per-scene ``(ids, pos, vel)``, ball offsets, final rows
+    and the event rows (scene index first) of ``scenes`` (sharing one table)."""
     first = scenes[0]
     shape = (first.table, first.physics, first.pockets)
     if any((s.table, s.physics, s.pockets) != shape for s in scenes):
@@ -148,7 +158,7 @@ def simulate_many(
     )
     if status.any():
         raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
-    return _batch(arrays, starts, final, events)
+    return arrays, starts, final, events
 
 
 def _batch(
