@@ -13,6 +13,7 @@ without when it is missing.
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
+- A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
 """
 
 from __future__ import annotations
@@ -214,4 +215,16 @@ class DrawsOverlay(Protocol):
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
         """Draw on ``picture.image`` and add legend entries to ``picture.legend``."""
+        ...
+
+
+@runtime_checkable
+class ExplainsInstability(Protocol):
+    """A ground truth that says why it is unstable; reports count the scenes each reason
+    excludes from the stable subset."""
+
+    @property
+    def unstable_reasons(self) -> list[str]:
+        """Short names of the stability conditions the scene fails (empty when stable or not
+        annotated)."""
         ...

@@ -45,9 +45,12 @@ META_DTYPES: dict[str, str] = {
     "index": "int32",
     "scene_id": "category",
     "stable": "boolean",
+    "unstable_reasons": "string",
     "scene_rule": "category",
 }
-"""Per-row columns of the units frame (``stable`` is NA when not annotated)."""
+"""Per-row columns of the units frame (``stable`` is NA when not annotated;
+``unstable_reasons`` lists, comma-separated, the stability conditions an unstable scene fails when
+its ground truth says so (:class:`~bpb_core.capabilities.ExplainsInstability`), else empty)."""
 
 CALL_DTYPES: dict[str, str] = {
     **{k: v for k, v in META_DTYPES.items() if k != "scene_rule"},
@@ -128,6 +131,12 @@ def load_frame(
     return load_results(run_dirs, registry=registry).units
 
 
+def _reasons(truth: object) -> str:
+    from bpb_core.capabilities import ExplainsInstability
+
+    return ",".join(truth.unstable_reasons) if isinstance(truth, ExplainsInstability) else ""
+
+
 def _extra_columns(scorers: Iterable[Scorer]) -> dict[str, str]:
     """The scorers' own columns; two scorers may share a column only with the same dtype."""
     columns: dict[str, str] = {}
@@ -180,6 +189,7 @@ def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
         meta |= {"scene_id": key.scene_id, "stable": truth.stable}
+        meta["unstable_reasons"] = _reasons(truth)
         folder = key.dir(run.path)
         for task in run.tasks:
             record = read_answer(folder / f"{task}.json")

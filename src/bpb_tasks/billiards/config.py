@@ -98,7 +98,9 @@ class DatasetConfig(_Strict):
         decimals: Positions and velocities in ``init.json`` are rounded to this many decimals.
         speed_ranges: Cue-speed range per horizon, keyed by the horizon in seconds (``"3"``).
         image: Canvas of the rendered PNGs.
-        stability_delta: Perturbation size of the stability annotation (m).
+        stability_delta: Perturbation size of the stability annotation (m, and a share of the
+            cue speed).
+        stability_samples: Random perturbations per scene of the stability annotation.
         calibration: Settings of the speed-range calibration.
     """
 
@@ -114,6 +116,7 @@ class DatasetConfig(_Strict):
     speed_ranges: dict[str, SpeedRange] = Field(default_factory=lambda: dict(DEFAULT_SPEED_RANGES))
     image: ImageConfig = Field(default_factory=ImageConfig)
     stability_delta: float = Field(1e-4, gt=0)
+    stability_samples: int = Field(64, ge=1, le=100_000)
     calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
 
     def speed_range(self, horizon: float) -> SpeedRange:

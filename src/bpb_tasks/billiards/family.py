@@ -157,7 +157,13 @@ class BilliardsFamily:
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
         outcome: Outcome = simulator.run(scene)
         final = final_state(scene, outcome, config.simulator)
-        stability = annotate(scene, outcome, delta=config.stability_delta, simulator=simulator)
+        stability = annotate(
+            scene,
+            outcome,
+            delta=config.stability_delta,
+            samples=config.stability_samples,
+            simulator=simulator,
+        )
         truth = final.model_copy(update={"stability": stability})
         return MadeScene(scene, outcome, truth, config)
 

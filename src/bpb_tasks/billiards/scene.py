@@ -96,8 +96,9 @@ class Scene(StrictModel):
 
 
 def check_geometry(scene: Scene) -> None:
-    """Raise ValueError naming the ball when ids repeat, a centre is off the table or balls
-    overlap by more than :data:`TOUCH_TOLERANCE`."""
+    """Raise ValueError naming the ball when ids repeat, a centre is off the table or within a
+    pocket circle (tangency included: such a ball would be pocketed at t = 0), or balls overlap
+    by more than :data:`TOUCH_TOLERANCE`."""
     radius = scene.physics.ball_radius
     seen: set[int] = set()
     for i, ball in enumerate(scene.balls):
@@ -112,6 +113,11 @@ def check_geometry(scene: Scene) -> None:
         )
         if not (lo <= x <= hi_x and lo <= y <= hi_y):
             raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} is off the table")
+        for k, centre in enumerate(scene.pockets.centers):
+            if math.dist(ball.pos, centre) <= scene.pockets.radius:
+                raise ValueError(
+                    f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} starts inside pocket {k}"
+                )
     min_gap = 2 * radius - TOUCH_TOLERANCE
     for i, a in enumerate(scene.balls):
         for b in scene.balls[i + 1 :]:
