@@ -5,7 +5,8 @@ without when it is missing.
 - A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
   (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
   :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
-  gallery's picture), :class:`Comparing` (``bpb bench sim``).
+  gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents` (its cost
+  per event and against scaled scenes).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
@@ -13,6 +14,7 @@ without when it is missing.
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
+- A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
 - A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
 """
 
@@ -227,4 +229,27 @@ class ExplainsInstability(Protocol):
     def unstable_reasons(self) -> list[str]:
         """Short names of the stability conditions the scene fails (empty when stable or not
         annotated)."""
+        ...
+
+
+@runtime_checkable
+class CountsEvents(Protocol):
+    """A family whose outcomes count discrete events, and whose scenes can be made busier: ``bpb
+    bench sim`` reports cost per event and cost against events per scene."""
+
+    def events(self, outcome: Any) -> int:
+        """The number of events in ``outcome`` (from :meth:`Simulator.run`)."""
+        ...
+
+    def scaled_scene(self, scene: Any, factor: float) -> Any:
+        """``scene`` with more events in the same simulated time (such as faster motion)."""
+        ...
+
+
+@runtime_checkable
+class RunsMany(Protocol):
+    """A simulator with a batch call (``bpb bench sim`` times it beside one call per scene)."""
+
+    def run_many(self, scenes: Sequence[Any]) -> Any:
+        """Simulate every scene to its own horizon."""
         ...

@@ -252,3 +252,11 @@ class BilliardsFamily:
     def compare(self, outcome: Outcome, reference: Outcome, scene: Scene) -> dict[str, float]:
         """Final-position error and label disagreements of ``outcome`` against ``reference``."""
         return bench_compare.compare(outcome, reference, scene)
+
+    def events(self, outcome: Outcome) -> int:
+        """Events in the outcome's log (ball, wall, pocket and stop events)."""
+        return len(outcome.events)
+
+    def scaled_scene(self, scene: Scene, factor: float) -> Scene:
+        """``scene`` with every velocity times ``factor`` (more events in the same time)."""
+        return bench_compare.scaled_scene(scene, factor)

@@ -42,6 +42,7 @@ order; ``engine="python"`` forces this module's pure-Python loop (the reference 
 from __future__ import annotations
 
 import heapq
+from collections.abc import Sequence
 
 from bpb_core.errors import BadInput, BpbError
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
@@ -100,6 +101,19 @@ class AnalyticSimulator:
             except KernelBudgetError as exc:
                 raise SimulationError(str(exc)) from None
         return _Simulation(scene, self.numeric, self.max_events).run(end)
+
+    def run_many(self, scenes: Sequence[Scene]) -> object:
+        """Simulate scenes sharing one table to their own horizons: one compiled batch call
+        (:func:`~bpb_tasks.simulators.analytic.compiled.simulate_many`, labels and final
+        positions only) with the kernel, else a list of :meth:`run` outcomes."""
+        if self.compiled and scenes:
+            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, simulate_many
+
+            try:
+                return simulate_many(scenes, max_events=self.max_events)
+            except KernelBudgetError as exc:
+                raise SimulationError(str(exc)) from None
+        return [self.run(s) for s in scenes]
 
 
 def _use_kernel(engine: str, float64: bool) -> bool:
