@@ -89,8 +89,8 @@ def _scaling(result: SimBench) -> list[str]:
     head += [f"{n} µs/event" for n in names]
     lines = [
         _wrap(
-            "Cost against events per scene: the same scenes with every velocity multiplied "
-            "(same simulated time, more collisions and bounces)."
+            "Cost against events per scene: the same scenes made busier by the family (same "
+            "simulated time, more events)."
         ),
         "",
         "| " + " | ".join(head) + " |",

@@ -1,8 +1,8 @@
 """Cost against events per scene for ``bpb bench sim --scaling``.
 
 A family that counts events (:class:`~bpb_core.capabilities.CountsEvents`) makes its benchmark
-scenes busier by a factor (for billiards: every velocity times the factor, so more collisions and
-bounces happen in the same simulated time). Each chosen simulator runs every scaled scene (the
+scenes busier by a factor (for instance every velocity times the factor, so more events happen
+in the same simulated time). Each chosen simulator runs every scaled scene (the
 factors interleaved per scene, so machine noise hits them alike); per factor the result holds the
 mean milliseconds and events per scene. If the cost follows the events, the microseconds per
 event stay about flat while the events per scene grow.
