@@ -69,19 +69,20 @@ class CalibrationConfig(_Strict):
     """
 
     target: float = Field(0.5, gt=0, lt=1)
-    samples: int = Field(1000, ge=20)
+    samples: int = Field(20_000, ge=20)
     low_ratio: float = Field(0.2, ge=0, lt=1)
     seed: int = 20260101
     iterations: int = Field(14, ge=4, le=40)
 
 
-# Calibrated with the defaults below (see docs/dataset-card.md, "Calibration").
+# Calibrated with CalibrationConfig(samples=100_000, iterations=16), otherwise the defaults
+# (see docs/dataset-card.md, "Cue-speed calibration").
 DEFAULT_SPEED_RANGES: dict[str, SpeedRange] = {
-    "1": SpeedRange(low=0.842, high=4.21),
-    "2": SpeedRange(low=0.405, high=2.025),
-    "3": SpeedRange(low=0.256, high=1.282),
-    "4": SpeedRange(low=0.202, high=1.008),
-    "5": SpeedRange(low=0.161, high=0.804),
+    "1": SpeedRange(low=0.7782, high=3.8908),
+    "2": SpeedRange(low=0.3965, high=1.9826),
+    "3": SpeedRange(low=0.2678, high=1.3392),
+    "4": SpeedRange(low=0.2093, high=1.0463),
+    "5": SpeedRange(low=0.1735, high=0.8673),
 }
 
 
