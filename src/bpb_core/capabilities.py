@@ -139,14 +139,16 @@ class Comparing(Protocol):
 
 @runtime_checkable
 class WritesTruthLines(Protocol):
-    """A family that turns many validated scenes into ground-truth JSON lines at once, without
-    building its ground-truth model per scene (the fast path of ``bpb simulate``)."""
+    """A family that turns many scene files into ground-truth JSON lines at once, without
+    building its scene or ground-truth models per scene (the fast path of ``bpb simulate``)."""
 
     def truth_lines(
-        self, scenes: Sequence[Any], simulator: Simulator, horizon: float | None
-    ) -> list[str] | None:
-        """One JSON line per scene, equal in content to the ground truth's JSON, in order;
-        ``None`` when this simulator (or its options) has no fast path."""
+        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
+    ) -> list[str | None] | None:
+        """One JSON line per scene file's text, equal in content to the ground truth's JSON, in
+        order; ``None`` for a text the fast path does not take (core reads that file the
+        ordinary way, which reports bad input), or as a whole when this simulator (or its
+        options) has no fast path."""
         ...
 
 

@@ -197,23 +197,36 @@ def _lines(files: Sequence[Path]) -> tuple[list[str], BadInput | None]:
     assert _JOB is not None
     job, horizon, stability = _JOB
     if not stability and isinstance(job.family, WritesTruthLines):
-        scenes: list[Any] = []
-        error: BadInput | None = None
+        texts: list[bytes] = []
         for path in files:
             try:
-                scenes.append(read_model(path, job.family.scene_model))
-            except BadInput as exc:
-                error = exc
-                break
-        fast = job.family.truth_lines(scenes, job.simulator, horizon) if scenes else []
+                texts.append(path.read_bytes())
+            except OSError:
+                break  # read again below, where the error names the file
+        fast = job.family.truth_lines(texts, job.simulator, horizon) if texts else []
         if fast is not None:
-            return fast, error
+            return _fill(files, fast)
     lines: list[str] = []
     for path in files:
         try:
             lines.append(_line(path))
         except BadInput as exc:
             return lines, exc
+    return lines, None
+
+
+def _fill(files: Sequence[Path], fast: list[str | None]) -> tuple[list[str], BadInput | None]:
+    """The fast lines, with the files the fast path left (``None``) and those after the texts
+    it got done the ordinary way; a bad file ends the chunk."""
+    lines: list[str] = []
+    for index, path in enumerate(files):
+        line = fast[index] if index < len(fast) else None
+        if line is None:
+            try:
+                line = _line(path)
+            except BadInput as exc:
+                return lines, exc
+        lines.append(line)
     return lines, None
 
 

@@ -81,6 +81,7 @@ class BilliardsTally:
     """Per-horizon counts: cue-ball collisions and the cue speeds drawn (for the histogram)."""
 
     speed_range: tuple[float, float]
+    target: float = 0.5
     scenes: int = 0
     collisions: int = 0
     speeds: list[float] = field(default_factory=list)
@@ -94,11 +95,13 @@ class BilliardsTally:
         self.speeds.append(speed)
 
     def summary(self) -> dict[str, Any]:
-        """Collisions, their rate and the speed range, for the manifest."""
+        """Collisions, their realised rate beside the calibration target, and the speed range,
+        for the manifest."""
         rate = round(self.collisions / self.scenes, 6) if self.scenes else 0.0
         return {
             "cue_collisions": self.collisions,
             "collision_rate": rate,
+            "target_collision_rate": self.target,
             "speed_range": self.speed_range,
         }
 
@@ -194,13 +197,14 @@ class BilliardsFamily:
         return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
 
     def truth_lines(
-        self, scenes: Sequence[Scene], simulator: Simulator, horizon: float | None
-    ) -> list[str] | None:
-        """``final.json`` lines of many scenes from the compiled kernel (``None``: no fast path
-        for ``simulator``); see :mod:`bpb_tasks.billiards.truth_lines`."""
-        from bpb_tasks.billiards.truth_lines import truth_lines
+        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
+    ) -> list[str | None] | None:
+        """``final.json`` lines of many ``init.json`` texts from the compiled kernel, read
+        without scene models (``None`` for a text left to the ordinary path, or as a whole when
+        ``simulator`` has none); see :mod:`bpb_tasks.billiards.truth_lines`."""
+        from bpb_tasks.billiards.truth_lines import text_lines
 
-        return truth_lines(scenes, simulator, horizon)
+        return text_lines(texts, simulator, horizon)
 
     def calibrate_horizon(
         self, config: DatasetConfig, simulator: Simulator, horizon: float
@@ -222,7 +226,7 @@ class BilliardsFamily:
     def new_tally(self, config: DatasetConfig, horizon: float) -> BilliardsTally:
         """An empty tally for ``horizon``."""
         speeds = config.speed_range(horizon)
-        return BilliardsTally((speeds.low, speeds.high))
+        return BilliardsTally((speeds.low, speeds.high), config.calibration.target)
 
     def write_stats(
         self, root: Path, config: DatasetConfig, tallies: Mapping[float, Any]

@@ -8,26 +8,49 @@ available has this path, everything else goes through the models.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from typing import Any
+
+from pydantic_core import to_json
 
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID
 from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.billiards.scene_text import LightScene, light_scenes
 
 KINDS = ("ball", "wall", "pocket", "stop")
 CHUNK = 512  # scenes per compiled call
 
 
+def text_lines(
+    texts: Sequence[bytes], simulator: Simulator, horizon: float | None
+) -> list[str | None] | None:
+    """``final.json`` lines of ``init.json`` texts read by
+    :func:`~bpb_tasks.billiards.scene_text.light_scene` (no pydantic model per scene): ``None``
+    for a text it does not take, or as a whole when ``simulator`` has no fast path."""
+    if not _fast(simulator):
+        return None
+    scenes = light_scenes(texts)
+    taken = [s for s in scenes if s is not None]
+    done = iter(truth_lines(taken, simulator, horizon) or [])
+    return [None if s is None else next(done) for s in scenes]
+
+
+def _fast(simulator: Simulator) -> bool:
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
+
+
 def truth_lines(
-    scenes: Sequence[Scene], simulator: Simulator, horizon: float | None
+    scenes: Sequence[Scene | LightScene], simulator: Simulator, horizon: float | None
 ) -> list[str] | None:
     """``final.json`` lines of ``scenes`` or ``None`` when ``simulator`` has no fast path."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
+    from bpb_tasks.simulators.analytic.engine import SimulationError
 
-    if not isinstance(simulator, AnalyticSimulator) or not simulator.compiled:
+    if not _fast(simulator):
         return None
+    assert hasattr(simulator, "max_events") and hasattr(simulator, "name")
     from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, run_batch
 
     groups: dict[Any, list[int]] = {}
@@ -38,7 +61,7 @@ def truth_lines(
     for members in groups.values():
         for at in range(0, len(members), CHUNK):
             chunk = members[at : at + CHUNK]
-            group = [scenes[i] for i in chunk]
+            group: list[Any] = [scenes[i] for i in chunk]
             ends = [s.horizon if horizon is None else horizon for s in group]
             try:
                 arrays, starts, final, events = run_batch(group, ends, simulator.max_events)
@@ -56,7 +79,7 @@ def truth_lines(
 
 
 def _line(
-    scene: Scene,
+    scene: Scene | LightScene,
     ids: list[int],
     final: list[list[float]],
     events: list[list[float]],
@@ -96,4 +119,4 @@ def _line(
         "stability": None,
         "simulator": simulator,
     }
-    return json.dumps(truth, separators=(",", ":"))
+    return to_json(truth).decode()  # pydantic's own writer: the model path's bytes
