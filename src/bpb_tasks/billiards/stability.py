@@ -21,6 +21,7 @@ installed they run as one batch in the compiled kernel.
 
 from __future__ import annotations
 
+import functools
 import math
 import random
 from collections.abc import Iterator, Sequence
@@ -30,6 +31,7 @@ import numpy as np
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.stability_batch import Tally, kernel_tally
 from bpb_tasks.billiards.stability_margins import (
     horizon_gap,
     min_event_gap,
@@ -60,18 +62,8 @@ def annotate(
 
         simulator = AnalyticSimulator()
     base = outcome if outcome is not None else simulator.run(scene)
-    reference = labels(base)
-    counts = dict.fromkeys(GROUPS, 0)
-    any_flip = 0
-    flips: set[str] = set()
-    spread = 0.0
-    for other, positions in perturbed_runs(scene, base.horizon, delta, samples, simulator):
-        names = list(flipped(reference, other))
-        flips.update(names)
-        any_flip += bool(names)
-        for group, a, b in zip(GROUPS, reference, other, strict=True):
-            counts[group] += a != b
-        spread = max(spread, q3_spread(base.positions, positions))
+    tally = _tally(scene, base, delta, samples, simulator)
+    counts, any_flip, flips, spread = tally.counts, tally.any_flip, tally.flips, tally.spread
     radius = scene.physics.ball_radius
     later = simulator.run(scene, base.horizon + 1.0)
     return Stability(
@@ -90,6 +82,29 @@ def annotate(
         pocket_gap=pocket_gap(base, scene.pockets.centers, scene.pockets.radius),
         flips=sorted(flips, key=_flip_order),
     )
+
+
+def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
+    """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
+    ``simulator`` runs the kernel, else copy by copy."""
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    ids, pos, vel = perturbation_arrays(scene, delta, samples)
+    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
+        return kernel_tally(scene, base, ids, pos, vel, simulator.max_events)
+    reference = labels(base)
+    tally = Tally(counts=dict.fromkeys(GROUPS, 0))
+    for k in range(samples):
+        copy = unvalidated_copy(scene, ids, pos[k].tolist(), vel[k].tolist())
+        out = simulator.run(copy, base.horizon)
+        other = labels(out)
+        names = list(flipped(reference, other))
+        tally.flips.update(names)
+        tally.any_flip += bool(names)
+        for group, a, b in zip(GROUPS, reference, other, strict=True):
+            tally.counts[group] += a != b
+        tally.spread = max(tally.spread, q3_spread(base.positions, out.positions))
+    return tally
 
 
 def labels(outcome: Outcome) -> Labels:
@@ -120,6 +135,7 @@ def q3_spread(nominal: Positions, other: Positions) -> float:
     return best
 
 
+@functools.lru_cache(maxsize=256)
 def upper_bound(flips: int, samples: int, level: float = 0.95) -> float:
     """Exact one-sided upper ``level`` bound on a rate with ``flips`` of ``samples`` observed
     (Clopper-Pearson; ``1 - 0.05 ** (1 / n)`` when nothing flipped)."""
@@ -164,29 +180,6 @@ def perturbation_arrays(
         vel[:, cue, 0] += delta * speed * np.cos(angles[:, -1])
         vel[:, cue, 1] += delta * speed * np.sin(angles[:, -1])
     return ids, pos, vel
-
-
-def perturbed_runs(
-    scene: Scene, horizon: float, delta: float, samples: int, simulator: Simulator
-) -> Iterator[tuple[Labels, Positions]]:
-    """Labels and final positions of each perturbed copy of ``scene``."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
-    ids, pos, vel = perturbation_arrays(scene, delta, samples)
-    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
-        from bpb_tasks.simulators.analytic.compiled import simulate_copies
-
-        batch = simulate_copies(scene, pos, vel, horizon, simulator.max_events)
-        for k in range(samples):
-            yield (
-                labels_of(batch.contacts[k], batch.walls[k], batch.positions[k]),
-                batch.positions[k],
-            )
-        return
-    for k in range(samples):
-        copy = unvalidated_copy(scene, ids, pos[k].tolist(), vel[k].tolist())
-        out = simulator.run(copy, horizon)
-        yield labels(out), out.positions
 
 
 def unvalidated_copy(

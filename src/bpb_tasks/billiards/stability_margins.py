@@ -108,7 +108,8 @@ def near_miss_gap(outcome: Outcome, radius: float) -> float | None:
         sa, sb = outcome.segments[a], outcome.segments[b]
         if all(s.vel == (0.0, 0.0) for s in (*sa, *sb)):
             continue
-        gap = _closest(sa, sb) - 2 * radius
+        limit = math.inf if best is None else best + 2 * radius
+        gap = _closest(sa, sb, limit) - 2 * radius
         best = gap if best is None else min(best, gap)
     return best
 
@@ -133,25 +134,54 @@ def _pieces(segments: tuple[Segment, ...]) -> list[tuple[float, float, tuple[flo
     return out
 
 
-def _closest(sa: tuple[Segment, ...], sb: tuple[Segment, ...]) -> float:
-    best = math.inf
-    for (a0, a1, pa), (b0, b1, pb) in itertools.product(_pieces(sa), _pieces(sb)):
-        lo, hi = max(a0, b0), min(a1, b1)
-        if lo > hi:
-            continue
-        d = [_at(pa, a0, lo)[k] - _at(pb, b0, lo)[k] for k in range(4)]
-        ax, ay = (pa[4] - pb[4]) / 2, (pa[5] - pb[5]) / 2
-        dx, dy, vx, vy = d
-        coeffs = [
-            ax * ax + ay * ay,
-            2 * (ax * vx + ay * vy),
-            vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
-        ]
-        coeffs += [2 * (vx * dx + vy * dy), dx * dx + dy * dy]
-        span = hi - lo
-        candidates = [0.0, span, *critical_points(coeffs, span, FLOAT64)] if span > 0 else [0.0]
-        best = min(best, min(math.sqrt(max(horner(coeffs, t), 0.0)) for t in candidates))
+def _closest(sa: tuple[Segment, ...], sb: tuple[Segment, ...], limit: float = math.inf) -> float:
+    """Closest approach of two balls' centres, or at least ``limit`` when it is no closer (piece
+    pairs whose bounding boxes are ``limit`` or more apart are skipped)."""
+    best = limit
+    boxes_b = [(piece, _box(piece)) for piece in _pieces(sb)]
+    for a0, a1, pa in _pieces(sa):
+        box_a = _box((a0, a1, pa))
+        for (b0, b1, pb), box_b in boxes_b:
+            lo, hi = max(a0, b0), min(a1, b1)
+            if lo > hi or _box_gap(box_a, box_b) >= best:
+                continue
+            best = min(best, _pair_closest(a0, pa, b0, pb, lo, hi))
     return best
+
+
+Piece = tuple[float, float, tuple[float, ...]]
+
+
+def _box(piece: Piece) -> tuple[float, float, float, float]:
+    """Bounding box of a piece's path (a straight stretch: its two ends)."""
+    t0, t1, p = piece
+    x0, y0, _, _ = _at(p, t0, t0)
+    x1, y1, _, _ = _at(p, t0, t1)
+    return min(x0, x1), max(x0, x1), min(y0, y1), max(y0, y1)
+
+
+def _box_gap(a: tuple[float, ...], b: tuple[float, ...]) -> float:
+    dx = max(0.0, b[0] - a[1], a[0] - b[1])
+    dy = max(0.0, b[2] - a[3], a[2] - b[3])
+    return math.hypot(dx, dy) * (1 - 1e-12)  # never skip a pair at the exact bound
+
+
+def _pair_closest(
+    a0: float, pa: tuple[float, ...], b0: float, pb: tuple[float, ...], lo: float, hi: float
+) -> float:
+    """Closest approach of two pieces over their common time ``[lo, hi]``."""
+    d = [_at(pa, a0, lo)[k] - _at(pb, b0, lo)[k] for k in range(4)]
+    ax, ay = (pa[4] - pb[4]) / 2, (pa[5] - pb[5]) / 2
+    dx, dy, vx, vy = d
+    coeffs = [
+        ax * ax + ay * ay,
+        2 * (ax * vx + ay * vy),
+        vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
+    ]
+    coeffs += [2 * (vx * dx + vy * dy), dx * dx + dy * dy]
+    span = hi - lo
+    candidates = [0.0, span, *critical_points(coeffs, span, FLOAT64)] if span > 0 else [0.0]
+    return min(math.sqrt(max(horner(coeffs, t), 0.0)) for t in candidates)
 
 
 def _at(p: tuple[float, ...], t0: float, t: float) -> tuple[float, float, float, float]:
