@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -141,16 +142,22 @@ Batch = tuple[list[tuple[list[int], np.ndarray, np.ndarray]], np.ndarray, np.nda
 
 
 def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int) -> Batch:
-    """The kernel's raw batch results: per-scene ``(ids, pos, vel)``, ball offsets, final rows
-    and the event rows (scene index first) of ``scenes`` (sharing one table)."""
+    """The kernel's raw batch results: per-scene ``(ids, pos, vel)`` (``pos`` and ``vel`` left
+    empty: the flat arrays went to the kernel), ball offsets, final rows and the event rows
+    (scene index first) of ``scenes`` (sharing one table)."""
     first = scenes[0]
     shape = (first.table, first.physics, first.pockets)
-    if any((s.table, s.physics, s.pockets) != shape for s in scenes):
+    if any(
+        (s.table, s.physics, s.pockets) != shape
+        for s in scenes
+        if s.table is not first.table or s.physics is not first.physics
+        or s.pockets is not first.pockets
+    ):  # fmt: skip
         raise ValueError("simulate_many: scenes must share table, physics and pockets")
-    arrays = [scene_arrays(s) for s in scenes]
-    starts = np.cumsum([0] + [len(a[0]) for a in arrays])
-    pos = np.concatenate([a[1] for a in arrays])
-    vel = np.concatenate([a[2] for a in arrays])
+    ordered = [sorted(s.balls, key=_ball_id) for s in scenes]
+    pos = np.array([b.pos for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
+    vel = np.array([b.vel for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
+    starts = np.cumsum([0] + [len(balls) for balls in ordered])
     ends = [s.horizon for s in scenes] if horizons is None else list(horizons)
     prm, pockets = table_params(first)
     final, status, events = run_many_arrays(
@@ -158,7 +165,13 @@ def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_eve
     )
     if status.any():
         raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
+    empty = np.zeros((0, 2))
+    arrays = [([b.id for b in balls], empty, empty) for balls in ordered]
     return arrays, starts, final, events
+
+
+def _ball_id(ball: Any) -> int:
+    return int(ball.id)
 
 
 def _batch(
@@ -175,11 +188,13 @@ def _batch(
     contacts: list[set[int]] = [set() for _ in arrays]
     walls: list[set[str]] = [set() for _ in arrays]
     counts = np.bincount(events[:, 0].astype(np.int64), minlength=len(arrays)).tolist()
-    for s, _, kind, a, b, wall, *_ in events.tolist():
+    kind, a, b = events[:, 2], events[:, 3], events[:, 4]
+    cue_rows = ((kind == 0) | (kind == 1)) & ((a == 0) | (b == 0))  # index 0: the lowest id
+    for s, _, kind_, a_, b_, wall, *_ in events[cue_rows].tolist():
         ids = arrays[int(s)][0]
-        if kind == 0 and (ids[int(a)] == 0 or ids[int(b)] == 0):
-            contacts[int(s)].add(ids[int(b)] if ids[int(a)] == 0 else ids[int(a)])
-        elif kind == 1 and ids[int(a)] == 0:
+        if kind_ == 0 and (ids[int(a_)] == 0 or ids[int(b_)] == 0):
+            contacts[int(s)].add(ids[int(b_)] if ids[int(a_)] == 0 else ids[int(a_)])
+        elif kind_ == 1 and ids[int(a_)] == 0:
             walls[int(s)].add(WALLS[int(wall)])
     return BatchResult(positions, contacts, walls, counts)
 
