@@ -5,7 +5,8 @@ without when it is missing.
 - A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
   (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
   :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
-  gallery's picture), :class:`Comparing` (``bpb bench sim``).
+  gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents` (its cost
+  per event and against scaled scenes).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
@@ -13,12 +14,14 @@ without when it is missing.
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
+- A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
+- A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
 """
 
 from __future__ import annotations
 
 import random
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -135,6 +138,21 @@ class Comparing(Protocol):
 
 
 @runtime_checkable
+class WritesTruthLines(Protocol):
+    """A family that turns many scene files into ground-truth JSON lines at once, without
+    building its scene or ground-truth models per scene (the fast path of ``bpb simulate``)."""
+
+    def truth_lines(
+        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
+    ) -> list[str | None] | None:
+        """One JSON line per scene file's text, equal in content to the ground truth's JSON, in
+        order; ``None`` for a text the fast path does not take (core reads that file the
+        ordinary way, which reports bad input), or as a whole when this simulator (or its
+        options) has no fast path."""
+        ...
+
+
+@runtime_checkable
 class KnowsFamilies(Protocol):
     """An offline adapter that answers from the scene itself, so it can answer only the scene
     families it knows (``bpb run`` checks before the first call, and leaves it out of its
@@ -201,4 +219,39 @@ class DrawsOverlay(Protocol):
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
         """Draw on ``picture.image`` and add legend entries to ``picture.legend``."""
+        ...
+
+
+@runtime_checkable
+class ExplainsInstability(Protocol):
+    """A ground truth that says why it is unstable; reports count the scenes each reason
+    excludes from the stable subset."""
+
+    @property
+    def unstable_reasons(self) -> list[str]:
+        """Short names of the stability conditions the scene fails (empty when stable or not
+        annotated)."""
+        ...
+
+
+@runtime_checkable
+class CountsEvents(Protocol):
+    """A family whose outcomes count discrete events, and whose scenes can be made busier: ``bpb
+    bench sim`` reports cost per event and cost against events per scene."""
+
+    def events(self, outcome: Any) -> int:
+        """The number of events in ``outcome`` (from :meth:`Simulator.run`)."""
+        ...
+
+    def scaled_scene(self, scene: Any, factor: float) -> Any:
+        """``scene`` with more events in the same simulated time (such as faster motion)."""
+        ...
+
+
+@runtime_checkable
+class RunsMany(Protocol):
+    """A simulator with a batch call (``bpb bench sim`` times it beside one call per scene)."""
+
+    def run_many(self, scenes: Sequence[Any]) -> Any:
+        """Simulate every scene to its own horizon."""
         ...

@@ -167,13 +167,73 @@ def simulate_lines(
     job = prepare(horizon, simulator, registry, options, files)
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
+    chunks = [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
     if count <= 1:
-        yield from map(_line, files)
+        for chunk in chunks:
+            yield from _emit(_lines(chunk))
         return
     import multiprocessing
 
     with multiprocessing.get_context("fork").Pool(count) as pool:
-        yield from pool.imap(_line, files, chunksize=max(16, min(256, len(files) // (8 * count))))
+        for result in pool.imap(_lines, _split(files, count)):
+            yield from _emit(result)
+
+
+CHUNK = 512  # scenes handed to a family's batch path at once
+
+
+def _split(files: Sequence[Path], count: int) -> list[Sequence[Path]]:
+    size = max(16, min(CHUNK, len(files) // (4 * count) or 1))
+    return [files[i : i + size] for i in range(0, len(files), size)]
+
+
+def _emit(result: tuple[list[str], BadInput | None]) -> Iterator[str]:
+    lines, error = result
+    yield from lines
+    if error is not None:
+        raise error
+
+
+def _lines(files: Sequence[Path]) -> tuple[list[str], BadInput | None]:
+    """JSON lines of ``files``: the family's batch path (:class:`WritesTruthLines`) when it has
+    one for this simulator and no stability is asked, else one ground truth model per scene.
+    A bad file ends the chunk: the lines before it come back with the error."""
+    from bpb_core.capabilities import WritesTruthLines
+
+    assert _JOB is not None
+    job, horizon, stability = _JOB
+    if not stability and isinstance(job.family, WritesTruthLines):
+        texts: list[bytes] = []
+        for path in files:
+            try:
+                texts.append(path.read_bytes())
+            except OSError:
+                break  # read again below, where the error names the file
+        fast = job.family.truth_lines(texts, job.simulator, horizon) if texts else []
+        if fast is not None:
+            return _fill(files, fast)
+    lines: list[str] = []
+    for path in files:
+        try:
+            lines.append(_line(path))
+        except BadInput as exc:
+            return lines, exc
+    return lines, None
+
+
+def _fill(files: Sequence[Path], fast: list[str | None]) -> tuple[list[str], BadInput | None]:
+    """The fast lines, with the files the fast path left (``None``) and those after the texts
+    it got done the ordinary way; a bad file ends the chunk."""
+    lines: list[str] = []
+    for index, path in enumerate(files):
+        line = fast[index] if index < len(fast) else None
+        if line is None:
+            try:
+                line = _line(path)
+            except BadInput as exc:
+                return lines, exc
+        lines.append(line)
+    return lines, None
 
 
 def _worker_count(workers: int, scenes: int) -> int:

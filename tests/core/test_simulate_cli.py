@@ -95,6 +95,15 @@ def test_bad_scene_names_file_and_field(tmp_path: Path) -> None:
     assert f"{bad}: balls[2].pos:" in message and "off the table" in message
 
 
+def test_resting_ball_inside_a_pocket_circle_is_bad_input(tmp_path: Path) -> None:
+    data = json.loads(random_scene(1, 0).model_dump_json())
+    data["balls"][3].update(pos=[0.03, 0.03], vel=[0.0, 0.0])  # pocket 0 is the corner (0, 0)
+    bad = tmp_path / "init.json"
+    bad.write_text(json.dumps(data))
+    message = one_line_error(bpb("simulate", str(bad)))
+    assert f"{bad}: balls[3].pos: ball 3 at [0.03, 0.03] starts inside pocket 0" in message
+
+
 @pytest.mark.parametrize(
     ("content", "expected"),
     [

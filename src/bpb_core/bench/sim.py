@@ -27,6 +27,7 @@ from bpb_core.bench.contestants import (
     parse_contestant,
     timed_run,
 )
+from bpb_core.capabilities import CountsEvents, RunsMany
 from bpb_core.errors import BadInput, PluginError
 
 if TYPE_CHECKING:
@@ -43,7 +44,9 @@ Progress = Callable[[int, int], None]
 
 @dataclass(frozen=True)
 class SimRow:
-    """One contestant's figures over the benchmark scenes (``counts`` in column order)."""
+    """One contestant's figures over the benchmark scenes (``counts`` in column order; errors
+    and counts over the scenes the reference ran; ``us_per_event`` when the family counts
+    events, ``batch_ms`` per scene of the simulator's batch call when it has one)."""
 
     name: str
     ms_per_scene: float
@@ -51,6 +54,8 @@ class SimRow:
     median_error: float
     counts: dict[str, float]
     reference: bool = False
+    us_per_event: float | None = None
+    batch_ms: float | None = None
 
 
 @dataclass(frozen=True)
@@ -67,27 +72,53 @@ class SimBench:
     simulate_ms: dict[str, float] | None = None
     simulate_scenes: int = 0
     simulate_with: str = ""
+    compared: int = 0
+    scaling: list[ScaleRow] = field(default_factory=list)
     machine: str = field(default_factory=machine_description)
     day: str = field(default_factory=today)
+
+
+@dataclass(frozen=True)
+class ScaleRow:
+    """Cost of one contestant on the scenes made busier by ``factor``."""
+
+    factor: float
+    name: str
+    ms_per_scene: float
+    events_per_scene: float
+
+    @property
+    def us_per_event(self) -> float:
+        """Microseconds per event."""
+        return 1000 * self.ms_per_scene / self.events_per_scene if self.events_per_scene else 0.0
 
 
 @dataclass
 class _Tally:
     seconds: float = 0.0
+    runs: int = 0
+    events: int = 0
     errors: list[float] = field(default_factory=list)
     counts: dict[str, float] = field(default_factory=dict)
+    batch_ms: float | None = None
 
-    def add(self, seconds: float, measures: dict[str, float]) -> None:
+    def add(self, seconds: float, measures: dict[str, float] | None, events: int) -> None:
         self.seconds += seconds
+        self.runs += 1
+        self.events += events
+        if measures is None:
+            return
         self.errors.append(measures[ERROR])
         for key, value in measures.items():
             if key != ERROR:
                 self.counts[key] = self.counts.get(key, 0.0) + value
 
-    def row(self, name: str, scenes: int, reference: bool) -> SimRow:
-        ms = 1000 * self.seconds / scenes
+    def row(self, name: str, reference: bool, count_events: bool) -> SimRow:
+        ms = 1000 * self.seconds / self.runs
         mid = statistics.median(self.errors)
-        return SimRow(name, ms, max(self.errors), mid, dict(self.counts), reference)
+        per_event = 1e6 * self.seconds / self.events if count_events and self.events else None
+        counts = dict(self.counts)
+        return SimRow(name, ms, max(self.errors), mid, counts, reference, per_event, self.batch_ms)
 
 
 def bench_simulators(
@@ -99,9 +130,13 @@ def bench_simulators(
     family: str | None = None,
     registry: Registry | None = None,
     progress: Progress | None = None,
+    reference_scenes: int | None = None,
 ) -> SimBench:
     """Run the reference and every contestant on ``scenes`` scenes of ``family`` (default: the
     default family) and compare each outcome with the reference's (see the module docstring).
+    The reference runs on the first ``reference_scenes`` scenes only (default: all); errors and
+    disagreements are over those, times over all. A simulator with a batch call
+    (:class:`~bpb_core.capabilities.RunsMany`) is also timed on all scenes at once.
 
     Raises:
         BadInput: Too few scenes, an unknown or foreign simulator, or a family that cannot
@@ -118,31 +153,60 @@ def bench_simulators(
     others = [parse_contestant(s) for s in (contestants or maker.bench_contestants)]
     sims = build_simulators(reg, name, [ref, *(c for c in others if c.spec != ref.spec)])
     sample = maker.bench_scenes(scenes, seed)
-    tallies = _run_all(maker, sims, sample, progress)
-    rows = [t.row(label, len(sample), label == ref.spec) for label, t in tallies.items()]
+    compared = min(len(sample), reference_scenes or len(sample))
+    tallies = _run_all(maker, sims, sample, progress, compared)
+    _time_batches(sims, sample, tallies)
+    counting = isinstance(maker, CountsEvents)
+    rows = [t.row(label, label == ref.spec, counting) for label, t in tallies.items()]
     columns = tuple(rows[0].counts)
+    description, measures = maker.bench_description, maker.bench_measures
     return SimBench(
-        name, len(sample), seed, maker.bench_description, maker.bench_measures, columns, rows
+        name, len(sample), seed, description, measures, columns, rows, compared=compared
     )
 
 
 def _run_all(
-    family: Comparing, sims: dict[str, Simulator], sample: list[Any], progress: Progress | None
+    family: Comparing,
+    sims: dict[str, Simulator],
+    sample: list[Any],
+    progress: Progress | None,
+    compared: int,
 ) -> dict[str, _Tally]:
-    """Each scene through every simulator in turn, the first one's outcome the reference."""
+    """Each scene through every simulator in turn, the first one's outcome the reference (run
+    on the first ``compared`` scenes only)."""
     tallies = {label: _Tally() for label in sims}
+    counter = family.events if isinstance(family, CountsEvents) else None
+    for sim in sims.values():  # warm-up: imports, caches, compiled code loaded
+        sim.run(sample[0])
+    reference = next(iter(sims))
     for index, scene in enumerate(sample):
         truth = None
         for label, sim in sims.items():
+            if label == reference and index >= compared:
+                continue
             outcome, seconds = timed_run(sim, scene)
-            truth = outcome if truth is None else truth
-            measures = family.compare(outcome, truth, scene)
-            if ERROR not in measures:
+            truth = outcome if truth is None and index < compared else truth
+            measures = None if truth is None else family.compare(outcome, truth, scene)
+            if measures is not None and ERROR not in measures:
                 raise PluginError(f"scene family: compare() returned no {ERROR!r}")
-            tallies[label].add(seconds, measures)
+            events = counter(outcome) if counter is not None else 0
+            tallies[label].add(seconds, measures, events)
         if progress is not None:
             progress(index + 1, len(sample))
     return tallies
+
+
+def _time_batches(
+    sims: dict[str, Simulator], sample: list[Any], tallies: dict[str, _Tally]
+) -> None:
+    """Per-scene milliseconds of each batch-capable simulator's one call on all scenes (after
+    a warm-up call on the first scene)."""
+    for label, sim in sims.items():
+        if isinstance(sim, RunsMany):
+            sim.run_many(sample[:1])
+            started = time.perf_counter()
+            sim.run_many(sample)
+            tallies[label].batch_ms = 1000 * (time.perf_counter() - started) / len(sample)
 
 
 def time_simulate(
@@ -197,12 +261,22 @@ def _scene_files(family: Comparing, count: int, seed: int, folder: Path) -> list
 
 
 def with_simulate_timing(
-    result: SimBench, count: int, simulator: str, registry: Registry | None = None
+    result: SimBench,
+    count: int,
+    simulators: str | Sequence[str],
+    registry: Registry | None = None,
 ) -> SimBench:
-    """``result`` with the ``bpb simulate`` figures for ``simulator`` added."""
+    """``result`` with the ``bpb simulate`` figures for ``simulators`` added (labels prefixed
+    with the simulator when there are several)."""
     from bpb_core.registry import make_registry
 
     reg = registry if registry is not None else make_registry()
     family = comparing_family(reg, result.family)
-    figures = time_simulate(family, simulator, count, registry=reg)
-    return replace(result, simulate_ms=figures, simulate_scenes=count, simulate_with=simulator)
+    names = [simulators] if isinstance(simulators, str) else list(simulators)
+    figures: dict[str, float] = {}
+    for name in names:
+        found = time_simulate(family, name, count, registry=reg)
+        prefix = f"{name}, " if len(names) > 1 else ""
+        figures |= {f"{prefix}{label}": ms for label, ms in found.items()}
+    with_ = ", ".join(names)
+    return replace(result, simulate_ms=figures, simulate_scenes=count, simulate_with=with_)

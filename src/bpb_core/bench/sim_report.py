@@ -36,7 +36,18 @@ def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
         "error over scenes; the other columns are summed over scenes."
     )
     lines = [HEADING, "", f"{result.day}, {result.machine}.", "", _wrap(intro), ""]
+    if result.compared and result.compared < result.scenes:
+        lines += [
+            _wrap(
+                f"The reference ran on the first {result.compared} scenes only: errors and "
+                f"disagreements are over those {result.compared}, times over all "
+                f"{result.scenes}."
+            ),
+            "",
+        ]
     lines += _table(result)
+    if result.scaling:
+        lines += ["", *_scaling(result)]
     reading = _reading(result)
     if reading:
         lines += ["", _wrap(reading)]
@@ -52,11 +63,44 @@ def _wrap(text: str) -> str:
 
 
 def _table(result: SimBench) -> list[str]:
-    head = ["simulator", "ms/scene", "max error", "median error", *result.columns]
+    per_event = any(r.us_per_event is not None for r in result.rows)
+    batch = any(r.batch_ms is not None for r in result.rows)
+    head = ["simulator", "ms/scene"]
+    head += ["µs/event"] * per_event + ["batch ms/scene"] * batch
+    head += ["max error", "median error", *result.columns]
     lines = ["| " + " | ".join(head) + " |", "| --- |" + " ---: |" * (len(head) - 1)]
     for row in result.rows:
-        cells = [row_name(row), f"{row.ms_per_scene:.3g}", f"{row.max_error:.2e}"]
-        cells += [f"{row.median_error:.2e}", *(count_text(row.counts[c]) for c in result.columns)]
+        cells = [row_name(row), f"{row.ms_per_scene:.3g}"]
+        cells += [_maybe(row.us_per_event)] * per_event + [_maybe(row.batch_ms)] * batch
+        cells += [f"{row.max_error:.2e}", f"{row.median_error:.2e}"]
+        cells += [count_text(row.counts[c]) for c in result.columns]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def _maybe(value: float | None) -> str:
+    return "–" if value is None else f"{value:.3g}"
+
+
+def _scaling(result: SimBench) -> list[str]:
+    """Cost against events per scene (the scaled scenes of ``--scaling``)."""
+    names = list(dict.fromkeys(r.name for r in result.scaling))
+    head = ["speed x", "events/scene", *(f"{n} ms/scene" for n in names)]
+    head += [f"{n} µs/event" for n in names]
+    lines = [
+        _wrap(
+            "Cost against events per scene: the same scenes made busier by the family (same "
+            "simulated time, more events)."
+        ),
+        "",
+        "| " + " | ".join(head) + " |",
+        "| ---: |" + " ---: |" * (len(head) - 1),
+    ]
+    for factor in dict.fromkeys(r.factor for r in result.scaling):
+        rows = {r.name: r for r in result.scaling if r.factor == factor}
+        cells = [f"{factor:g}", f"{rows[names[0]].events_per_scene:.3g}"]
+        cells += [f"{rows[n].ms_per_scene:.3g}" for n in names]
+        cells += [f"{rows[n].us_per_event:.3g}" for n in names]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 

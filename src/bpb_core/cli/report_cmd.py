@@ -94,6 +94,7 @@ def _print_tables(built: Report) -> None:
     console.print(_frame_table("Accuracy by horizon (strict)", tables["by_horizon"], percent=True))
     if results.suites:
         console.print(_stable_table(tables, results.suites[0].name))
+        console.print(_exclusions(tables["stable_exclusions"]))
     for diagnostic in built.diagnostics:
         if diagnostic.terminal:
             frame = tables[diagnostic.name][["run", "baseline", *diagnostic.terminal]]
@@ -166,6 +167,12 @@ def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
             "0" if kept is None else str(kept["expected"]),
         )
     return table
+
+
+def _exclusions(frame: pd.DataFrame) -> str:
+    """One line: how many scenes each stability reason leaves out of the stable subset."""
+    parts = [f"{r['reason']} {r['scenes']}" for r in frame.to_dict(orient="records")]
+    return "Scenes left out of the stable subset: " + ", ".join(parts)
 
 
 def _name(run: str, baseline: bool) -> str:

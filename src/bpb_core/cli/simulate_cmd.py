@@ -22,6 +22,11 @@ import click
 @click.option(
     "--precision", default=None, help="analytic only: 'float64' (default) or digits for mpmath."
 )
+@click.option(
+    "--engine",
+    default=None,
+    help="analytic only: 'auto' (compiled kernel when installed), 'kernel' or 'python'.",
+)
 @click.option("--stability", is_flag=True, help="Add the stability annotation (slower).")
 @click.option(
     "--workers",
@@ -35,6 +40,7 @@ def simulate(
     simulator: str | None,
     dt: float | None,
     precision: str | None,
+    engine: str | None,
     stability: bool,
     workers: int,
 ) -> None:
@@ -46,6 +52,8 @@ def simulate(
         options["dt"] = dt
     if precision is not None:
         options["precision"] = precision
+    if engine is not None:
+        options["engine"] = engine
     out = sys.stdout
     for line in simulate_lines(
         paths,

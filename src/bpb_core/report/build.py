@@ -28,6 +28,7 @@ from bpb_core.results.tables import (
     by_horizon,
     leaderboard,
     metrics,
+    stable_exclusions,
     summary,
     summary_records,
 )
@@ -57,6 +58,7 @@ class Report:
             "suites": {s.name: dict(s.weights) for s in self.results.suites},
             "bootstrap": _records(self.tables["bootstrap"]),
             "stable": _records(self.tables["leaderboard_stable"]),
+            "stable_exclusions": _records(self.tables["stable_exclusions"]),
             "diagnostics": {d.name: _records(self.tables[d.name]) for d in self.diagnostics},
             "files": {name: str(path) for name, path in self.files.items()},
         }
@@ -81,6 +83,7 @@ def report_tables(
         "leaderboard": leaderboard(units, suites),
         "leaderboard_answered": leaderboard(units, suites, view="answered"),
         "leaderboard_stable": leaderboard(units, suites, stable_only=True),
+        "stable_exclusions": stable_exclusions(units),
         "accuracy": accuracy(units),
         "accuracy_answered": accuracy(units, view="answered"),
         "by_horizon": by_horizon(units),
@@ -248,7 +251,9 @@ def _sections(
                 tables["leaderboard_stable"],
                 percent=scores,
                 empty="no stable scenes (the dataset has no stability annotation?)",
-            ),
+            )
+            + '<p class="muted">Scenes left out of the stable subset, by reason:</p>'
+            + html.table(tables["stable_exclusions"]),
         ),
         (
             "Bootstrap 95% intervals",

@@ -46,10 +46,13 @@ META_DTYPES: dict[str, str] = {
     "scene_id": "category",
     "epoch": "int32",
     "stable": "boolean",
+    "unstable_reasons": "string",
     "scene_rule": "category",
 }
 """Per-row columns of the units frame (``stable`` is NA when not annotated; ``epoch`` is 1
-unless the run asked every (scene, task) several times with ``--epochs``)."""
+unless the run asked every (scene, task) several times with ``--epochs``; ``unstable_reasons``
+lists, comma-separated, the stability conditions an unstable scene fails when its ground truth
+says so (:class:`~bpb_core.capabilities.ExplainsInstability`), else empty)."""
 
 CALL_DTYPES: dict[str, str] = {
     **{k: v for k, v in META_DTYPES.items() if k != "scene_rule"},
@@ -130,6 +133,12 @@ def load_frame(
     return load_results(run_dirs, registry=registry).units
 
 
+def _reasons(truth: object) -> str:
+    from bpb_core.capabilities import ExplainsInstability
+
+    return ",".join(truth.unstable_reasons) if isinstance(truth, ExplainsInstability) else ""
+
+
 def _extra_columns(scorers: Iterable[Scorer]) -> dict[str, str]:
     """The scorers' own columns; two scorers may share a column only with the same dtype."""
     columns: dict[str, str] = {}
@@ -182,6 +191,7 @@ def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
         meta |= {"scene_id": key.scene_id, "stable": truth.stable}
+        meta["unstable_reasons"] = _reasons(truth)
         for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
             meta["epoch"] = epoch
             record = read_answer(answer_path(run.path, key, task, epoch))

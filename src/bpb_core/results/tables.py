@@ -45,6 +45,21 @@ def scene_scores(units: pd.DataFrame, *, stable_only: bool = False) -> pd.DataFr
     return out.drop(columns=["mean", "min", "scene_rule"])
 
 
+def stable_exclusions(units: pd.DataFrame) -> pd.DataFrame:
+    """Scenes left out of the stable subset, per reason: one row per reason named by the ground
+    truths (a scene may count under several), then ``any`` (all unstable scenes) and
+    ``not annotated``. Columns ``reason`` and ``scenes`` (distinct scene ids)."""
+    scenes = units.drop_duplicates("scene_id")[["stable", "unstable_reasons"]]
+    unstable = scenes[scenes["stable"].fillna(True).eq(False)]
+    counts: dict[str, int] = {}
+    for cell in unstable["unstable_reasons"].fillna(""):
+        for reason in filter(None, str(cell).split(",")):
+            counts[reason] = counts.get(reason, 0) + 1
+    rows = [*sorted(counts.items()), ("any", len(unstable))]
+    rows.append(("not annotated", int(scenes["stable"].isna().sum())))
+    return pd.DataFrame(rows, columns=["reason", "scenes"])
+
+
 def _in_view(scenes: pd.DataFrame, view: View) -> pd.DataFrame:
     if view == "strict":
         return scenes

@@ -75,6 +75,14 @@ def random_scenes(count: int, seed: int = 0, **options: object) -> Iterator[Scen
         yield random_scene(seed, index, **options)  # type: ignore[arg-type]
 
 
+def scaled_scene(scene: Scene, factor: float) -> Scene:
+    """``scene`` with every velocity times ``factor``."""
+    balls = [
+        b.model_copy(update={"vel": (b.vel[0] * factor, b.vel[1] * factor)}) for b in scene.balls
+    ]
+    return scene.model_copy(update={"balls": balls})
+
+
 def position_error(outcome: Outcome, reference: Outcome) -> float:
     """Largest distance between final positions of balls on the table in both."""
     gaps = [

@@ -5,12 +5,19 @@ of any dataset seed) is simulated at cue speeds ``high * (low_ratio + u * (1 - l
 share of scenes in which the cue ball touches another ball grows with ``high``; a bisection on
 ``high`` finds the value where it meets ``calibration.target``. The result is deterministic, so the
 defaults shipped in :mod:`bpb_tasks.billiards.config` can be recomputed and checked.
+
+With the compiled kernel (the analytic simulator on float64 with numba) each evaluation is one
+batch call on arrays built straight from the draws, rounded exactly as :func:`build_scene` rounds
+them; otherwise every scene is built and simulated one by one.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.config import DatasetConfig, SpeedRange, horizon_key
@@ -38,12 +45,53 @@ def collision_rate(
 ) -> float:
     """Share of ``draws`` whose cue ball touches another ball by ``horizon`` with cue speeds
     drawn from ``speeds``."""
+    if _compiled(simulator):
+        return _kernel_rate(draws, horizon, speeds, config)
     hits = 0
     for i, d in enumerate(draws):
         speed = speeds.low + d.u * (speeds.high - speeds.low)
         scene = build_scene(d, horizon, i, config, speed=speed)
         hits += bool(simulator.run(scene).cue_contacts())
     return hits / len(draws)
+
+
+def _compiled(simulator: Simulator) -> bool:
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
+
+
+def _kernel_rate(
+    draws: Sequence[Draw], horizon: float, speeds: SpeedRange, config: DatasetConfig
+) -> float:
+    """:func:`collision_rate` in one compiled batch (same rounding as :func:`build_scene`)."""
+    from bpb_tasks.simulators.analytic.compiled import table_params
+    from bpb_tasks.simulators.analytic.kernel import run_many_arrays
+
+    places = config.decimals
+    pos = np.array([[(round(x, places), round(y, places)) for x, y in d.positions] for d in draws])
+    vel = np.zeros_like(pos)
+    for k, d in enumerate(draws):
+        speed = speeds.low + d.u * (speeds.high - speeds.low)
+        vel[k, 0] = (
+            round(speed * math.cos(d.angle), places) + 0.0,
+            round(speed * math.sin(d.angle), places),
+        )
+    count, n = pos.shape[0], pos.shape[1]
+    prm, pockets = table_params(build_scene(draws[0], horizon, 0, config, speed=1.0))
+    _, status, events = run_many_arrays(
+        pos.reshape(-1, 2),
+        vel.reshape(-1, 2),
+        np.arange(count + 1, dtype=np.int64) * n,
+        prm,
+        pockets,
+        np.full(count, float(horizon)),
+        100_000,
+    )
+    if status.any():
+        raise ValueError(f"horizon {horizon:g} s: a calibration scene exceeded the event budget")
+    cue = (events[:, 2] == 0) & ((events[:, 3] == 0) | (events[:, 4] == 0))
+    return float(len(np.unique(events[cue, 0])) / count)
 
 
 def calibration_draws(horizon: float, config: DatasetConfig) -> list[Draw]:
@@ -87,8 +135,8 @@ def calibrate_horizon(
     for _ in range(cal.iterations):
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if rate(mid) < cal.target else (lo, mid)
-    high = round((lo + hi) / 2, 3)
-    found = SpeedRange(low=round(high * cal.low_ratio, 3), high=high)
+    high = round((lo + hi) / 2, 4)
+    found = SpeedRange(low=round(high * cal.low_ratio, 4), high=high)
     realised = collision_rate(draws, horizon, found, config, simulator)
     return Calibration(horizon, found, realised, len(draws))
 

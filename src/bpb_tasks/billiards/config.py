@@ -72,19 +72,20 @@ class CalibrationConfig(_Strict):
     """
 
     target: float = Field(0.5, gt=0, lt=1)
-    samples: int = Field(1000, ge=20)
+    samples: int = Field(20_000, ge=20)
     low_ratio: float = Field(0.2, ge=0, lt=1)
     seed: int = 20260101
     iterations: int = Field(14, ge=4, le=40)
 
 
-# Calibrated with the defaults below (see docs/dataset-card.md, "Calibration").
+# Calibrated with CalibrationConfig(samples=100_000, iterations=16), otherwise the defaults
+# (see docs/dataset-card.md, "Cue-speed calibration").
 DEFAULT_SPEED_RANGES: dict[str, SpeedRange] = {
-    "1": SpeedRange(low=0.842, high=4.21),
-    "2": SpeedRange(low=0.405, high=2.025),
-    "3": SpeedRange(low=0.256, high=1.282),
-    "4": SpeedRange(low=0.202, high=1.008),
-    "5": SpeedRange(low=0.161, high=0.804),
+    "1": SpeedRange(low=0.7782, high=3.8908),
+    "2": SpeedRange(low=0.3965, high=1.9826),
+    "3": SpeedRange(low=0.2678, high=1.3392),
+    "4": SpeedRange(low=0.2093, high=1.0463),
+    "5": SpeedRange(low=0.1735, high=0.8673),
 }
 
 
@@ -101,7 +102,9 @@ class DatasetConfig(_Strict):
         decimals: Positions and velocities in ``init.json`` are rounded to this many decimals.
         speed_ranges: Cue-speed range per horizon, keyed by the horizon in seconds (``"3"``).
         image: Canvas of the rendered PNGs.
-        stability_delta: Perturbation size of the stability annotation (m).
+        stability_delta: Perturbation size of the stability annotation (m, and a share of the
+            cue speed).
+        stability_samples: Random perturbations per scene of the stability annotation.
         calibration: Settings of the speed-range calibration.
     """
 
@@ -117,6 +120,7 @@ class DatasetConfig(_Strict):
     speed_ranges: dict[str, SpeedRange] = Field(default_factory=lambda: dict(DEFAULT_SPEED_RANGES))
     image: ImageConfig = Field(default_factory=ImageConfig)
     stability_delta: float = Field(1e-4, gt=0)
+    stability_samples: int = Field(64, ge=1, le=100_000)
     calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
 
     @model_validator(mode="after")

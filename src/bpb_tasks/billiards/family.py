@@ -81,6 +81,7 @@ class BilliardsTally:
     """Per-horizon counts: cue-ball collisions and the cue speeds drawn (for the histogram)."""
 
     speed_range: tuple[float, float]
+    target: float = 0.5
     scenes: int = 0
     collisions: int = 0
     speeds: list[float] = field(default_factory=list)
@@ -94,11 +95,13 @@ class BilliardsTally:
         self.speeds.append(speed)
 
     def summary(self) -> dict[str, Any]:
-        """Collisions, their rate and the speed range, for the manifest."""
+        """Collisions, their realised rate beside the calibration target, and the speed range,
+        for the manifest."""
         rate = round(self.collisions / self.scenes, 6) if self.scenes else 0.0
         return {
             "cue_collisions": self.collisions,
             "collision_rate": rate,
+            "target_collision_rate": self.target,
             "speed_range": self.speed_range,
         }
 
@@ -157,7 +160,13 @@ class BilliardsFamily:
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
         outcome: Outcome = simulator.run(scene)
         final = final_state(scene, outcome, config.simulator)
-        stability = annotate(scene, outcome, delta=config.stability_delta, simulator=simulator)
+        stability = annotate(
+            scene,
+            outcome,
+            delta=config.stability_delta,
+            samples=config.stability_samples,
+            simulator=simulator,
+        )
         truth = final.model_copy(update={"stability": stability})
         return MadeScene(scene, outcome, truth, config)
 
@@ -187,6 +196,16 @@ class BilliardsFamily:
 
         return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
 
+    def truth_lines(
+        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
+    ) -> list[str | None] | None:
+        """``final.json`` lines of many ``init.json`` texts from the compiled kernel, read
+        without scene models (``None`` for a text left to the ordinary path, or as a whole when
+        ``simulator`` has none); see :mod:`bpb_tasks.billiards.truth_lines`."""
+        from bpb_tasks.billiards.truth_lines import text_lines
+
+        return text_lines(texts, simulator, horizon)
+
     def calibrate_horizon(
         self, config: DatasetConfig, simulator: Simulator, horizon: float
     ) -> Calibration:
@@ -207,7 +226,7 @@ class BilliardsFamily:
     def new_tally(self, config: DatasetConfig, horizon: float) -> BilliardsTally:
         """An empty tally for ``horizon``."""
         speeds = config.speed_range(horizon)
-        return BilliardsTally((speeds.low, speeds.high))
+        return BilliardsTally((speeds.low, speeds.high), config.calibration.target)
 
     def write_stats(
         self, root: Path, config: DatasetConfig, tallies: Mapping[float, Any]
@@ -237,3 +256,11 @@ class BilliardsFamily:
     def compare(self, outcome: Outcome, reference: Outcome, scene: Scene) -> dict[str, float]:
         """Final-position error and label disagreements of ``outcome`` against ``reference``."""
         return bench_compare.compare(outcome, reference, scene)
+
+    def events(self, outcome: Outcome) -> int:
+        """Events in the outcome's log (ball, wall, pocket and stop events)."""
+        return len(outcome.events)
+
+    def scaled_scene(self, scene: Scene, factor: float) -> Scene:
+        """``scene`` with every velocity times ``factor`` (more events in the same time)."""
+        return bench_compare.scaled_scene(scene, factor)

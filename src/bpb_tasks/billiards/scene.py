@@ -106,7 +106,8 @@ class Scene(StrictModel):
 
 def check_geometry(scene: Scene) -> None:
     """Raise ValueError naming the ball when there is no cue ball (id 0), ids repeat, a centre
-    is off the table or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
+    is off the table or within a pocket circle (tangency included: such a ball would be pocketed
+    at t = 0), or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
     radius = scene.physics.ball_radius
     if all(ball.id != 0 for ball in scene.balls):
         raise ValueError("balls: no cue ball (a ball with id 0)")
@@ -123,6 +124,11 @@ def check_geometry(scene: Scene) -> None:
         )
         if not (lo <= x <= hi_x and lo <= y <= hi_y):
             raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} is off the table")
+        for k, centre in enumerate(scene.pockets.centers):
+            if math.dist(ball.pos, centre) <= scene.pockets.radius:
+                raise ValueError(
+                    f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} starts inside pocket {k}"
+                )
     min_gap = 2 * radius - TOUCH_TOLERANCE
     for i, a in enumerate(scene.balls):
         for b in scene.balls[i + 1 :]:

@@ -1,38 +1,50 @@
-"""Stability annotation: how close a scene's labels are to flipping (SPEC section 3).
+"""Stability annotation: how likely a scene's labels are to flip (SPEC section 3).
 
-Margins are read off the simulated outcome:
+The scene is re-simulated under ``samples`` (default 64) random perturbations of size ``delta``
+(default 1e-4): every ball's centre moves by ``delta`` metres in a uniformly random direction, and
+the cue ball's velocity gains a vector of length ``delta`` times its speed in a uniformly random
+direction. The draws come from a generator seeded by the scene id, so the annotation is
+deterministic. For each perturbation the labels are compared with the nominal ones:
 
-* ``near_miss_gap``: over pairs of balls that never touched (at least one of them moving at some
-  time), the smallest gap ``distance - 2R`` over ``[0, horizon]``, found exactly per piece of
-  motion (the squared distance is a quartic; its minimum is at an end or a critical point).
-* ``min_graze_cos``: over ball-ball contacts, the smallest ``|cos|`` between the relative velocity
-  and the line of centres (near 0 = grazing).
-* ``min_event_gap``: the smallest time between two consecutive events of one ball (stops ignored).
-* ``horizon_gap``: the time between the horizon and the nearest ball, wall or pocket event,
-  looking up to one second past the horizon (an event just after it is as fragile as one before).
+* flip rates (share of perturbations that flip at least one label) for Q1 (cue contacts), Q2
+  (cue walls) and pocketed balls, and their union with its exact (Clopper-Pearson) upper 95%
+  bound;
+* the Q3 spread: the largest distance between a ball's perturbed and nominal final positions,
+  over balls on the table in both and over perturbations. Q3 counts as unstable when the spread
+  exceeds half a ball radius.
 
-Flips: the scene is re-simulated under small perturbations of size ``delta`` and its labels (Q1
-contacts, Q2 walls, pocketed balls) compared. The 12 perturbations are the cue position moved by
-``+-delta`` in x and y, the cue direction turned by ``+-delta`` radians, the cue speed changed by
-``+-delta`` m/s, and four moves of every object ball by ``+-delta`` per axis with signs drawn from
-a generator seeded by the scene id. ``stable`` means no label flipped.
+``stable`` means no label flipped in any perturbation and the Q3 spread is within the bound. The
+deterministic margins (:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside.
+Perturbed copies skip scene validation (a copy may touch a wall or another ball); with numba
+installed they run as one batch in the compiled kernel.
 """
 
 from __future__ import annotations
 
-import itertools
+import functools
 import math
 import random
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
+
+import numpy as np
 
 from bpb_core.interfaces import Simulator
-from bpb_tasks.billiards.outcome import CUE_ID, Outcome, Segment
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.stability_batch import Tally, kernel_tally
+from bpb_tasks.billiards.stability_margins import (
+    horizon_gap,
+    min_event_gap,
+    min_graze_cos,
+    near_miss_gap,
+    pocket_gap,
+)
 from bpb_tasks.billiards.truth import Stability
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
-from bpb_tasks.simulators.analytic.roots import critical_points, horner
 
 Labels = tuple[frozenset[int], frozenset[str], frozenset[int]]
+Positions = dict[int, tuple[float, float] | None]
+DEFAULT_SAMPLES = 64
+GROUPS = ("q1", "q2", "pocketed")
 
 
 def annotate(
@@ -40,35 +52,70 @@ def annotate(
     outcome: Outcome | None = None,
     *,
     delta: float = 1e-4,
+    samples: int = DEFAULT_SAMPLES,
     simulator: Simulator | None = None,
 ) -> Stability:
-    """Margins and label flips of ``scene`` (simulated with ``simulator``, default analytic)."""
+    """Flip rates, Q3 spread and margins of ``scene`` (simulated with ``simulator``, default
+    analytic)."""
     if simulator is None:
         from bpb_tasks.simulators.analytic import AnalyticSimulator
 
         simulator = AnalyticSimulator()
     base = outcome if outcome is not None else simulator.run(scene)
-    reference = labels(base)
-    flips: set[str] = set()
-    for variant in perturbations(scene, delta):
-        flips.update(flipped(reference, labels(simulator.run(variant, base.horizon))))
+    tally = _tally(scene, base, delta, samples, simulator)
+    counts, any_flip, flips, spread = tally.counts, tally.any_flip, tally.flips, tally.spread
     radius = scene.physics.ball_radius
     later = simulator.run(scene, base.horizon + 1.0)
     return Stability(
-        stable=not flips,
+        stable=any_flip == 0 and spread <= radius / 2,
         delta=delta,
+        samples=samples,
+        flip_rates={g: counts[g] / samples for g in GROUPS},
+        flip_rate=any_flip / samples,
+        flip_rate_upper95=upper_bound(any_flip, samples),
+        q3_spread=spread,
+        q3_stable=spread <= radius / 2,
         near_miss_gap=near_miss_gap(base, radius),
         min_graze_cos=min_graze_cos(base),
         min_event_gap=min_event_gap(base),
         horizon_gap=horizon_gap(later, base.horizon),
+        pocket_gap=pocket_gap(base, scene.pockets.centers, scene.pockets.radius),
         flips=sorted(flips, key=_flip_order),
     )
 
 
+def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
+    """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
+    ``simulator`` runs the kernel, else copy by copy."""
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    ids, pos, vel = perturbation_arrays(scene, delta, samples)
+    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
+        return kernel_tally(scene, base, ids, pos, vel, simulator.max_events)
+    reference = labels(base)
+    tally = Tally(counts=dict.fromkeys(GROUPS, 0))
+    for k in range(samples):
+        copy = unvalidated_copy(scene, ids, pos[k].tolist(), vel[k].tolist())
+        out = simulator.run(copy, base.horizon)
+        other = labels(out)
+        names = list(flipped(reference, other))
+        tally.flips.update(names)
+        tally.any_flip += bool(names)
+        for group, a, b in zip(GROUPS, reference, other, strict=True):
+            tally.counts[group] += a != b
+        tally.spread = max(tally.spread, q3_spread(base.positions, out.positions))
+    return tally
+
+
 def labels(outcome: Outcome) -> Labels:
     """Q1 contacts, Q2 walls and the pocketed balls of an outcome."""
-    pocketed = frozenset(i for i, p in outcome.positions.items() if p is None)
-    return frozenset(outcome.cue_contacts()), frozenset(outcome.cue_walls()), pocketed
+    return labels_of(outcome.cue_contacts(), outcome.cue_walls(), outcome.positions)
+
+
+def labels_of(contacts: set[int], walls: set[str], positions: Positions) -> Labels:
+    """The labels from cue contacts, cue walls and final positions."""
+    pocketed = frozenset(i for i, p in positions.items() if p is None)
+    return frozenset(contacts), frozenset(walls), pocketed
 
 
 def flipped(reference: Labels, other: Labels) -> Iterator[str]:
@@ -78,157 +125,72 @@ def flipped(reference: Labels, other: Labels) -> Iterator[str]:
             yield f"{prefix}:{item}"
 
 
+def q3_spread(nominal: Positions, other: Positions) -> float:
+    """Largest distance between final positions of balls on the table in both."""
+    best = 0.0
+    for ball, pos in nominal.items():
+        moved = other.get(ball)
+        if pos is not None and moved is not None:
+            best = max(best, math.dist(pos, moved))
+    return best
+
+
+@functools.lru_cache(maxsize=256)
+def upper_bound(flips: int, samples: int, level: float = 0.95) -> float:
+    """Exact one-sided upper ``level`` bound on a rate with ``flips`` of ``samples`` observed
+    (Clopper-Pearson; ``1 - 0.05 ** (1 / n)`` when nothing flipped)."""
+    if flips >= samples:
+        return 1.0
+    alpha = 1 - level
+
+    def cdf(p: float) -> float:
+        return sum(
+            math.comb(samples, k) * p**k * (1 - p) ** (samples - k) for k in range(flips + 1)
+        )
+
+    lo, hi = flips / samples, 1.0
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if cdf(mid) > alpha else (lo, mid)
+    return hi
+
+
 def _flip_order(name: str) -> tuple[str, str]:
     head, _, tail = name.rpartition(":")
     return head, tail.zfill(8)
 
 
-def perturbations(scene: Scene, delta: float) -> Iterator[Scene]:
-    """The 12 perturbed copies of ``scene`` (see the module docstring)."""
-    cue = scene.ball(CUE_ID)
-    x, y = cue.pos
-    vx, vy = cue.vel
-    speed = math.hypot(vx, vy)
-    for dx, dy in ((delta, 0.0), (-delta, 0.0), (0.0, delta), (0.0, -delta)):
-        yield _with_ball(scene, CUE_ID, (x + dx, y + dy), cue.vel)
-    for turn in (delta, -delta):
-        c, s = math.cos(turn), math.sin(turn)
-        yield _with_ball(scene, CUE_ID, cue.pos, (vx * c - vy * s, vx * s + vy * c))
-    for change in (delta, -delta):
-        scale = max(speed + change, 0.0) / speed if speed > 0 else 0.0
-        yield _with_ball(scene, CUE_ID, cue.pos, (vx * scale, vy * scale))
-    rng = random.Random(f"stability:{scene.scene_id}")
-    for _ in range(4):
-        balls = [
-            b
-            if b.id == CUE_ID
-            else b.model_copy(
-                update={
-                    "pos": (
-                        b.pos[0] + rng.choice((-delta, delta)),
-                        b.pos[1] + rng.choice((-delta, delta)),
-                    )
-                }
-            )
-            for b in scene.balls
-        ]
-        yield scene.model_copy(update={"balls": balls})
+def perturbation_arrays(
+    scene: Scene, delta: float, samples: int, stream: str = "stability"
+) -> tuple[list[int], np.ndarray, np.ndarray]:
+    """Ball ids and the ``(samples, n, 2)`` positions and velocities of the perturbed copies
+    (drawn from a generator seeded by ``stream`` and the scene id)."""
+    balls = sorted(scene.balls, key=lambda b: b.id)
+    rng = random.Random(f"{stream}:{scene.scene_id}")
+    angles = np.array([[rng.random() for _ in range(len(balls) + 1)] for _ in range(samples)])
+    angles *= 2 * math.pi
+    pos = np.array([b.pos for b in balls], dtype=float)[None] + delta * np.stack(
+        (np.cos(angles[:, :-1]), np.sin(angles[:, :-1])), axis=-1
+    )
+    vel = np.repeat(np.array([b.vel for b in balls], dtype=float)[None], samples, axis=0)
+    ids = [b.id for b in balls]
+    if CUE_ID in ids:
+        cue = ids.index(CUE_ID)
+        speed = math.hypot(*balls[cue].vel)
+        vel[:, cue, 0] += delta * speed * np.cos(angles[:, -1])
+        vel[:, cue, 1] += delta * speed * np.sin(angles[:, -1])
+    return ids, pos, vel
 
 
-def _with_ball(
-    scene: Scene, ball_id: int, pos: tuple[float, float], vel: tuple[float, float]
+def unvalidated_copy(
+    scene: Scene,
+    ids: Sequence[int],
+    pos: Sequence[Sequence[float]],
+    vel: Sequence[Sequence[float]],
 ) -> Scene:
+    """``scene`` with other ball states, built without validation."""
     balls = [
-        b.model_copy(update={"pos": pos, "vel": vel}) if b.id == ball_id else b for b in scene.balls
+        Ball.model_construct(id=i, pos=(p[0], p[1]), vel=(v[0], v[1]))
+        for i, p, v in zip(ids, pos, vel, strict=True)
     ]
     return scene.model_copy(update={"balls": balls})
-
-
-def min_graze_cos(outcome: Outcome) -> float | None:
-    """Smallest ``|cos|`` of the approach angle over ball-ball contacts."""
-    best: float | None = None
-    for event in outcome.events:
-        if event.kind != "ball":
-            continue
-        (ax, ay), (bx, by) = event.positions
-        va, vb = (_velocity_before(outcome.segments[i], event.t) for i in event.ids)
-        rx, ry = va[0] - vb[0], va[1] - vb[1]
-        nx, ny = bx - ax, by - ay
-        norm = math.hypot(rx, ry) * math.hypot(nx, ny)
-        if norm > 0:
-            value = abs(rx * nx + ry * ny) / norm
-            best = value if best is None else min(best, value)
-    return best
-
-
-def _velocity_before(segments: tuple[Segment, ...], t: float) -> tuple[float, float]:
-    earlier = [s for s in segments if s.t0 < t] or [segments[0]]
-    seg = earlier[-1]
-    speed = math.hypot(*seg.vel)
-    if speed == 0:
-        return 0.0, 0.0
-    left = max(speed - seg.decel * (t - seg.t0), 0.0) / speed
-    return seg.vel[0] * left, seg.vel[1] * left
-
-
-def min_event_gap(outcome: Outcome) -> float | None:
-    """Smallest time between consecutive (non-stop) events sharing a ball."""
-    times: dict[int, list[float]] = {}
-    for event in outcome.events:
-        if event.kind != "stop":
-            for i in event.ids:
-                times.setdefault(i, []).append(event.t)
-    gaps = [b - a for ts in times.values() for a, b in itertools.pairwise(ts)]
-    return min(gaps) if gaps else None
-
-
-def horizon_gap(outcome: Outcome, horizon: float) -> float | None:
-    """Time between ``horizon`` and the nearest non-stop event of ``outcome``."""
-    gaps = [abs(e.t - horizon) for e in outcome.events if e.kind != "stop"]
-    return min(gaps) if gaps else None
-
-
-def near_miss_gap(outcome: Outcome, radius: float) -> float | None:
-    """Smallest gap over the trajectories of pairs that never touched (see module docstring)."""
-    touched = {tuple(sorted(e.ids)) for e in outcome.events if e.kind == "ball"}
-    best: float | None = None
-    for a, b in itertools.combinations(sorted(outcome.segments), 2):
-        if (a, b) in touched:
-            continue
-        sa, sb = outcome.segments[a], outcome.segments[b]
-        if all(s.vel == (0.0, 0.0) for s in (*sa, *sb)):
-            continue
-        gap = _closest(sa, sb) - 2 * radius
-        best = gap if best is None else min(best, gap)
-    return best
-
-
-def _pieces(segments: tuple[Segment, ...]) -> list[tuple[float, float, tuple[float, ...]]]:
-    """Motion as ``(t0, t1, (x, y, vx, vy, ax, ay))`` pieces, split where a ball stops."""
-    out: list[tuple[float, float, tuple[float, ...]]] = []
-    for s in segments:
-        speed = math.hypot(*s.vel)
-        if speed == 0 or s.decel == 0:
-            ax = ay = 0.0
-            out.append((s.t0, s.t1, (*s.pos, *s.vel, ax, ay)))
-            continue
-        ux, uy = s.vel[0] / speed, s.vel[1] / speed
-        stop = s.t0 + speed / s.decel
-        out.append((s.t0, min(stop, s.t1), (*s.pos, *s.vel, -s.decel * ux, -s.decel * uy)))
-        if stop < s.t1:
-            reach = speed * speed / (2 * s.decel)
-            out.append(
-                (stop, s.t1, (s.pos[0] + ux * reach, s.pos[1] + uy * reach, 0.0, 0.0, 0.0, 0.0))
-            )
-    return out
-
-
-def _closest(sa: tuple[Segment, ...], sb: tuple[Segment, ...]) -> float:
-    best = math.inf
-    for (a0, a1, pa), (b0, b1, pb) in itertools.product(_pieces(sa), _pieces(sb)):
-        lo, hi = max(a0, b0), min(a1, b1)
-        if lo > hi:
-            continue
-        d = [_at(pa, a0, lo)[k] - _at(pb, b0, lo)[k] for k in range(4)]
-        ax, ay = (pa[4] - pb[4]) / 2, (pa[5] - pb[5]) / 2
-        dx, dy, vx, vy = d
-        coeffs = [
-            ax * ax + ay * ay,
-            2 * (ax * vx + ay * vy),
-            vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
-        ]
-        coeffs += [2 * (vx * dx + vy * dy), dx * dx + dy * dy]
-        span = hi - lo
-        candidates = [0.0, span, *critical_points(coeffs, span, FLOAT64)] if span > 0 else [0.0]
-        best = min(best, min(math.sqrt(max(horner(coeffs, t), 0.0)) for t in candidates))
-    return best
-
-
-def _at(p: tuple[float, ...], t0: float, t: float) -> tuple[float, float, float, float]:
-    tau = t - t0
-    return (
-        p[0] + p[2] * tau + p[4] * tau * tau / 2,
-        p[1] + p[3] * tau + p[5] * tau * tau / 2,
-        p[2] + p[4] * tau,
-        p[3] + p[5] * tau,
-    )

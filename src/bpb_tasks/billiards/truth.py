@@ -53,15 +53,26 @@ class EventRecord(StrictModel):
 
 
 class Stability(BaseModel):
-    """How close the scene's labels are to flipping (SPEC section 3).
+    """How likely the scene's labels are to flip (SPEC section 3;
+    :mod:`bpb_tasks.billiards.stability` defines the perturbations).
 
     Attributes:
-        stable: No label flips under any perturbation of size ``delta``.
-        delta: Perturbation size in metres (positions) and m/s scaled likewise (velocity).
+        stable: No label flipped in any of ``samples`` perturbations and the Q3 spread is at most
+            half a ball radius.
+        delta: Perturbation size: metres for positions, a share of the cue speed for velocity.
+        samples: Number of random perturbations.
+        flip_rates: Share of perturbations flipping a Q1, a Q2 or a pocketed label.
+        flip_rate: Share of perturbations flipping any label.
+        flip_rate_upper95: Exact upper 95% bound on the probability that a perturbation flips
+            any label (about ``3 / samples`` when none flipped).
+        q3_spread: Largest distance (m) between a ball's perturbed and nominal final positions.
+        q3_stable: ``q3_spread`` is at most half a ball radius.
         near_miss_gap: Smallest positive gap (m) between balls that did not touch.
         min_graze_cos: Smallest |cos| of the approach angle over contacts (grazing near 0).
         min_event_gap: Smallest time (s) between two events sharing a ball.
         horizon_gap: Time (s) between the horizon and the nearest event.
+        pocket_gap: Nearest pocket-edge pass (m): closest distance of a moving centre to a pocket
+            it does not enter, minus the pocket radius.
         flips: Labels that flipped under perturbation, e.g. ``q1:3``, ``q2:TOP``, ``q3:pocket:5``.
     """
 
@@ -69,10 +80,17 @@ class Stability(BaseModel):
 
     stable: bool
     delta: float
+    samples: int = 0
+    flip_rates: dict[str, float] = Field(default_factory=dict)
+    flip_rate: float = 0.0
+    flip_rate_upper95: float = 1.0
+    q3_spread: float = 0.0
+    q3_stable: bool = True
     near_miss_gap: float | None = None
     min_graze_cos: float | None = None
     min_event_gap: float | None = None
     horizon_gap: float | None = None
+    pocket_gap: float | None = None
     flips: list[str] = Field(default_factory=list)
 
 
@@ -92,6 +110,17 @@ class FinalState(StrictModel):
     def stable(self) -> bool | None:
         """Whether no label flips under the stability perturbations (``None``: not annotated)."""
         return None if self.stability is None else self.stability.stable
+
+    @property
+    def unstable_reasons(self) -> list[str]:
+        """The stability conditions the scene fails: ``q1``, ``q2``, ``pocketed`` (a label of
+        that kind flipped) and ``q3`` (Q3 spread over half a ball radius); empty when stable or
+        not annotated."""
+        s = self.stability
+        if s is None:
+            return []
+        flipped = [g for g in ("q1", "q2", "pocketed") if s.flip_rates.get(g, 0.0) > 0]
+        return flipped + ([] if s.q3_stable else ["q3"])
 
 
 def final_json_schema() -> dict[str, Any]:

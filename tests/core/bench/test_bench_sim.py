@@ -46,6 +46,25 @@ def test_billiards_reference_is_exact_and_analytic_close(registry: Registry) -> 
     assert all(row.ms_per_scene > 0 for row in result.rows)
 
 
+def test_kernel_and_python_engine_side_by_side_with_events_batches_and_scaling(
+    registry: Registry,
+) -> None:
+    from bpb_core.bench.sim_scaling import with_scaling
+
+    contestants = ("analytic:engine=kernel", "analytic:engine=python")
+    result = bench_simulators(6, 1, contestants, registry=registry, reference_scenes=2)
+    assert result.compared == 2 and result.scenes == 6
+    _, kernel, python = result.rows
+    assert kernel.max_error == python.max_error < 1e-9  # same float64 arithmetic
+    assert kernel.us_per_event and python.us_per_event and kernel.batch_ms and python.batch_ms
+    scaled = with_scaling(result, contestants[:1], 3, (1.0, 8.0), registry=registry)
+    slow, fast = scaled.scaling
+    assert (slow.factor, fast.factor) == (1.0, 8.0)
+    assert fast.events_per_scene > 2 * slow.events_per_scene > 0
+    text = sim_report.markdown(scaled, None)
+    assert "first 2 scenes only" in text and "| 8 |" in text and "µs/event" in text
+
+
 def test_a_contestant_of_another_family_or_unknown_is_refused(registry: Registry) -> None:
     with pytest.raises(UnknownName, match="nosuch"):
         bench_simulators(1, contestants=("nosuch",), registry=registry)

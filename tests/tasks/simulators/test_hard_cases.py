@@ -6,12 +6,17 @@ import math
 
 import pytest
 
+from bpb_tasks.billiards.scene import Ball
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
 from support.phys_helpers import R, kinds, scene, state_at
 
-SIMS = [AnalyticSimulator(), AnalyticSimulator(precision=50)]
-IDS = ["float64", "mpmath50"]
+SIMS = [
+    AnalyticSimulator(engine="python"),
+    AnalyticSimulator(precision=50),
+    AnalyticSimulator(engine="kernel"),
+]
+IDS = ["float64", "mpmath50", "kernel"]
 
 
 @pytest.fixture(params=SIMS, ids=IDS)
@@ -193,13 +198,26 @@ def test_degenerate_motion_never_crashes(balls: list[tuple[float, float, float, 
         assert kinds(out) == kinds(ref)
 
 
-def test_event_budget_is_enforced() -> None:
+@pytest.mark.parametrize("engine", ["python", "kernel"])
+def test_event_budget_is_enforced(engine: str) -> None:
     s = scene([(0.3, 0.4, 41.0, 17.0)], mu=0.0, horizon=5.0, pockets=[])
     with pytest.raises(SimulationError, match="more than 10 events"):
-        AnalyticSimulator(max_events=10).run(s)
+        AnalyticSimulator(max_events=10, engine=engine).run(s)
 
 
-def test_ball_resting_inside_a_pocket_is_pocketed_at_zero() -> None:
-    out = AnalyticSimulator().run(scene([(0.5, 0.5, 0.0, 0.0), (1.0, R + 0.01, 0.0, 0.0)]))
+def test_ball_starting_inside_a_pocket_is_bad_input() -> None:
+    with pytest.raises(ValueError, match=r"balls\[1\]\.pos: ball 1 .* starts inside pocket 1"):
+        scene([(0.5, 0.5, 0.0, 0.0), (1.0, R + 0.01, 0.0, 0.0)])
+    with pytest.raises(ValueError, match=r"ball 1 .* starts inside pocket 0"):
+        scene([(0.5, 0.5, 0.0, 0.0), (0.04, 0.03, 0.3, 0.0)])  # moving ones too
+
+
+@pytest.mark.parametrize("engine", ["python", "kernel"])
+def test_unvalidated_ball_inside_a_pocket_is_pocketed_at_zero(engine: str) -> None:
+    """Perturbed copies skip validation; the engines then pocket such a ball at once."""
+    s = scene([(0.5, 0.5, 0.0, 0.0), (1.0, 0.3, 0.0, 0.0)])
+    inside = Ball.model_construct(id=1, pos=(1.0, R + 0.01), vel=(0.0, 0.0))
+    copy = s.model_copy(update={"balls": [s.balls[0], inside]})
+    out = AnalyticSimulator(engine=engine).run(copy)
     assert out.positions[1] is None
     assert [(e.kind, e.ids, e.t) for e in out.events] == [("pocket", (1,), 0.0)]

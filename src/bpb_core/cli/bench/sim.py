@@ -30,9 +30,23 @@ if TYPE_CHECKING:
     help="Scene files for the `bpb simulate` timing (0 skips it).",
 )
 @click.option(
-    "--simulate-with", default=None, help="Simulator timed through `bpb simulate` [default: the "
-    "first contestant].",
+    "--simulate-with", multiple=True, help="Simulator timed through `bpb simulate` (repeatable) "
+    "[default: the first contestant].",
 )  # fmt: skip
+@click.option(
+    "--reference-scenes",
+    type=int,
+    default=None,
+    help="Run the reference on the first N scenes only [default: all].",
+)
+@click.option(
+    "--scaling",
+    "scaling",
+    multiple=True,
+    help="Simulator to time against events per scene on scenes made busier x1..x32 "
+    "(repeatable; the family must count events).",
+)
+@click.option("--scaling-scenes", default=200, show_default=True, help="Scenes for --scaling.")
 @click.option("--plot", type=click.Path(path_type=Path), default=None, help="Write the PNG here.")
 @click.option(
     "--markdown",
@@ -47,7 +61,10 @@ def bench_sim(
     contestants: tuple[str, ...],
     reference: str | None,
     simulate_scenes: int,
-    simulate_with: str | None,
+    simulate_with: tuple[str, ...],
+    reference_scenes: int | None,
+    scaling: tuple[str, ...],
+    scaling_scenes: int,
     plot: Path | None,
     markdown: Path | None,
 ) -> None:
@@ -69,10 +86,15 @@ def bench_sim(
             family=family,
             registry=registry,
             progress=lambda done, _total: bar.update(task, completed=done),
+            reference_scenes=reference_scenes,
         )
+    if scaling:
+        from bpb_core.bench.sim_scaling import with_scaling
+
+        result = with_scaling(result, scaling, scaling_scenes, registry=registry)
     if simulate_scenes > 0:
         others = [r.name for r in result.rows if not r.reference]
-        timed = simulate_with or (others or [result.rows[0].name])[0]
+        timed = list(simulate_with) or [(others or [result.rows[0].name])[0]]
         result = with_simulate_timing(result, simulate_scenes, timed, registry)
     _show(result)
     if plot is not None:
@@ -98,6 +120,16 @@ def _show(result: SimBench) -> None:
         counts = [count_text(row.counts[c]) for c in result.columns]
         table.add_row(row_name(row), *cells, *counts)
     stdout().print(table)
+    for row in result.rows:
+        if row.us_per_event is not None or row.batch_ms is not None:
+            batch = "–" if row.batch_ms is None else f"{row.batch_ms:.3g}"
+            per_event = "–" if row.us_per_event is None else f"{row.us_per_event:.3g}"
+            stdout().print(f"{row.name}: {per_event} µs/event, batch {batch} ms/scene")
+    for s in result.scaling:
+        stdout().print(
+            f"x{s.factor:g} {s.name}: {s.events_per_scene:.3g} events/scene, "
+            f"{s.ms_per_scene:.3g} ms/scene, {s.us_per_event:.3g} µs/event"
+        )
     for label, ms in (result.simulate_ms or {}).items():
         stdout().print(f"bpb simulate ({result.simulate_with}), {label}: {ms:.3f} ms/scene")
 

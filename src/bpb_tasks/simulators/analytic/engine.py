@@ -34,17 +34,21 @@ Physics conventions (the data contract; the dataset card quotes them):
   stop), so a piece is either pure deceleration or rest.
 
 The same code runs on float64 or on 50-digit mpmath numbers (``precision=50``), the reference.
+With numba installed (the ``fast`` extra) float64 runs go through the compiled event kernel
+(:mod:`bpb_tasks.simulators.analytic.kernel`), which performs the same operations in the same
+order; ``engine="python"`` forces this module's pure-Python loop (the reference and fallback).
 """
 
 from __future__ import annotations
 
 import heapq
+from collections.abc import Sequence
 
-from bpb_core.errors import BpbError
+from bpb_core.errors import BadInput, BpbError
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import WALLS, Scene
 from bpb_tasks.simulators.analytic.motion import Body
-from bpb_tasks.simulators.analytic.numeric import Number, Numeric, backend
+from bpb_tasks.simulators.analytic.numeric import FLOAT64, Number, Numeric, backend
 from bpb_tasks.simulators.analytic.prediction import (
     BALL,
     BOTTOM,
@@ -70,20 +74,59 @@ class AnalyticSimulator:
     Args:
         precision: ``None``/``"float64"`` (default) or a number of decimal digits for mpmath.
         max_events: Bound on processed events; exceeding it raises :class:`SimulationError`.
+        engine: ``"auto"`` (compiled kernel for float64 when numba is installed), ``"kernel"``
+            (require it) or ``"python"`` (the pure-Python reference loop).
     """
 
     name = "analytic"
 
     def __init__(
-        self, precision: str | int | None = None, max_events: int = DEFAULT_MAX_EVENTS
+        self,
+        precision: str | int | None = None,
+        max_events: int = DEFAULT_MAX_EVENTS,
+        engine: str = "auto",
     ) -> None:
         self.numeric = backend(precision)
         self.max_events = max_events
+        self.compiled = _use_kernel(engine, self.numeric is FLOAT64)
 
     def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
         end = scene.horizon if horizon is None else horizon
+        if self.compiled:
+            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, kernel_outcome
+
+            try:
+                return kernel_outcome(scene, end, self.max_events)
+            except KernelBudgetError as exc:
+                raise SimulationError(str(exc)) from None
         return _Simulation(scene, self.numeric, self.max_events).run(end)
+
+    def run_many(self, scenes: Sequence[Scene]) -> object:
+        """Simulate scenes sharing one table to their own horizons: one compiled batch call
+        (:func:`~bpb_tasks.simulators.analytic.compiled.simulate_many`, labels and final
+        positions only) with the kernel, else a list of :meth:`run` outcomes."""
+        if self.compiled and scenes:
+            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, simulate_many
+
+            try:
+                return simulate_many(scenes, max_events=self.max_events)
+            except KernelBudgetError as exc:
+                raise SimulationError(str(exc)) from None
+        return [self.run(s) for s in scenes]
+
+
+def _use_kernel(engine: str, float64: bool) -> bool:
+    """Whether runs go through the compiled kernel (see :class:`AnalyticSimulator`)."""
+    if engine not in ("auto", "kernel", "python"):
+        raise BadInput(f"engine: expected 'auto', 'kernel' or 'python', got {engine!r}")
+    if engine == "python":
+        return False
+    from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
+
+    if engine == "kernel" and not (HAVE_NUMBA and float64):
+        raise BadInput("engine: 'kernel' needs numba (pip install 'bpb[fast]') and float64")
+    return HAVE_NUMBA and float64
 
 
 class _Simulation(Predictor):

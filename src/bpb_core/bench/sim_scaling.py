@@ -1,0 +1,63 @@
+"""Cost against events per scene for ``bpb bench sim --scaling``.
+
+A family that counts events (:class:`~bpb_core.capabilities.CountsEvents`) makes its benchmark
+scenes busier by a factor (for instance every velocity times the factor, so more events happen
+in the same simulated time). Each chosen simulator runs every scaled scene (the
+factors interleaved per scene, so machine noise hits them alike); per factor the result holds the
+mean milliseconds and events per scene. If the cost follows the events, the microseconds per
+event stay about flat while the events per scene grow.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
+from bpb_core.bench.sim import ScaleRow, SimBench
+from bpb_core.capabilities import CountsEvents
+from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+
+DEFAULT_FACTORS = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
+
+
+def with_scaling(
+    result: SimBench,
+    contestants: Sequence[str],
+    scenes: int,
+    factors: Sequence[float] = DEFAULT_FACTORS,
+    registry: Registry | None = None,
+) -> SimBench:
+    """``result`` with scaling rows for ``contestants`` on its first ``scenes`` scenes.
+
+    Raises:
+        BadInput: The family does not count events.
+    """
+    from dataclasses import replace
+
+    from bpb_core.bench.contestants import timed_run
+    from bpb_core.registry import make_registry
+
+    reg = registry if registry is not None else make_registry()
+    family = comparing_family(reg, result.family)
+    if not isinstance(family, CountsEvents):
+        raise BadInput(f"--scaling: scene family {result.family!r} does not count events")
+    sims = build_simulators(reg, result.family, [parse_contestant(c) for c in contestants])
+    sample = family.bench_scenes(scenes, result.seed)
+    seconds = {(f, label): 0.0 for f in factors for label in sims}
+    events = dict.fromkeys(seconds, 0)
+    for scene in sample:
+        for factor in factors:
+            busy = family.scaled_scene(scene, factor)
+            for label, sim in sims.items():
+                outcome, spent = timed_run(sim, busy)
+                seconds[factor, label] += spent
+                events[factor, label] += family.events(outcome)
+    rows = [
+        ScaleRow(f, label, 1000 * seconds[f, label] / len(sample), events[f, label] / len(sample))
+        for f, label in seconds
+    ]
+    return replace(result, scaling=rows)

@@ -1,0 +1,244 @@
+"""The compiled event kernel: the analytic engine's event loop on arrays, compiled by numba.
+
+Same conventions, same processing order and the same float64 operations as
+:mod:`bpb_tasks.simulators.analytic.engine` (the reference, which stays the fallback without numba
+and the only backend for mpmath). :func:`run_arrays` simulates one scene given as arrays and
+returns its event log, motion pieces and final state as arrays:
+
+* ``events``: rows ``(t, kind, a, b, wall, xa, ya, xb, yb)`` with ``a``/``b`` ball indices
+  (``b = -1`` for one-ball events), ``wall`` the TOP/BOTTOM/LEFT/RIGHT index or ``-1``;
+* ``pieces``: rows ``(index, t0, x, y, vx, vy)`` in the order the reference appends them;
+* ``final``: rows ``(x, y, alive, end)`` at the horizon (``end``: the pocketing time, else the
+  horizon);
+* ``status``: 0, or 1 when the event budget was exceeded.
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import Any
+
+import numpy as np
+
+from bpb_tasks.simulators.analytic.kernel_predict import (
+    ALIVE,
+    BALL,
+    BOTTOM,
+    POCKET,
+    REST,
+    RIGHT,
+    SPEED,
+    STOP,
+    TOP,
+    UX,
+    UY,
+    VERSION,
+    WALL,
+    XMAX,
+    XMIN,
+    YMAX,
+    YMIN,
+    Arr,
+    X as _X,
+    Y as _Y,
+    advance,
+    pocket_at_start,
+    predict_pairs,
+    predict_single,
+    set_velocity,
+    state,
+)
+from bpb_tasks.simulators.analytic.kernel_roots import jit
+
+__all__ = ["run_arrays", "run_many_arrays"]
+
+
+@jit
+def _changed(
+    st: Arr, iv: Arr, prm: Arr, pieces: Any, i: int, t: float, vx: float, vy: float
+) -> None:
+    set_velocity(st, prm, i, t, vx, vy)
+    iv[i, VERSION] += 1
+    pieces.append((float(i), t, st[i, _X], st[i, _Y], vx, vy))
+
+
+@jit
+def _log(events: Any, st: Arr, t: float, kind: int, a: int, b: int, wall: int) -> None:
+    xb = st[b, _X] if b >= 0 else 0.0
+    yb = st[b, _Y] if b >= 0 else 0.0
+    events.append((t, float(kind), float(a), float(b), float(wall), st[a, _X], st[a, _Y], xb, yb))
+
+
+@jit
+def _collide(
+    st: Arr, iv: Arr, prm: Arr, queue: Any, events: Any, pieces: Any, p: int, q: int, t: float
+) -> bool:
+    px, py, ps = state(st, prm, p, t)
+    qx, qy, qs = state(st, prm, q, t)
+    nx, ny = qx - px, qy - py
+    norm = np.sqrt(nx * nx + ny * ny)
+    nx, ny = nx / norm, ny / norm
+    pvx, pvy, qvx, qvy = st[p, UX] * ps, st[p, UY] * ps, st[q, UX] * qs, st[q, UY] * qs
+    vn = (pvx - qvx) * nx + (pvy - qvy) * ny
+    if not vn > 0:
+        return False
+    st[p, _X], st[p, _Y], st[q, _X], st[q, _Y] = px, py, qx, qy
+    _changed(st, iv, prm, pieces, p, t, pvx - vn * nx, pvy - vn * ny)
+    _changed(st, iv, prm, pieces, q, t, qvx + vn * nx, qvy + vn * ny)
+    _log(events, st, t, BALL, p, q, -1)
+    return True
+
+
+@jit
+def _bounce(
+    st: Arr, iv: Arr, prm: Arr, events: Any, pieces: Any, b: int, t: float, wall: int
+) -> None:
+    advance(st, prm, b, t)
+    vx, vy = st[b, UX] * st[b, SPEED], st[b, UY] * st[b, SPEED]
+    if wall in (TOP, BOTTOM):
+        st[b, _Y] = prm[YMAX] if wall == TOP else prm[YMIN]
+        vy = -vy * prm[REST]
+    else:
+        st[b, _X] = prm[XMAX] if wall == RIGHT else prm[XMIN]
+        vx = -vx * prm[REST]
+    _changed(st, iv, prm, pieces, b, t, vx, vy)
+    _log(events, st, t, WALL, b, -1, wall)
+
+
+@jit
+def _start(st: Arr, iv: Arr, prm: Arr, pockets: Arr, vel: Arr, queue: Any, pieces: Any) -> None:
+    n = st.shape[0]
+    for i in range(n):
+        set_velocity(st, prm, i, 0.0, vel[i, 0], vel[i, 1])
+        pieces.append((float(i), 0.0, st[i, _X], st[i, _Y], vel[i, 0], vel[i, 1]))
+    for i in range(n):
+        if st[i, SPEED] > 0:
+            predict_single(st, iv, prm, pockets, queue, i)
+        else:
+            pocket_at_start(st, iv, prm, pockets, queue, i)
+    for i in range(n):
+        if st[i, SPEED] > 0:
+            predict_pairs(st, iv, prm, queue, i, 0.0, -1)
+
+
+@jit
+def _loop(
+    st: Arr,
+    iv: Arr,
+    prm: Arr,
+    pockets: Arr,
+    queue: Any,
+    events: Any,
+    pieces: Any,
+    ended: Arr,
+    horizon: float,
+    max_events: int,
+) -> int:
+    count = 0
+    while len(queue) > 0 and queue[0][0] <= horizon:
+        t, kind, i, k, ver_i, ver_k = heapq.heappop(queue)
+        if iv[i, VERSION] != ver_i or iv[i, ALIVE] == 0:
+            continue
+        if kind == BALL:
+            if iv[k, VERSION] != ver_k or iv[k, ALIVE] == 0:
+                continue
+            if not _collide(st, iv, prm, queue, events, pieces, i, k, t):
+                continue
+            predict_single(st, iv, prm, pockets, queue, i)
+            predict_pairs(st, iv, prm, queue, i, t, -1)
+            predict_single(st, iv, prm, pockets, queue, k)
+            predict_pairs(st, iv, prm, queue, k, t, i)
+        elif kind == WALL:
+            _bounce(st, iv, prm, events, pieces, i, t, k)
+            predict_single(st, iv, prm, pockets, queue, i)
+            predict_pairs(st, iv, prm, queue, i, t, -1)
+        elif kind == POCKET:
+            advance(st, prm, i, t)
+            iv[i, ALIVE] = 0
+            iv[i, VERSION] += 1
+            ended[i] = t
+            _log(events, st, t, POCKET, i, -1, -1)
+        else:
+            advance(st, prm, i, t)
+            zero = st[i, SPEED] * 0
+            _changed(st, iv, prm, pieces, i, t, zero, zero)
+            _log(events, st, t, STOP, i, -1, -1)
+            predict_pairs(st, iv, prm, queue, i, t, -1)
+        count += 1
+        if count > max_events:
+            return 1
+    return 0
+
+
+@jit
+def run_arrays(
+    pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, max_events: int
+) -> tuple[Arr, Arr, Arr, int]:
+    """Simulate one scene (see the module docstring); ``pos``/``vel`` are ``(n, 2)`` arrays of
+    the balls sorted by id and ``prm`` the table constants of ``kernel_predict``."""
+    n = pos.shape[0]
+    st = np.zeros((n, 8))
+    st[:, 0] = pos[:, 0]
+    st[:, 1] = pos[:, 1]
+    iv = np.zeros((n, 2), dtype=np.int64)
+    iv[:, ALIVE] = 1
+    ended = np.full(n, horizon)
+    queue = [(0.0, 0, 0, 0, 0, 0)]
+    queue.pop()
+    events = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
+    events.pop()
+    pieces = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
+    pieces.pop()
+    _start(st, iv, prm, pockets, vel, queue, pieces)
+    status = _loop(st, iv, prm, pockets, queue, events, pieces, ended, horizon, max_events)
+    final = np.zeros((n, 4))
+    for i in range(n):
+        if iv[i, ALIVE] == 1:
+            x, y, _ = state(st, prm, i, horizon)
+            final[i, 0], final[i, 1], final[i, 2] = x, y, 1.0
+        final[i, 3] = ended[i]
+    return _table(events, 9), _table(pieces, 6), final, status
+
+
+@jit
+def _table(rows: Any, width: int) -> Arr:
+    out = np.empty((len(rows), width))
+    for r in range(len(rows)):
+        row = rows[r]
+        for c in range(width):
+            out[r, c] = row[c]
+    return out
+
+
+@jit
+def run_many_arrays(
+    pos: Arr, vel: Arr, starts: Arr, prm: Arr, pockets: Arr, horizons: Arr, max_events: int
+) -> tuple[Arr, Arr, Arr]:
+    """Simulate many scenes sharing one table in a single call: scene ``s`` holds balls
+    ``starts[s]:starts[s + 1]`` of ``pos``/``vel``. Returns per-ball final rows (as
+    :func:`run_arrays`), per-scene statuses, and per-scene counts of cue-ball contacts per
+    kind ``(balls, walls)`` are left to the caller: this returns the final rows, the statuses
+    and the event tables concatenated with a leading scene column."""
+    scenes = starts.shape[0] - 1
+    final = np.zeros((pos.shape[0], 4))
+    status = np.zeros(scenes, dtype=np.int64)
+    logs = [np.zeros((0, 10))]
+    logs.pop()
+    for s in range(scenes):
+        a, b = starts[s], starts[s + 1]
+        ev, _, fin, code = run_arrays(pos[a:b], vel[a:b], prm, pockets, horizons[s], max_events)
+        final[a:b] = fin
+        status[s] = code
+        tagged = np.empty((ev.shape[0], 10))
+        tagged[:, 0] = s
+        tagged[:, 1:] = ev
+        logs.append(tagged)
+    total = 0
+    for log in logs:
+        total += log.shape[0]
+    events = np.empty((total, 10))
+    row = 0
+    for log in logs:
+        events[row : row + log.shape[0]] = log
+        row += log.shape[0]
+    return final, status, events

@@ -1,0 +1,116 @@
+"""The stability annotation as a measured probability: flip rates under random perturbations,
+their upper bound, the Q3 spread, the pocket-edge margin and the reasons reports count."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.stability import (
+    annotate,
+    labels,
+    perturbation_arrays,
+    unvalidated_copy,
+    upper_bound,
+)
+from bpb_tasks.simulators.analytic import AnalyticSimulator
+from support.phys_helpers import R, scene
+
+PYTHON = AnalyticSimulator(engine="python")
+
+
+def test_upper_bound_is_the_exact_clopper_pearson_bound() -> None:
+    assert upper_bound(0, 64) == pytest.approx(1 - 0.05 ** (1 / 64), rel=1e-9)
+    assert upper_bound(1, 10) == pytest.approx(0.39416, abs=1e-5)
+    assert upper_bound(5, 5) == 1.0
+
+
+def test_isolated_roll_has_no_flips_and_a_tiny_spread() -> None:
+    st = annotate(scene([(0.5, 0.5, 0.3, 0.0), (0.5, 0.2, 0.0, 0.0)], horizon=1), samples=32)
+    assert st.stable and st.samples == 32 and st.flip_rate == 0.0
+    assert st.flip_rates == {"q1": 0.0, "q2": 0.0, "pocketed": 0.0}
+    assert st.flip_rate_upper95 == pytest.approx(1 - 0.05 ** (1 / 32))
+    # every centre moves 1e-4 m and the cue speed changes by at most 1e-4 of 0.3 m/s
+    assert 5e-5 < st.q3_spread < 2e-4 and st.q3_stable
+
+
+def test_perturbations_have_the_documented_size() -> None:
+    s = scene([(0.5, 0.5, 0.8, 0.6), (1.0, 0.3, 0.0, 0.0), (1.5, 0.7, 0.0, 0.0)])
+    ids, pos, vel = perturbation_arrays(s, 1e-4, 50)
+    assert ids == [0, 1, 2] and pos.shape == vel.shape == (50, 3, 2)
+    moved = [math.dist(p, b.pos) for row in pos.tolist() for p, b in zip(row, s.balls, strict=True)]
+    assert max(abs(m - 1e-4) for m in moved) < 1e-12
+    kicks = [math.dist(v[0], (0.8, 0.6)) for v in vel.tolist()]
+    assert max(abs(k - 1e-4 * 1.0) for k in kicks) < 1e-12
+    assert (vel[:, 1:] == 0).all()
+    again = perturbation_arrays(s, 1e-4, 50)[1]
+    assert (again == pos).all()
+
+
+def test_grazing_contact_flips_q1_often() -> None:
+    s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5 + 2 * R * (1 - 1e-9), 0.0, 0.0)], horizon=2)
+    st = annotate(s)
+    assert not st.stable and "q1:1" in st.flips
+    assert 0.2 < st.flip_rates["q1"] < 0.8 and st.flip_rate >= st.flip_rates["q1"]
+    assert st.flip_rate_upper95 > st.flip_rate
+
+
+def test_pocket_gap_is_the_nearest_pass_of_a_pocket_not_entered() -> None:
+    # rolls along y = 0.5 under pockets at (1, 0.9) (0.4 away) and (1.8, 0.58) (0.08 away)
+    s = scene(
+        [(0.3, 0.5, 1.5, 0.0)], pockets=[(1.0, 0.9), (1.8, 0.58)], pocket_radius=0.06, horizon=2
+    )
+    assert annotate(s, samples=4).pocket_gap == pytest.approx(0.08 - 0.06, abs=1e-12)
+    # a ball that enters the pocket is not measured against that pocket
+    into = scene([(0.3, 0.5, 1.5, 0.0)], pockets=[(1.8, 0.5)], horizon=2)
+    assert PYTHON.run(into).positions[0] is None
+    assert annotate(into, samples=4).pocket_gap is None
+
+
+def test_chaotic_final_positions_make_q3_unstable_with_stable_labels() -> None:
+    # scene 1 at 3 s, seed 0: several collisions spread final positions by ~5 cm
+    made = BilliardsFamily().make_scene(DatasetConfig(), AnalyticSimulator(), 0, 3.0, 1)
+    st = made.truth.stability
+    assert st is not None and st.flip_rate == 0.0
+    assert st.q3_spread > R / 2 and not st.q3_stable and not st.stable
+    assert made.truth.unstable_reasons == ["q3"]
+
+
+def test_kernel_batch_and_python_engine_annotate_alike() -> None:
+    """The kernel's array tally equals running every copy through the Python engine."""
+    family, cfg = BilliardsFamily(), DatasetConfig()
+    scenes = [family.make_scene(cfg, PYTHON, 0, float(1 + i % 5), i).scene for i in range(16)]
+    scenes.append(scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5 + 2 * R * (1 - 1e-9), 0.0, 0.0)]))
+    unstable = 0
+    for s in scenes:
+        python = annotate(s, simulator=PYTHON, samples=32)
+        assert python == annotate(s, simulator=AnalyticSimulator(), samples=32)
+        unstable += not python.stable
+    assert unstable >= 2  # flips and spreads were compared, not only zeros
+
+
+@pytest.mark.slow
+def test_under_two_per_mille_of_stable_scenes_flip_under_fresh_perturbations() -> None:
+    """2,000 generated scenes; each stable one gets 20 fresh perturbations (another stream),
+    simulated by the pure-Python engine; a scene counts when any of them flips a label."""
+    family, cfg, kernel = BilliardsFamily(), DatasetConfig(), AnalyticSimulator()
+    stable: list[Scene] = []
+    for i in range(2000):
+        made = family.make_scene(cfg, kernel, 5, float(1 + i % 5), i)
+        if made.truth.stable:
+            stable.append(made.scene)
+    assert len(stable) > 1000
+    flipped = 0
+    for s in stable:
+        reference = labels(PYTHON.run(s))
+        ids, pos, vel = perturbation_arrays(s, cfg.stability_delta, 20, stream="check")
+        flipped += any(
+            labels(PYTHON.run(unvalidated_copy(s, ids, p.tolist(), v.tolist()), s.horizon))
+            != reference
+            for p, v in zip(pos, vel, strict=True)
+        )
+    assert flipped / len(stable) < 0.002, (flipped, len(stable))
