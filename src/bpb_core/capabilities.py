@@ -4,8 +4,9 @@ without when it is missing.
 
 - A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
   (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
-  :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
-  gallery's picture), :class:`Comparing` (``bpb bench sim``).
+  :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Perceiving` (reading a
+  scene back from the image and prompt a model gets: ``baseline:vision``), :class:`Picturing`
+  (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
@@ -90,6 +91,26 @@ class Predicting(Protocol):
 
     def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
         """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
+        ...
+
+
+@runtime_checkable
+class Perceiving(Protocol):
+    """A family that can read a scene back from exactly what a model is given: the input image
+    and the prompt text (``baseline:vision`` runs its own simulator on what it reads, which
+    separates seeing from reasoning)."""
+
+    def perceive(self, image: bytes, prompt: str) -> Any:
+        """The scene (of the family's scene model) read from ``image`` and ``prompt``.
+
+        Raises:
+            ValueError: Something could not be read; the message says what (one line).
+        """
+        ...
+
+    def perception_error(self, perceived: Any, scene: Any) -> dict[str, float]:
+        """How far ``perceived`` is from the true ``scene``: named numbers, stored with each
+        answer (``metadata``) and summarised per horizon by the report."""
         ...
 
 

@@ -59,6 +59,7 @@ class AnswerRecord(BaseModel):
     error: str | None = None
     input_mode: str = "image"
     cot: bool = False
+    metadata: dict[str, float | str] = Field(default_factory=dict)
 
 
 def answer_path(run_dir: Path, key: SceneKey, task: str) -> Path:
@@ -81,7 +82,8 @@ def write_json_atomic(path: Path, data: Any) -> None:
 def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
     """Store one (scene, task) result atomically; returns the file written."""
     path = answer_path(run_dir, key, record.task)
-    write_json_atomic(path, record.model_dump(mode="json"))
+    skip = None if record.metadata else {"metadata"}  # files without it stay as they were
+    write_json_atomic(path, record.model_dump(mode="json", exclude=skip))
     return path
 
 

@@ -13,7 +13,8 @@ def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "baseline",
         lazy("bpb_adapters.baseline.adapter:make_adapter"),
-        "Offline reference answers, no network: stasis, straight, random, oracle",
+        "Offline reference answers, no network: stasis, straight, random, oracle "
+        "(by default); vision (reads the image, then simulates; on request)",
         models=("stasis", "straight", "random", "oracle"),
         offline=True,
     )

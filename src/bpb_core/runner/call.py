@@ -64,6 +64,7 @@ class PairCall:
     timeout: float = 0.0
     last_error: str | None = None
     finish_reason: str | None = None
+    metadata: dict[str, float | str] = field(default_factory=dict)
 
     async def run(self) -> None:
         """Attempt until the pair is settled (its answer file written) or the run stops."""
@@ -139,6 +140,7 @@ class PairCall:
         self.tally.add(response)
         self.state.account(response)
         self.finish_reason = response.finish_reason
+        self.metadata = dict(response.metadata)
         parsed = _parse(self, response, prompt)
         await self._log(
             outcome=parsed.outcome,
@@ -153,6 +155,7 @@ class PairCall:
             sent=response.sent,
             dropped=list(response.dropped),
             reasoning=response.reasoning,
+            **({"metadata": response.metadata} if response.metadata else {}),
         )
         self.state.note_dropped(self.task, response.dropped)
         if parsed.outcome == "ok":
@@ -223,6 +226,7 @@ class PairCall:
             error=None if status == "ok" else self.last_error,
             input_mode=self.state.options.input_mode,
             cot=self.state.cot(self.task),
+            metadata=self.metadata,
         )
         await self.state.offload(write_answer, self.state.run_dir, self.ref.key, record)
         self.state.count(self.task, status)
