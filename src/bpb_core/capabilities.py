@@ -13,6 +13,7 @@ without when it is missing.
   :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
+- A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
 """
 
@@ -204,6 +205,32 @@ class Estimating(Protocol):
     def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
         """Input tokens of ``messages`` by the provider's own counting (its image rule
         included) and their input cost in USD (``None`` when no price is known)."""
+        ...
+
+
+@runtime_checkable
+class AnswersInBrowser(Protocol):
+    """A task people can answer in the browser (``bpb human``): it brings its own form widgets
+    as a Jinja2 template and turns the posted fields into its answer format; core shows the
+    image and the exact prompt beside it, times the answer and stores it like a model's.
+
+    Attributes:
+        form_template: Jinja2 source of the task's inputs, rendered with autoescaping and the
+            values of :meth:`form_context` plus ``prefix`` (put it before every field name),
+            ``image_width`` and ``image_height`` (the input image's pixels; the image is shown
+            in an element with id ``scene-image`` inside a positioned box with id
+            ``scene-box``, for widgets placed on it).
+    """
+
+    form_template: str
+
+    def form_context(self, scene: Any, image: bytes | None) -> dict[str, Any]:
+        """The values the form template needs for ``scene`` (JSON-ready)."""
+        ...
+
+    def read_form(self, fields: Mapping[str, str], scene: Any) -> dict[str, Any]:
+        """The answer (the task's answer format) from the posted ``fields`` (names without the
+        prefix); raises ``ValueError`` naming the field for anything unexpected."""
         ...
 
 

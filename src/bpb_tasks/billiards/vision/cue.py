@@ -1,17 +1,23 @@
 """The cue ball's velocity: the speed printed in the header, the direction of the arrow.
 
 The header note (:func:`~bpb_tasks.billiards.render.speed_note`) is right-aligned in the header
-line. Its digits are read one at a time: each candidate note is drawn with the renderer's own
-font and text patch and compared pixel by pixel with the image, keeping the digit that differs
-least (two passes). The arrow is the only thing drawn in the arrow colour; its direction is the
+line. Its digits are read one place at a time: the note is drawn with the renderer's own font and
+text patch with each digit in that place and compared with the image over that place's columns,
+keeping the digit that differs least; the whole reading must then match the note. The arrow is
+the only thing drawn in the arrow colour; its direction is the
 principal axis of those pixels, pointing away from the cue ball.
+
+The notes of every digit in every place are drawn once per canvas (cached), so reading a note
+costs a few array comparisons.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.render import speed_note
@@ -25,43 +31,60 @@ DIGITS = "0123456789"
 MAX_MISMATCH = 0.02  # share of the note's pixels that may differ from the best reading
 
 
+@functools.lru_cache(maxsize=64)
 def _note_keys(spec: CanvasSpec, text: str) -> Keys:
     patch = text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE)
     rgb = patch.convert("RGB")
     return image_keys_of(rgb.tobytes(), rgb.size)
 
 
-def _mismatch(keys: Keys, spec: CanvasSpec, text: str, span: int) -> int:
-    """Pixels that differ between the image's header strip and ``text`` drawn there."""
-    note = _note_keys(spec, text)
-    h, w = note.shape
+def _reading(int_digits: int, digits: list[str]) -> str:
+    return speed_note(float("".join(digits[:int_digits]) + "." + "".join(digits[int_digits:])))
+
+
+@functools.lru_cache(maxsize=8)
+def _slots(spec: CanvasSpec, int_digits: int) -> tuple[tuple[Keys, NDArray[np.intp]], ...]:
+    """Per digit slot of a note with ``int_digits`` digits before the point: the note drawn
+    with each digit 0-9 in that slot (zeros elsewhere) and the columns where they differ.
+    Digits have equal widths in the renderer's font, so the columns are the same for every
+    speed; a leading zero is drawn as 1 so that the note keeps its digits."""
+    slots = []
+    for slot in range(int_digits + 3):
+        drawn = []
+        for digit in DIGITS:
+            digits = ["1" if i == 0 and int_digits > 1 else "0" for i in range(int_digits + 3)]
+            digits[slot] = digit if not (slot == 0 and int_digits > 1 and digit == "0") else "1"
+            drawn.append(_note_keys(spec, _reading(int_digits, digits)))
+        stack = np.stack(drawn)
+        columns = np.flatnonzero((stack != stack[:1]).any(axis=(0, 1)))
+        slots.append((stack, columns))
+    return tuple(slots)
+
+
+def _strip(keys: Keys, spec: CanvasSpec, shape: tuple[int, ...]) -> Keys | None:
+    h, w = shape
     right = keys.shape[1] - spec.right
     top = round(header_y(spec) - h / 2)
-    if top < 0 or right - span < 0:
-        return keys.size
-    strip = keys[top : top + h, right - span : right]
-    drawn = np.full(strip.shape, shown(spec, st.PAGE), dtype=np.int32)
-    drawn[:, span - min(w, span) :] = note[:, w - min(w, span) :]
-    return int((strip != drawn).sum())
+    if top < 0 or right - w < 0 or top + h > keys.shape[0]:
+        return None
+    return keys[top : top + h, right - w : right]
 
 
-def _decode(keys: Keys, spec: CanvasSpec, int_digits: int, span: int) -> tuple[int, str]:
-    slots = ["0"] * (int_digits + 3)
-
-    def text() -> str:
-        return speed_note(float("".join(slots[:int_digits]) + "." + "".join(slots[int_digits:])))
-
-    best = _mismatch(keys, spec, text(), span)
-    for _ in range(2):
-        for i in range(len(slots)):
-            for digit in DIGITS:
-                old, slots[i] = slots[i], digit
-                score = _mismatch(keys, spec, text(), span)
-                if score < best:
-                    best = score
-                else:
-                    slots[i] = old
-    return best, text()
+def _decode(keys: Keys, spec: CanvasSpec, int_digits: int) -> tuple[int, str]:
+    """Mismatching pixels of the best reading with ``int_digits`` digits before the point."""
+    slots = _slots(spec, int_digits)
+    strip = _strip(keys, spec, slots[0][0].shape[1:])
+    if strip is None:
+        return keys.size, ""
+    digits = []
+    for stack, columns in slots:
+        wrong = (stack[:, :, columns] != strip[None, :, columns]).sum(axis=(1, 2))
+        digits.append(DIGITS[int(np.argmin(wrong))])
+    text = _reading(int_digits, digits)
+    note = _note_keys(spec, text)
+    if note.shape != strip.shape:
+        return keys.size, text
+    return int((note != strip).sum()), text
 
 
 def read_speed(keys: Keys, spec: CanvasSpec) -> float:
@@ -70,9 +93,8 @@ def read_speed(keys: Keys, spec: CanvasSpec) -> float:
     Raises:
         PerceptionFailed: No reading matches the header well enough.
     """
-    span = _note_keys(spec, speed_note(100.0)).shape[1] + 4
-    score, text = min(_decode(keys, spec, n, span) for n in (1, 2))
-    if score > MAX_MISMATCH * span * _note_keys(spec, text).shape[0]:
+    score, text = min(_decode(keys, spec, n) for n in (1, 2))
+    if not text or score > MAX_MISMATCH * _note_keys(spec, text).size:
         raise PerceptionFailed(f"the cue speed note cannot be read ({score} pixels differ)")
     return float(text.split(" speed ")[1].split()[0])
 
@@ -83,7 +105,7 @@ def read_direction(keys: Keys, spec: CanvasSpec, cue_px: tuple[float, float]) ->
     Raises:
         PerceptionFailed: No arrow is drawn, or too little of it is visible.
     """
-    points = np.argwhere(keys == shown(spec, st.ARROW)).astype(float)
+    points = np.argwhere(keys == shown(keys, st.ARROW)).astype(float)
     if len(points) < 20:
         raise PerceptionFailed("no cue arrow found")
     for _ in range(2):  # refit without pixels far from the first axis

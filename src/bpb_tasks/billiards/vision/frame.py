@@ -21,6 +21,8 @@ from bpb_tasks.billiards.render_canvas import TICK_MINOR, CanvasSpec
 from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed, PromptFacts
 
 Keys = NDArray[np.int32]
+Frame1D = tuple[NDArray[np.float64], float]
+GAP = 60  # pixels of an axis line the cue arrow may hide
 
 
 def colour_key(rgb: st.RGB) -> int:
@@ -37,13 +39,15 @@ def near(keys: Keys, rgb: st.RGB, tolerance: int = 6) -> NDArray[np.bool_]:
     return out
 
 
-def shown(spec: CanvasSpec, rgb: st.RGB) -> int:
-    """Key of the colour ``rgb`` becomes in the canvas's palette (what the image holds)."""
-    from bpb_tasks.billiards.render_palette import palette_for
-
-    pixel = palette_for(spec).quantize(Image.new("RGB", (1, 1), rgb)).convert("RGB")
-    r, g, b = pixel.getpixel((0, 0))  # type: ignore[misc]
-    return colour_key((r, g, b))
+def shown(keys: Keys, rgb: st.RGB, within: int = 12) -> int:
+    """The colour of ``keys`` nearest to ``rgb``: what a flat colour became in the palette the
+    image was drawn in (it moves some colours by a few levels); -1 when none is ``within``
+    that distance (sum over channels)."""
+    colours = np.unique(keys)
+    channels = np.stack([(colours >> s) & 255 for s in (16, 8, 0)], axis=1)
+    distance = np.abs(channels - np.array(rgb)).sum(axis=1)
+    nearest = int(np.argmin(distance))
+    return int(colours[nearest]) if distance[nearest] <= within else -1
 
 
 def image_keys(png: bytes) -> Keys:
@@ -79,27 +83,51 @@ class Frame:
         return (px - self.x0) / self.ppm, (self.y0 - py) / self.ppm
 
 
-def _longest_run(line: NDArray[np.bool_]) -> tuple[int, int]:
-    """First and last index of the longest run of True in ``line``."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], line.astype(np.int8), [0]))))
-    starts, ends = edges[::2], edges[1::2]
-    longest = int(np.argmax(ends - starts))
-    return int(starts[longest]), int(ends[longest]) - 1
+def _extent(line: NDArray[np.bool_]) -> tuple[int, int]:
+    """First and last index of the longest stretch of True in ``line``, bridging gaps of up to
+    :data:`GAP` (where the cue arrow crosses the axis)."""
+    found = np.flatnonzero(line)
+    breaks = np.flatnonzero(np.diff(found) > GAP)
+    starts = np.concatenate(([0], breaks + 1))
+    ends = np.concatenate((breaks, [len(found) - 1]))
+    longest = int(np.argmax(found[ends] - found[starts]))
+    return int(found[starts[longest]]), int(found[ends[longest]])
 
 
-def _ticks(
-    axis_line: NDArray[np.bool_], beside: NDArray[np.bool_], expected: int, axis: str
-) -> NDArray[np.intp]:
-    """Tick positions: ink beside the axis, within the axis line's extent."""
-    first, last = _longest_run(axis_line)
-    found = np.flatnonzero(beside[first : last + 1]) + first
-    if len(found) != expected:
-        raise PerceptionFailed(f"the {axis} axis shows {len(found)} ticks, expected {expected}")
-    return found
+def _tick_marks(beside: NDArray[np.bool_], ends: tuple[int, int]) -> NDArray[np.intp]:
+    """Positions of one-pixel ink marks beside the axis within its extent (text is thicker)."""
+    inside = np.zeros_like(beside)
+    inside[ends[0] : ends[1] + 1] = beside[ends[0] : ends[1] + 1]
+    padded = np.concatenate(([False], inside, [False]))
+    alone = inside & ~padded[:-2] & ~padded[2:]
+    return np.flatnonzero(alone)
+
+
+def _fit_ticks(ticks: NDArray[np.intp], ends: tuple[int, int], length: float, axis: str) -> Frame1D:
+    """Tick numbers (0 at the zero end) and spacing of the visible ``ticks`` (pixels from the
+    zero end) of an axis ``length`` metres long: the cue arrow may hide some, so they are
+    numbered from whichever end of the axis line fits (the far end only when it has a tick)."""
+    count = math.floor(length / TICK_MINOR + 1e-9) + 1
+    anchors = [(ends[0], 0)]
+    if abs(length / TICK_MINOR - (count - 1)) < 1e-9:
+        anchors.append((ends[1], count - 1))
+    if len(ticks) < max(3, count // 2):
+        raise PerceptionFailed(f"the {axis} axis shows {len(ticks)} ticks, expected {count}")
+    diffs = np.diff(ticks).astype(float)
+    step = float(np.median(diffs[diffs <= 1.5 * diffs.min()]))
+    for anchor, sign in anchors:
+        index = np.rint((ticks - anchor) / step) + sign
+        if index.min() < 0 or index.max() > count - 1:
+            continue
+        slope, origin = np.polyfit(index, ticks, 1) if np.ptp(index) > 0 else (step, ticks[0])
+        fitted = origin + slope * index
+        if np.abs(fitted - ticks).max() <= 1.5 and abs(origin + slope * sign - anchor) <= 1.5:
+            return index, float(slope)
+    raise PerceptionFailed(f"the {axis} axis ticks are not evenly spaced from its ends")
 
 
 def find_frame(keys: Keys, facts: PromptFacts) -> Frame:
-    """The frame from the axes' ticks (their count must match the prompt's table size).
+    """The frame from the axes' ticks (their count must fit the prompt's table size).
 
     Raises:
         PerceptionFailed: No axis, or ticks that do not fit the table.
@@ -110,15 +138,23 @@ def find_frame(keys: Keys, facts: PromptFacts) -> Frame:
     height, width = keys.shape
     if ink[row].sum() < width // 4 or ink[:, col].sum() < height // 4 or row + 1 >= height:
         raise PerceptionFailed("no axis lines found")
-    count_x = math.floor(facts.table.width / TICK_MINOR + 1e-9) + 1
-    count_y = math.floor(facts.table.height / TICK_MINOR + 1e-9) + 1
-    xs = _ticks(ink[row], ink[row + 1], count_x, "x")
-    ys = _ticks(ink[:, col], ink[:, max(col - 1, 0)], count_y, "y")
-    ppm_x = (xs[-1] - xs[0]) / ((count_x - 1) * TICK_MINOR)
-    ppm_y = (ys[-1] - ys[0]) / ((count_y - 1) * TICK_MINOR)
+    x_ends = _extent(ink[row])
+    xs = _tick_marks(ink[row + 1], x_ends)
+    x_index, step_x = _fit_ticks(xs, x_ends, facts.table.width, "x")
+    up = ink[::-1, max(col - 1, 0)]  # rows counted from the bottom: y = 0 first
+    y_ends = _extent(ink[::-1, col])
+    ys = _tick_marks(up, y_ends)
+    y_index, step_y = _fit_ticks(ys, y_ends, facts.table.height, "y")
+    ppm_x, ppm_y = step_x / TICK_MINOR, step_y / TICK_MINOR
     if abs(ppm_x - ppm_y) > 0.01 * ppm_x:
         raise PerceptionFailed(f"the axes disagree on the scale: {ppm_x:g} and {ppm_y:g} px/m")
-    return Frame(float(xs[0]), float(ys[-1]), float(ppm_x))
+    ppm = ppm_x if len(xs) >= len(ys) else ppm_y  # ticks sit on whole pixels: more is better
+    if abs(ppm - round(ppm)) < 0.3:  # whole pixels per metre are the usual setting
+        ppm = float(round(ppm))
+    step = ppm * TICK_MINOR
+    x0 = float(np.median(xs - x_index * step))
+    bottom = float(np.median(ys - y_index * step))
+    return Frame(x0, height - 1 - bottom, ppm)
 
 
 def canvas_of(frame: Frame, facts: PromptFacts, size: tuple[int, int]) -> CanvasSpec:
