@@ -24,6 +24,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
     "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
+    "human": ("bpb_core.cli.web_cmd", "human", "Answer the questions in the browser (a run)."),
+    "view": ("bpb_core.cli.web_cmd", "view", "Browse runs in the browser, pair by pair."),
     "simulate": (
         "bpb_core.cli.simulate_cmd",
         "simulate",
