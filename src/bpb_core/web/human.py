@@ -173,7 +173,7 @@ class HumanSession:
         log.append(
             {
                 "time": time.time(), "scene_id": ref.scene_id, "task": task,
-                "adapter": self.spec, "attempt": 1, "outcome": "ok", "text": text,
+                "adapter": self.spec, "attempt": 1, "escalation": 0, "outcome": "ok", "text": text,
                 "latency": latency, "rule": rule, "error": None,
             }
         )  # fmt: skip
