@@ -99,8 +99,8 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
         assert asked == [ref.scene_id for ref in session.order[:3]]  # the seeded order
         # a forged post is refused with a message and stores nothing
         before = len(_answers(run))
-        reply = page.request.post(url + "/answer", form={"scene": session.order[3].scene_id,
-                                                         "shown": "1", "q1.ball99": "T"})  # fmt: skip
+        forged_form = {"scene": session.order[3].scene_id, "shown": "1", "q1.ball99": "T"}
+        reply = page.request.post(url + "/answer", form=forged_form)
         assert reply.status == 400 and "q1.ball99: not a field" in reply.text()
         assert len(_answers(run)) == before == 9
     answers = _answers(run)
@@ -118,8 +118,9 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
     assert human["completeness"] == pytest.approx(0.5) and human["adapter"] == "human:tester"
     # an attempt whose text is markup is shown as text, never run
     with (run / "attempts.jsonl").open("a") as log:
-        forged = {"scene_id": asked[0], "task": "q1", "attempt": 2, "outcome": "parse_error",
-                  "text": "<script>window.pwned = 1</script><b>bold</b>", "error": "<i>x</i>"}  # fmt: skip
+        markup = "<script>window.pwned = 1</script><b>bold</b>"
+        forged = {"scene_id": asked[0], "task": "q1", "attempt": 2, "outcome": "parse_error"}
+        forged |= {"text": markup, "error": "<i>x</i>"}
         log.write(json.dumps(forged) + "\n")
     viewer = Viewer.load([runs_dir], registry)
     with serving(viewer_app(viewer)) as url:
