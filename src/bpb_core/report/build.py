@@ -23,7 +23,7 @@ import pandas as pd
 
 from bpb_core.report import charts as ch, gallery, html
 from bpb_core.results.frames import Results, load_results
-from bpb_core.results.metadata import metadata_table
+from bpb_core.results.metadata import metadata_by_horizon, metadata_table
 from bpb_core.results.tables import (
     accuracy,
     by_horizon,
@@ -231,10 +231,11 @@ def _headline(tables: dict[str, pd.DataFrame], results: Results) -> str:
 def _metadata_section(frame: pd.DataFrame) -> tuple[str, str]:
     note = (
         "<p class='muted'>What adapters measured about their own answers (see each adapter's "
-        "docs), per horizon: count of scenes, median, mean and maximum of each number; a text "
-        "measure (e.g. a reason for not answering) shows its count only.</p>"
+        "docs), per horizon: the median over scenes of each number, the count of scenes of a "
+        "text measure (e.g. a reason for not answering). Counts, means and maxima: "
+        "<i>tables/metadata.csv</i>.</p>"
     )
-    return "Adapters' own measurements by horizon", note + html.table(frame)
+    return "Adapters' own measurements by horizon", note + html.table(metadata_by_horizon(frame))
 
 
 def _sections(

@@ -57,3 +57,24 @@ def _summary(key: tuple[str, float, str], found: list[float | str]) -> dict[str,
     else:
         row |= {"median": math.nan, "mean": math.nan, "max": math.nan}
     return row
+
+
+def metadata_by_horizon(table: pd.DataFrame) -> pd.DataFrame:
+    """:func:`metadata_table` as one row per (run, measure) and one column per horizon
+    (``h1``...): the median of a numeric measure, the count of a text one (its ``statistic``
+    column says which), to read beside the accuracy by horizon."""
+    import pandas as pd
+
+    if table.empty:
+        return pd.DataFrame(columns=["run", "measure", "statistic"])
+    value = table["median"].where(table["median"].notna(), table["n"].astype("float64"))
+    frame = table.assign(
+        value=value,
+        statistic=table["median"].notna().map({True: "median", False: "count"}),
+        column=[f"h{h:g}" for h in table["horizon"]],
+    )
+    wide = frame.pivot_table(
+        index=["run", "measure", "statistic"], columns="column", values="value", sort=False
+    )
+    order = [f"h{h:g}" for h in sorted(table["horizon"].unique())]
+    return wide[order].reset_index().rename_axis(columns=None)

@@ -8,6 +8,7 @@ from pathlib import Path
 from bpb_core.registry import Registry
 from bpb_core.report.build import build_report
 from bpb_core.results import load_results, summary
+from bpb_core.results.metadata import metadata_by_horizon
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import evaluate
 from bpb_core.runner.options import RunOptions
@@ -30,6 +31,9 @@ def test_vision_reads_generated_images_and_reports_its_perception(
     centre = table[table["measure"] == "centre_error_mm"]
     assert set(centre["run"]) == {"baseline_vision"} and set(centre["horizon"]) == {1.0, 3.0}
     assert (centre["n"] == 3).all() and (centre["median"] < 1.2).all()
+    wide = metadata_by_horizon(table).set_index("measure")
+    assert list(wide.columns) == ["run", "statistic", "h1", "h3"]
+    assert wide.loc["centre_error_mm", "h1"] == centre["median"].iloc[0]
 
 
 def test_an_unreadable_image_is_answered_unknown_and_scored_wrong(
