@@ -3,7 +3,8 @@ and turning a posted form into stored answers. No web framework here: the app wr
 
 The scenes come in an order shuffled by the seed; a (scene, task) answered before is never asked
 again, so closing the browser and starting again resumes. Every posted field is checked before
-anything is stored: a bad form stores nothing and says which field is wrong.
+anything is stored: a bad form stores nothing and says which field is wrong. Each page carries
+the session's random token, so a page of another site cannot post answers into the run.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import json
 import random
 import re
+import secrets
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -62,6 +64,7 @@ class HumanSession:
     registry: Registry
     options: RunOptions = field(default_factory=RunOptions)
     seed: int = 0
+    token: str = field(default_factory=lambda: secrets.token_hex(16), init=False, repr=False)
     order: list[SceneRef] = field(default_factory=list, init=False)
     tasks: dict[str, Task] = field(default_factory=dict, init=False)
 
@@ -117,6 +120,8 @@ class HumanSession:
             FormError: A field is unknown, missing or invalid, or the scene is not the one
                 being asked; nothing is stored.
         """
+        if not secrets.compare_digest(fields.get("token", ""), self.token):
+            raise FormError("token: not this session's page (another site, or a restarted app)")
         ref = self.next_scene()
         if ref is None or fields.get("scene") != ref.scene_id:
             raise FormError("scene: not the scene being asked (answered already, or stale page)")
@@ -141,7 +146,7 @@ class HumanSession:
             if len(value) > MAX_VALUE:
                 raise FormError(f"{key[:40]}: longer than {MAX_VALUE} characters")
             task, dot, rest = key.partition(".")
-            if key in ("scene", "shown"):
+            if key in ("scene", "shown", "token"):
                 continue
             if task == "ms" and rest in self.tasks:
                 times[rest] = _milliseconds(key, value)

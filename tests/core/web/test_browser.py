@@ -100,6 +100,7 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
         # a forged post is refused with a message and stores nothing
         before = len(_answers(run))
         forged_form = {"scene": session.order[3].scene_id, "shown": "1", "q1.ball99": "T"}
+        forged_form["token"] = session.token
         reply = page.request.post(url + "/answer", form=forged_form)
         assert reply.status == 400 and "q1.ball99: not a field" in reply.text()
         assert len(_answers(run)) == before == 9

@@ -26,7 +26,7 @@ def _session(data: Path, run: Path, registry: Registry, seed: int = 0) -> HumanS
 
 def _valid_form(client: TestClient) -> dict[str, str]:
     page = client.get("/").text
-    form = dict(re.findall(r'name="(scene|shown)" value="([^"]+)"', page))
+    form = dict(re.findall(r'name="(scene|shown|token)" value="([^"]+)"', page))
     places = r'name="(q3\.pos\d+)" id="[^"]+" data-ball="\d+"\s+value="([^"]+)"'
     form |= dict(re.findall(places, page))
     return form | {"q1.ball1": "T", "ms.q1": "1500"}
@@ -71,6 +71,7 @@ def test_order_is_seeded_and_a_new_session_resumes(
         ({"shown": "soon"}, "shown: expected the time"),
         ({"q2.TOP": "T" * 500}, "longer than 200 characters"),
         ({"<script>x": "T"}, "&lt;script&gt;x: not a field"),
+        ({"token": "0" * 32}, "token: not this session"),
     ],
 )
 def test_a_bad_post_is_refused_with_its_field_and_stores_nothing(
