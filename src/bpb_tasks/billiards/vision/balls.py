@@ -1,10 +1,13 @@
 """Ball centres and ids by template matching against the renderer's own ball sprites.
 
 Each id has its own fill colour (:func:`~bpb_tasks.billiards.render_style.ball_colour`), drawn
-flat between the dark rim and the white badge. The template of ball ``i`` is the set of sprite
-pixels that carry exactly that colour; the image's pixels of that colour are matched against it
-at every offset near their median, and the offset covering the most of them is where the
-renderer pasted the sprite (the speed label pasted over a ball hides part of it, not the rest).
+flat between the dark rim and the white badge. The template of ball ``i`` is the set of pixels of
+the renderer's own sprite that carry that colour as the canvas's palette draws it; the image's
+pixels of that colour are matched against it at every offset within a few pixels of their median
+(a dozen when that does not fit well), and the offset covering the most of them is where the
+renderer pasted the sprite, at a whole pixel (the speed label pasted over a ball hides part of
+it, not the rest). Ids sharing a colour (more than 8 balls) cannot be told apart: that is a
+perception failure, named.
 """
 
 from __future__ import annotations
