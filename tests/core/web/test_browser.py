@@ -94,8 +94,8 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
             _drag(page, 1, (2.0, 1.0))  # onto the top-right pocket
             if step == 0:
                 _shot(page, tmp_path, "human")
-            page.locator("#submit").click()
-            page.wait_for_load_state()
+            with page.expect_navigation():  # the post, its redirect and the next page
+                page.locator("#submit").click()
         assert asked == [ref.scene_id for ref in session.order[:3]]  # the seeded order
         # a forged post is refused with a message and stores nothing
         before = len(_answers(run))
@@ -129,8 +129,8 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
         assert page.locator("tr.pair").count() == 36  # 2 runs x 6 scenes x 3 tasks
         page.select_option("#filter-model", "human:tester")
         page.select_option("#filter-verdict", "unanswered")
-        page.locator("#apply").click()
-        page.wait_for_load_state()
+        with page.expect_navigation():
+            page.locator("#apply").click()
         assert page.locator("tr.pair").count() == 9
         page.goto(url + "/?model=baseline:oracle&task=q1&horizon=3")
         assert page.locator('tr.pair[data-verdict="correct"]').count() == 3
@@ -138,7 +138,8 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
         stable = page.locator("tr.pair").count()
         assert 0 < stable <= 18
         page.goto(url + "/?model=human:tester&task=q1")
-        page.locator(f'tr.pair a:text-is("{asked[0]}")').click()
+        with page.expect_navigation():
+            page.locator(f'tr.pair a:text-is("{asked[0]}")').click()
         page.wait_for_load_state("networkidle")
         for image in ("#input-image", "#overlay-image"):
             assert page.locator(image).evaluate("i => i.naturalWidth") > 0
