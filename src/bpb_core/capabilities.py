@@ -4,15 +4,17 @@ without when it is missing.
 
 - A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
   (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
-  :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Picturing` (the failure
-  gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents` (its cost
-  per event and against scaled scenes).
+  :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Perceiving` (reading a
+  scene back from the image and prompt a model gets: ``baseline:vision``), :class:`Picturing`
+  (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents`
+  (its cost per event and against scaled scenes).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
   :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
+- A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
 - A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
 - A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
@@ -93,6 +95,26 @@ class Predicting(Protocol):
 
     def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
         """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
+        ...
+
+
+@runtime_checkable
+class Perceiving(Protocol):
+    """A family that can read a scene back from exactly what a model is given: the input image
+    and the prompt text (``baseline:vision`` runs its own simulator on what it reads, which
+    separates seeing from reasoning)."""
+
+    def perceive(self, image: bytes, prompt: str) -> Any:
+        """The scene (of the family's scene model) read from ``image`` and ``prompt``.
+
+        Raises:
+            ValueError: Something could not be read; the message says what (one line).
+        """
+        ...
+
+    def perception_error(self, perceived: Any, scene: Any) -> dict[str, float]:
+        """How far ``perceived`` is from the true ``scene``: named numbers, stored with each
+        answer (``metadata``) and summarised per horizon by the report."""
         ...
 
 
@@ -201,6 +223,32 @@ class Estimating(Protocol):
     def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
         """Input tokens of ``messages`` by the provider's own counting (its image rule
         included) and their input cost in USD (``None`` when no price is known)."""
+        ...
+
+
+@runtime_checkable
+class AnswersInBrowser(Protocol):
+    """A task people can answer in the browser (``bpb human``): it brings its own form widgets
+    as a Jinja2 template and turns the posted fields into its answer format; core shows the
+    image and the exact prompt beside it, times the answer and stores it like a model's.
+
+    Attributes:
+        form_template: Jinja2 source of the task's inputs, rendered with autoescaping and the
+            values of :meth:`form_context` plus ``prefix`` (put it before every field name),
+            ``image_width`` and ``image_height`` (the input image's pixels; the image is shown
+            in an element with id ``scene-image`` inside a positioned box with id
+            ``scene-box``, for widgets placed on it).
+    """
+
+    form_template: str
+
+    def form_context(self, scene: Any, image: bytes | None) -> dict[str, Any]:
+        """The values the form template needs for ``scene`` (JSON-ready)."""
+        ...
+
+    def read_form(self, fields: Mapping[str, str], scene: Any) -> dict[str, Any]:
+        """The answer (the task's answer format) from the posted ``fields`` (names without the
+        prefix); raises ``ValueError`` naming the field for anything unexpected."""
         ...
 
 

@@ -60,6 +60,7 @@ class AnswerRecord(BaseModel):
     input_mode: str = "image"
     cot: bool = False
     epoch: int = 1
+    metadata: dict[str, float | str] = Field(default_factory=dict)
 
 
 def answer_name(task: str, epoch: int = 1) -> str:
@@ -105,6 +106,8 @@ def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
     data = record.model_dump(mode="json")
     if record.epoch == 1:  # files of runs without --epochs stay as they always were
         del data["epoch"]
+    if not record.metadata:  # nor do files of adapters without metadata
+        del data["metadata"]
     write_json_atomic(path, data)
     return path
 

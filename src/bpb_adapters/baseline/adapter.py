@@ -17,15 +17,17 @@ import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Predicting
+from bpb_core.capabilities import Perceiving, Predicting
 from bpb_core.errors import BadInput, RequestRejected
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
 
 if TYPE_CHECKING:
+    from bpb_adapters.baseline.vision import VisionAdapter
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.registry import Registry
 
 ORACLE = "oracle"
+VISION = "vision"
 
 
 def _registry() -> Registry:
@@ -63,6 +65,7 @@ class BaselineAdapter:
         """``None`` when ``family`` offers this prediction (every family has the oracle), else
         what it offers."""
         offered = (ORACLE, *(family.predictors if isinstance(family, Predicting) else ()))
+        offered += (VISION,) if isinstance(family, Perceiving) else ()
         if self.model in offered:
             return None
         known = ", ".join(f"baseline:{name}" for name in offered)
@@ -101,9 +104,14 @@ class BaselineAdapter:
         )
 
 
-def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter:
-    """Build ``baseline:<model>``: ``oracle`` or a prediction the scene family offers (checked
-    against the dataset's family before a run starts)."""
+def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter | VisionAdapter:
+    """Build ``baseline:<model>``: ``oracle``, ``vision`` (perception from the image, then the
+    dataset's simulator) or a prediction the scene family offers (checked against the dataset's
+    family before a run starts)."""
     if not model.strip():
         raise BadInput("--adapter baseline:: give a model, e.g. baseline:oracle")
+    if model == VISION:
+        from bpb_adapters.baseline.vision import VisionAdapter
+
+        return VisionAdapter()
     return BaselineAdapter(f"baseline:{model}", model, options.seed)

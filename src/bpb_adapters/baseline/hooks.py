@@ -16,4 +16,16 @@ def bpb_model_adapters() -> Iterator[AdapterInfo]:
         "Offline reference answers, no network: stasis, straight, random, oracle",
         models=("stasis", "straight", "random", "oracle"),
         offline=True,
+        catalog=lazy("bpb_adapters.baseline.hooks:on_request"),
     )
+
+
+def on_request() -> list[tuple[str, str]]:
+    """Baselines listed by ``bpb list adapters`` but not run by default (slower)."""
+    return [
+        (
+            "vision",
+            "reads the scene from the input image and prompt (perception), then simulates it; "
+            "records its perception error (run on request)",
+        )
+    ]

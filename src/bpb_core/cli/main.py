@@ -25,6 +25,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
     "prompt": ("bpb_core.cli.prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
+    "human": ("bpb_core.cli.web_cmd", "human", "Answer the questions in the browser (a run)."),
+    "view": ("bpb_core.cli.web_cmd", "view", "Browse runs in the browser, pair by pair."),
     "simulate": (
         "bpb_core.cli.simulate_cmd",
         "simulate",

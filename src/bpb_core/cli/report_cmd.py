@@ -92,6 +92,11 @@ def _print_tables(built: Report) -> None:
     console = stdout()
     console.print(_leaderboard(tables["summary"], tables["bootstrap"], built))
     console.print(_frame_table("Accuracy by horizon (strict)", tables["by_horizon"], percent=True))
+    if not tables["metadata"].empty:
+        from bpb_core.results.metadata import metadata_by_horizon
+
+        wide = metadata_by_horizon(tables["metadata"])
+        console.print(_frame_table("Adapters' own measurements by horizon", wide, percent=False))
     if results.suites:
         console.print(_stable_table(tables, results.suites[0].name))
         console.print(_exclusions(tables["stable_exclusions"]))

@@ -23,6 +23,7 @@ import pandas as pd
 
 from bpb_core.report import charts as ch, gallery, html
 from bpb_core.results.frames import Results, load_results
+from bpb_core.results.metadata import metadata_by_horizon, metadata_table
 from bpb_core.results.tables import (
     accuracy,
     by_horizon,
@@ -91,6 +92,7 @@ def report_tables(
         "bootstrap": bootstrap_ci(units, suites, n_boot=n_boot, seed=seed),
         "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed),
         "usage": usage(calls),
+        "metadata": metadata_table(calls),
     }
     for diagnostic in diagnostics:
         tables[diagnostic.name] = diagnostic.table(results)
@@ -229,6 +231,16 @@ def _headline(tables: dict[str, pd.DataFrame], results: Results) -> str:
     return note + html.table(board, percent=percent)
 
 
+def _metadata_section(frame: pd.DataFrame) -> tuple[str, str]:
+    note = (
+        "<p class='muted'>What adapters measured about their own answers (see each adapter's "
+        "docs), per horizon: the median over scenes of each number, the count of scenes of a "
+        "text measure (e.g. a reason for not answering). Counts, means and maxima: "
+        "<i>tables/metadata.csv</i>.</p>"
+    )
+    return "Adapters' own measurements by horizon", note + html.table(metadata_by_horizon(frame))
+
+
 def _sections(
     tables: dict[str, pd.DataFrame], diagnostics: Sequence[Diagnostic]
 ) -> list[tuple[str, str]]:
@@ -266,6 +278,8 @@ def _sections(
             else "<p class='muted'>no model runs to compare</p>",
         ),
     ]
+    if not tables["metadata"].empty:
+        sections.insert(2, _metadata_section(tables["metadata"]))
     for diagnostic in diagnostics:
         body = html.table(tables[diagnostic.name], percent=diagnostic.percent)
         sections.append((diagnostic.title, body))

@@ -101,12 +101,12 @@ def build_cases(results: Results, scorers: Mapping[str, Scorer], count: int = 8)
             t: scorer.explain(by_task[t]) for t in tasks
             if isinstance(scorer := scorers[t], ExplainsErrors)
         }  # fmt: skip
-        png = _drawing(run, key, by_task, scorers)
+        png = drawing(run, key, by_task, scorers)
         cases.append(Case(run.label, sid, key.horizon, scores, wrong, png))
     return cases
 
 
-def _drawing(
+def drawing(
     run: RunFolder, key: SceneKey, rows: Mapping[str, pd.DataFrame], scorers: Mapping[str, Scorer]
 ) -> bytes:
     """The family's picture of the scene with every task's overlay; empty when the family

@@ -8,7 +8,8 @@ them vectorised and returns two frames with explicit dtypes:
   no answer file for appears with status ``missing``. Columns: :data:`META_DTYPES`, the
   scorer input (:data:`bpb_core.scored_units.SCORER_INPUT`), each scorer's own columns (NaN on
   other tasks' rows) and the scorer output (``correct``, ``distance``).
-- ``calls``: one row per (run, scene, task) with status, tokens, cost, latency and retries.
+- ``calls``: one row per (run, scene, task) with status, tokens, cost, latency, retries and the
+  adapter's own measurements (``metadata``, JSON text; see :mod:`bpb_core.results.metadata`).
 
 It also names the suites that apply: installed suites all of whose tasks appear in the units.
 Everything else (accuracies, leaderboards, diagnostics, reports) is derived from these frames.
@@ -17,6 +18,7 @@ Nothing here prints.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -70,6 +72,7 @@ CALL_DTYPES: dict[str, str] = {
     "input_mode": "str",
     "cot": "boolean",
     "error": "str",
+    "metadata": "str",
 }
 """Columns of the calls frame (``cost`` is NaN when unknown, never a made-up 0)."""
 
@@ -217,7 +220,7 @@ def _add_call(
         values: dict[str, Any] = {**meta, "status": status, "attempts": 0, "retries": 0}
         values |= {name: 0 for name in _USAGE} | {"cost": float("nan"), "latency": float("nan")}
         values |= {"cot": None, "finish_reason": None, "rule": None, "input_mode": None}
-        calls.repeat({**values, "error": None}, 1)
+        calls.repeat({**values, "error": None, "metadata": None}, 1)
         return
     usage = record.usage
     values = {
@@ -233,6 +236,7 @@ def _add_call(
         "rule": record.rule,
         "input_mode": record.input_mode,
         "error": record.error,
+        "metadata": json.dumps(record.metadata, sort_keys=True) if record.metadata else None,
     }
     calls.repeat(values, 1)
 

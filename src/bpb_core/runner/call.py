@@ -65,6 +65,7 @@ class PairCall:
     timeout: float = 0.0
     last_error: str | None = None
     finish_reason: str | None = None
+    metadata: dict[str, float | str] = field(default_factory=dict)
 
     async def run(self) -> None:
         """Attempt until the pair is settled (its answer file written) or the run stops."""
@@ -142,6 +143,7 @@ class PairCall:
         self.tally.add(response)
         self.state.account(response)
         self.finish_reason = response.finish_reason
+        self.metadata = dict(response.metadata)
         # Parsing is linear but a reply may be up to a megabyte: keep the event loop serving.
         parsed = await asyncio.to_thread(_parse, self, response, prompt)
         await self._log(
@@ -158,6 +160,7 @@ class PairCall:
             sent=response.sent,
             dropped=list(response.dropped),
             reasoning=response.reasoning,
+            **({"metadata": response.metadata} if response.metadata else {}),
         )
         self.state.note_dropped(self.task, response.dropped)
         if parsed.outcome == "ok":
@@ -229,6 +232,7 @@ class PairCall:
             input_mode=self.state.options.input_mode,
             cot=self.state.cot(self.task),
             epoch=self.epoch,
+            metadata=self.metadata,
         )
         await self.state.offload(write_answer, self.state.run_dir, self.ref.key, record)
         self.state.count(self.task, status)

@@ -4,7 +4,8 @@ Everything core needs to generate, read and check billiards datasets comes throu
 :class:`BilliardsFamily`: the config model, the sampler (seeded per scene), the simulation with
 ground truth and stability annotation, the three images, the index columns and per-horizon
 counts, the stats figures, speed calibration, the reference predictions behind the ``baseline``
-adapter, the failure gallery's picture and the simulator comparison of ``bpb bench sim``.
+adapter, reading a scene back from its image (``baseline:vision``), the failure gallery's
+picture and the simulator comparison of ``bpb bench sim``.
 """
 
 from __future__ import annotations
@@ -242,6 +243,20 @@ class BilliardsFamily:
         from bpb_tasks.billiards.predictors import PREDICTORS
 
         return PREDICTORS[name](scene, rng)
+
+    def perceive(self, image: bytes, prompt: str) -> Scene:
+        """The scene read from ``init.png`` and the prompt (``baseline:vision``); raises
+        ``ValueError`` saying what could not be read."""
+        from bpb_tasks.billiards.vision.perceive import perceive
+
+        return perceive(image, prompt)
+
+    def perception_error(self, perceived: Scene, scene: Scene) -> dict[str, float]:
+        """Centre error (mm, mean and max over balls), cue speed (m/s) and direction (degrees)
+        errors of a perceived scene."""
+        from bpb_tasks.billiards.vision.perceive import perception_error
+
+        return perception_error(perceived, scene)
 
     def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
         """The scene's trajectory image (or a plain table) for the failure gallery."""

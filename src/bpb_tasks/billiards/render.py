@@ -56,9 +56,13 @@ def render_init(scene: Scene, spec: CanvasSpec) -> Image.Image:
         paste_ball(img, spec, ball.id, ball.pos)
     if label is not None:
         _speed_label(img, spec, *label)
-    speed = math.hypot(*scene.ball(CUE_ID).vel)
-    header_note(img, spec, f"cue ball 0 speed {speed:.3f} m/s")
+    header_note(img, spec, speed_note(math.hypot(*scene.ball(CUE_ID).vel)))
     return img
+
+
+def speed_note(speed: float) -> str:
+    """The initial image's header note stating the cue ball's speed."""
+    return f"cue ball {CUE_ID} speed {speed:.3f} m/s"
 
 
 def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, field_validator
@@ -11,6 +12,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, check_ids, load, read_id, upper
+from bpb_tasks.questions.browser import colour, read_ticks
 from bpb_tasks.questions.question import BilliardsQuestion
 
 
@@ -72,3 +74,15 @@ class Q1Task(BilliardsQuestion):
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"answers": [label.model_dump() for label in truth.q1]}
+
+    def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
+        """The object balls to tick (``bpb human``)."""
+        ids = sorted(b.id for b in scene.balls if b.id != 0)
+        balls = [{"id": i, "colour": colour(i)} for i in ids]
+        return {"horizon": f"{scene.horizon:g}", "balls": balls}
+
+    def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
+        """Ticked balls ``ball<id>`` are ``T``, the others ``F``."""
+        ids = sorted(b.id for b in scene.balls if b.id != 0)
+        ticked = read_ticks(fields, [f"ball{i}" for i in ids])
+        return {"answers": [{"id": i, "answer": "T" if f"ball{i}" in ticked else "F"} for i in ids]}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, field_validator
@@ -12,6 +13,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene import WALLS, Scene, Wall
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, load, upper
+from bpb_tasks.questions.browser import read_ticks
 from bpb_tasks.questions.question import BilliardsQuestion
 
 
@@ -67,3 +69,12 @@ class Q2Task(BilliardsQuestion):
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"answers": [label.model_dump() for label in truth.q2]}
+
+    def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
+        """The walls to tick (``bpb human``)."""
+        return {"horizon": f"{scene.horizon:g}", "walls": list(WALLS)}
+
+    def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
+        """Ticked walls are ``T``, the others ``F``."""
+        ticked = read_ticks(fields, WALLS)
+        return {"answers": [{"wall": w, "answer": "T" if w in ticked else "F"} for w in WALLS]}

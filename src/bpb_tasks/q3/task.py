@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, field_validator
@@ -13,6 +14,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import Item, check_ids, load, read_id
+from bpb_tasks.questions.browser import drag_context, read_positions
 from bpb_tasks.questions.question import BilliardsQuestion
 
 
@@ -104,3 +106,11 @@ class Q3Task(BilliardsQuestion):
                 for p in truth.predictions
             ]
         }
+
+    def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
+        """Draggable markers and pocket drop zones on the image (``bpb human``)."""
+        return drag_context(scene, image)
+
+    def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
+        """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket``."""
+        return read_positions(fields, scene)

@@ -45,6 +45,14 @@ class BilliardsQuestion(ABC):
     def expected(self, truth: FinalState) -> dict[str, Any]:
         """The correct answer, in the task's answer format, from the ground truth."""
 
+    @property
+    def form_template(self) -> str:
+        """Jinja2 source of the task's browser form (``bpb human``; see
+        :mod:`bpb_tasks.questions.browser`)."""
+        from bpb_tasks.questions.browser import template
+
+        return template(self.name)
+
     def prompt_text(self, scene: Scene, options: PromptOptions) -> str:
         """The whole text of the prompt."""
         return "\n\n".join(

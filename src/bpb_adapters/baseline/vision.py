@@ -1,0 +1,116 @@
+"""``baseline:vision``: perception from the image, then the family's own physics.
+
+It reads only what a model is given (the input image and the prompt text) through the scene
+family's :class:`~bpb_core.capabilities.Perceiving` capability, runs the dataset's simulator on
+the scene it read and answers each task with the part of the result the task's ``expected()``
+cuts, as JSON text through the same parse path as a model. Against ``baseline:oracle`` (the same
+physics on the true scene) it shows how much of a perfect physicist's score survives reading
+the scene from a PNG.
+
+The true scene in the request is used for one thing only: measuring the perception error
+(:meth:`~bpb_core.capabilities.Perceiving.perception_error`), returned as the reply's
+``metadata`` and summarised per horizon by the report. When the image cannot be read the reply
+says ``unknown`` and why: it fails to parse, is re-asked and finally scored wrong, and the
+reason is kept in the answer's metadata (``perception_failed``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.capabilities import Perceiving
+from bpb_core.errors import RequestRejected
+from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily, Simulator, Task
+    from bpb_core.registry import Registry
+
+CACHE_SIZE = 64  # perceived scenes kept (the tasks of one scene share its image)
+
+
+def _inputs(request: ModelRequest) -> tuple[bytes | None, str]:
+    """The first image and all text of the request's messages."""
+    images = [p.data for m in request.messages for p in m.parts if isinstance(p, ImagePart)]
+    text = "\n".join(p.text for m in request.messages for p in m.parts if isinstance(p, TextPart))
+    return (images[0] if images else None), text
+
+
+@dataclass
+class VisionAdapter:
+    """Reads the scene from the image, simulates it and answers (see the module docstring)."""
+
+    name: str = "baseline:vision"
+    _registry: Registry | None = field(default=None, repr=False)
+    _components: dict[str, Any] = field(default_factory=dict, repr=False)
+    _seen: OrderedDict[str, tuple[Any, str | None]] = field(default_factory=OrderedDict, repr=False)
+
+    def _component(self, key: str, build: Any) -> Any:
+        if key not in self._components:
+            if self._registry is None:
+                from bpb_adapters.baseline.adapter import _registry
+
+                self._registry = _registry()
+            self._components[key] = build(self._registry)
+        return self._components[key]
+
+    def cannot_answer(self, family: SceneFamily) -> str | None:
+        """``None`` when ``family`` can read its scenes back from their images."""
+        if isinstance(family, Perceiving):
+            return None
+        return f"the {family.name} scene family cannot read scenes from images"
+
+    def _perceive(self, family: Perceiving, image: bytes, prompt: str) -> tuple[Any, str | None]:
+        first = prompt.split("\n", 1)[0]
+        key = hashlib.sha256(image + first.encode()).hexdigest()
+        if key not in self._seen:
+            try:
+                self._seen[key] = (family.perceive(image, prompt), None)
+            except ValueError as exc:
+                self._seen[key] = (None, str(exc) or type(exc).__name__)
+            if len(self._seen) > CACHE_SIZE:
+                self._seen.popitem(last=False)
+        return self._seen[key]
+
+    def _answer(self, request: ModelRequest, family: SceneFamily) -> tuple[str, dict[str, Any]]:
+        if not isinstance(family, Perceiving):
+            raise RequestRejected(f"{self.name}: {self.cannot_answer(family)}")
+        image, prompt = _inputs(request)
+        if image is None:
+            missing = "no image in the request (input mode state)"
+            return f"unknown: {missing}", {"perception_failed": missing}
+        perceived, reason = self._perceive(family, image, prompt)
+        if reason is not None:
+            return f"unknown: the image could not be read: {reason}", {"perception_failed": reason}
+        simulator_name = request.simulator or family.simulator_name(family.load_config(None))
+        simulator: Simulator = self._component(
+            f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
+        )
+        truth = family.ground_truth(perceived, simulator, stability=False)
+        task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
+        scene = request.scene  # the truth: only to measure the perception error
+        measured = {} if scene is None else family.perception_error(perceived, scene)
+        return json.dumps(task.expected(truth)), dict(measured)
+
+    async def complete(self, request: ModelRequest) -> ModelResponse:
+        """Answer from the image and prompt in ``request``."""
+        started = time.perf_counter()
+        if request.family is None:
+            raise RequestRejected(f"{self.name} needs the scene's family in the request")
+        name = str(request.family)
+        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
+        text, metadata = self._answer(request, family)
+        return ModelResponse(
+            text=text,
+            usage=Usage(0, 0, 0, 0),
+            cost=0.0,
+            latency=time.perf_counter() - started,
+            model_id=self.name,
+            finish_reason="stop",
+            metadata=metadata,
+        )

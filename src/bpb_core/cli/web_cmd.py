@@ -1,0 +1,65 @@
+"""``bpb human`` (people answer a dataset in the browser) and ``bpb view`` (browse runs): both
+serve a local web app on 127.0.0.1 (see :mod:`bpb_core.web`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from bpb_core.cli.console import load_registry, stderr
+from bpb_core.cli.run_cmd import _csv, _horizons
+
+PORT_HELP = "Port on 127.0.0.1 (the apps never listen on other interfaces)."
+PORTS = click.IntRange(0, 65535)
+
+
+@click.command("human")
+@click.option("--data", required=True, type=click.Path(path_type=Path), help="Dataset folder.")
+@click.option("--out", required=True, type=click.Path(path_type=Path), help="Run folder.")
+@click.option("--name", default="anonymous", show_default=True, help="Who answers (human:NAME).")
+@click.option("--tasks", help="Comma-separated tasks (default: the family's default tasks).")
+@click.option("--horizons", help="Comma-separated horizons to include (default: all).")
+@click.option("--limit", type=click.IntRange(1), help="First N scenes per horizon.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the scene order.")
+@click.option("--port", default=8765, show_default=True, type=PORTS, help=PORT_HELP)
+def human(
+    data: Path,
+    out: Path,
+    name: str,
+    tasks: str | None,
+    horizons: str | None,
+    limit: int | None,
+    seed: int,
+    port: int,
+) -> None:
+    """Answer a dataset's questions in the browser; saved as a normal run (human:NAME),
+    resumable, scenes in a seeded order."""
+    from bpb_core.runner.options import RunOptions
+    from bpb_core.web.serve import HOST, require_web, serve
+
+    require_web()
+    from bpb_core.web.human import HumanSession
+    from bpb_core.web.human_app import human_app
+
+    chosen = tuple(_csv(tasks, "--tasks"))
+    options = RunOptions(tasks=chosen, horizons=_horizons(horizons), limit=limit)
+    session = HumanSession(data, out, name, load_registry(), options, seed)
+    stderr().print(f"bpb human: open http://{HOST}:{port}/ (Ctrl-C stops; answers are kept)")
+    serve(human_app(session), port)
+
+
+@click.command("view")
+@click.argument("run_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
+def view(run_dirs: tuple[Path, ...], port: int) -> None:
+    """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
+    from bpb_core.web.serve import HOST, require_web, serve
+
+    require_web()
+    from bpb_core.web.viewer import Viewer
+    from bpb_core.web.viewer_app import viewer_app
+
+    viewer = Viewer.load(list(run_dirs), load_registry())
+    stderr().print(f"bpb view: open http://{HOST}:{port}/ (Ctrl-C stops)")
+    serve(viewer_app(viewer), port)

@@ -1,0 +1,207 @@
+"""A person's answering session (``bpb human``): which scene comes next, the page it shows,
+and turning a posted form into stored answers. No web framework here: the app wraps it.
+
+The scenes come in an order shuffled by the seed; a (scene, task) answered before is never asked
+again, so closing the browser and starting again resumes. Every posted field is checked before
+anything is stored: a bad form stores nothing and says which field is wrong. Each page carries
+the session's random token, so a page of another site cannot post answers into the run.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import re
+import secrets
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.capabilities import AnswersInBrowser
+from bpb_core.errors import BadInput, ParseFailure
+from bpb_core.interfaces import PromptOptions
+from bpb_core.model_calls import TextPart
+from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
+from bpb_core.runner.asking import asking
+from bpb_core.runner.manifest import start_manifest
+from bpb_core.runner.options import RunOptions
+from bpb_core.runner.scenes import SceneRef
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import Task
+    from bpb_core.registry import Registry
+
+NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+MAX_FIELDS = 200
+MAX_VALUE = 200
+MAX_MS = 24 * 3600 * 1000
+
+
+class FormError(ValueError):
+    """A posted form that cannot be stored; the message names the field."""
+
+
+@dataclass(frozen=True)
+class Page:
+    """What the page of one scene shows."""
+
+    ref: SceneRef
+    prompts: dict[str, str]
+    forms: dict[str, tuple[str, dict[str, Any]]]
+    done: int
+    total: int
+
+
+@dataclass
+class HumanSession:
+    """One person answering a dataset into a run folder (adapter ``human:<name>``)."""
+
+    data: Path
+    run_dir: Path
+    name: str
+    registry: Registry
+    options: RunOptions = field(default_factory=RunOptions)
+    seed: int = 0
+    token: str = field(default_factory=lambda: secrets.token_hex(16), init=False, repr=False)
+    order: list[SceneRef] = field(default_factory=list, init=False)
+    tasks: dict[str, Task] = field(default_factory=dict, init=False)
+
+    def __post_init__(self) -> None:
+        if not NAME.match(self.name):
+            raise BadInput(f"--name {self.name!r}: use letters, digits, '_', '.' or '-'")
+        ask = asking(self.data, self.options, self.registry)
+        self.options = ask.options
+        self.tasks = ask.tasks
+        unable = [n for n, t in self.tasks.items() if not isinstance(t, AnswersInBrowser)]
+        if unable:
+            raise BadInput(f"--tasks: {', '.join(unable)} cannot be answered in the browser")
+        self.order = list(ask.scenes)
+        random.Random(f"human:{self.seed}").shuffle(self.order)
+        count = len(self.order)
+        start_manifest(self.run_dir, self.spec, self.data, self.options, self.registry, count)
+
+    @property
+    def spec(self) -> str:
+        """The run's adapter name, ``human:<name>``."""
+        return f"human:{self.name}"
+
+    def next_scene(self) -> SceneRef | None:
+        """The first scene in the order with a task not yet answered (``None`` when done)."""
+        done = completed(self.run_dir)
+        for ref in self.order:
+            if any((ref.scene_id, task) not in done for task in self.tasks):
+                return ref
+        return None
+
+    def page(self, ref: SceneRef) -> Page:
+        """The prompts (exactly as a model gets them) and the task forms of ``ref``."""
+        scene, image = ref.load(), ref.image()
+        prompts, forms = {}, {}
+        for name, task in self.tasks.items():
+            messages = task.messages(scene, image, self._prompt_options(name))
+            prompts[name] = "\n".join(
+                p.text for m in messages for p in m.parts if isinstance(p, TextPart)
+            )
+            assert isinstance(task, AnswersInBrowser)
+            forms[name] = (task.form_template, task.form_context(scene, image))
+        done = len({sid for sid, _ in completed(self.run_dir)})
+        return Page(ref, prompts, forms, done, len(self.order))
+
+    def _prompt_options(self, task: str) -> PromptOptions:
+        cot = self.options.cot.get(task, self.tasks[task].default_cot)
+        return PromptOptions(self.options.input_mode, cot, self.options.force_numeric, 0)
+
+    def submit(self, fields: Mapping[str, str], shown_at: float) -> None:
+        """Check every field of a posted form and store one answer per task.
+
+        Raises:
+            FormError: A field is unknown, missing or invalid, or the scene is not the one
+                being asked; nothing is stored.
+        """
+        if not secrets.compare_digest(fields.get("token", ""), self.token):
+            raise FormError("token: not this session's page (another site, or a restarted app)")
+        ref = self.next_scene()
+        if ref is None or fields.get("scene") != ref.scene_id:
+            raise FormError("scene: not the scene being asked (answered already, or stale page)")
+        answers = self._read(fields, ref)
+        seconds = max(time.time() - shown_at, 0.0)
+        log = AttemptLog(self.run_dir)
+        try:
+            for task, (value, rule, ms) in answers.items():
+                latency = min(ms / 1000, seconds) if ms is not None else seconds
+                self._store(ref, task, value, rule, latency, log)
+        finally:
+            log.close()
+
+    def _read(
+        self, fields: Mapping[str, str], ref: SceneRef
+    ) -> dict[str, tuple[dict[str, Any], str | None, int | None]]:
+        if len(fields) > MAX_FIELDS:
+            raise FormError(f"form: more than {MAX_FIELDS} fields")
+        by_task: dict[str, dict[str, str]] = {name: {} for name in self.tasks}
+        times: dict[str, int | None] = dict.fromkeys(self.tasks)
+        for key, value in fields.items():
+            if len(value) > MAX_VALUE:
+                raise FormError(f"{key[:40]}: longer than {MAX_VALUE} characters")
+            task, dot, rest = key.partition(".")
+            if key in ("scene", "shown", "token"):
+                continue
+            if task == "ms" and rest in self.tasks:
+                times[rest] = _milliseconds(key, value)
+            elif dot and task in self.tasks and rest:
+                by_task[task][rest] = value
+            else:
+                raise FormError(f"{key[:40]}: not a field of this form")
+        scene = ref.load()
+        out: dict[str, tuple[dict[str, Any], str | None, int | None]] = {}
+        for name, component in self.tasks.items():
+            assert isinstance(component, AnswersInBrowser)
+            try:
+                answer = component.read_form(by_task[name], scene)
+            except ValueError as exc:
+                raise FormError(f"{name}.{exc}") from None
+            try:
+                options = self._prompt_options(name)
+                parsed = self.tasks[name].parse(json.dumps(answer), scene, options)
+            except ParseFailure as exc:
+                raise FormError(f"{name}: {exc}") from None
+            out[name] = (dict(parsed.value), parsed.rule, times[name])
+        return out
+
+    def _store(
+        self, ref: SceneRef, task: str, value: dict[str, Any], rule: str | None,
+        latency: float, log: AttemptLog,
+    ) -> None:  # fmt: skip
+        text = json.dumps(value)
+        log.append(
+            {
+                "time": time.time(), "scene_id": ref.scene_id, "task": task,
+                "adapter": self.spec, "attempt": 1, "escalation": 0, "outcome": "ok", "text": text,
+                "latency": latency, "rule": rule, "error": None,
+            }
+        )  # fmt: skip
+        record = AnswerRecord(
+            scene_id=ref.scene_id,
+            horizon=ref.key.horizon,
+            index=ref.key.index,
+            task=task,
+            adapter=self.spec,
+            status="ok",
+            answer=value,
+            rule=rule,
+            finish_reason="stop",
+            attempts=1,
+            cost=0.0,
+            latency=round(latency, 3),
+            input_mode=self.options.input_mode,
+            cot=self._prompt_options(task).cot,
+        )
+        write_answer(self.run_dir, ref.key, record)
+
+
+def _milliseconds(key: str, value: str) -> int:
+    if not value.isdigit() or int(value) > MAX_MS:
+        raise FormError(f"{key}: expected whole milliseconds from 0 to {MAX_MS}")
+    return int(value)

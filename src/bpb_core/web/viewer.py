@@ -1,0 +1,221 @@
+"""What ``bpb view`` shows: the (run, scene, task) pairs of some runs, filtered, and everything
+about one pair. No web framework here: the app wraps it.
+
+Pairs come from the results frames (:func:`~bpb_core.results.frames.load_results`); a pair is
+``correct`` when every scored unit of it is, ``unanswered`` when the run has no answer for it
+(missing, or an API error), else ``wrong``. A pair's page rebuilds the exact prompt from the
+task (with the input mode, chain-of-thought setting and escalation of each attempt), lists every
+attempt from the attempts log, and has the scene family draw the truth with each scorer's
+marks (as the report's failure gallery does).
+"""
+
+from __future__ import annotations
+
+import json
+from collections import defaultdict
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from bpb_core.interfaces import PromptOptions
+from bpb_core.layout import SceneKey
+from bpb_core.model_calls import TextPart
+from bpb_core.report.gallery import drawing
+from bpb_core.results.frames import Results, load_results
+from bpb_core.run_folder import AnswerRecord, read_answer, read_attempts
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+    from bpb_core.results.reading import RunFolder
+
+PAGE_SIZE = 100
+VERDICTS = ("correct", "wrong", "unanswered")
+STABILITY = ("stable", "unstable")
+
+
+class QueryError(ValueError):
+    """A filter value the runs do not have; the message names the parameter."""
+
+
+@dataclass(frozen=True)
+class PairView:
+    """Everything shown about one (run, scene, task)."""
+
+    run: RunFolder
+    run_id: int
+    key: SceneKey
+    task: str
+    record: AnswerRecord | None
+    prompts: list[tuple[int, str]]
+    attempts: list[dict[str, Any]]
+    units: pd.DataFrame
+    verdict: str
+
+    @property
+    def answer_json(self) -> str:
+        """The parsed answer, pretty-printed (empty without one)."""
+        if self.record is None or self.record.answer is None:
+            return ""
+        return json.dumps(self.record.answer, indent=1)
+
+
+@dataclass
+class Viewer:
+    """Runs loaded for browsing."""
+
+    results: Results
+    registry: Registry
+    pairs: pd.DataFrame
+    _attempts: dict[int, dict[tuple[str, str], list[dict[str, Any]]]] = field(default_factory=dict)
+
+    @classmethod
+    def load(cls, paths: list[Path], registry: Registry) -> Viewer:
+        """Read and score ``paths`` (run folders or folders of them)."""
+        results = load_results(paths, registry=registry)
+        return cls(results, registry, _pairs(results.units))
+
+    def choices(self) -> dict[str, list[str]]:
+        """The values each filter can take."""
+        frame = self.pairs
+        return {
+            "model": sorted(str(v) for v in frame["adapter"].unique()),
+            "task": sorted(str(v) for v in frame["task"].unique()),
+            "horizon": [f"{h:g}" for h in sorted(frame["horizon"].unique())],
+            "stable": list(STABILITY),
+            "verdict": list(VERDICTS),
+        }
+
+    def select(self, query: Mapping[str, str]) -> tuple[pd.DataFrame, int]:
+        """The pairs matching ``query`` (one page of them) and how many match.
+
+        Raises:
+            QueryError: An unknown parameter or a value no pair has.
+        """
+        choices = self.choices()
+        frame = self.pairs
+        for name, value in query.items():
+            if name == "page" or value == "":
+                continue
+            if name not in choices:
+                raise QueryError(f"{name[:40]}: not a filter (filters: {', '.join(choices)})")
+            if value not in choices[name]:
+                raise QueryError(f"{name}: no pair has {value[:40]!r}")
+            frame = frame[_mask(frame, name, value)]
+        page = _page(query.get("page", "1"))
+        start = (page - 1) * PAGE_SIZE
+        return frame.iloc[start : start + PAGE_SIZE], len(frame)
+
+    def pair(self, run_id: int, scene_id: str, task: str) -> PairView:
+        """One pair.
+
+        Raises:
+            QueryError: No such run, scene or task among the loaded runs.
+        """
+        if not 0 <= run_id < len(self.results.runs):
+            raise QueryError(f"run {run_id}: no such run")
+        run = self.results.runs[run_id]
+        rows = self._rows(run.label, scene_id, task)
+        if rows.empty:
+            raise QueryError(f"{scene_id[:40]} / {task[:20]}: not a pair of run {run.label}")
+        key = SceneKey(float(rows["horizon"].iloc[0]), int(rows["index"].iloc[0]))
+        record = read_answer(key.dir(run.path) / f"{task}.json")
+        attempts = self._attempts_of(run_id).get((scene_id, task), [])
+        prompts = self._prompts(run, key, task, record, attempts)
+        verdict = _pairs(rows)["verdict"].iloc[0]
+        units = rows[["unit", "truth", "pred", "correct", "distance", "status"]]
+        return PairView(run, run_id, key, task, record, prompts, attempts, units, str(verdict))
+
+    def image(self, run_id: int, scene_id: str) -> bytes:
+        """The input image the run's models were shown for ``scene_id``."""
+        run, key = self._scene(run_id, scene_id)
+        name = run.family.input_image if run.family is not None else None
+        if name is None:
+            raise QueryError(f"the {run.label} dataset has no images")
+        return (key.dir(run.dataset) / name).read_bytes()
+
+    def overlay(self, run_id: int, scene_id: str, task: str) -> bytes:
+        """The scene drawn by its family with the task's truth and prediction marks."""
+        view = self.pair(run_id, scene_id, task)
+        rows = self._rows(view.run.label, scene_id, task)
+        scorer = self.registry.scorer_for(task)
+        return drawing(view.run, view.key, {task: rows}, {task: scorer})
+
+    def _rows(self, label: str, scene_id: str, task: str) -> pd.DataFrame:
+        units = self.results.units
+        pick = (units["run"] == label) & (units["scene_id"] == scene_id) & (units["task"] == task)
+        return units[pick]
+
+    def _scene(self, run_id: int, scene_id: str) -> tuple[RunFolder, SceneKey]:
+        if not 0 <= run_id < len(self.results.runs):
+            raise QueryError(f"run {run_id}: no such run")
+        run = self.results.runs[run_id]
+        for key in run.scene_keys:
+            if key.scene_id == scene_id:
+                return run, key
+        raise QueryError(f"{scene_id[:40]}: not a scene of run {run.label}")
+
+    def _attempts_of(self, run_id: int) -> dict[tuple[str, str], list[dict[str, Any]]]:
+        if run_id not in self._attempts:
+            found: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+            for entry in read_attempts(self.results.runs[run_id].path):
+                found[(str(entry.get("scene_id")), str(entry.get("task")))].append(entry)
+            self._attempts[run_id] = dict(found)
+        return self._attempts[run_id]
+
+    def _prompts(
+        self, run: RunFolder, key: SceneKey, task: str, record: AnswerRecord | None,
+        attempts: list[dict[str, Any]],
+    ) -> list[tuple[int, str]]:  # fmt: skip
+        """The prompt text of each escalation level the attempts used (0 when none)."""
+        if task not in self.registry.names("task"):
+            return []
+        component = self.registry.task(task)
+        scene, _ = run.truth(key)
+        options = run.manifest.get("options") or {}
+        mode = record.input_mode if record else str(options.get("input_mode", "image"))
+        cot = record.cot if record else component.default_cot
+        image = None if mode == "state" else self.image(self.results.runs.index(run), key.scene_id)
+        levels = sorted({int(a.get("escalation") or 0) for a in attempts} or {0})
+        out = []
+        for level in levels:
+            prompt = PromptOptions(mode, cot, bool(options.get("force_numeric", False)), level)  # type: ignore[arg-type]
+            messages = component.messages(scene, image, prompt)
+            text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
+            out.append((level, text))
+        return out
+
+
+def _pairs(units: pd.DataFrame) -> pd.DataFrame:
+    """One row per (run, scene, task) with its verdict."""
+    keys = ["run", "adapter", "model", "task", "horizon", "index", "scene_id"]
+    grouped = units.groupby(keys, observed=True, sort=True)
+    frame = grouped.agg(
+        stable=("stable", "first"),
+        status=("status", "first"),
+        units=("correct", "size"),
+        right=("correct", "sum"),
+    ).reset_index()
+    answered = frame["status"].isin(["ok", "parse_error"])
+    frame["verdict"] = "wrong"
+    frame.loc[answered & (frame["right"] == frame["units"]), "verdict"] = "correct"
+    frame.loc[~answered, "verdict"] = "unanswered"
+    return frame
+
+
+def _mask(frame: pd.DataFrame, name: str, value: str) -> pd.Series:
+    if name == "model":
+        return frame["adapter"].astype(str) == value
+    if name == "horizon":
+        return frame["horizon"].map(lambda h: f"{h:g}") == value
+    if name == "stable":
+        return frame["stable"].fillna(False).astype(bool) == (value == "stable")
+    return frame[name].astype(str) == value
+
+
+def _page(value: str) -> int:
+    if not value.isdigit() or not 1 <= int(value) <= 1_000_000:
+        raise QueryError("page: expected a page number")
+    return int(value)

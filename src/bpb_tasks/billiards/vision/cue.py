@@ -1,0 +1,122 @@
+"""The cue ball's velocity: the speed printed in the header, the direction of the arrow.
+
+The header note (:func:`~bpb_tasks.billiards.render.speed_note`) is right-aligned in the header
+line. Its digits are read one place at a time: the note is drawn with the renderer's own font and
+text patch with each digit in that place and compared with the image over that place's columns,
+keeping the digit that differs least; the whole reading must then match the note. The arrow is
+the only thing drawn in the arrow colour; its direction is the
+principal axis of those pixels, pointing away from the cue ball.
+
+The notes of every digit in every place are drawn once per canvas (cached), so reading a note
+costs a few array comparisons.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards.render import speed_note
+from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render_palette import header_y, text_patch
+from bpb_tasks.billiards.vision.balls import image_keys_of
+from bpb_tasks.billiards.vision.frame import Keys, shown
+from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed
+
+DIGITS = "0123456789"
+MAX_MISMATCH = 0.02  # share of the note's pixels that may differ from the best reading
+
+
+@functools.lru_cache(maxsize=64)
+def _note_keys(spec: CanvasSpec, text: str) -> Keys:
+    patch = text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE)
+    rgb = patch.convert("RGB")
+    return image_keys_of(rgb.tobytes(), rgb.size)
+
+
+def _reading(int_digits: int, digits: list[str]) -> str:
+    return speed_note(float("".join(digits[:int_digits]) + "." + "".join(digits[int_digits:])))
+
+
+@functools.lru_cache(maxsize=8)
+def _slots(spec: CanvasSpec, int_digits: int) -> tuple[tuple[Keys, NDArray[np.intp]], ...]:
+    """Per digit slot of a note with ``int_digits`` digits before the point: the note drawn
+    with each digit 0-9 in that slot (zeros elsewhere) and the columns where they differ.
+    Digits have equal widths in the renderer's font, so the columns are the same for every
+    speed; a leading zero is drawn as 1 so that the note keeps its digits."""
+    slots = []
+    for slot in range(int_digits + 3):
+        drawn = []
+        for digit in DIGITS:
+            digits = ["1" if i == 0 and int_digits > 1 else "0" for i in range(int_digits + 3)]
+            digits[slot] = digit if not (slot == 0 and int_digits > 1 and digit == "0") else "1"
+            drawn.append(_note_keys(spec, _reading(int_digits, digits)))
+        stack = np.stack(drawn)
+        columns = np.flatnonzero((stack != stack[:1]).any(axis=(0, 1)))
+        slots.append((stack, columns))
+    return tuple(slots)
+
+
+def _strip(keys: Keys, spec: CanvasSpec, shape: tuple[int, ...]) -> Keys | None:
+    h, w = shape
+    right = keys.shape[1] - spec.right
+    top = round(header_y(spec) - h / 2)
+    if top < 0 or right - w < 0 or top + h > keys.shape[0]:
+        return None
+    return keys[top : top + h, right - w : right]
+
+
+def _decode(keys: Keys, spec: CanvasSpec, int_digits: int) -> tuple[int, str]:
+    """Mismatching pixels of the best reading with ``int_digits`` digits before the point."""
+    slots = _slots(spec, int_digits)
+    strip = _strip(keys, spec, slots[0][0].shape[1:])
+    if strip is None:
+        return keys.size, ""
+    digits = []
+    for stack, columns in slots:
+        wrong = (stack[:, :, columns] != strip[None, :, columns]).sum(axis=(1, 2))
+        digits.append(DIGITS[int(np.argmin(wrong))])
+    text = _reading(int_digits, digits)
+    note = _note_keys(spec, text)
+    if note.shape != strip.shape:
+        return keys.size, text
+    return int((note != strip).sum()), text
+
+
+def read_speed(keys: Keys, spec: CanvasSpec) -> float:
+    """The cue speed (m/s) printed in the header, to its three decimals.
+
+    Raises:
+        PerceptionFailed: No reading matches the header well enough.
+    """
+    score, text = min(_decode(keys, spec, n) for n in (1, 2))
+    if not text or score > MAX_MISMATCH * _note_keys(spec, text).size:
+        raise PerceptionFailed(f"the cue speed note cannot be read ({score} pixels differ)")
+    return float(text.split(" speed ")[1].split()[0])
+
+
+def read_direction(keys: Keys, spec: CanvasSpec, cue_px: tuple[float, float]) -> float:
+    """Angle (radians, table convention: counter-clockwise from +x) of the cue arrow.
+
+    Raises:
+        PerceptionFailed: No arrow is drawn, or too little of it is visible.
+    """
+    points = np.argwhere(keys == shown(keys, st.ARROW)).astype(float)
+    if len(points) < 20:
+        raise PerceptionFailed("no cue arrow found")
+    for _ in range(2):  # refit without pixels far from the first axis
+        centre = points.mean(axis=0)
+        _, _, axes = np.linalg.svd(points - centre, full_matrices=False)
+        axis = axes[0]
+        off = np.abs((points - centre) @ np.array([-axis[1], axis[0]]))
+        kept = points[off <= 6]
+        if len(kept) >= 20:
+            points = kept
+    away = centre - np.array([cue_px[1], cue_px[0]])
+    if away @ axis < 0:
+        axis = -axis
+    return math.atan2(-axis[0], axis[1])  # rows grow downward, y upward

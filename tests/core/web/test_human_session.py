@@ -1,0 +1,132 @@
+"""``bpb human`` without a browser: seeded order, resume, and every bad post refused with a
+message while nothing is stored."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from starlette.testclient import TestClient
+
+from bpb_core.errors import BadInput
+from bpb_core.registry import Registry
+from bpb_core.run_folder import iter_answers, read_manifest
+from bpb_core.runner.options import RunOptions
+from bpb_core.web.human import HumanSession
+from bpb_core.web.human_app import human_app
+
+
+def _session(data: Path, run: Path, registry: Registry, seed: int = 0) -> HumanSession:
+    return HumanSession(data, run, "ann", registry, RunOptions(horizons=(1.0,)), seed)
+
+
+def _valid_form(client: TestClient) -> dict[str, str]:
+    page = client.get("/").text
+    form = dict(re.findall(r'name="(scene|shown|token)" value="([^"]+)"', page))
+    places = r'name="(q3\.pos\d+)" id="[^"]+" data-ball="\d+"\s+value="([^"]+)"'
+    form |= dict(re.findall(places, page))
+    return form | {"q1.ball1": "T", "ms.q1": "1500"}
+
+
+def test_order_is_seeded_and_a_new_session_resumes(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    first = _session(small_dataset, tmp_path / "a", registry, seed=1)
+    again = _session(small_dataset, tmp_path / "b", registry, seed=1)
+    other = [_session(small_dataset, tmp_path / f"c{s}", registry, seed=s) for s in range(2, 6)]
+    assert [r.scene_id for r in first.order] == [r.scene_id for r in again.order]
+    assert any([r.scene_id for r in o.order] != [r.scene_id for r in first.order] for o in other)
+    client = TestClient(human_app(first))
+    form = _valid_form(client) | {"shown": f"{time.time() - 2:.3f}", "ms.q2": "9000"}
+    reply = client.post("/answer", data=form, follow_redirects=False)
+    assert reply.status_code == 303
+    resumed = _session(small_dataset, tmp_path / "a", registry, seed=1)
+    resumed_at = resumed.next_scene()
+    assert resumed_at is not None and resumed_at.scene_id == first.order[1].scene_id
+    stored = [r for _, r in iter_answers(tmp_path / "a")]
+    assert {r.task for r in stored} == {"q1", "q2", "q3"} and all(r.status == "ok" for r in stored)
+    assert {r.adapter for r in stored} == {"human:ann"}
+    latency = {r.task: r.latency for r in stored}  # the page's timing, capped by the server's
+    assert latency["q1"] == pytest.approx(1.5, abs=0.01)
+    assert latency["q2"] == pytest.approx(2.0, abs=0.5)
+    manifest = read_manifest(tmp_path / "a")
+    assert manifest is not None and manifest["adapter"] == "human:ann"
+    assert len(manifest["sessions"]) == 2
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"q1.ball9": "T"}, "q1.ball9: not a field of this form"),
+        ({"q1.ball1": "yes"}, "q1.ball1: a ticked box posts T"),
+        ({"q3.pos2": "3.5,0.2"}, "q3.pos2: (3.5, 0.2) is off the table"),
+        ({"q3.pos2": "a,b"}, "q3.pos2: expected &#39;x,y&#39; in metres"),
+        ({"q3.pos2": None}, "q3.pos2: missing"),
+        ({"ms.q1": "-4"}, "ms.q1: expected whole milliseconds"),
+        ({"scene": "h9_0000"}, "scene: not the scene being asked"),
+        ({"shown": "soon"}, "shown: expected the time"),
+        ({"q2.TOP": "T" * 500}, "longer than 200 characters"),
+        ({"<script>x": "T"}, "&lt;script&gt;x: not a field"),
+        ({"token": "0" * 32}, "token: not this session"),
+    ],
+)
+def test_a_bad_post_is_refused_with_its_field_and_stores_nothing(
+    small_dataset: Path,
+    tmp_path: Path,
+    registry: Registry,
+    change: dict[str, str | None],
+    message: str,
+) -> None:
+    client = TestClient(human_app(_session(small_dataset, tmp_path, registry)))
+    form = _valid_form(client)
+    for key, value in change.items():
+        if value is None:
+            form.pop(key)
+        else:
+            form[key] = value
+    reply = client.post("/answer", data=form, follow_redirects=False)
+    assert reply.status_code == 400 and message in reply.text
+    assert "<script>x" not in reply.text
+    assert list(iter_answers(tmp_path)) == []
+
+
+def test_a_name_that_is_not_a_plain_word_is_bad_input(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    with pytest.raises(BadInput, match="--name"):
+        HumanSession(small_dataset, tmp_path, "<bob>", registry)
+
+
+def test_the_closing_page_comes_when_every_scene_is_answered(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    session = _session(small_dataset, tmp_path, registry)
+    client = TestClient(human_app(session))
+    for _ in session.order:
+        assert client.post("/answer", data=_valid_form(client)).status_code == 200
+    assert 'id="done"' in client.get("/").text and session.next_scene() is None
+
+
+def test_the_apps_listen_on_loopback_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    import uvicorn
+
+    from bpb_core.web import serve as serving
+
+    seen: dict[str, object] = {}
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw))
+    serving.serve(object(), 8765)
+    assert seen["host"] == "127.0.0.1" and seen["port"] == 8765
+
+
+def test_bad_command_lines_are_one_line_errors(
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]], tmp_path: Path
+) -> None:
+    viewed = run_bpb("view", str(tmp_path / "nope"))
+    assert viewed.returncode == 2 and "no such run folder" in viewed.stderr
+    human = run_bpb("human", "--data", str(tmp_path / "nodata"), "--out", str(tmp_path / "run"))
+    assert human.returncode == 2 and "--data" in human.stderr
+    assert len(human.stderr.strip().splitlines()) == 1
