@@ -209,7 +209,10 @@ def _lines(files: Sequence[Path]) -> tuple[list[str], BadInput | None]:
                 texts.append(path.read_bytes())
             except OSError:
                 break  # read again below, where the error names the file
-        fast = job.family.truth_lines(texts, job.simulator, horizon) if texts else []
+        try:
+            fast = job.family.truth_lines(texts, job.simulator, horizon) if texts else []
+        except BpbError:  # e.g. an event cap overrun: the ordinary path below names the file
+            fast = None
         if fast is not None:
             return _fill(files, fast)
     lines: list[str] = []

@@ -4,7 +4,8 @@ fast path).
 :func:`light_scene` accepts a text only when it is plainly valid: one pydantic-core call checks
 it against plain typed dicts with the :class:`~bpb_tasks.billiards.scene.Scene` fields and no
 others (same types and coercions, finite numbers, a positive horizon, non-negative integer ids;
-no model instance is built); then ids must be distinct and every centre on the table, outside
+no model instance is built); then ids must be distinct and include the cue ball (0), speeds at
+most :data:`~bpb_tasks.billiards.scene.MAX_SPEED`, and every centre on the table, outside
 every pocket circle and not overlapping another ball (:func:`light_scenes` checks this on
 arrays, the tolerance as in :func:`~bpb_tasks.billiards.scene.check_geometry` or stricter).
 Table, physics and pockets, when given, are validated by their pydantic models once per distinct
@@ -14,6 +15,7 @@ file and field of whatever is wrong.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Annotated, Any, NamedTuple, NotRequired
 
@@ -21,7 +23,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 from typing_extensions import TypedDict
 
-from bpb_tasks.billiards.scene import TOUCH_TOLERANCE, Physics, Pockets, Table
+from bpb_tasks.billiards.scene import MAX_SPEED, TOUCH_TOLERANCE, Physics, Pockets, Table
 
 PARTS: dict[str, type[BaseModel]] = {"table": Table, "physics": Physics, "pockets": Pockets}
 _STRICT = ConfigDict(extra="forbid", allow_inf_nan=False)
@@ -95,7 +97,10 @@ def light_scene(text: bytes | str, *, geometry: bool = True) -> LightScene | Non
     if table is None or physics is None or pockets is None:
         return None
     balls = [LightBall(b["id"], b["pos"], b.get("vel", (0.0, 0.0))) for b in data["balls"]]
-    if len({b.id for b in balls}) != len(balls):
+    ids = {b.id for b in balls}
+    if len(ids) != len(balls) or 0 not in ids:  # repeated ids or no cue ball
+        return None
+    if any(math.hypot(*b.vel) > MAX_SPEED for b in balls):
         return None
     scene = LightScene(data["scene_id"], data["horizon"], table, physics, pockets, balls)
     return scene if not geometry or _geometry_many([scene])[0] else None
