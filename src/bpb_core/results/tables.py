@@ -16,10 +16,12 @@ its tasks' leaderboard scores (NaN for a run that lacks one of them).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
+
+from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, excluded_tasks
 
 if TYPE_CHECKING:
     from bpb_core.registration import SuiteInfo
@@ -120,22 +122,37 @@ def leaderboard(
     view: View = "strict",
     stable_only: bool = False,
     sort_by: str | None = None,
+    min_complete: float = DEFAULT_MIN_COMPLETE,
+    include_incomplete: bool = False,
 ) -> pd.DataFrame:
     """One row per run: each task's score (mean over horizons), each suite's weighted total,
     completeness; best first (by ``sort_by``, default the first suite, else the mean task).
+
+    A task with a (task, horizon) cell less than ``min_complete`` answered scores NaN (and so
+    does every suite built on it), unless ``include_incomplete``: it is left out of the ranking
+    instead of being read as a finding (:mod:`bpb_core.results.completeness`). ``worst_cell``
+    is the run's least complete cell; ``short`` names its tasks with a cell under
+    ``min_complete``.
     """
     acc = accuracy(units, view=view, stable_only=stable_only)
     tasks = tasks_of(units)
     means = acc.pivot_table(
         index=RUN_COLUMNS, columns="task", values="accuracy", aggfunc="mean", observed=True
     ).reindex(columns=tasks)
+    short = excluded_tasks(acc, min_complete)
+    if not include_incomplete:
+        for run, names in short.items():
+            means.loc[means.index.get_level_values("run") == run, names] = np.nan
     for suite in suites:
         means[suite.name] = suite_score(means, suite)
     counts = acc.groupby(RUN_COLUMNS, observed=True)[["answered", "expected"]].sum()
     out = means.join(counts).reset_index()
     out.columns.name = None
     out["completeness"] = out["answered"] / out["expected"]
-    out = out[[*RUN_COLUMNS, *metrics(units, suites), "completeness", "expected"]]
+    out["worst_cell"] = out["run"].map(acc.groupby("run", observed=True)["completeness"].min())
+    out["short"] = [", ".join(short.get(str(run), [])) for run in out["run"]]
+    columns = [*metrics(units, suites), "completeness", "worst_cell", "short", "expected"]
+    out = out[[*RUN_COLUMNS, *columns]]
     key = sort_by or (suites[0].name if suites else None)
     order = out[key] if key is not None else out[tasks].mean(axis=1)
     ranked = out.assign(_order=order.to_numpy()).sort_values(
@@ -144,16 +161,16 @@ def leaderboard(
     return ranked.drop(columns="_order").reset_index(drop=True)
 
 
-def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFrame:
+def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any) -> pd.DataFrame:
     """Strict leaderboard plus each suite's answered-only score and the completeness, best
-    first.
+    first (``options``: ``min_complete``, ``include_incomplete`` of :func:`leaderboard`).
 
     Columns: ``run, adapter, model, baseline``, each task, each suite followed by
-    ``<suite>_answered``, ``completeness, expected`` (``expected``: scene-task pairs the run
-    should have answered).
+    ``<suite>_answered``, ``completeness, worst_cell, short, expected`` (``expected``:
+    scene-task pairs the run should have answered).
     """
-    strict = leaderboard(units, suites, view="strict")
-    answered = leaderboard(units, suites, view="answered").set_index("run")
+    strict = leaderboard(units, suites, view="strict", **options)
+    answered = leaderboard(units, suites, view="answered", **options).set_index("run")
     for suite in suites:
         position = list(strict.columns).index(suite.name) + 1
         strict.insert(position, f"{suite.name}_answered", strict["run"].map(answered[suite.name]))
@@ -161,10 +178,10 @@ def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFra
 
 
 def summary_records(
-    units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()
+    units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any
 ) -> list[dict[str, object]]:
     """:func:`summary` as JSON-ready dicts (NaN becomes ``None``)."""
-    table = summary(units, suites)
+    table = summary(units, suites, **options)
     records: list[dict[str, object]] = []
     for row in table.to_dict(orient="records"):
         records.append({str(k): _plain(v) for k, v in row.items()})

@@ -90,7 +90,7 @@ def test_exports_keep_rows_and_dtypes(report_dir: Path) -> None:
 def test_charts_are_real_non_blank_pngs(report_dir: Path) -> None:
     charts = sorted((report_dir / "out" / "charts").glob("*.png"))
     assert [p.stem for p in charts] == [
-        "accuracy_vs_horizon", "leaderboards", "q3_tolerance_curve", "stasis_index",
+        "accuracy_by_horizon", "leaderboards", "q3_tolerance_curve", "stasis_index",
     ]  # fmt: skip
     for path in charts:
         with Image.open(path) as img:

@@ -1,0 +1,67 @@
+"""What a partial or mixed set of runs makes a report say: never a finding from missing data,
+never one leaderboard over two datasets."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bpb_core.errors import BadInput
+from bpb_core.registry import make_registry
+from bpb_core.report.build import Completeness, build_report
+from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run
+
+
+def _stopped_run(root: Path, data: Path) -> Path:
+    """An oracle-perfect model stopped after horizon 1: nothing answered at horizon 2."""
+    answers = {key: value for key, value in all_answers(oracle_answer).items() if key[0][1] == "1"}
+    return write_run(root / "runs" / "stopped", "litellm:stopped", data, answers)
+
+
+def test_a_stopped_run_does_not_fall_with_horizon(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    report = build_report(tmp_path / "runs", n_boot=20, registry=make_registry())
+    acc = report.tables["accuracy"].set_index(["task", "horizon"])
+    # strict: the unanswered horizon reads 0%, but is marked short ...
+    assert acc.loc[("q1", 2.0), "accuracy"] == 0.0 and acc.loc[("q1", 2.0), "level"] == "short"
+    assert acc.loc[("q1", 1.0), "level"] == "full"
+    # ... and no leaderboard or interval ranks the run on it
+    for name in ("leaderboard", "leaderboard_answered", "summary"):
+        row = report.tables[name].iloc[0]
+        assert row[["q1", "q2", "q3", "total"]].isna().all(), name
+        assert row["short"] == "q1, q2, q3"
+    assert report.tables["bootstrap"]["estimate"].isna().all()
+    summary = report.summary_json()
+    assert summary["incomplete"] == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
+    cells = {(c["task"], c["horizon"]): c for c in summary["completeness"]}
+    assert cells[("q3", 2.0)]["level"] == "short" and cells[("q3", 2.0)]["answered"] == 0
+
+
+def test_include_incomplete_keeps_the_scores_but_still_marks_them(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    rule = Completeness(include_incomplete=True)
+    report = build_report(tmp_path / "runs", n_boot=20, completeness=rule)
+    row = report.tables["leaderboard_answered"].iloc[0]
+    assert row["total"] == 1.0 and row["short"] == "q1, q2, q3"
+
+
+def test_runs_on_two_datasets_are_two_sections_never_one_leaderboard(tmp_path: Path) -> None:
+    first, second = write_dataset(tmp_path / "d1"), write_dataset(tmp_path / "d2")
+    runs = tmp_path / "runs"
+    write_run(runs / "a", "baseline:oracle", first, all_answers(oracle_answer))
+    write_run(runs / "b", "baseline:oracle", second, all_answers(oracle_answer))
+    report = build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    assert [p.results.runs[0].label for p in report.parts] == ["a", "b"]
+    assert all(len(p.tables["leaderboard"]) == 1 for p in report.parts)
+    with pytest.raises(BadInput, match="2 datasets"):
+        _ = report.tables
+    summary = json.loads(json.dumps(report.summary_json(), default=str))
+    assert "leaderboard" not in summary and len(summary["datasets"]) == 2
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "answered 2 different" in page and page.count("<h2>Dataset ") == 2
+    tables = sorted(p.name for p in (tmp_path / "out" / "tables").glob("*leaderboard.md"))
+    assert len(tables) == 2  # one per dataset, prefixed with its short id
