@@ -165,15 +165,15 @@ def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: An
     """Strict leaderboard plus each suite's answered-only score and the completeness, best
     first (``options``: ``min_complete``, ``include_incomplete`` of :func:`leaderboard`).
 
-    Columns: ``run, adapter, model, baseline``, each task, each suite followed by
-    ``<suite>_answered``, ``completeness, worst_cell, short, expected`` (``expected``:
-    scene-task pairs the run should have answered).
+    Columns: ``run, adapter, model, baseline``, each task and each suite followed by its
+    answered-only score ``<name>_answered``, ``completeness, worst_cell, short, expected``
+    (``expected``: scene-task pairs the run should have answered).
     """
     strict = leaderboard(units, suites, view="strict", **options)
     answered = leaderboard(units, suites, view="answered", **options).set_index("run")
-    for suite in suites:
-        position = list(strict.columns).index(suite.name) + 1
-        strict.insert(position, f"{suite.name}_answered", strict["run"].map(answered[suite.name]))
+    for name in metrics(units, suites):
+        position = list(strict.columns).index(name) + 1
+        strict.insert(position, f"{name}_answered", strict["run"].map(answered[name]))
     return strict
 
 
