@@ -133,6 +133,12 @@ def _print_part(part: ReportPart, built: Report) -> None:
     console.print(_cell_table(title, *headline_cells(part, rule)))
     for run, line in incomplete_lines(part.results.calls).items():
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
+    for task, notes in part.metric_notes.items():
+        frame = tables[f"{task}_metrics"][["run", "baseline", "complete", *notes]]
+        title = f"{task} metrics beside accuracy (answered only)"
+        console.print(_frame_table(title, frame, percent=True))
+        for name, note in notes.items():
+            console.print(f"[dim]{escape(name)}: {escape(note)}[/]", highlight=False)
     horizon = horizon_cells(tables["accuracy_answered"], rule)
     console.print(_cell_table("Accuracy by horizon (answered only; \\[answered share])", *horizon))
     if part.results.suites:

@@ -85,10 +85,12 @@ def leaderboards(
     titles: Mapping[str, str] | None = None,
     *,
     xlabel: str = "mean accuracy over horizons (%)",
+    no_value: str = "left out (too incomplete)",
 ) -> bytes:
     """One leaderboard per metric (each task, then each suite): horizontal bars, best on
     top, every baseline also drawn as a dashed line across the panel (the floors and the
-    ceiling on the same axis); runs with no score (left out) are named under the axis."""
+    ceiling on the same axis); a zero is drawn as a tick on the axis so it reads as a value;
+    runs with no value are named under the axis after ``no_value``."""
     titles = titles or {}
     ncols = min(len(metrics), 2)
     nrows = (len(metrics) + ncols - 1) // ncols
@@ -105,6 +107,9 @@ def leaderboards(
         bars = ax.barh(list(ys), values, color=colours, edgecolor="white")
         for bar, hatch in zip(bars, hatches, strict=True):
             bar.set_hatch(hatch)
+        for y, value, colour in zip(ys, values, colours, strict=True):
+            if value == 0:
+                ax.plot([0.6, 0.6], [y - 0.4, y + 0.4], color=colour, lw=3, solid_capstyle="butt")
         ends = values.copy()
         if ci is not None:
             ends = np.fmax(ends, _error_bars(ax, ranked, ci, metric))
@@ -115,7 +120,7 @@ def leaderboards(
         ax.set_xticks([0, 20, 40, 60, 80, 100])
         _floors(ax, ranked, styles, metric)
         left_out = board.loc[board[metric].isna(), "run"].astype(str).tolist()
-        note = f"\nleft out (too incomplete): {', '.join(left_out)}" if left_out else ""
+        note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
         ax.set_xlabel(xlabel + note, fontsize=8)
         ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)

@@ -121,5 +121,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "incomplete": incomplete_lines(results.calls),
         "usage": records(tables["usage"]),
         "pairs": records(tables["pairs"]),
+        "metrics": {t: records(tables[f"{t}_metrics"]) for t in part.metric_notes},
+        "metric_notes": {t: dict(notes) for t, notes in part.metric_notes.items()},
         "diagnostics": {d.name: records(tables[d.name]) for d in part.diagnostics},
     }

@@ -28,6 +28,14 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
             tables["accuracy_answered"], order, suites, names, min_complete=rule.min_complete
         ),
     }  # fmt: skip
+    for task, notes in part.metric_notes.items():
+        table = part.tables[f"{task}_metrics"]
+        shown = [m for m in notes if table[m].notna().any()]
+        title = f"{names.get(task, task)}: metrics beside accuracy"
+        pngs[title] = ch.leaderboards(
+            table, shown, None, {m: f"{task} {m.replace('_', ' ')}" for m in shown},
+            xlabel="answered only (%)", no_value="no value (undefined, or too incomplete)",
+        )  # fmt: skip
     for diagnostic in part.diagnostics:
         png = diagnostic.chart(tables[diagnostic.name])
         if png is not None:

@@ -7,21 +7,29 @@ tables on its own. :func:`report_tables` is pure (frames in, frames out).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
+from bpb_core.capabilities import ReportsMetrics
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.frames import Results, by_dataset
-from bpb_core.results.tables import RUN_COLUMNS, accuracy, by_horizon, leaderboard, summary
+from bpb_core.results.tables import (
+    RUN_COLUMNS,
+    UNANSWERED,
+    accuracy,
+    by_horizon,
+    leaderboard,
+    summary,
+)
 from bpb_core.results.uncertainty import all_pairs, bootstrap_ci
 from bpb_core.results.usage import usage
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import Diagnostic
+    from bpb_core.interfaces import Diagnostic, Scorer
     from bpb_core.registry import Registry
 
 
@@ -43,6 +51,8 @@ class ReportPart:
     results: Results
     tables: dict[str, pd.DataFrame]
     diagnostics: tuple[Diagnostic, ...] = ()
+    metric_notes: dict[str, Mapping[str, str]] = field(default_factory=dict)
+    """Per task with a ``<task>_metrics`` table: its metrics and what each says."""
 
     @property
     def path(self) -> str:
@@ -67,11 +77,14 @@ def report_parts(
     parts = []
     for part in by_dataset(results):
         diagnostics = tuple(registry.diagnostics_for(part.tasks))
+        scorers = {task: registry.scorer_for(task) for task in part.tasks}
         tables = report_tables(
-            part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness
-        )
+            part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness,
+            scorers=scorers,
+        )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
-        parts.append(ReportPart(dataset, part, tables, diagnostics))
+        notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
+        parts.append(ReportPart(dataset, part, tables, diagnostics, notes))
     return tuple(parts)
 
 
@@ -82,13 +95,15 @@ def report_tables(
     n_boot: int = 2000,
     seed: int = 0,
     completeness: Completeness | None = None,
+    scorers: Mapping[str, Scorer] | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Every table of a report, derived from ``results`` (nothing is written or printed).
 
     Leaderboards leave out a task with a cell under the completeness threshold (unless
     ``include_incomplete``); accuracy tables carry each cell's ``level`` (full, partial,
     short); bootstrap intervals are blanked where the leaderboard is; paired comparisons use
-    the scenes both runs answered.
+    the scenes both runs answered. A scorer that :class:`~bpb_core.capabilities.ReportsMetrics`
+    adds the table ``<task>_metrics``.
     """
     rule = completeness or Completeness()
     units, calls, suites = results.units, results.calls, results.suites
@@ -112,7 +127,29 @@ def report_tables(
     done = tables["leaderboard"].set_index("run")["completeness"]
     for diagnostic in diagnostics:
         tables[diagnostic.name] = _with_completeness(diagnostic.table(results), done)
+    for task, scorer in (scorers or {}).items():
+        if isinstance(scorer, ReportsMetrics):
+            table = task_metrics(units, task, scorer, tables["leaderboard_answered"], rule)
+            tables[f"{task}_metrics"] = _with_completeness(table, done)
     return tables
+
+
+def task_metrics(
+    units: pd.DataFrame,
+    task: str,
+    scorer: ReportsMetrics,
+    board: pd.DataFrame,
+    rule: Completeness,
+) -> pd.DataFrame:
+    """A scorer's metrics on the task's answered units, blanked (NaN) for runs whose task the
+    leaderboard left out."""
+    answered = units[(units["task"] == task) & ~units["status"].isin(UNANSWERED)]
+    table = scorer.task_metrics(answered)
+    if not rule.include_incomplete:
+        short = board.set_index("run")["short"].astype(str)
+        left_out = [task in short.get(str(run), "").split(", ") for run in table["run"]]
+        table.loc[left_out, list(scorer.metric_notes)] = np.nan
+    return table
 
 
 def _with_completeness(table: pd.DataFrame, done: pd.Series) -> pd.DataFrame:

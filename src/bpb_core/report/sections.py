@@ -70,7 +70,21 @@ def headline(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     beside, and what is incomplete."""
     head, rows = headline_cells(part, rule)
     body = _headline_note(part, rule) + html.cells(head, rows, "no runs")
-    return [("Leaderboard (answered only; strict beside)", body + incomplete_notes(part))]
+    out = [("Leaderboard (answered only; strict beside)", body + incomplete_notes(part))]
+    for task in part.metric_notes:
+        out.append((f"{task} metrics beside accuracy (answered only)", metrics_body(part, task)))
+    return out
+
+
+def metrics_body(part: ReportPart, task: str) -> Markup:
+    """A task's metrics table (from its scorer) with what each metric says."""
+    notes = part.metric_notes[task]
+    items = Markup("").join(
+        Markup("<li><b>{}</b>: {}</li>").format(name, note) for name, note in notes.items()
+    )
+    table = part.tables[f"{task}_metrics"]
+    percent = (*notes, "complete")
+    return html.table(table, percent=percent) + Markup("<ul class='muted'>{}</ul>").format(items)
 
 
 def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Rows]:
