@@ -14,23 +14,36 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from bpb_core.report.html import Cell, plain
 from bpb_core.report.sections import Rows, headline_cells, horizon_cells
 from bpb_core.results.completeness import completeness_records, incomplete_lines
 from bpb_core.results.tables import summary_records
 
 if TYPE_CHECKING:
-    from bpb_core.report.html import Cell
     from bpb_core.report.parts import Completeness, ReportPart
 
 PAPER_TABLES = ("leaderboard", "by_horizon")
 
 
 def paper_tables(part: ReportPart, rule: Completeness) -> dict[str, pd.DataFrame]:
-    """The headline leaderboard and accuracy by horizon (answered only) as frames of text."""
-    return {
+    """The headline leaderboard, accuracy by horizon (answered only) and each task's metrics
+    table as frames of text."""
+    out = {
         "leaderboard": _frame(*headline_cells(part, rule)),
         "by_horizon": _frame(*horizon_cells(part.tables["accuracy_answered"], rule)),
     }
+    for task, notes in part.metric_notes.items():
+        table = part.tables[f"{task}_metrics"]
+        columns = ["complete", *notes]
+        rows: Rows = [
+            (
+                bool(row["baseline"]),
+                [Cell(str(row["run"])), *(plain(row[c], True) for c in columns)],
+            )
+            for row in table.to_dict(orient="records")
+        ]
+        out[f"{task}_metrics"] = _frame(["run", *columns], rows)
+    return out
 
 
 def _text(cell: Cell) -> str:
@@ -64,6 +77,7 @@ def latex(frame: pd.DataFrame, caption: str) -> str:
     styler = styler.format_index(escape="latex", axis=1)
     align = "l" + "r" * (len(frame.columns) - 1)
     caption = caption.replace("%", "\\%")
+    frame = frame.replace("–", "--", regex=True)  # an en dash any TeX engine reads
     return styler.to_latex(
         hrules=True, column_format=align, caption=caption, position="t", position_float="centering"
     )
@@ -82,6 +96,7 @@ def write_exports(part: ReportPart, out: Path, prefix: str, rule: Completeness) 
         "by_horizon": "Accuracy by horizon, answered only (in brackets: the share answered).",
     }
     for name, frame in paper_tables(part, rule).items():
+        captions.setdefault(name, f"{name.replace('_', ' ')}, answered only.")
         md = out / "tables" / f"{prefix}{name}.md"
         md.write_text(markdown(frame), encoding="utf-8")
         tex = out / "tables" / f"{prefix}{name}.tex"

@@ -65,3 +65,33 @@ def test_runs_on_two_datasets_are_two_sections_never_one_leaderboard(tmp_path: P
     assert "answered 2 different" in page and page.count("<h2>Dataset ") == 2
     tables = sorted(p.name for p in (tmp_path / "out" / "tables").glob("*leaderboard.md"))
     assert len(tables) == 2  # one per dataset, prefixed with its short id
+
+
+def test_markdown_and_booktabs_exports_show_the_same_cells(runs: Path, tmp_path: Path) -> None:
+    build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    tables = tmp_path / "out" / "tables"
+    md = (tables / "by_horizon.md").read_text().splitlines()
+    assert md[0].startswith("| run | task | h1 | h2 | mean |") and md[1].startswith("| :---")
+    model_q2 = next(line for line in md if line.startswith("| litellm_model | q2"))
+    assert model_q2 == "| litellm_model | q2 | 50.0% | left out (50.0%) | left out |"
+    tex = (tables / "leaderboard.tex").read_text()
+    for rule in ("\\toprule", "\\midrule", "\\bottomrule", "\\caption{"):
+        assert tex.count(rule) == 1, rule
+    assert "baseline\\_stasis (baseline) & 100.0\\% & 87.5\\%" in tex
+    assert "%" not in tex.replace("\\%", "")  # no bare % would comment the rest of a line out
+    assert (tables / "q1_metrics.tex").is_file() and (tables / "q1_metrics.md").is_file()
+
+
+def test_json_carries_by_horizon_completeness_usage_and_confusion(runs: Path) -> None:
+    summary = build_report(runs, n_boot=20).summary_json()
+    rows = {(r["run"], r["task"], r["horizon"]): r for r in summary["by_horizon"]}
+    cell = rows[("litellm_model", "q1", 1.0)]
+    assert cell["accuracy_strict"] == 0.5 and cell["accuracy_answered"] == 1.0
+    assert cell["completeness"] == 0.5 and cell["level"] == "short"
+    assert {u["run"] for u in summary["usage"]} == {
+        "baseline_oracle",
+        "baseline_stasis",
+        "litellm_model",
+    }
+    assert {"q1_confusion", "q2_confusion"} <= set(summary["diagnostics"])
+    assert summary["completeness_rule"] == {"min_complete": 0.9, "include_incomplete": False}
