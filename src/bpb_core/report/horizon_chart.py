@@ -135,5 +135,7 @@ def _bar(
         return
     bar = ax.bar(x, value, width, color=style["color"], edgecolor="white", lw=0.4)[0]
     bar.set_hatch(style["hatch"])
+    if value == 0:  # a zero is a value: a stub on the axis, not an empty slot
+        ax.plot([x - width / 2, x + width / 2], [0.6, 0.6], color=style["color"], lw=2.5)
     mark = "*" if grade == "partial" else ""
     ax.text(x, value + 1, f"{value:.0f}{mark}", **text_args)
