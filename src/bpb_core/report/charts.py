@@ -58,10 +58,13 @@ def png(fig: Figure) -> bytes:
 
 
 def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
-    """Colour, line style and hatch per run (``runs`` has columns run, baseline)."""
+    """Colour, line style and hatch per run (``runs`` has columns run, baseline), assigned in
+    the order of the run names so that every chart of a report agrees."""
     styles: dict[str, dict[str, Any]] = {}
     models = baselines = 0
-    for row in runs.drop_duplicates("run").itertuples():
+    # by name, not by the frame's order, so a run has the same style in every chart
+    ordered = runs.assign(run=runs["run"].astype(str)).drop_duplicates("run").sort_values("run")
+    for row in ordered.itertuples():
         if row.baseline:
             k = baselines % len(_BASELINE_GREYS)
             styles[str(row.run)] = {
