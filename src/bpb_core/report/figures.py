@@ -31,6 +31,8 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
     for task, notes in part.metric_notes.items():
         table = part.tables[f"{task}_metrics"]
         shown = [m for m in notes if table[m].notna().any()]
+        if not shown:
+            continue
         title = f"{names.get(task, task)}: metrics beside accuracy"
         pngs[title] = ch.leaderboards(
             table, shown, None, {m: f"{task} {m.replace('_', ' ')}" for m in shown},

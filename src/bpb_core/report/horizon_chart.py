@@ -28,10 +28,9 @@ def suite_by_horizon(accuracy: pd.DataFrame, suite: SuiteInfo) -> pd.DataFrame:
     """A suite's weighted accuracy per (run, horizon), with the least complete task's
     completeness (empty when a task of it is absent)."""
     keys = ["run", "baseline", "horizon"]
-    wide = accuracy.pivot_table(index=keys, columns="task", values="accuracy", observed=True)
-    done = accuracy.pivot_table(
-        index=keys, columns="task", values="completeness", aggfunc="min", observed=True
-    )
+    cells = accuracy.assign(run=accuracy["run"].astype(str)).set_index([*keys, "task"])
+    wide = cells["accuracy"].unstack("task")  # keeps cells with no answer (NaN): drawn left out
+    done = cells["completeness"].unstack("task")
     if not set(suite.weights) <= set(wide.columns):
         return pd.DataFrame(columns=[*keys, "accuracy", "completeness"])
     out = pd.DataFrame({"accuracy": sum(w * wide[t] for t, w in suite.weights.items())})
@@ -105,6 +104,7 @@ def _panel(
                 x = j - 0.42 + width * (k + 0.5)
                 _bar(ax, x, width, rows[horizon], styles[run], min_complete, many)
     ax.set_xticks(range(len(horizons)), [f"{h:g} s" for h in horizons], fontsize=8)
+    ax.set_xlim(-0.5, len(horizons) - 0.5)
     ax.set_ylim(0, 118 if many else 112)
     ax.set_yticks([0, 25, 50, 75, 100])
     ax.tick_params(axis="y", labelsize=7)

@@ -146,7 +146,7 @@ def leaderboard(
     for suite in suites:
         means[suite.name] = suite_score(means, suite)
     counts = acc.groupby(RUN_COLUMNS, observed=True)[["answered", "expected"]].sum()
-    out = means.join(counts).reset_index()
+    out = means.reindex(counts.index).join(counts).reset_index()  # a run with no answer stays
     out.columns.name = None
     out["completeness"] = out["answered"] / out["expected"]
     out["worst_cell"] = out["run"].map(acc.groupby("run", observed=True)["completeness"].min())

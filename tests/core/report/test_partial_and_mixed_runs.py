@@ -95,3 +95,14 @@ def test_json_carries_by_horizon_completeness_usage_and_confusion(runs: Path) ->
     }
     assert {"q1_confusion", "q2_confusion"} <= set(summary["diagnostics"])
     assert summary["completeness_rule"] == {"min_complete": 0.9, "include_incomplete": False}
+
+
+def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    write_run(tmp_path / "runs" / "nothing", "litellm:none", data, {})
+    _stopped_run(tmp_path, data)
+    report = build_report(tmp_path / "runs", tmp_path / "out", n_boot=20, gallery_size=0)
+    board = report.tables["leaderboard_answered"].set_index("run")
+    assert board.loc["nothing", "completeness"] == 0.0 and board.loc["nothing", "short"]
+    assert board.loc["nothing", ["q1", "total"]].isna().all()
+    assert (tmp_path / "out" / "charts" / "accuracy_by_horizon.png").stat().st_size > 0
