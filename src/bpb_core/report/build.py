@@ -27,7 +27,7 @@ import pandas as pd
 from bpb_core.errors import BadInput
 from bpb_core.report import gallery, html
 from bpb_core.report.exports import part_json, write_exports
-from bpb_core.report.figures import chart_pngs
+from bpb_core.report.figures import chart_notes, chart_pngs
 from bpb_core.report.parts import Completeness, ReportPart, report_parts, report_tables
 from bpb_core.report.sections import headline, run_items, sections
 from bpb_core.results.frames import Results, load_results
@@ -163,6 +163,7 @@ def _page_part(part: ReportPart, pngs: dict[str, bytes], rule: Completeness) -> 
         "runs": run_items(part),
         "headline": headline(part, rule),
         "charts": pngs,
+        "chart_notes": chart_notes(part, rule),
         "sections": sections(part, rule),
     }
 

@@ -39,7 +39,29 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
             xlabel="answered only (%)", no_value="no value (undefined, or too incomplete)",
         )  # fmt: skip
     for diagnostic in part.diagnostics:
-        png = diagnostic.chart(tables[diagnostic.name])
+        table = tables[diagnostic.name]
+        left_out = [] if rule.include_incomplete else diagnostic_left_out(part, diagnostic.name)
+        if "run" in table.columns and left_out:
+            table = table[~table["run"].astype(str).isin(left_out)]
+        png = diagnostic.chart(table) if not table.empty else None
         if png is not None:
             pngs[diagnostic.title] = png
     return pngs
+
+
+def diagnostic_left_out(part: ReportPart, name: str) -> list[str]:
+    """Runs a diagnostic's chart leaves out: too incomplete in one of the diagnostic's tasks
+    (its table keeps them, with their completeness)."""
+    return part.too_incomplete(part.diagnostic_tasks.get(name, ()))
+
+
+def chart_notes(part: ReportPart, rule: Completeness) -> dict[str, str]:
+    """A line under each chart that leaves runs out, naming them."""
+    if rule.include_incomplete:
+        return {}
+    notes = {}
+    for diagnostic in part.diagnostics:
+        left_out = diagnostic_left_out(part, diagnostic.name)
+        if left_out:
+            notes[diagnostic.title] = f"left out as too incomplete: {', '.join(left_out)}"
+    return notes

@@ -82,7 +82,8 @@ together.</p>{% endif %}
 {% endfor %}</ul>
 {% for heading, body in part.headline %}<h2>{{ heading }}</h2>{{ body }}{% endfor %}
 <h2>Charts</h2>{% for name, uri in part.charts %}<h3>{{ name }}</h3>
-<img class="chart" alt="{{ name }}" src="{{ uri }}">{% endfor %}
+<img class="chart" alt="{{ name }}" src="{{ uri }}">{% if part.chart_notes.get(name) %}
+<p class="muted">{{ part.chart_notes[name] }}</p>{% endif %}{% endfor %}
 {% for heading, body in part.sections %}<h2>{{ heading }}</h2>{{ body }}{% endfor %}
 {% endfor %}
 <h2>Failure gallery</h2><p class="muted">The worst answered scenes (lowest score), models before
@@ -169,7 +170,8 @@ def render(
     failure gallery.
 
     Each part is a dict with ``name``, ``runs`` (dicts), ``headline`` and ``sections``
-    ((heading, HTML body) pairs) and ``charts`` ({title: PNG bytes}).
+    ((heading, HTML body) pairs), ``charts`` ({title: PNG bytes}) and ``chart_notes``
+    ({title: a line shown under the chart}).
     """
     shown = [{**p, "charts": [(k, data_uri(v)) for k, v in p["charts"].items()]} for p in parts]
     template = _environment().from_string(PAGE)

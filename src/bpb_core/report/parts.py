@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.capabilities import ReportsMetrics
+from bpb_core.registration import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.frames import Results, by_dataset
 from bpb_core.results.tables import (
@@ -53,6 +54,17 @@ class ReportPart:
     diagnostics: tuple[Diagnostic, ...] = ()
     metric_notes: dict[str, Mapping[str, str]] = field(default_factory=dict)
     """Per task with a ``<task>_metrics`` table: its metrics and what each says."""
+    diagnostic_tasks: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """Per diagnostic, the tasks it looks at."""
+
+    def too_incomplete(self, tasks: Sequence[str]) -> list[str]:
+        """Runs with a task of ``tasks`` left out of the leaderboards (a cell too incomplete)."""
+        board = self.tables["leaderboard_answered"]
+        wanted = set(tasks)
+        return [
+            str(run) for run, short in zip(board["run"], board["short"], strict=True)
+            if wanted & set(str(short).split(", "))
+        ]  # fmt: skip
 
     @property
     def path(self) -> str:
@@ -84,8 +96,15 @@ def report_parts(
         )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
         notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
-        parts.append(ReportPart(dataset, part, tables, diagnostics, notes))
+        infos = registry.entries("diagnostic")
+        looks = {d.name: _tasks_of(infos.get(d.name)) for d in diagnostics}
+        parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks))
     return tuple(parts)
+
+
+def _tasks_of(entry: object) -> tuple[str, ...]:
+    info = getattr(entry, "info", None)
+    return tuple(info.tasks) if isinstance(info, DiagnosticInfo) else ()
 
 
 def report_tables(

@@ -106,3 +106,13 @@ def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> No
     assert board.loc["nothing", "completeness"] == 0.0 and board.loc["nothing", "short"]
     assert board.loc["nothing", ["q1", "total"]].isna().all()
     assert (tmp_path / "out" / "charts" / "accuracy_by_horizon.png").stat().st_size > 0
+
+
+def test_diagnostic_charts_leave_out_too_incomplete_runs_and_say_so(
+    runs: Path, tmp_path: Path
+) -> None:
+    report = build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    assert "litellm_model" in set(report.tables["stasis"]["run"])  # the table keeps it
+    page = (tmp_path / "out" / "report.html").read_text()
+    stasis = page[page.index("<h3>Stasis index</h3>") :]
+    assert stasis.index("left out as too incomplete: litellm_model") < stasis.index("<h2>")
