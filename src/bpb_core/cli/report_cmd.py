@@ -58,6 +58,7 @@ USAGE_COLUMNS = {
     default=0.9,
     show_default=True,
     type=click.FloatRange(0, 1),
+    callback=lambda _ctx, _param, value: _share(value),
     help="Share of a (run, task, horizon) cell that must be answered for it to count.",
 )
 @click.option(
@@ -105,6 +106,12 @@ def report(
     _print_tables(built)
     if out is not None:
         stderr().print(f"wrote {built.files['html']} and {len(built.files) - 1} more files")
+
+
+def _share(value: float) -> float:
+    if math.isnan(value):  # FloatRange lets NaN through: no comparison with it is true
+        raise click.BadParameter("must be a number from 0 to 1, not nan")
+    return value
 
 
 def _print_tables(built: Report) -> None:

@@ -147,3 +147,22 @@ def test_html_renders_charts_and_gallery_in_headless_chromium(
         assert hi - lo > 150
     if os.environ.get("BPB_KEEP_SCREENSHOT"):
         shutil.copy(shot, os.environ["BPB_KEEP_SCREENSHOT"])
+
+
+@pytest.mark.parametrize("value", ["nan", "1.5", "-0.1", "abc"])
+def test_a_bad_completeness_threshold_is_exit_2_naming_the_option(
+    report_dir: Path, value: str
+) -> None:
+    done = bpb("report", str(report_dir / "runs"), "--min-complete", value)
+    assert done.returncode == 2 and "--min-complete" in done.stderr
+
+
+def test_include_incomplete_puts_the_run_back_marked(report_dir: Path) -> None:
+    args = ("report", str(report_dir / "runs"), "--bootstrap", "20", "--json")
+    board = {r["run"]: r for r in json.loads(bpb(*args).stdout)["leaderboard"]}
+    assert board["litellm_model"]["total_answered"] is None
+    board = {
+        r["run"]: r for r in json.loads(bpb(*args, "--include-incomplete").stdout)["leaderboard"]
+    }
+    model = board["litellm_model"]
+    assert model["q1_answered"] == 1.0 and model["short"] == "q1, q2, q3"
