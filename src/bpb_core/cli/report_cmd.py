@@ -170,7 +170,7 @@ def _cell_table(title: str, head: list[str], rows: Rows) -> Table:
     table = Table(title=title)
     for name in head:
         left = name in ("run", "task")
-        table.add_column(name, justify="left" if left else "right", no_wrap=name == "run")
+        table.add_column(name, justify="left" if left else "right", no_wrap=True)
     for baseline, cells in rows:
         texts = [_cell_text(c) for c in cells]
         texts[0] = _name(cells[0].text, baseline)

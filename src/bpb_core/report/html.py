@@ -35,7 +35,7 @@ padding-bottom:4px}h3{margin:20px 0 6px}
 border-left:4px solid #e69f00;font-size:13px}
 table{border-collapse:collapse;margin:8px 0 16px;font-size:13px;background:#fff}
 th,td{border:1px solid #dde1e7;padding:4px 7px;text-align:right;white-space:nowrap}
-th{background:#eef1f5;white-space:normal;max-width:9em}
+th{background:#eef1f5;white-space:normal;max-width:9em;overflow-wrap:anywhere}
 td:first-child,th:first-child{text-align:left;white-space:normal;min-width:10em}
 tr.baseline td{color:#555;font-style:italic;background:#fafafa}
 td.partial sup{color:#b45f06;font-size:10px;margin-left:2px}

@@ -16,7 +16,7 @@ from markupsafe import Markup
 
 from bpb_core.report import html
 from bpb_core.report.html import Cell
-from bpb_core.results.completeness import incomplete_lines, level
+from bpb_core.results.completeness import incomplete_lines, level, worst_cells
 
 if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
@@ -53,13 +53,17 @@ def completeness_cell(value: float, rule: Completeness) -> Cell:
     return Cell(pct(value), css=css, title="share of the scene-task calls answered")
 
 
-def score_cell(value: float, left_out: bool, rule: Completeness) -> Cell:
-    """A leaderboard score; blank and greyed when a cell of it is under the threshold."""
-    if left_out and math.isnan(value):
+def score_cell(value: float, worst: float, rule: Completeness) -> Cell:
+    """A leaderboard score with its least complete cell ``worst``: "left out" and greyed when
+    that is under the threshold (and the score blank), marked with it when under 100%."""
+    grade = level(worst, rule.min_complete)
+    if grade == "short" and math.isnan(value):
         return Cell(LEFT_OUT, css="short", title=f"a horizon is under {pct(rule.min_complete)}")
     if math.isnan(value):
         return Cell("–")
-    return Cell(pct(value), css="partial" if left_out else "", note="!" if left_out else "")
+    if grade == "full":
+        return Cell(pct(value))
+    return Cell(pct(value), note=pct(worst), css=grade, title="least complete horizon answered")
 
 
 Rows = list[tuple[bool, list[Cell]]]
@@ -97,15 +101,19 @@ def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Row
     head = ["run", "complete", *tasks, *(s.name for s in suites)]
     head += [f"{first} strict", f"{first} 95% CI"] if first else []
     head += ["worst cell", "left out"]
+    worst = worst_cells(tables["accuracy"])
     rows = []
     for row in board.to_dict(orient="records"):
         run, short = str(row["run"]), str(row["short"])
+        found = worst.loc[run].to_dict() if run in worst.index else {}
+        least = {t: float(found.get(t, 1.0)) for t in tasks}
+        of = {s.name: min(least.get(t, 1.0) for t in s.weights) for s in suites}
         cells = [Cell(run), completeness_cell(float(row["completeness"]), rule)]
-        cells += [score_cell(float(row[m]), m in short.split(", "), rule) for m in tasks]
-        cells += [score_cell(float(row[s.name]), bool(short), rule) for s in suites]
+        cells += [score_cell(float(row[m]), least[m], rule) for m in tasks]
+        cells += [score_cell(float(row[s.name]), of[s.name], rule) for s in suites]
         if first:
             strict_score = float(strict.loc[run, first])  # type: ignore[arg-type]
-            cells.append(score_cell(strict_score, bool(short), rule))
+            cells.append(score_cell(strict_score, of[first], rule))
             cells.append(_interval(ci, run, first))
         cells += [completeness_cell(float(row["worst_cell"]), rule), Cell(short or "–")]
         rows.append((bool(row["baseline"]), cells))
