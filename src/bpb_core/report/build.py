@@ -29,7 +29,7 @@ from bpb_core.report import gallery, html
 from bpb_core.report.exports import part_json, write_exports
 from bpb_core.report.figures import chart_notes, chart_pngs
 from bpb_core.report.parts import Completeness, ReportPart, report_parts, report_tables
-from bpb_core.report.sections import headline, run_items, sections
+from bpb_core.report.sections import headline, sections
 from bpb_core.results.frames import Results, load_results
 
 if TYPE_CHECKING:
@@ -166,6 +166,23 @@ def _page_part(part: ReportPart, pngs: dict[str, bytes], rule: Completeness) -> 
         "chart_notes": chart_notes(part, rule),
         "sections": sections(part, rule),
     }
+
+
+def run_items(part: ReportPart) -> list[dict[str, Any]]:
+    """The runs of a part, for the page's run list."""
+    return [
+        {
+            "label": run.label,
+            "adapter": run.adapter,
+            "model": run.model,
+            "tasks": ", ".join(run.tasks),
+            "scenes": len(run.scene_keys),
+            "dataset": str(run.dataset),
+            "hash": str(run.manifest.get("dataset_hash") or "")[:12],
+            "baseline": run.baseline,
+        }
+        for run in part.results.runs
+    ]
 
 
 def _write(path: Path, data: bytes) -> Path:

@@ -17,7 +17,8 @@ import pandas as pd
 from bpb_core.capabilities import ReportsMetrics
 from bpb_core.registration import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
-from bpb_core.results.frames import Results, by_dataset
+from bpb_core.results.datasets import by_dataset
+from bpb_core.results.frames import Results
 from bpb_core.results.tables import (
     RUN_COLUMNS,
     UNANSWERED,

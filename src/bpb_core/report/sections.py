@@ -24,23 +24,6 @@ if TYPE_CHECKING:
 LEFT_OUT = "left out"
 
 
-def run_items(part: ReportPart) -> list[dict[str, Any]]:
-    """The runs of a part, for the page's run list."""
-    return [
-        {
-            "label": run.label,
-            "adapter": run.adapter,
-            "model": run.model,
-            "tasks": ", ".join(run.tasks),
-            "scenes": len(run.scene_keys),
-            "dataset": str(run.dataset),
-            "hash": str(run.manifest.get("dataset_hash") or "")[:12],
-            "baseline": run.baseline,
-        }
-        for run in part.results.runs
-    ]
-
-
 def pct(value: float) -> str:
     """A share as a percentage with one decimal."""
     return f"{100 * value:.1f}%"
