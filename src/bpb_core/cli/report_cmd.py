@@ -140,6 +140,11 @@ def _print_part(part: ReportPart, built: Report) -> None:
     console.print(_cell_table(title, *headline_cells(part, rule)))
     for run, line in incomplete_lines(part.results.calls).items():
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
+    if not part.results.units["baseline"].any():
+        console.print(
+            "[yellow]no baseline ran on this dataset: add the floors with bpb run --adapter "
+            "baseline:stasis --adapter baseline:straight (offline, free)[/]", highlight=False,
+        )  # fmt: skip
     for task, notes in part.metric_notes.items():
         frame = tables[f"{task}_metrics"][["run", "baseline", "complete", *notes]]
         title = f"{task} metrics beside accuracy (answered only)"

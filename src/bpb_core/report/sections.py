@@ -123,6 +123,12 @@ def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
         + (f" Suites: {suites}." if suites else "")
     )
     note = Markup("<p class='muted'>{}</p>").format(text)
+    if not part.results.units["baseline"].any():
+        note += Markup("<p class='warn'>{}</p>").format(
+            "No baseline ran on this dataset, so the floors a score must beat are not shown: "
+            f"bpb run --data {part.path} --adapter baseline:stasis --adapter baseline:straight "
+            "(offline, free), then report again."
+        )
     if len(expected) > 1:
         note += Markup("<p class='warn'>{}</p>").format(
             "The runs were asked different numbers of scenes "

@@ -116,3 +116,11 @@ def test_diagnostic_charts_leave_out_too_incomplete_runs_and_say_so(
     page = (tmp_path / "out" / "report.html").read_text()
     stasis = page[page.index("<h3>Stasis index</h3>") :]
     assert stasis.index("left out as too incomplete: litellm_model") < stasis.index("<h2>")
+
+
+def test_a_report_without_baselines_says_the_floors_are_missing(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    build_report(tmp_path / "runs", tmp_path / "out", n_boot=20, gallery_size=0)
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "No baseline ran on this dataset" in page and "--adapter baseline:stasis" in page
