@@ -133,8 +133,8 @@ def report_tables(
         "leaderboard": leaderboard(units, suites, **keep),  # type: ignore[arg-type]
         "leaderboard_answered": leaderboard(units, suites, view="answered", **keep),  # type: ignore[arg-type]
         "leaderboard_stable": leaderboard(units, suites, stable_only=True, **keep),  # type: ignore[arg-type]
-        "by_horizon": by_horizon(units),
-        "by_horizon_answered": by_horizon(units, view="answered"),
+        "by_horizon": by_horizon(units, **keep),  # type: ignore[arg-type]
+        "by_horizon_answered": by_horizon(units, view="answered", **keep),  # type: ignore[arg-type]
         "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed, view="answered"),
         "usage": usage(calls),
     }

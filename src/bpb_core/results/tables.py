@@ -84,16 +84,27 @@ def accuracy(
 
 
 def by_horizon(
-    units: pd.DataFrame, *, view: View = "strict", stable_only: bool = False
+    units: pd.DataFrame,
+    *,
+    view: View = "strict",
+    stable_only: bool = False,
+    min_complete: float = DEFAULT_MIN_COMPLETE,
+    include_incomplete: bool = False,
 ) -> pd.DataFrame:
-    """Wide table: one row per (run, task), one column per horizon, and ``mean`` over horizons."""
+    """Wide table: one row per (run, task), one column per horizon, ``mean`` over horizons,
+    then each horizon's completeness (``h1_complete``, ...). ``mean`` is NaN when a cell is
+    under ``min_complete`` answered, unless ``include_incomplete``."""
     acc = accuracy(units, view=view, stable_only=stable_only)
-    wide = acc.pivot_table(
-        index=["run", "baseline", "task"], columns="horizon", values="accuracy", observed=True
-    )
-    wide.columns = [f"h{h:g}" for h in wide.columns]
+    keys = ["run", "baseline", "task"]
+    cells = acc.assign(run=acc["run"].astype(str)).set_index([*keys, "horizon"])
+    wide = cells["accuracy"].unstack("horizon")  # keeps cells with no answer (NaN)
+    done = cells["completeness"].unstack("horizon")
+    labels = [f"h{h:g}" for h in wide.columns]
+    wide.columns, done.columns = labels, [f"{h}_complete" for h in labels]
     wide["mean"] = wide.mean(axis=1)
-    return wide.reset_index()
+    if not include_incomplete:
+        wide.loc[(done < min_complete).any(axis=1), "mean"] = np.nan
+    return wide.join(done).reset_index()
 
 
 def tasks_of(units: pd.DataFrame) -> list[str]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -76,6 +77,11 @@ def test_a_task_with_a_cell_under_the_threshold_is_left_out_of_the_leaderboard(
     assert kept[["q1", "q2", "q3"]].tolist() == pytest.approx([1.0, 0.75, 27 / 28])
     assert kept["short"] == ""
     assert board(runs).loc["baseline_oracle", "short"] == ""
+    wide = by_horizon(load_results(runs).units, view="answered").set_index(["run", "task"])
+    model = wide.loc[("litellm_model", "q2")]
+    assert (model["h1"], model["h1_complete"], model["h2_complete"]) == (0.5, 1.0, 0.5)
+    assert np.isnan(model["mean"])  # a mean over the answered horizon only would mislead
+    assert wide.loc[("baseline_stasis", "q2"), "mean"] == 0.5
 
 
 def test_stable_subset_drops_unstable_scenes(runs: Path) -> None:
