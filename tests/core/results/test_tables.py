@@ -137,3 +137,15 @@ def test_run_options_select_the_scenes_expected(runs: Path) -> None:
     missing = calls[calls["scene_id"] == "h2_0000"]["status"]
     assert set(missing) == {"missing"}
     assert board(runs / "litellm_model").loc["litellm_model", "completeness"] == 0.5
+
+
+def test_a_run_on_a_dataset_regenerated_since_is_refused(runs: Path) -> None:
+    data = runs.parent / "data"
+    (data / "dataset.json").write_text(json.dumps({"name": "hand-made", "dataset_hash": "a" * 64}))
+    manifest = runs / "litellm_model" / "run.json"
+    record = json.loads(manifest.read_text())
+    manifest.write_text(json.dumps({**record, "dataset_hash": "a" * 64}))
+    assert len(load_results(runs / "litellm_model").calls) == 12  # the same dataset: fine
+    manifest.write_text(json.dumps({**record, "dataset_hash": "b" * 64}))
+    with pytest.raises(BadInput, match=r"run\.json: dataset_hash bbbbbbbbbbbb but .* aaaaaaaaaaaa"):
+        load_results(runs / "litellm_model")
