@@ -58,8 +58,10 @@ def _table(frame: pd.DataFrame) -> Table:
         cells = [escape(str(row["adapter"])), _pct(row["completeness"])]
         for name in names:
             answered, strict = row[f"{name}_answered"], row[name]
-            left_out = math.isnan(float(answered))
-            cells.append("left out" if left_out else f"{_pct(answered)} ({_pct(strict)})")
+            if not math.isnan(float(answered)):
+                cells.append(f"{_pct(answered)} ({_pct(strict)})")
+            else:  # too incomplete, or not asked (a suite with a task the run lacks)
+                cells.append("left out" if row["short"] else "–")
         cells.append(escape(str(row["short"])) or "–")
         table.add_row(*cells)
     return table
