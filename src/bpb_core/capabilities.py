@@ -15,7 +15,8 @@ without when it is missing.
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
 - A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``).
-- A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
+- A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery),
+  :class:`ReportsMetrics` (metrics beside its task's accuracy in reports).
 - A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
 - A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
 """
@@ -302,4 +303,25 @@ class RunsMany(Protocol):
 
     def run_many(self, scenes: Sequence[Any]) -> Any:
         """Simulate every scene to its own horizon."""
+
+
+@runtime_checkable
+class ReportsMetrics(Protocol):
+    """A scorer with metrics beside its task's accuracy, for a task whose accuracy alone can
+    mislead (a rare positive class, say, that a constant answer gets mostly right).
+
+    Reports show them in a table and a chart per task, with the baselines on the same axis,
+    and blank them for a run whose task is left out of the leaderboards (too incomplete).
+
+    Attributes:
+        metric_notes: Metric column -> one line for the report: what it says, and whether a
+            constant or random answer scores a fixed value on it (chance-corrected).
+    """
+
+    metric_notes: Mapping[str, str]
+
+    def task_metrics(self, units: pd.DataFrame) -> pd.DataFrame:
+        """One row per run of ``units`` (this task's units of answered calls: status ``ok``
+        or ``parse_error``) with the run columns ``run, adapter, model, baseline`` first,
+        then one column per key of :attr:`metric_notes`, then any counts behind them."""
         ...

@@ -14,7 +14,7 @@ from typing import Literal
 from PIL import Image, ImageDraw, ImageFont
 
 RGB = tuple[int, int, int]
-Mark = Literal["ring", "ring-cross", "line"]
+Mark = Literal["ring", "ring-cross", "line", "square", "triangle"]
 LEGEND_BACKGROUND: RGB = (24, 28, 36)
 
 
@@ -93,6 +93,20 @@ def _mark(draw: ImageDraw.ImageDraw, entry: LegendEntry, x: int, y: int, r: int)
     if entry.mark == "line":
         draw.line((x, y, x + 2 * r, y), fill=entry.colour, width=2)
         return
+    if entry.mark in ("square", "triangle"):
+        draw.polygon(shape(entry.mark, x + r, y, r), outline=entry.colour, width=3)
+        return
     draw.ellipse((x, y - r, x + 2 * r, y + r), outline=entry.colour, width=3)
     if entry.mark == "ring-cross":
         draw.line((x + r * 0.4, y - r * 0.6, x + r * 1.6, y + r * 0.6), fill=entry.colour, width=3)
+
+
+def shape(
+    mark: Literal["square", "triangle"], x: float, y: float, r: float
+) -> list[tuple[float, float]]:
+    """The corners of a square or an upward triangle of half-size ``r`` centred on ``(x, y)``
+    (overlays draw them; the legend shows the same)."""
+    if mark == "square":
+        return [(x - r, y - r), (x + r, y - r), (x + r, y + r), (x - r, y + r)]
+    h = r * 1.15
+    return [(x, y - h), (x + h, y + h * 0.7), (x - h, y + h * 0.7)]

@@ -19,7 +19,9 @@ if TYPE_CHECKING:
     import pandas as pd
     from rich.table import Table
 
-    from bpb_core.report.build import Report
+    from bpb_core.report.build import Report, ReportPart
+    from bpb_core.report.html import Cell
+    from bpb_core.report.sections import Rows
 
 
 USAGE_COLUMNS = {
@@ -28,7 +30,7 @@ USAGE_COLUMNS = {
     "output_tokens": "out tok",
     "reasoning_tokens": "reason tok",
     "cost": "cost $",
-    "latency_mean": "latency s",
+    "latency_mean": "latency ms",
     "retries": "retries",
     "parse_error": "parse err",
     "api_error": "api err",
@@ -52,6 +54,19 @@ USAGE_COLUMNS = {
 )
 @click.option("--seed", default=0, show_default=True, help="Bootstrap seed.")
 @click.option(
+    "--min-complete",
+    default=0.9,
+    show_default=True,
+    type=click.FloatRange(0, 1),
+    callback=lambda _ctx, _param, value: _share(value),
+    help="Share of a (run, task, horizon) cell that must be answered for it to count.",
+)
+@click.option(
+    "--include-incomplete",
+    is_flag=True,
+    help="Keep tasks with a cell under --min-complete in the leaderboards (still marked).",
+)
+@click.option(
     "--gallery",
     "gallery_size",
     default=8,
@@ -65,19 +80,25 @@ def report(
     as_json: bool,
     n_boot: int,
     seed: int,
+    min_complete: float,
+    include_incomplete: bool,
     gallery_size: int,
 ) -> None:
     """Score run folders (or folders of run folders) and compare them.
 
-    Prints the leaderboards (strict and answered-only, with bootstrap 95% intervals), accuracy by
-    horizon, the stasis index and usage. With --out, also writes PNG charts, CSV and Parquet
-    exports and one self-contained report.html with a failure gallery.
+    Prints, per dataset (runs on different datasets are never ranked together), the leaderboard
+    (answered-only scores and completeness first, the strict score beside, bootstrap 95%
+    intervals), accuracy by horizon with each cell's completeness, the diagnostics and usage.
+    A task with a (task, horizon) cell under --min-complete answered is left out of the
+    leaderboards. With --out, also writes PNG charts, CSV, Parquet, Markdown and LaTeX exports
+    and one self-contained report.html with a failure gallery.
     """
-    from bpb_core.report.build import build_report
+    from bpb_core.report.build import Completeness, build_report
 
+    rule = Completeness(min_complete, include_incomplete)
     built = build_report(
         run_dirs, out, n_boot=n_boot, seed=seed, gallery_size=gallery_size,
-        registry=load_registry(),
+        registry=load_registry(), completeness=rule,
     )  # fmt: skip
     if as_json:
         click.echo(json.dumps(built.summary_json(), indent=2, default=str))
@@ -87,52 +108,94 @@ def report(
         stderr().print(f"wrote {built.files['html']} and {len(built.files) - 1} more files")
 
 
+def _share(value: float) -> float:
+    if math.isnan(value):  # FloatRange lets NaN through: no comparison with it is true
+        raise click.BadParameter("must be a number from 0 to 1, not nan")
+    return value
+
+
 def _print_tables(built: Report) -> None:
-    tables, results = built.tables, built.results
     console = stdout()
-    console.print(_leaderboard(tables["summary"], tables["bootstrap"], built))
-    console.print(_frame_table("Accuracy by horizon (strict)", tables["by_horizon"], percent=True))
+    several = len(built.parts) > 1
+    if several:
+        stderr().print(
+            f"[yellow]note:[/] the runs answered {len(built.parts)} datasets; each is reported "
+            "on its own, never ranked together",
+            highlight=False,
+        )
+    for part in built.parts:
+        if several:
+            console.rule(f"dataset {part.short_id} ({part.path})")
+        _print_part(part, built)
+
+
+def _print_part(part: ReportPart, built: Report) -> None:
+    from rich.markup import escape
+
+    from bpb_core.report.sections import headline_cells, horizon_cells
+    from bpb_core.results.completeness import incomplete_lines
+
+    tables, rule, console = part.tables, built.completeness, stdout()
+    title = "Leaderboard (answered only, strict beside; mean over horizons)"
+    console.print(_cell_table(title, *headline_cells(part, rule)))
+    for run, line in incomplete_lines(part.results.calls).items():
+        console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
+    if not part.results.units["baseline"].any():
+        console.print(
+            "[yellow]no baseline ran on this dataset: add the floors with bpb run --adapter "
+            "baseline:stasis --adapter baseline:straight (offline, free)[/]", highlight=False,
+        )  # fmt: skip
+    for task, notes in part.metric_notes.items():
+        frame = tables[f"{task}_metrics"][["run", "baseline", "complete", *notes]]
+        title = f"{task} metrics beside accuracy (answered only)"
+        console.print(_frame_table(title, frame, percent=True))
+        for name, note in notes.items():
+            console.print(f"[dim]{escape(name)}: {escape(note)}[/]", highlight=False)
+    horizon = horizon_cells(tables["accuracy_answered"], rule)
+    console.print(_cell_table("Accuracy by horizon (answered only; \\[answered share])", *horizon))
     if not tables["metadata"].empty:
         from bpb_core.results.metadata import metadata_by_horizon
 
         wide = metadata_by_horizon(tables["metadata"])
         console.print(_frame_table("Adapters' own measurements by horizon", wide, percent=False))
-    if results.suites:
-        console.print(_stable_table(tables, results.suites[0].name))
+    if part.results.suites:
+        console.print(_stable_table(tables, part.results.suites[0].name))
         console.print(_exclusions(tables["stable_exclusions"]))
-    for diagnostic in built.diagnostics:
+    for diagnostic in part.diagnostics:
         if diagnostic.terminal:
-            frame = tables[diagnostic.name][["run", "baseline", *diagnostic.terminal]]
-            console.print(_frame_table(diagnostic.title, frame, percent=diagnostic.percent))
-    use = tables["usage"].rename(columns=USAGE_COLUMNS)[
-        ["run", "baseline", *USAGE_COLUMNS.values()]
-    ]
+            table = tables[diagnostic.name]
+            shown = ["complete"] if "complete" in table.columns else []
+            frame = table[["run", "baseline", *shown, *diagnostic.terminal]]
+            percent = (*diagnostic.percent, "complete")
+            console.print(_frame_table(diagnostic.title, frame, percent=percent))
+    use = tables["usage"].assign(latency_mean=lambda f: (1000 * f["latency_mean"]).round(0))
+    use = use.rename(columns=USAGE_COLUMNS)[["run", "baseline", *USAGE_COLUMNS.values()]]
     console.print(_frame_table("Usage", use, percent=False))
 
 
-def _leaderboard(board: pd.DataFrame, ci: pd.DataFrame, built: Report) -> Table:
+def _cell_table(title: str, head: list[str], rows: Rows) -> Table:
+    """A rich table of report cells: partial cells carry their answered share in brackets,
+    short ones are dim."""
     from rich.table import Table
 
-    from bpb_core.results.tables import metrics
-
-    results = built.results
-    scores = metrics(results.units, results.suites)
-    first = results.suites[0].name if results.suites else None
-    extra = ["95% CI", "answered-only"] if first else []
-    table = Table(title="Leaderboard (mean over horizons; strict = missing/errors wrong)")
-    for name in ("run", *scores, *extra, "complete"):
-        table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
-    rows = ci[ci["metric"] == first]
-    bounds = dict(zip(rows["run"], zip(rows["lo"], rows["hi"], strict=True), strict=True))
-    for row in board.to_dict(orient="records"):
-        run = str(row["run"])
-        cells = [_pct(row[m]) for m in scores]
-        if first:
-            lo, hi = bounds.get(run, (math.nan, math.nan))
-            interval = "–" if math.isnan(lo) else f"{_pct(lo)}–{_pct(hi)}"
-            cells += [interval, _pct(row[f"{first}_answered"])]
-        table.add_row(_name(run, bool(row["baseline"])), *cells, _pct(row["completeness"]))
+    table = Table(title=title)
+    for name in head:
+        left = name in ("run", "task")
+        table.add_column(name, justify="left" if left else "right", no_wrap=True)
+    for baseline, cells in rows:
+        texts = [_cell_text(c) for c in cells]
+        texts[0] = _name(cells[0].text, baseline)
+        table.add_row(*texts)
     return table
+
+
+def _cell_text(cell: Cell) -> str:
+    from rich.markup import escape
+
+    text = escape(cell.text) + (escape(f" [{cell.note}]") if cell.note else "")
+    if cell.css == "short":
+        return f"[dim]{text}[/]"
+    return f"[yellow]{text}[/]" if cell.css == "partial" else text
 
 
 def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[str]) -> Table:

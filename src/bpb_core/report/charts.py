@@ -1,8 +1,9 @@
 """PNG charts of a report, drawn with matplotlib (imported lazily, Agg backend).
 
-Each function takes a derived frame and returns PNG bytes. Baseline runs are drawn in grey with
-hatching (bars) or dashed lines and their names carry a ``[baseline]`` mark, so models are read
-against the floors and the ceiling.
+Each function takes a derived frame and returns PNG bytes. Models get one colour-blind-safe
+colour each (Okabe-Ito); baseline runs are drawn in grey with hatching (bars) or dashed lines
+and their names carry a ``[baseline]`` mark, so models are read against the floors and the
+ceiling. Accuracy by horizon is :mod:`bpb_core.report.horizon_chart`.
 """
 
 from __future__ import annotations
@@ -17,10 +18,10 @@ import pandas as pd
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from bpb_core.registration import SuiteInfo
 
-_MODEL_COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
-_BASELINE_GREYS = ["#444444", "#9a9a9a", "#6e6e6e", "#bdbdbd"]
+# Okabe-Ito: distinguishable with every common colour-vision deficiency and in greyscale order.
+_MODEL_COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000"]
+_BASELINE_GREYS = ["#4d4d4d", "#969696", "#737373", "#bdbdbd"]
 _BASELINE_LINES = ["--", ":", "-.", (0, (6, 2, 1, 2))]
 _BASELINE_HATCHES = ["//", "..", "xx", "\\\\"]
 _BASELINE_MARKERS = ["s", "^", "D", "v"]
@@ -57,10 +58,13 @@ def png(fig: Figure) -> bytes:
 
 
 def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
-    """Colour, line style and hatch per run (``runs`` has columns run, baseline)."""
+    """Colour, line style and hatch per run (``runs`` has columns run, baseline), assigned in
+    the order of the run names so that every chart of a report agrees."""
     styles: dict[str, dict[str, Any]] = {}
     models = baselines = 0
-    for row in runs.drop_duplicates("run").itertuples():
+    # by name, not by the frame's order, so a run has the same style in every chart
+    ordered = runs.assign(run=runs["run"].astype(str)).drop_duplicates("run").sort_values("run")
+    for row in ordered.itertuples():
         if row.baseline:
             k = baselines % len(_BASELINE_GREYS)
             styles[str(row.run)] = {
@@ -77,65 +81,19 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     return styles
 
 
-def accuracy_vs_horizon(
-    accuracy: pd.DataFrame,
-    leaderboard_order: list[str],
-    suites: Sequence[SuiteInfo] = (),
-    titles: Mapping[str, str] | None = None,
-) -> bytes:
-    """One panel per task (and per suite): accuracy against horizon, one line per run."""
-    titles = titles or {}
-    frame = accuracy.copy()
-    panels: dict[str, pd.DataFrame] = {
-        str(task): frame[frame["task"] == task] for task in sorted(frame["task"].unique())
-    }
-    for suite in suites:
-        panels[suite.name] = _suite_by_horizon(frame, suite)
-    ncols = min(len(panels), 2)
-    nrows = (len(panels) + ncols - 1) // ncols
-    fig, axes = figure(nrows, ncols, (6.2 * ncols, 3.6 * nrows))
-    styles = run_styles(frame[["run", "baseline"]])
-    for ax, (name, data) in zip(axes.flat, panels.items(), strict=False):
-        for run in leaderboard_order:
-            rows = data[data["run"] == run].sort_values("horizon")
-            if rows.empty:
-                continue
-            style = styles[run]
-            ax.plot(
-                rows["horizon"], 100 * rows["accuracy"], color=style["color"], ls=style["ls"],
-                marker=style["marker"], label=label(run, bool(rows["baseline"].iloc[0])),
-            )  # fmt: skip
-        ax.set_title(titles.get(name, name))
-        ax.set_xlabel("horizon (s)")
-        ax.set_ylabel("accuracy (%)")
-        ax.set_ylim(-3, 103)
-        ax.set_xticks(sorted(frame["horizon"].unique()))
-        ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(panels) :]:
-        ax.set_visible(False)
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
-    return png(fig)
-
-
-def _suite_by_horizon(accuracy: pd.DataFrame, suite: SuiteInfo) -> pd.DataFrame:
-    wide = accuracy.pivot_table(
-        index=["run", "baseline", "horizon"], columns="task", values="accuracy", observed=True
-    )
-    if not set(suite.weights) <= set(wide.columns):
-        return pd.DataFrame(columns=["run", "baseline", "horizon", "accuracy"])
-    wide["accuracy"] = sum(w * wide[t] for t, w in suite.weights.items())
-    return wide[["accuracy"]].reset_index()
-
-
 def leaderboards(
     board: pd.DataFrame,
     metrics: Sequence[str],
     ci: pd.DataFrame | None = None,
     titles: Mapping[str, str] | None = None,
+    *,
+    xlabel: str = "mean accuracy over horizons (%)",
+    no_value: str = "left out (too incomplete)",
 ) -> bytes:
     """One leaderboard per metric (each task, then each suite): horizontal bars, best on
-    top."""
+    top, every baseline also drawn as a dashed line across the panel (the floors and the
+    ceiling on the same axis); a zero is drawn as a tick on the axis so it reads as a value;
+    runs with no value are named under the axis after ``no_value``."""
     titles = titles or {}
     ncols = min(len(metrics), 2)
     nrows = (len(metrics) + ncols - 1) // ncols
@@ -152,6 +110,9 @@ def leaderboards(
         bars = ax.barh(list(ys), values, color=colours, edgecolor="white")
         for bar, hatch in zip(bars, hatches, strict=True):
             bar.set_hatch(hatch)
+        for y, value, colour in zip(ys, values, colours, strict=True):
+            if value == 0:
+                ax.plot([0.6, 0.6], [y - 0.4, y + 0.4], color=colour, lw=3, solid_capstyle="butt")
         ends = values.copy()
         if ci is not None:
             ends = np.fmax(ends, _error_bars(ax, ranked, ci, metric))
@@ -160,10 +121,19 @@ def leaderboards(
         ax.set_yticks(list(ys), names_of(ranked), fontsize=8)
         ax.set_xlim(0, 114)
         ax.set_xticks([0, 20, 40, 60, 80, 100])
-        ax.set_xlabel("mean accuracy over horizons (%)")
-        ax.set_title(titles.get(metric, metric) + " leaderboard", fontsize=10)
+        _floors(ax, ranked, styles, metric)
+        left_out = board.loc[board[metric].isna(), "run"].astype(str).tolist()
+        note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
+        ax.set_xlabel(xlabel + note, fontsize=8)
+        ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)
     return png(fig)
+
+
+def _floors(ax: Any, ranked: pd.DataFrame, styles: dict[str, dict[str, Any]], metric: str) -> None:
+    for row in ranked[ranked["baseline"].astype(bool)].to_dict(orient="records"):
+        style = styles[str(row["run"])]
+        ax.axvline(100 * float(row[metric]), color=style["color"], ls="--", lw=0.8, zorder=0)
 
 
 def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> Any:

@@ -1,4 +1,5 @@
-"""One self-contained HTML page: inline CSS, charts and gallery images as base64 data URIs.
+"""One self-contained HTML page, rendered with jinja2 (autoescaped): inline CSS, charts and
+gallery images as base64 data URIs.
 
 The page loads nothing from anywhere (no fonts, scripts or styles from the network), so it works
 offline and can be mailed around as one file. A small inline script marks ``<body>`` with
@@ -9,15 +10,20 @@ Chromium.
 from __future__ import annotations
 
 import base64
-import html
 import math
 from collections.abc import Collection, Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
+from functools import cache
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
+from markupsafe import Markup
 
 from bpb_core.report.gallery import Case
-from bpb_core.results.reading import RunFolder
+
+if TYPE_CHECKING:
+    import jinja2
 
 CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0;color:#1d2433;
@@ -25,11 +31,15 @@ background:#f6f7f9}
 main{max-width:1280px;margin:0 auto;padding:24px 32px 64px}
 h1{font-size:26px;margin:8px 0 4px}h2{margin-top:40px;border-bottom:2px solid #dde1e7;
 padding-bottom:4px}h3{margin:20px 0 6px}
-.muted{color:#667085;font-size:13px}
+.muted{color:#667085;font-size:13px}.warn{color:#8a4b00;background:#fff4e0;padding:6px 10px;
+border-left:4px solid #e69f00;font-size:13px}
 table{border-collapse:collapse;margin:8px 0 16px;font-size:13px;background:#fff}
-th,td{border:1px solid #dde1e7;padding:4px 8px;text-align:right}
-th{background:#eef1f5}td:first-child,th:first-child{text-align:left}
+th,td{border:1px solid #dde1e7;padding:4px 7px;text-align:right;white-space:nowrap}
+th{background:#eef1f5;white-space:normal;max-width:9em;overflow-wrap:anywhere}
+td:first-child,th:first-child{text-align:left;white-space:normal;min-width:10em}
 tr.baseline td{color:#555;font-style:italic;background:#fafafa}
+td.partial sup{color:#b45f06;font-size:10px;margin-left:2px}
+td.short{color:#9aa0a6;background:repeating-linear-gradient(45deg,#f3f3f3 0 4px,#fff 4px 8px)}
 .badge{display:inline-block;font-size:11px;padding:0 6px;border-radius:8px;background:#888;
 color:#fff;margin-left:6px;font-style:normal}
 img.chart{max-width:100%;background:#fff;border:1px solid #dde1e7;margin:8px 0}
@@ -47,21 +57,85 @@ window.addEventListener('load', function () {
 });
 """
 
+TABLE = """{% if not rows %}<p class="muted">{{ empty }}</p>{% else %}<div class="scroll"><table>
+<thead><tr>{% for h in head %}<th>{{ h }}</th>{% endfor %}</tr></thead><tbody>
+{% for row in rows %}<tr{% if row.baseline %} class="baseline"{% endif %}>
+{%- for c in row.cells %}<td{% if c.css %} class="{{ c.css }}"{% endif %}
+{%- if c.title %} title="{{ c.title }}"{% endif %}>{{ c.text }}
+{%- if c.note %}<sup>{{ c.note }}</sup>{% endif %}
+{%- if loop.first and row.baseline %}<span class="badge">baseline</span>{% endif %}</td>
+{%- endfor %}</tr>
+{% endfor %}</tbody></table></div>{% endif %}"""
+
+PAGE = """<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">
+<title>{{ title }}</title><style>{{ css }}</style></head><body><main>
+<h1>{{ title }}</h1><div class="muted">generated {{ when }} by bpb</div>
+{% if parts|length > 1 %}<p class="warn">These runs answered {{ parts|length }} different
+datasets. Each dataset has its own section below; runs on different datasets are never ranked
+together.</p>{% endif %}
+{% for part in parts %}
+{% if parts|length > 1 %}<h2>Dataset {{ part.name }}</h2>{% endif %}
+<h2>Runs</h2><ul>{% for run in part.runs %}<li><b>{{ run.label }}</b> &mdash; adapter
+<code>{{ run.adapter }}</code>, model <code>{{ run.model }}</code>, tasks {{ run.tasks }},
+{{ run.scenes }} scenes, dataset <code>{{ run.dataset }}</code>{% if run.hash %}, hash
+<code>{{ run.hash }}</code>{% endif %}{% if run.baseline %} (baseline){% endif %}</li>
+{% endfor %}</ul>
+{% for heading, body in part.headline %}<h2>{{ heading }}</h2>{{ body }}{% endfor %}
+<h2>Charts</h2>{% for name, uri in part.charts %}<h3>{{ name }}</h3>
+<img class="chart" alt="{{ name }}" src="{{ uri }}">{% if part.chart_notes.get(name) %}
+<p class="muted">{{ part.chart_notes[name] }}</p>{% endif %}{% endfor %}
+{% for heading, body in part.sections %}<h2>{{ heading }}</h2>{{ body }}{% endfor %}
+{% endfor %}
+<h2>Failure gallery</h2><p class="muted">The worst answered scenes (lowest score), models before
+baselines; the legend above each picture explains its marks.</p>
+<div class="gallery">{% for case in cases %}<div class="case"><h3>{{ case.run }} &middot;
+{{ case.scene_id }}</h3><div class="muted">horizon {{ case.horizon }} s &middot;
+{{ case.scores }}</div>{% if case.uri %}<img alt="{{ case.scene_id }}" src="{{ case.uri }}">
+{% endif %}{% for title, items in case.wrong %}<div class="key"><span>{{ title }}:</span>
+{% if items %}<ul>{% for i in items %}<li>{{ i }}</li>{% endfor %}</ul>{% else %} all right
+{% endif %}</div>{% endfor %}</div>{% else %}<p class="muted">no answered scenes</p>
+{% endfor %}</div><script>{{ script }}</script></main></body></html>"""
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One table cell: its text, a small note after it (``<sup>``), a CSS class and a
+    tooltip."""
+
+    text: str
+    note: str = ""
+    css: str = ""
+    title: str = ""
+
+
+@cache
+def _environment() -> jinja2.Environment:
+    import jinja2
+
+    return jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
+
 
 def data_uri(png: bytes) -> str:
     """``data:image/png;base64,...`` for ``png``."""
     return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
 
-def _cell(column: str, value: object, percent: bool) -> str:
+def plain(value: object, percent: bool) -> Cell:
+    """A cell of a plain value: NaN as a dash, floats as percentages or 4 digits."""
     if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "<td>&ndash;</td>"
+        return Cell("–")
     if isinstance(value, bool):
-        return f"<td>{'yes' if value else 'no'}</td>"
+        return Cell("yes" if value else "no")
     if isinstance(value, float):
-        text = f"{100 * value:.1f}%" if percent else f"{value:.4g}"
-        return f"<td>{text}</td>"
-    return f"<td>{html.escape(str(value))}</td>"
+        return Cell(f"{100 * value:.1f}%" if percent else f"{value:.4g}")
+    return Cell(str(value))
+
+
+def cells(head: Sequence[str], rows: Sequence[tuple[bool, Sequence[Cell]]], empty: str) -> Markup:
+    """An HTML table of ready cells; ``rows`` are (baseline, cells) pairs."""
+    items = [{"baseline": baseline, "cells": list(row)} for baseline, row in rows]
+    template = _environment().from_string(TABLE)
+    return Markup(template.render(head=list(head), rows=items, empty=empty))
 
 
 def table(
@@ -70,100 +144,53 @@ def table(
     percent: Collection[str] = (),
     drop: Sequence[str] = ("adapter", "model"),
     empty: str = "nothing to show",
-) -> str:
+    headers: dict[str, str] | None = None,
+) -> Markup:
     """An HTML table of ``frame``: ``percent`` columns as percentages, baseline rows greyed and
-    marked."""
-    if frame.empty:
-        return f'<p class="muted">{html.escape(empty)}</p>'
+    marked; ``headers`` renames columns for display."""
     columns = [c for c in frame.columns if c not in drop and c != "baseline"]
-    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in columns)
-    rows = []
-    for record in frame.to_dict(orient="records"):
-        baseline = bool(record.get("baseline", False))
-        cells = []
-        for column in columns:
-            cell = _cell(str(column), record[column], column in percent)
-            if column == "run" and baseline:
-                cell = cell.replace("</td>", '<span class="badge">baseline</span></td>')
-            cells.append(cell)
-        css = ' class="baseline"' if baseline else ""
-        rows.append(f"<tr{css}>{''.join(cells)}</tr>")
-    body = "".join(rows)
-    inner = f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-    return f"<div class='scroll'>{inner}</div>"
-
-
-def _runs_section(runs: Sequence[RunFolder]) -> str:
-    items = []
-    for run in runs:
-        info = run.manifest
-        items.append(
-            f"<li><b>{html.escape(run.label)}</b> &mdash; adapter <code>"
-            f"{html.escape(run.adapter)}</code>, model <code>{html.escape(run.model)}</code>, "
-            f"tasks {html.escape(', '.join(run.tasks))}, {len(run.scene_keys)} scenes, "
-            f"dataset <code>{html.escape(str(run.dataset))}</code>"
-            f"{_hash(info)}{'' if not run.baseline else ' (baseline)'}</li>"
+    rows = [
+        (
+            bool(record.get("baseline", False)),
+            [plain(record[c], c in percent) for c in columns],
         )
-    return "<ul>" + "".join(items) + "</ul>"
-
-
-def _hash(info: dict[str, object]) -> str:
-    value = info.get("dataset_hash")
-    return f", hash <code>{html.escape(str(value)[:12])}</code>" if value else ""
-
-
-def _case(case: Case) -> str:
-    scores = ", ".join(f"{k} {100 * v:.0f}%" for k, v in case.scores.items() if not math.isnan(v))
-
-    def listing(title: str, items: list[str]) -> str:
-        if not items:
-            return f"<div class='key'><span>{html.escape(title)}:</span> all right</div>"
-        body = "".join(f"<li>{html.escape(i)}</li>" for i in items)
-        return f"<div class='key'><span>{html.escape(title)}:</span><ul>{body}</ul></div>"
-
-    image = (
-        f"<img alt='{html.escape(case.scene_id)}' src='{data_uri(case.png)}'>" if case.png else ""
-    )
-    wrong = "".join(listing(f"{task.upper()} wrong", items) for task, items in case.wrong.items())
-    return (
-        f"<div class='case'><h3>{html.escape(case.run)} &middot; {html.escape(case.scene_id)}"
-        f"</h3><div class='muted'>horizon {case.horizon:g} s &middot; {scores}</div>"
-        f"{image}{wrong}</div>"
-    )
+        for record in frame.to_dict(orient="records")
+    ]
+    names = headers or {}
+    return cells([names.get(str(c), str(c)) for c in columns], rows, empty)
 
 
 def render(
     *,
     title: str,
-    runs: Sequence[RunFolder],
-    headline: Sequence[tuple[str, str]],
-    sections: Sequence[tuple[str, str]],
-    charts: dict[str, bytes],
+    parts: Sequence[dict[str, Any]],
     cases: Sequence[Case],
 ) -> str:
-    """The whole page: runs, ``headline`` sections, charts, ``sections``, failure gallery.
+    """The whole page: per dataset its runs, headline sections, charts and sections, then the
+    failure gallery.
 
-    Sections are (heading, HTML body) pairs.
+    Each part is a dict with ``name``, ``runs`` (dicts), ``headline`` and ``sections``
+    ((heading, HTML body) pairs), ``charts`` ({title: PNG bytes}) and ``chart_notes``
+    ({title: a line shown under the chart}).
     """
-    when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    chart_html = "".join(
-        f"<h3>{html.escape(name)}</h3><img class='chart' alt='{html.escape(name)}' "
-        f"src='{data_uri(png)}'>"
-        for name, png in charts.items()
+    shown = [{**p, "charts": [(k, data_uri(v)) for k, v in p["charts"].items()]} for p in parts]
+    template = _environment().from_string(PAGE)
+    return template.render(
+        title=title,
+        when=datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        css=Markup(CSS),
+        script=Markup(SCRIPT),
+        parts=shown,
+        cases=[_case(c) for c in cases],
     )
 
-    def join(parts: Sequence[tuple[str, str]]) -> str:
-        return "".join(f"<h2>{html.escape(h)}</h2>{content}" for h, content in parts)
 
-    gallery = "".join(_case(c) for c in cases) or "<p class='muted'>no answered scenes</p>"
-    return (
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
-        f"<title>{html.escape(title)}</title><style>{CSS}</style></head><body><main>"
-        f"<h1>{html.escape(title)}</h1><div class='muted'>generated {when} by bpb</div>"
-        f"<h2>Runs</h2>{_runs_section(runs)}"
-        f"{join(headline)}<h2>Charts</h2>{chart_html}{join(sections)}"
-        "<h2>Failure gallery</h2><p class='muted'>The worst answered scenes (lowest score), "
-        "models before baselines; the legend above each picture explains its marks.</p>"
-        f"<div class='gallery'>{gallery}</div>"
-        f"<script>{SCRIPT}</script></main></body></html>"
-    )
+def _case(case: Case) -> dict[str, Any]:
+    scores = ", ".join(f"{k} {100 * v:.0f}%" for k, v in case.scores.items() if not math.isnan(v))
+    wrong = [(f"{task.upper()} wrong", items) for task, items in case.wrong.items()]
+    uri = data_uri(case.png) if case.png else ""
+    return {"run": case.run, "scene_id": case.scene_id, "horizon": f"{case.horizon:g}"} | {
+        "scores": scores,
+        "uri": uri,
+        "wrong": wrong,
+    }

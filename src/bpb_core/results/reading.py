@@ -11,6 +11,7 @@ read with the models of the dataset's scene family.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -24,6 +25,7 @@ from bpb_core.errors import BadInput
 from bpb_core.layout import (
     FINAL,
     INIT,
+    MANIFEST,
     RUN_MANIFEST,
     SceneKey,
     iter_scene_keys,
@@ -120,6 +122,7 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     adapter = str(manifest.get("adapter") or manifest.get("spec") or path.name)
     model = str(manifest.get("model_id") or manifest.get("model") or adapter)
     dataset = _dataset_path(manifest, path)
+    _same_dataset(manifest, dataset, path)
     family = _family(dataset, registry)
     tasks = _option(manifest, "tasks")
     if not tasks:
@@ -133,6 +136,22 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     epochs = _option(manifest, "epochs")
     epochs = epochs if isinstance(epochs, int) and epochs >= 1 else 1
     return RunFolder(path, label, adapter, model, names, dataset, keys, manifest, family, epochs)
+
+
+def _same_dataset(manifest: dict[str, Any], dataset: Path, run_path: Path) -> None:
+    """Refuse a run whose dataset was regenerated since: its answers are about other scenes
+    and scoring them against the new ground truth would mix two datasets silently."""
+    recorded = manifest.get("dataset_hash")
+    try:
+        current = json.loads((dataset / MANIFEST).read_text(encoding="utf-8")).get("dataset_hash")
+    except (OSError, ValueError, AttributeError):
+        return  # no manifest hash to compare with (a hand-made dataset)
+    if isinstance(recorded, str) and isinstance(current, str) and recorded != current:
+        raise BadInput(
+            f"{run_path / RUN_MANIFEST}: dataset_hash {recorded[:12]} but {dataset} now holds "
+            f"dataset {current[:12]} (regenerated since the run?): point data at the dataset "
+            "the run answered"
+        )
 
 
 def _family(dataset: Path, registry: Registry | None) -> SceneFamily:

@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bpb_core.results.completeness import incomplete_lines
 from bpb_core.results.frames import load_results
 from bpb_core.results.tables import summary
 from bpb_core.run_folder import write_bytes_atomic
@@ -18,7 +19,8 @@ if TYPE_CHECKING:
 
 def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> pd.DataFrame | None:
     """Write ``scores.csv`` (scored units) into each run folder and return the summary table
-    (``None`` when there is nothing to score)."""
+    (``None`` when there is nothing to score); ``attrs["incomplete"]`` maps each run with
+    unanswered calls to the line saying so."""
     if not run_dirs:
         return None
     results = load_results(list(run_dirs), registry=registry)
@@ -29,4 +31,6 @@ def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> 
     for run in results.runs:
         text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
-    return summary(frame, results.suites)
+    table = summary(frame, results.suites)
+    table.attrs["incomplete"] = incomplete_lines(results.calls)  # what the summary must say
+    return table

@@ -16,10 +16,12 @@ its tasks' leaderboard scores (NaN for a run that lacks one of them).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
+
+from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, excluded_tasks
 
 if TYPE_CHECKING:
     from bpb_core.registration import SuiteInfo
@@ -97,16 +99,27 @@ def accuracy(
 
 
 def by_horizon(
-    units: pd.DataFrame, *, view: View = "strict", stable_only: bool = False
+    units: pd.DataFrame,
+    *,
+    view: View = "strict",
+    stable_only: bool = False,
+    min_complete: float = DEFAULT_MIN_COMPLETE,
+    include_incomplete: bool = False,
 ) -> pd.DataFrame:
-    """Wide table: one row per (run, task), one column per horizon, and ``mean`` over horizons."""
+    """Wide table: one row per (run, task), one column per horizon, ``mean`` over horizons,
+    then each horizon's completeness (``h1_complete``, ...). ``mean`` is NaN when a cell is
+    under ``min_complete`` answered, unless ``include_incomplete``."""
     acc = accuracy(units, view=view, stable_only=stable_only)
-    wide = acc.pivot_table(
-        index=["run", "baseline", "task"], columns="horizon", values="accuracy", observed=True
-    )
-    wide.columns = [f"h{h:g}" for h in wide.columns]
+    keys = ["run", "baseline", "task"]
+    cells = acc.assign(run=acc["run"].astype(str)).set_index([*keys, "horizon"])
+    wide = cells["accuracy"].unstack("horizon")  # keeps cells with no answer (NaN)
+    done = cells["completeness"].unstack("horizon")
+    labels = [f"h{h:g}" for h in wide.columns]
+    wide.columns, done.columns = labels, [f"{h}_complete" for h in labels]
     wide["mean"] = wide.mean(axis=1)
-    return wide.reset_index()
+    if not include_incomplete:
+        wide.loc[(done < min_complete).any(axis=1), "mean"] = np.nan
+    return wide.join(done).reset_index()
 
 
 def tasks_of(units: pd.DataFrame) -> list[str]:
@@ -135,22 +148,37 @@ def leaderboard(
     view: View = "strict",
     stable_only: bool = False,
     sort_by: str | None = None,
+    min_complete: float = DEFAULT_MIN_COMPLETE,
+    include_incomplete: bool = False,
 ) -> pd.DataFrame:
     """One row per run: each task's score (mean over horizons), each suite's weighted total,
     completeness; best first (by ``sort_by``, default the first suite, else the mean task).
+
+    A task with a (task, horizon) cell less than ``min_complete`` answered scores NaN (and so
+    does every suite built on it), unless ``include_incomplete``: it is left out of the ranking
+    instead of being read as a finding (:mod:`bpb_core.results.completeness`). ``worst_cell``
+    is the run's least complete cell; ``short`` names its tasks with a cell under
+    ``min_complete``.
     """
     acc = accuracy(units, view=view, stable_only=stable_only)
     tasks = tasks_of(units)
     means = acc.pivot_table(
         index=RUN_COLUMNS, columns="task", values="accuracy", aggfunc="mean", observed=True
     ).reindex(columns=tasks)
+    short = excluded_tasks(acc, min_complete)
+    if not include_incomplete:
+        for run, names in short.items():
+            means.loc[means.index.get_level_values("run") == run, names] = np.nan
     for suite in suites:
         means[suite.name] = suite_score(means, suite)
     counts = acc.groupby(RUN_COLUMNS, observed=True)[["answered", "expected"]].sum()
-    out = means.join(counts).reset_index()
+    out = means.reindex(counts.index).join(counts).reset_index()  # a run with no answer stays
     out.columns.name = None
     out["completeness"] = out["answered"] / out["expected"]
-    out = out[[*RUN_COLUMNS, *metrics(units, suites), "completeness", "expected"]]
+    out["worst_cell"] = out["run"].map(acc.groupby("run", observed=True)["completeness"].min())
+    out["short"] = [", ".join(short.get(str(run), [])) for run in out["run"]]
+    columns = [*metrics(units, suites), "completeness", "worst_cell", "short", "expected"]
+    out = out[[*RUN_COLUMNS, *columns]]
     key = sort_by or (suites[0].name if suites else None)
     order = out[key] if key is not None else out[tasks].mean(axis=1)
     ranked = out.assign(_order=order.to_numpy()).sort_values(
@@ -159,27 +187,27 @@ def leaderboard(
     return ranked.drop(columns="_order").reset_index(drop=True)
 
 
-def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFrame:
+def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any) -> pd.DataFrame:
     """Strict leaderboard plus each suite's answered-only score and the completeness, best
-    first.
+    first (``options``: ``min_complete``, ``include_incomplete`` of :func:`leaderboard`).
 
-    Columns: ``run, adapter, model, baseline``, each task, each suite followed by
-    ``<suite>_answered``, ``completeness, expected`` (``expected``: scene-task pairs the run
-    should have answered).
+    Columns: ``run, adapter, model, baseline``, each task and each suite followed by its
+    answered-only score ``<name>_answered``, ``completeness, worst_cell, short, expected``
+    (``expected``: scene-task pairs the run should have answered).
     """
-    strict = leaderboard(units, suites, view="strict")
-    answered = leaderboard(units, suites, view="answered").set_index("run")
-    for suite in suites:
-        position = list(strict.columns).index(suite.name) + 1
-        strict.insert(position, f"{suite.name}_answered", strict["run"].map(answered[suite.name]))
+    strict = leaderboard(units, suites, view="strict", **options)
+    answered = leaderboard(units, suites, view="answered", **options).set_index("run")
+    for name in metrics(units, suites):
+        position = list(strict.columns).index(name) + 1
+        strict.insert(position, f"{name}_answered", strict["run"].map(answered[name]))
     return strict
 
 
 def summary_records(
-    units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()
+    units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any
 ) -> list[dict[str, object]]:
     """:func:`summary` as JSON-ready dicts (NaN becomes ``None``)."""
-    table = summary(units, suites)
+    table = summary(units, suites, **options)
     records: list[dict[str, object]] = []
     for row in table.to_dict(orient="records"):
         records.append({str(k): _plain(v) for k, v in row.items()})

@@ -24,7 +24,7 @@ from bpb_tasks.billiards.render_palette import (
     stamp,
     text_patch,
 )
-from bpb_tasks.billiards.render_trajectory import draw_trajectories
+from bpb_tasks.billiards.render_trajectory import draw_markers, draw_paths
 from bpb_tasks.billiards.scene import Scene
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
@@ -49,11 +49,12 @@ def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
 
 
 def render_init(scene: Scene, spec: CanvasSpec) -> Image.Image:
-    """The initial state: balls, the cue velocity arrow and its speed in m/s."""
+    """The initial state: balls, then the cue velocity arrow above them (shortened to stay on
+    the cloth, off rails and pockets) and its speed in m/s."""
     img = base(spec, "Initial state, t = 0 s").copy()
-    label = _draw_velocity(img, spec, scene)  # under the balls, so no id is hidden
     for ball in scene.balls:
         paste_ball(img, spec, ball.id, ball.pos)
+    label = _draw_velocity(img, spec, scene)
     if label is not None:
         _speed_label(img, spec, *label)
     header_note(img, spec, speed_note(math.hypot(*scene.ball(CUE_ID).vel)))
@@ -83,22 +84,24 @@ def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Imag
 
 
 def render_trajectory(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
-    """Paths over [0, horizon], start positions faded, end positions solid, events marked."""
+    """Paths over [0, horizon], start positions faded, end positions solid, then the contact
+    and pocketing markers above everything."""
     img = base(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True).copy()
     for ball in scene.balls:
         paste_ball(img, spec, ball.id, ball.pos, alpha=GHOST_ALPHA)
-    draw_trajectories(img, spec, palette_for(spec), outcome)
+    draw_paths(img, spec, palette_for(spec), outcome)
     for ball in scene.balls:
         pos = outcome.positions.get(ball.id)
         if pos is not None:
             paste_ball(img, spec, ball.id, pos)
+    draw_markers(img, spec, palette_for(spec), outcome)
     return img
 
 
 def _draw_velocity(
     img: Image.Image, spec: CanvasSpec, scene: Scene
-) -> tuple[Point, Point, str] | None:
-    """Draw the cue arrow; return where its speed label goes (tip, direction, text)."""
+) -> tuple[Point, Point, Point, str] | None:
+    """Draw the cue arrow; return what its speed label needs (start, tip, direction, text)."""
     cue = scene.ball(CUE_ID)
     vx, vy = cue.vel
     speed = math.hypot(vx, vy)
@@ -106,12 +109,46 @@ def _draw_velocity(
         return None
     ux, uy = vx / speed, vy / speed
     r = spec.radius_m
-    length = 0.10 + 0.12 * min(speed, 3.0)  # metres; direction matters, the label gives speed
+    wanted = 0.10 + 0.12 * min(speed, 3.0)  # metres; direction matters, the label gives speed
+    length = arrow_length(spec, cue.pos, (ux, uy), wanted)
     start = spec.to_px(cue.pos[0] + ux * r * 1.15, cue.pos[1] + uy * r * 1.15)
     end = spec.to_px(cue.pos[0] + ux * (r + length), cue.pos[1] + uy * (r + length))
     pal = palette_for(spec)
     arrow(ImageDraw.Draw(img), start, end, spec.scale, pal.ink(st.ARROW), pal.ink(st.HALO))
-    return end, (ux, -uy), f"{speed:.2f} m/s"
+    return start, end, (ux, -uy), f"{speed:.2f} m/s"
+
+
+ARROW_CLEARANCE = 0.012
+"""Metres the arrow keeps from the cushions and from every pocket's edge."""
+ARROW_MIN = 0.05
+"""The shortest arrow drawn (metres beyond the ball), even where nothing longer fits."""
+
+
+def arrow_length(spec: CanvasSpec, pos: Point, direction: Point, wanted: float) -> float:
+    """The longest arrow (metres beyond the cue ball's edge), at most ``wanted``, whose shaft
+    and head stay on the cloth and off the pockets (down to :data:`ARROW_MIN`)."""
+    length = wanted
+    while length > ARROW_MIN and not _clear(spec, pos, direction, length):
+        length -= 0.005
+    return max(length, ARROW_MIN)
+
+
+def _clear(spec: CanvasSpec, pos: Point, direction: Point, length: float) -> bool:
+    """Whether the shaft stays on the cloth and off the pockets, and the head (its
+    half-width plus :data:`ARROW_CLEARANCE`) too."""
+    head = 10 * spec.scale / spec.ppm + ARROW_CLEARANCE  # the head's half-width, in metres
+    r = spec.radius_m
+    steps = max(2, math.ceil(length / 0.005))
+    for k in range(steps + 1):
+        d = r * 1.15 + (length + r - r * 1.15) * k / steps
+        x, y = pos[0] + direction[0] * d, pos[1] + direction[1] * d
+        room = head if k == steps else 0.0
+        if not (room <= x <= spec.width_m - room and room <= y <= spec.height_m - room):
+            return False
+        pockets = (math.hypot(x - px, y - py) for px, py in spec.pockets)
+        if any(gap < spec.pocket_radius_m + room for gap in pockets):
+            return False
+    return True
 
 
 def arrow(
@@ -145,17 +182,33 @@ def _grow(points: list[Point], by: float) -> list[Point]:
 
 
 def _speed_label(
-    img: Image.Image, spec: CanvasSpec, tip: Point, direction: Point, text: str
+    img: Image.Image, spec: CanvasSpec, start: Point, tip: Point, direction: Point, text: str
 ) -> None:
+    """The speed beside the arrow: beyond its tip, else beside its shaft, else behind the
+    ball; the first place that fits on the cloth without covering the arrow."""
     font = st.font(round(17 * spec.scale), bold=True)
     patch = text_patch(
         spec, text, font, st.INK, st.PAGE, pad=round(6 * spec.scale), outline=st.HALO
     )
     w, h = patch.size
     gap = 10 * spec.scale
-    cx = tip[0] + direction[0] * (w / 2 + gap)
-    cy = tip[1] + direction[1] * (h / 2 + gap)
+    dx, dy = direction
+    reach = abs(dx) * w / 2 + abs(dy) * h / 2 + gap  # centre to box edge along the arrow
+    side = abs(dy) * w / 2 + abs(dx) * h / 2 + gap  # ... and across it
+    mid = ((start[0] + tip[0]) / 2, (start[1] + tip[1]) / 2)
+    ball = spec.radius_m * spec.ppm
+    candidates = [
+        (tip[0] + dx * reach, tip[1] + dy * reach),
+        (mid[0] - dy * side, mid[1] + dx * side),
+        (mid[0] + dy * side, mid[1] - dx * side),
+        (start[0] - dx * (reach + 2.3 * ball), start[1] - dy * (reach + 2.3 * ball)),
+    ]
     (x0, y0), (x1, y1) = spec.to_px(0, spec.height_m), spec.to_px(spec.width_m, 0)
+
+    def fits(c: Point) -> bool:
+        return x0 + w / 2 + 2 <= c[0] <= x1 - w / 2 - 2 and y0 + h / 2 + 2 <= c[1] <= y1 - h / 2 - 2
+
+    cx, cy = next((c for c in candidates if fits(c)), candidates[0])
     cx = min(max(cx, x0 + w / 2 + 2), x1 - w / 2 - 2)  # keep it on the cloth, off the axes
     cy = min(max(cy, y0 + h / 2 + 2), y1 - h / 2 - 2)
     img.paste(patch, (round(cx - w / 2), round(cy - h / 2)))

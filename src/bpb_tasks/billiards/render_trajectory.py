@@ -50,6 +50,12 @@ def path_points(segments: tuple[Segment, ...]) -> list[Point]:
 
 def draw_trajectories(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
     """Draw every moving ball's path (cue ball last, on top), then the event markers."""
+    draw_paths(img, spec, pal, outcome)
+    draw_markers(img, spec, pal, outcome)
+
+
+def draw_paths(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
+    """Draw every moving ball's path, the cue ball's last (on top)."""
     draw = ImageDraw.Draw(img)
     s = spec.scale
     halo = pal.ink(st.HALO)
@@ -60,6 +66,11 @@ def draw_trajectories(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome:
             continue
         draw.line(pts, fill=halo, width=round(6 * s), joint="curve")
         draw.line(pts, fill=pal.ink(st.ball_colour(ball_id)), width=round(3 * s), joint="curve")
+
+
+def draw_markers(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
+    """Mark every contact and pocketing (drawn last, above the balls, so none is hidden)."""
+    draw = ImageDraw.Draw(img)
     for event in outcome.events:
         _mark(draw, spec, pal, event)
 

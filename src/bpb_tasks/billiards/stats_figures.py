@@ -58,28 +58,39 @@ def _save(fig: object, path: Path) -> None:
     fig.savefig(path, dpi=DPI, metadata={"Software": None})  # type: ignore[attr-defined]
 
 
+COLUMN_WIDTH = 3.4
+"""Inches: one column of a two-column paper, so the figure prints at its own size."""
+
+
 def speed_histograms(
     path: Path,
     horizons: Sequence[float],
     speeds: Sequence[Sequence[float]],
     spans: Sequence[tuple[float, float] | None] | None = None,
 ) -> None:
-    """One histogram of sampled cue speeds per horizon, side by side."""
+    """One histogram of sampled cue speeds per horizon, stacked in one column (readable at
+    one column width: 3.4 in wide, 7-9 pt text), each with its own speed axis."""
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
     n = len(horizons)
-    fig = Figure(figsize=(3.0 * n + 0.6, 3.0), layout="constrained")
-    axes = fig.subplots(1, n, squeeze=False)[0]
+    fig = Figure(figsize=(COLUMN_WIDTH, 0.55 + 1.05 * n), layout="constrained")
+    axes = fig.subplots(n, 1, squeeze=False)[:, 0]
     spans = spans or [None] * n
     for ax, h, values, span in zip(axes, horizons, speeds, spans, strict=True):
-        ax.hist(values, bins=BINS, range=span, color="#2f6f9f", edgecolor="white", linewidth=0.6)
-        ax.set_title(f"t = {h:g} s (n = {len(values)})", fontsize=10)
-        ax.set_xlabel("cue speed (m/s)", fontsize=9)
-        ax.tick_params(labelsize=8)
-        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-    axes[0].set_ylabel("scenes", fontsize=9)
-    fig.suptitle("Sampled cue-ball initial speeds", fontsize=11)
+        counts, _, _ = ax.hist(
+            values, bins=BINS, range=span, color="#0072B2", edgecolor="white", linewidth=0.5
+        )
+        ax.set_ylim(0, 1.5 * max([*counts, 1]))  # room for the label above the tallest bar
+        ax.text(
+            0.99, 0.95, f"t = {h:g} s, n = {len(values)}", transform=ax.transAxes,
+            ha="right", va="top", fontsize=8,
+        )  # fmt: skip
+        ax.tick_params(labelsize=7, pad=1)
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=3))
+        ax.set_ylabel("scenes", fontsize=7)
+    axes[-1].set_xlabel("cue speed (m/s)", fontsize=8)
+    fig.suptitle("Sampled cue-ball initial speeds", fontsize=9)
     _save(fig, path)
 
 

@@ -8,7 +8,7 @@ radius of where they started (Q3). Only answered units count (see
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -80,28 +80,39 @@ class StasisIndex:
 
     def chart(self, table: pd.DataFrame) -> bytes | None:
         """Per run: share of true contacts predicted absent and of moved balls predicted
-        unmoved (higher = more 'nothing happens' bias)."""
+        unmoved (higher = more 'nothing happens' bias), each bar labelled; a zero is drawn as
+        a stub, a share with nothing to count ("n/a") as no bar."""
         from bpb_core.report.charts import figure, names_of, png
 
-        fig, axes = figure(1, 1, (9.0, 1.8 + 0.5 * len(table)))
+        fig, axes = figure(1, 1, (7.0, 1.3 + 0.5 * len(table)))
         ax = axes[0, 0]
         ranked = table.sort_values("contact_stasis", na_position="first")
-        ys = list(range(len(ranked)))
+        ys = np.arange(len(ranked), dtype=float)
         height = 0.38
-        contact = 100 * ranked["contact_stasis"].fillna(0).to_numpy(dtype=float)
-        motion = 100 * ranked["motion_stasis"].fillna(0).to_numpy(dtype=float)
-        ax.barh(
-            [y + height / 2 for y in ys], contact, height, color="#d62728",
-            label="true contacts predicted absent",
-        )  # fmt: skip
-        ax.barh(
-            [y - height / 2 for y in ys], motion, height, color="#1f77b4",
-            label="moved balls predicted unmoved",
-        )  # fmt: skip
+        for offset, column, colour, text in (
+            (height / 2, "contact_stasis", "#D55E00", "true contacts predicted absent"),
+            (-height / 2, "motion_stasis", "#0072B2", "moved balls predicted unmoved"),
+        ):
+            values = 100 * ranked[column].to_numpy(dtype=float)
+            _bars(ax, ys + offset, values, height, colour, text)
         ax.set_yticks(ys, names_of(ranked), fontsize=8)
-        ax.set_xlim(0, 100)
-        ax.set_xlabel("share (%)")
-        ax.set_title("Stasis index (answered units only)")
-        ax.legend(loc="lower right", fontsize=8)
+        ax.set_xlim(0, 112)
+        ax.set_xticks([0, 20, 40, 60, 80, 100])
+        ax.set_xlabel("share (%), answered units only", fontsize=8)
+        ax.set_title("Stasis index", fontsize=10)
         ax.grid(axis="x", alpha=0.3)
+        ax.set_axisbelow(True)
+        fig.legend(loc="outside lower center", ncols=2, fontsize=8, frameon=False)
         return png(fig)
+
+
+def _bars(ax: Any, ys: Any, values: Any, height: float, colour: str, text: str) -> None:
+    drawn = np.nan_to_num(values, nan=0.0)
+    ax.barh(ys, drawn, height, color=colour, label=text)
+    for y, value in zip(ys, values, strict=True):
+        if np.isnan(value):
+            ax.text(1, y, "n/a (none answered)", va="center", fontsize=7, color="#666666")
+            continue
+        if value == 0:
+            ax.plot([0.6, 0.6], [y - height / 2, y + height / 2], color=colour, lw=3)
+        ax.text(value + 1, y, f"{value:.1f}%", va="center", fontsize=7)

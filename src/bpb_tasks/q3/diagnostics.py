@@ -108,7 +108,8 @@ class Q3Tolerance:
         """Q3 accuracy against the tolerance (in ball radii), one line per run."""
         from bpb_core.report.charts import figure, label, png, run_styles
 
-        fig, axes = figure(1, 1, (8.0, 4.2))
+        runs = table["run"].nunique()
+        fig, axes = figure(1, 1, (7.0, 3.6 + 0.2 * ((runs + 2) // 3)))
         ax = axes[0, 0]
         styles = run_styles(table[["run", "baseline"]])
         for run, rows in table.groupby("run", observed=True, sort=False):
@@ -125,5 +126,5 @@ class Q3Tolerance:
         ax.set_ylim(-3, 103)
         ax.set_title("Q3 tolerance curve")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        fig.legend(loc="outside lower center", ncols=min(runs, 3), fontsize=8, frameon=False)
         return png(fig)

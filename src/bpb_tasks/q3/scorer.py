@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 from PIL import ImageDraw, ImageFont
 
-from bpb_core.picture import ScenePicture, font
+from bpb_core.picture import ScenePicture, font, shape
 from bpb_core.scored_units import INVALID, NAN, UnitRow, entries
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
@@ -52,7 +52,7 @@ COLUMNS: dict[str, str] = {
 """Q3's own unit columns: true, predicted and starting centre (NaN when absent), ball radius."""
 
 TRUTH_COLOUR = (255, 212, 0)
-PRED_COLOUR = (235, 30, 70)
+PRED_COLOUR = (255, 80, 255)  # magenta: no ball, path or trajectory mark uses it
 LINK_COLOUR = (255, 255, 255)
 
 
@@ -106,15 +106,17 @@ class Q3Scorer:
         return [_wrong_text(r) for r in rows[~rows["correct"].astype(bool)].itertuples()]
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
-        """True (yellow ring) and predicted (red ring and cross) centres joined by a line."""
+        """True (yellow square) and predicted (magenta triangle) centres joined by a line:
+        shapes the trajectory image does not use (its rings, diamonds and crosses mark
+        contacts and pocketings)."""
         r = (float(rows["radius"].iloc[0]) if len(rows) else 0.028575) * picture.scale
         width = max(2, round(r / 6))
         face = font(max(12, round(r * 0.9)))
         draw = ImageDraw.Draw(picture.image)
         for row in rows.itertuples():
             _marks(draw, picture, row, r, width, face)
-        picture.explain("true final position", TRUTH_COLOUR, "ring")
-        picture.explain("predicted position", PRED_COLOUR, "ring-cross")
+        picture.explain("true final position", TRUTH_COLOUR, "square")
+        picture.explain("predicted position", PRED_COLOUR, "triangle")
         picture.explain("error", LINK_COLOUR, "line")
 
 
@@ -145,11 +147,9 @@ def _marks(
         draw.line((*truth, *pred), fill=LINK_COLOUR, width=max(1, width // 2))
     if truth:
         tx, ty = truth
-        draw.ellipse((tx - r, ty - r, tx + r, ty + r), outline=TRUTH_COLOUR, width=width)
-        draw.text((tx + r, ty - r), unit, fill=TRUTH_COLOUR, font=face)
+        draw.polygon(shape("square", tx, ty, r * 1.1), outline=TRUTH_COLOUR, width=width)
+        draw.text((tx + r * 1.2, ty - r * 1.2), unit, fill=TRUTH_COLOUR, font=face)
     if pred:
-        x, y, d = pred[0], pred[1], r * 0.6
-        draw.ellipse((x - r, y - r, x + r, y + r), outline=PRED_COLOUR, width=width)
-        draw.line((x - d, y - d, x + d, y + d), fill=PRED_COLOUR, width=width)
-        draw.line((x - d, y + d, x + d, y - d), fill=PRED_COLOUR, width=width)
-        draw.text((x + r, y + r * 0.2), unit, fill=PRED_COLOUR, font=face)
+        x, y = pred
+        draw.polygon(shape("triangle", x, y, r * 1.1), outline=PRED_COLOUR, width=width)
+        draw.text((x + r * 1.2, y + r * 0.2), unit, fill=PRED_COLOUR, font=face)

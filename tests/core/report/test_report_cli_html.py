@@ -90,7 +90,8 @@ def test_exports_keep_rows_and_dtypes(report_dir: Path) -> None:
 def test_charts_are_real_non_blank_pngs(report_dir: Path) -> None:
     charts = sorted((report_dir / "out" / "charts").glob("*.png"))
     assert [p.stem for p in charts] == [
-        "accuracy_vs_horizon", "leaderboards", "q3_tolerance_curve", "stasis_index",
+        "accuracy_by_horizon", "leaderboards", "q1_ball_collisions__metrics_beside_accuracy",
+        "q3_tolerance_curve", "stasis_index",
     ]  # fmt: skip
     for path in charts:
         with Image.open(path) as img:
@@ -101,7 +102,7 @@ def test_html_is_self_contained(report_dir: Path) -> None:
     page = (report_dir / "out" / "report.html").read_text()
     assert not re.search(r"""(src|href)=['"]?(https?:|//|file:)""", page)
     assert "@import" not in page and "url(" not in page
-    assert page.count("data:image/png;base64,") == 4 + len(
+    assert page.count("data:image/png;base64,") == 5 + len(
         list((report_dir / "out" / "gallery").glob("*.png"))
     )
     assert "Failure gallery" in page and "litellm_model" in page
@@ -131,8 +132,8 @@ def test_html_renders_charts_and_gallery_in_headless_chromium(
     body = re.search(r"<body[^>]*>", dom)
     assert body is not None
     images = int(re.search(r'data-images="(\d+)"', body.group(0)).group(1))  # type: ignore[union-attr]
-    assert 'data-images-ok="yes"' in body.group(0) and images >= 5  # 4 charts + gallery
-    assert dom.count('class="case"') >= 1 and dom.count('class="chart"') == 4
+    assert 'data-images-ok="yes"' in body.group(0) and images >= 6  # 5 charts + gallery
+    assert dom.count('class="case"') >= 1 and dom.count('class="chart"') == 5
     shot = tmp_path / "shot.png"
     subprocess.run(
         [*common, f"--screenshot={shot}", "--window-size=1400,3000", page],
@@ -146,3 +147,22 @@ def test_html_renders_charts_and_gallery_in_headless_chromium(
         assert hi - lo > 150
     if os.environ.get("BPB_KEEP_SCREENSHOT"):
         shutil.copy(shot, os.environ["BPB_KEEP_SCREENSHOT"])
+
+
+@pytest.mark.parametrize("value", ["nan", "1.5", "-0.1", "abc"])
+def test_a_bad_completeness_threshold_is_exit_2_naming_the_option(
+    report_dir: Path, value: str
+) -> None:
+    done = bpb("report", str(report_dir / "runs"), "--min-complete", value)
+    assert done.returncode == 2 and "--min-complete" in done.stderr
+
+
+def test_include_incomplete_puts_the_run_back_marked(report_dir: Path) -> None:
+    args = ("report", str(report_dir / "runs"), "--bootstrap", "20", "--json")
+    board = {r["run"]: r for r in json.loads(bpb(*args).stdout)["leaderboard"]}
+    assert board["litellm_model"]["total_answered"] is None
+    board = {
+        r["run"]: r for r in json.loads(bpb(*args, "--include-incomplete").stdout)["leaderboard"]
+    }
+    model = board["litellm_model"]
+    assert model["q1_answered"] == 1.0 and model["short"] == "q1, q2, q3"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -53,14 +54,34 @@ def test_stasis_scores_match_the_hand_worked_numbers(runs: Path) -> None:
 
 
 def test_strict_and_answered_views_and_completeness(runs: Path) -> None:
-    strict = board(runs).loc["litellm_model"]
-    answered = board(runs, view="answered").loc["litellm_model"]
+    strict = board(runs, include_incomplete=True).loc["litellm_model"]
+    answered = board(runs, view="answered", include_incomplete=True).loc["litellm_model"]
     assert strict[["q1", "q2", "q3"]].tolist() == pytest.approx([0.5, 0.5, 5 / 7])
     # answered: q1 drops the api_error and the missing scene; the parse error stays wrong
     assert answered[["q1", "q2", "q3"]].tolist() == pytest.approx([1.0, 0.75, 27 / 28])
     assert strict["completeness"] == pytest.approx(8 / 12)
     acc = accuracy(load_results(runs).units).set_index(["run", "task", "horizon"])
     assert acc.loc[("litellm_model", "q1", 1.0), "completeness"] == 0.5
+
+
+def test_a_task_with_a_cell_under_the_threshold_is_left_out_of_the_leaderboard(
+    runs: Path,
+) -> None:
+    # every task of the model has a horizon half answered (h2_0000 has no files at all)
+    row = board(runs, view="answered").loc["litellm_model"]
+    assert row[["q1", "q2", "q3", "total"]].isna().all()
+    assert row["short"] == "q1, q2, q3" and row["worst_cell"] == 0.5
+    assert board(runs).index[-1] == "litellm_model"  # NaN ranks last, never above a floor
+    # a lower threshold keeps q2 and q3 (one cell each at 50%) ... and q1 (h1 and h2 at 50%)
+    kept = board(runs, view="answered", min_complete=0.5).loc["litellm_model"]
+    assert kept[["q1", "q2", "q3"]].tolist() == pytest.approx([1.0, 0.75, 27 / 28])
+    assert kept["short"] == ""
+    assert board(runs).loc["baseline_oracle", "short"] == ""
+    wide = by_horizon(load_results(runs).units, view="answered").set_index(["run", "task"])
+    model = wide.loc[("litellm_model", "q2")]
+    assert (model["h1"], model["h1_complete"], model["h2_complete"]) == (0.5, 1.0, 0.5)
+    assert np.isnan(model["mean"])  # a mean over the answered horizon only would mislead
+    assert wide.loc[("baseline_stasis", "q2"), "mean"] == 0.5
 
 
 def test_stable_subset_drops_unstable_scenes(runs: Path) -> None:
@@ -70,7 +91,7 @@ def test_stable_subset_drops_unstable_scenes(runs: Path) -> None:
 
 def test_summary_lists_best_first_with_answered_total(runs: Path) -> None:
     results = load_results(runs)
-    table = summary(results.units, results.suites)
+    table = summary(results.units, results.suites, include_incomplete=True)
     assert table["run"].tolist() == ["baseline_oracle", "baseline_stasis", "litellm_model"]
     model = table.set_index("run").loc["litellm_model"]
     assert model["total_answered"] == pytest.approx(0.3 + 0.3 * 0.75 + 0.4 * 27 / 28)
@@ -116,3 +137,15 @@ def test_run_options_select_the_scenes_expected(runs: Path) -> None:
     missing = calls[calls["scene_id"] == "h2_0000"]["status"]
     assert set(missing) == {"missing"}
     assert board(runs / "litellm_model").loc["litellm_model", "completeness"] == 0.5
+
+
+def test_a_run_on_a_dataset_regenerated_since_is_refused(runs: Path) -> None:
+    data = runs.parent / "data"
+    (data / "dataset.json").write_text(json.dumps({"name": "hand-made", "dataset_hash": "a" * 64}))
+    manifest = runs / "litellm_model" / "run.json"
+    record = json.loads(manifest.read_text())
+    manifest.write_text(json.dumps({**record, "dataset_hash": "a" * 64}))
+    assert len(load_results(runs / "litellm_model").calls) == 12  # the same dataset: fine
+    manifest.write_text(json.dumps({**record, "dataset_hash": "b" * 64}))
+    with pytest.raises(BadInput, match=r"run\.json: dataset_hash bbbbbbbbbbbb but .* aaaaaaaaaaaa"):
+        load_results(runs / "litellm_model")

@@ -1,0 +1,201 @@
+"""One part of a report per dataset: its results and every table derived from them.
+
+Runs on different datasets answered different questions, so a report never ranks them
+together: :func:`report_parts` splits the results by dataset hash and derives each part's
+tables on its own. :func:`report_tables` is pure (frames in, frames out).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from bpb_core.capabilities import ReportsMetrics
+from bpb_core.registration import DiagnosticInfo
+from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
+from bpb_core.results.datasets import by_dataset
+from bpb_core.results.frames import Results
+from bpb_core.results.metadata import metadata_table
+from bpb_core.results.tables import (
+    RUN_COLUMNS,
+    UNANSWERED,
+    accuracy,
+    by_horizon,
+    leaderboard,
+    stable_exclusions,
+    summary,
+)
+from bpb_core.results.uncertainty import all_pairs, bootstrap_ci
+from bpb_core.results.usage import usage
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import Diagnostic, Scorer
+    from bpb_core.registry import Registry
+
+
+@dataclass(frozen=True)
+class Completeness:
+    """How much of a cell must be answered to count (see
+    :mod:`bpb_core.results.completeness`)."""
+
+    min_complete: float = DEFAULT_MIN_COMPLETE
+    include_incomplete: bool = False
+
+
+@dataclass(frozen=True)
+class ReportPart:
+    """The runs on one dataset, with every derived table (the diagnostics' under their names)
+    and the diagnostics shown."""
+
+    dataset: str
+    results: Results
+    tables: dict[str, pd.DataFrame]
+    diagnostics: tuple[Diagnostic, ...] = ()
+    metric_notes: dict[str, Mapping[str, str]] = field(default_factory=dict)
+    """Per task with a ``<task>_metrics`` table: its metrics and what each says."""
+    diagnostic_tasks: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """Per diagnostic, the tasks it looks at."""
+
+    def too_incomplete(self, tasks: Sequence[str]) -> list[str]:
+        """Runs with a task of ``tasks`` left out of the leaderboards (a cell too incomplete)."""
+        board = self.tables["leaderboard_answered"]
+        wanted = set(tasks)
+        return [
+            str(run) for run, short in zip(board["run"], board["short"], strict=True)
+            if wanted & set(str(short).split(", "))
+        ]  # fmt: skip
+
+    @property
+    def path(self) -> str:
+        """The dataset folder the runs name (the first run's)."""
+        return str(self.results.runs[0].dataset) if self.results.runs else ""
+
+    @property
+    def short_id(self) -> str:
+        """The first 12 characters of the dataset hash (a path's last part when no hash)."""
+        return self.dataset[:12] if "/" not in self.dataset else self.dataset.rsplit("/", 1)[1]
+
+
+def report_parts(
+    results: Results,
+    registry: Registry,
+    *,
+    n_boot: int = 2000,
+    seed: int = 0,
+    completeness: Completeness | None = None,
+) -> tuple[ReportPart, ...]:
+    """One :class:`ReportPart` per dataset, with the diagnostics of the tasks that ran on it."""
+    parts = []
+    for part in by_dataset(results):
+        diagnostics = tuple(registry.diagnostics_for(part.tasks))
+        scorers = {task: registry.scorer_for(task) for task in part.tasks}
+        tables = report_tables(
+            part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness,
+            scorers=scorers,
+        )  # fmt: skip
+        dataset = part.runs[0].dataset_id if part.runs else ""
+        notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
+        infos = registry.entries("diagnostic")
+        looks = {d.name: _tasks_of(infos.get(d.name)) for d in diagnostics}
+        parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks))
+    return tuple(parts)
+
+
+def _tasks_of(entry: object) -> tuple[str, ...]:
+    info = getattr(entry, "info", None)
+    return tuple(info.tasks) if isinstance(info, DiagnosticInfo) else ()
+
+
+def report_tables(
+    results: Results,
+    diagnostics: Sequence[Diagnostic] = (),
+    *,
+    n_boot: int = 2000,
+    seed: int = 0,
+    completeness: Completeness | None = None,
+    scorers: Mapping[str, Scorer] | None = None,
+) -> dict[str, pd.DataFrame]:
+    """Every table of a report, derived from ``results`` (nothing is written or printed).
+
+    Leaderboards leave out a task with a cell under the completeness threshold (unless
+    ``include_incomplete``); accuracy tables carry each cell's ``level`` (full, partial,
+    short); bootstrap intervals are blanked where the leaderboard is; paired comparisons use
+    the scenes both runs answered. A scorer that :class:`~bpb_core.capabilities.ReportsMetrics`
+    adds the table ``<task>_metrics``.
+    """
+    rule = completeness or Completeness()
+    units, calls, suites = results.units, results.calls, results.suites
+    keep = {"min_complete": rule.min_complete, "include_incomplete": rule.include_incomplete}
+    tables = {
+        "summary": summary(units, suites, **keep),
+        "leaderboard": leaderboard(units, suites, **keep),  # type: ignore[arg-type]
+        "leaderboard_answered": leaderboard(units, suites, view="answered", **keep),  # type: ignore[arg-type]
+        "leaderboard_stable": leaderboard(units, suites, stable_only=True, **keep),  # type: ignore[arg-type]
+        "by_horizon": by_horizon(units, **keep),  # type: ignore[arg-type]
+        "by_horizon_answered": by_horizon(units, view="answered", **keep),  # type: ignore[arg-type]
+        "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed, view="answered"),
+        "stable_exclusions": stable_exclusions(units),
+        "usage": usage(calls),
+        "metadata": metadata_table(calls),
+    }
+    for suffix, view in (("", "strict"), ("_answered", "answered")):
+        acc = accuracy(units, view=view)  # type: ignore[arg-type]
+        tables[f"accuracy{suffix}"] = acc.assign(level=cell_levels(acc, rule.min_complete))
+        ci = bootstrap_ci(units, suites, view=view, n_boot=n_boot, seed=seed)  # type: ignore[arg-type]
+        tables[f"bootstrap{suffix}"] = _blank(ci, tables[f"leaderboard{suffix}"])
+    tables["completeness"] = tables["accuracy"].drop(columns=["accuracy", "scenes"])
+    done = tables["leaderboard"].set_index("run")["completeness"]
+    for diagnostic in diagnostics:
+        tables[diagnostic.name] = _with_completeness(diagnostic.table(results), done)
+    for task, scorer in (scorers or {}).items():
+        if isinstance(scorer, ReportsMetrics):
+            table = task_metrics(units, task, scorer, tables["leaderboard_answered"], rule)
+            tables[f"{task}_metrics"] = _with_completeness(table, done)
+    return tables
+
+
+def task_metrics(
+    units: pd.DataFrame,
+    task: str,
+    scorer: ReportsMetrics,
+    board: pd.DataFrame,
+    rule: Completeness,
+) -> pd.DataFrame:
+    """A scorer's metrics on the task's answered units, blanked (NaN) for runs whose task the
+    leaderboard left out."""
+    answered = units[(units["task"] == task) & ~units["status"].isin(UNANSWERED)]
+    table = scorer.task_metrics(answered)
+    if not rule.include_incomplete:
+        short = board.set_index("run")["short"].astype(str)
+        left_out = [task in short.get(str(run), "").split(", ") for run in table["run"]]
+        table.loc[left_out, list(scorer.metric_notes)] = np.nan
+    return table
+
+
+def _with_completeness(table: pd.DataFrame, done: pd.Series) -> pd.DataFrame:
+    """A diagnostic's table with each run's completeness after the run columns: a diagnostic
+    of a half-answered run says less than its numbers suggest."""
+    if "run" not in table.columns or "complete" in table.columns:
+        return table
+    at = next((i for i, c in enumerate(table.columns) if c not in RUN_COLUMNS), len(table.columns))
+    out = table.copy()
+    out.insert(at, "complete", out["run"].astype(str).map(done).astype("float64"))
+    return out
+
+
+def _blank(ci: pd.DataFrame, board: pd.DataFrame) -> pd.DataFrame:
+    """Bootstrap rows blanked where the leaderboard left the score out (too incomplete)."""
+    if ci.empty:
+        return ci
+    scores = board.set_index("run")
+    left_out = [
+        metric not in scores.columns or bool(np.isnan(scores.loc[run, metric]))
+        for run, metric in zip(ci["run"], ci["metric"], strict=True)
+    ]
+    out = ci.copy()
+    out.loc[left_out, ["estimate", "lo", "hi"]] = np.nan
+    return out

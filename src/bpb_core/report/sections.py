@@ -1,0 +1,262 @@
+"""The HTML sections of one report part: the headline (answered-only first), accuracy by horizon
+with every cell's completeness, and the other tables.
+
+A cell under 100% answered carries its completeness as a note; a cell under the threshold is
+greyed and reads "left out", so no table states a finding that comes from missing data.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+from markupsafe import Markup
+
+from bpb_core.report import html
+from bpb_core.report.html import Cell
+from bpb_core.results.completeness import incomplete_lines, level, worst_cells
+
+if TYPE_CHECKING:
+    from bpb_core.report.parts import Completeness, ReportPart
+
+LEFT_OUT = "left out"
+
+
+def pct(value: float) -> str:
+    """A share as a percentage with one decimal."""
+    return f"{100 * value:.1f}%"
+
+
+def completeness_cell(value: float, rule: Completeness) -> Cell:
+    """A completeness share, marked partial or short."""
+    grade = level(value, rule.min_complete)
+    css = "" if grade == "full" else grade
+    return Cell(pct(value), css=css, title="share of the scene-task calls answered")
+
+
+def score_cell(value: float, worst: float, rule: Completeness) -> Cell:
+    """A leaderboard score with its least complete cell ``worst``: "left out" and greyed when
+    that is under the threshold (and the score blank), marked with it when under 100%."""
+    grade = level(worst, rule.min_complete)
+    if grade == "short" and math.isnan(value):
+        return Cell(LEFT_OUT, css="short", title=f"a horizon is under {pct(rule.min_complete)}")
+    if math.isnan(value):
+        return Cell("–")
+    if grade == "full":
+        return Cell(pct(value))
+    return Cell(pct(value), note=pct(worst), css=grade, title="least complete horizon answered")
+
+
+Rows = list[tuple[bool, list[Cell]]]
+
+
+def headline(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
+    """The leaderboard leading with the answered-only scores and completeness, the strict score
+    beside, and what is incomplete."""
+    head, rows = headline_cells(part, rule)
+    body = _headline_note(part, rule) + html.cells(head, rows, "no runs")
+    out = [("Leaderboard (answered only; strict beside)", body + incomplete_notes(part))]
+    for task in part.metric_notes:
+        out.append((f"{task} metrics beside accuracy (answered only)", metrics_body(part, task)))
+    return out
+
+
+def metrics_body(part: ReportPart, task: str) -> Markup:
+    """A task's metrics table (from its scorer) with what each metric says."""
+    notes = part.metric_notes[task]
+    items = Markup("").join(
+        Markup("<li><b>{}</b>: {}</li>").format(name, note) for name, note in notes.items()
+    )
+    table = part.tables[f"{task}_metrics"]
+    percent = (*notes, "complete")
+    return html.table(table, percent=percent) + Markup("<ul class='muted'>{}</ul>").format(items)
+
+
+def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Rows]:
+    """The headline leaderboard's header and (baseline, cells) rows, best first."""
+    tables, suites = part.tables, part.results.suites
+    board, strict = tables["leaderboard_answered"], tables["leaderboard"].set_index("run")
+    tasks = part.results.tasks
+    first = suites[0].name if suites else None
+    ci = tables["bootstrap_answered"]
+    head = ["run", "complete", *tasks, *(s.name for s in suites)]
+    head += [f"{first} strict", f"{first} 95% CI"] if first else []
+    head += ["worst cell", "left out"]
+    worst = worst_cells(tables["accuracy"])
+    rows = []
+    for row in board.to_dict(orient="records"):
+        run, short = str(row["run"]), str(row["short"])
+        found = worst.loc[run].to_dict() if run in worst.index else {}
+        least = {t: float(found.get(t, 1.0)) for t in tasks}
+        of = {s.name: min(least.get(t, 1.0) for t in s.weights) for s in suites}
+        cells = [Cell(run), completeness_cell(float(row["completeness"]), rule)]
+        cells += [score_cell(float(row[m]), least[m], rule) for m in tasks]
+        cells += [score_cell(float(row[s.name]), of[s.name], rule) for s in suites]
+        if first:
+            strict_score = float(strict.loc[run, first])  # type: ignore[arg-type]
+            cells.append(score_cell(strict_score, of[first], rule))
+            cells.append(_interval(ci, run, first))
+        cells += [completeness_cell(float(row["worst_cell"]), rule), Cell(short or "–")]
+        rows.append((bool(row["baseline"]), cells))
+    return head, rows
+
+
+def _interval(ci: pd.DataFrame, run: str, metric: str) -> Cell:
+    rows = ci[(ci["run"] == run) & (ci["metric"] == metric)]
+    if rows.empty or rows["lo"].isna().all():
+        return Cell("–")
+    return Cell(f"{pct(float(rows['lo'].iloc[0]))}–{pct(float(rows['hi'].iloc[0]))}")
+
+
+def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
+    suites = ", ".join(f"{s.name} ({s.summary})" for s in part.results.suites)
+    expected = set(part.tables["leaderboard"]["expected"].tolist())
+    text = (
+        "Mean accuracy over horizons. Answered only: calls that never returned an answer "
+        "(API error, never sent) are left out; a parse error stays wrong. Strict (the paper): "
+        "they are wrong too. complete: the share answered; worst cell: the least answered "
+        f"(task, horizon). A task with a cell under {pct(rule.min_complete)} answered is "
+        + ("kept but marked !" if rule.include_incomplete else "left out of the ranking")
+        + ". Baselines are floors (stasis, straight, random) and the ceiling (oracle)."
+        + (f" Suites: {suites}." if suites else "")
+    )
+    note = Markup("<p class='muted'>{}</p>").format(text)
+    if not part.results.units["baseline"].any():
+        note += Markup("<p class='warn'>{}</p>").format(
+            "No baseline ran on this dataset, so the floors a score must beat are not shown: "
+            f"bpb run --data {part.path} --adapter baseline:stasis --adapter baseline:straight "
+            "(offline, free), then report again."
+        )
+    if len(expected) > 1:
+        note += Markup("<p class='warn'>{}</p>").format(
+            "The runs were asked different numbers of scenes "
+            f"({', '.join(str(e) for e in sorted(expected))} scene-task calls): their scores "
+            "are means over different scenes; compare them in the paired comparisons below."
+        )
+    return note
+
+
+def incomplete_notes(part: ReportPart) -> Markup:
+    """One warning line per run with calls that failed on infrastructure or were never sent."""
+    lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results.calls).items()]
+    return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
+
+
+def horizon_table(acc: pd.DataFrame, rule: Completeness) -> Markup:
+    """Accuracy by horizon, one row per (run, task): partial cells carry their completeness,
+    short cells are greyed and left out of the mean."""
+    head, rows = horizon_cells(acc, rule)
+    return html.cells(head, rows, "no answers")
+
+
+def horizon_cells(acc: pd.DataFrame, rule: Completeness) -> tuple[list[str], Rows]:
+    """The by-horizon table's header and (baseline, cells) rows."""
+    horizons = sorted(float(h) for h in acc["horizon"].unique())
+    head = ["run", "task", *(f"h{h:g}" for h in horizons), "mean"]
+    rows = []
+    for (run, task), frame in acc.groupby(["run", "task"], observed=True, sort=False):
+        cells = [Cell(str(run)), Cell(str(task))]
+        by_h = {float(r["horizon"]): dict(r) for r in frame.to_dict(orient="records")}
+        values = []
+        for h in horizons:
+            if h not in by_h:
+                cells.append(Cell("–"))
+                continue
+            cell = by_h[h]
+            cells.append(_horizon_cell(cell, rule))
+            short = cell["level"] == "short" and not rule.include_incomplete
+            values.append(math.nan if short else float(cell["accuracy"]))
+        mean = math.nan if any(math.isnan(v) for v in values) else sum(values) / len(values)
+        cells.append(Cell(LEFT_OUT, css="short") if math.isnan(mean) else Cell(pct(mean)))
+        rows.append((bool(frame["baseline"].iloc[0]), cells))
+    return head, rows
+
+
+def _horizon_cell(cell: Mapping[Any, Any], rule: Completeness) -> Cell:
+    value, done = float(cell["accuracy"]), float(cell["completeness"])
+    answered = f"{int(cell['answered'])} of {int(cell['expected'])} answered"
+    if cell["level"] == "short":
+        text = pct(value) if rule.include_incomplete and not math.isnan(value) else LEFT_OUT
+        return Cell(text, note=pct(done), css="short", title=answered)
+    if math.isnan(value):
+        return Cell("–", title=answered)
+    if cell["level"] == "partial":
+        return Cell(pct(value), note=pct(done), css="partial", title=answered)
+    return Cell(pct(value), title=answered)
+
+
+def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
+    """The part's other sections: by horizon, stable subset, intervals, pairs, diagnostics,
+    usage."""
+    tables = part.tables
+    pairs = tables["pairs"]
+    scores = [*part.results.tasks, *(s.name for s in part.results.suites)]
+    answered = tables["accuracy_answered"]
+    key = Markup(
+        "<p class='muted'>A small number after a value is the share of the cell's scenes "
+        "answered (under 100%); a greyed cell is under {} and left out.</p>"
+    ).format(pct(rule.min_complete))
+    out = [
+        ("Accuracy by horizon (answered only)", key + horizon_table(answered, rule)),
+        ("Accuracy by horizon (strict)", key + horizon_table(tables["accuracy"], rule)),
+        (
+            "Leaderboard on stable scenes (strict)",
+            html.table(
+                tables["leaderboard_stable"],
+                percent=[*scores, "completeness", "worst_cell"],
+                empty="no stable scenes (the dataset has no stability annotation?)",
+            )
+            + Markup('<p class="muted">Scenes left out of the stable subset, by reason:</p>')
+            + html.table(tables["stable_exclusions"]),
+        ),
+        (
+            "Bootstrap 95% intervals (answered only)",
+            html.table(tables["bootstrap_answered"], percent=("estimate", "lo", "hi")),
+        ),
+        (
+            "Paired comparisons (a minus b, scenes both answered, exact sign test)",
+            html.table(pairs, percent=("a_score", "b_score", "diff", "lo", "hi"))
+            if not pairs.empty
+            else Markup("<p class='muted'>no model runs to compare</p>"),
+        ),
+    ]
+    if not tables["metadata"].empty:
+        out.insert(2, _metadata_section(tables["metadata"]))
+    for diagnostic in part.diagnostics:
+        body = html.table(tables[diagnostic.name], percent=(*diagnostic.percent, "complete"))
+        out.append((diagnostic.title, body))
+    out.append(("Tokens, cost, latency, retries", usage_table(tables["usage"])))
+    return out
+
+
+def _metadata_section(frame: pd.DataFrame) -> tuple[str, Markup]:
+    from bpb_core.results.metadata import metadata_by_horizon
+
+    note = Markup(
+        "<p class='muted'>What adapters measured about their own answers (see each adapter's "
+        "docs), per horizon: the median over scenes of each number, the count of scenes of a "
+        "text measure (e.g. a reason for not answering). Counts, means and maxima: "
+        "<i>tables/metadata.csv</i>.</p>"
+    )
+    return "Adapters' own measurements by horizon", note + html.table(metadata_by_horizon(frame))
+
+
+USAGE_HEADERS = {
+    "calls": "calls", "input_tokens": "in tok", "output_tokens": "out tok",
+    "reasoning_tokens": "reason tok", "cached_tokens": "cached tok", "cost": "cost $",
+    "cost_unknown": "cost unknown", "latency_mean": "latency mean ms",
+    "latency_median": "latency median ms", "retries": "retries", "ok": "ok",
+    "parse_error": "parse err", "api_error": "api err", "missing": "missing",
+    "tokens_per_call": "tok/call",
+}  # fmt: skip
+
+
+def usage_table(frame: pd.DataFrame) -> Markup:
+    """The usage table with short headers and latencies in milliseconds."""
+    shown = frame.copy()
+    for name in ("latency_mean", "latency_median"):
+        shown[name] = (1000 * shown[name]).round(0)
+    shown["tokens_per_call"] = shown["tokens_per_call"].round(0)
+    return html.table(shown, headers=USAGE_HEADERS)

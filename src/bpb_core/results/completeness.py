@@ -1,0 +1,96 @@
+"""Completeness per (run, task, horizon) cell, and which scores it leaves standing.
+
+A cell is the scenes a run was asked about for one task at one horizon; its completeness is the
+share of them that got an answer (not ``api_error``, not ``missing``). A score made of too few
+answers is a statement about missing data, not about the model: a run stopped by ``--max-cost``
+after the first horizons would otherwise "fall with horizon". So:
+
+- a cell under 100% is *partial*: shown, and marked;
+- a cell under ``min_complete`` (default :data:`DEFAULT_MIN_COMPLETE`) is *short*: greyed in
+  charts, and a task with a short cell is left out of the leaderboards (its score and every
+  suite built on it become NaN), unless the caller asks to include incomplete runs.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import pandas as pd
+
+DEFAULT_MIN_COMPLETE = 0.9
+"""The share of a cell's scenes that must be answered for it to count in leaderboards."""
+
+Level = Literal["full", "partial", "short"]
+
+
+def level(completeness: float, min_complete: float) -> Level:
+    """``full`` (every scene answered), ``partial`` (some missing) or ``short`` (under
+    ``min_complete``: not to be read as a finding)."""
+    if completeness >= 1.0:
+        return "full"
+    return "partial" if completeness >= min_complete else "short"
+
+
+def cell_levels(acc: pd.DataFrame, min_complete: float) -> pd.Series:
+    """The :func:`level` of every row of an accuracy frame (column ``completeness``)."""
+    values = acc["completeness"].fillna(0.0).to_numpy(dtype=float)
+    return pd.Series([level(v, min_complete) for v in values], index=acc.index, dtype="str")
+
+
+def worst_cells(acc: pd.DataFrame) -> pd.DataFrame:
+    """The least complete cell per (run, task): one row per run, one column per task."""
+    worst = acc.pivot_table(
+        index="run", columns="task", values="completeness", aggfunc="min", observed=True
+    )
+    worst.columns.name = None
+    return worst
+
+
+def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str]]:
+    """Per run, the tasks with a cell under ``min_complete`` (empty lists left out)."""
+    worst = worst_cells(acc)
+    out: dict[str, list[str]] = {}
+    for run, row in worst.iterrows():
+        short = [str(task) for task, value in row.items() if value < min_complete]
+        if short:
+            out[str(run)] = short
+    return out
+
+
+def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[str, object]]:
+    """JSON-ready cells: run, task, horizon, answered, expected, completeness, level."""
+    cells = acc[["run", "task", "horizon", "answered", "expected", "completeness"]].copy()
+    cells["level"] = cell_levels(acc, min_complete)
+    records: list[dict[str, object]] = []
+    for row in cells.to_dict(orient="records"):
+        records.append(
+            {
+                "run": str(row["run"]),
+                "task": str(row["task"]),
+                "horizon": float(row["horizon"]),
+                "answered": int(row["answered"]),
+                "expected": int(row["expected"]),
+                "completeness": float(row["completeness"]),
+                "level": str(row["level"]),
+            }
+        )
+    return records
+
+
+def incomplete_lines(calls: pd.DataFrame) -> dict[str, str]:
+    """Per run with unanswered calls, what to say: how many failed on infrastructure
+    (``api_error``) or were never sent (``missing``), and that re-running resumes them."""
+    counts = calls.groupby(["run", "status"], observed=True).size().unstack(fill_value=0)
+    out: dict[str, str] = {}
+    for run, row in counts.iterrows():
+        failed = int(row.get("api_error", 0))
+        unsent = int(row.get("missing", 0))
+        parts = [f"{_calls(failed)} failed on infrastructure"] if failed else []
+        parts += [f"{_calls(unsent)} never sent"] if unsent else []
+        if parts:
+            out[str(run)] = f"incomplete: {' and '.join(parts)}, re-run to resume"
+    return out
+
+
+def _calls(count: int) -> str:
+    return f"{count} call" if count == 1 else f"{count} calls"

@@ -1,0 +1,126 @@
+"""What a partial or mixed set of runs makes a report say: never a finding from missing data,
+never one leaderboard over two datasets."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bpb_core.errors import BadInput
+from bpb_core.registry import make_registry
+from bpb_core.report.build import Completeness, build_report
+from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run
+
+
+def _stopped_run(root: Path, data: Path) -> Path:
+    """An oracle-perfect model stopped after horizon 1: nothing answered at horizon 2."""
+    answers = {key: value for key, value in all_answers(oracle_answer).items() if key[0][1] == "1"}
+    return write_run(root / "runs" / "stopped", "litellm:stopped", data, answers)
+
+
+def test_a_stopped_run_does_not_fall_with_horizon(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    report = build_report(tmp_path / "runs", n_boot=20, registry=make_registry())
+    acc = report.tables["accuracy"].set_index(["task", "horizon"])
+    # strict: the unanswered horizon reads 0%, but is marked short ...
+    assert acc.loc[("q1", 2.0), "accuracy"] == 0.0 and acc.loc[("q1", 2.0), "level"] == "short"
+    assert acc.loc[("q1", 1.0), "level"] == "full"
+    # ... and no leaderboard or interval ranks the run on it
+    for name in ("leaderboard", "leaderboard_answered", "summary"):
+        row = report.tables[name].iloc[0]
+        assert row[["q1", "q2", "q3", "total"]].isna().all(), name
+        assert row["short"] == "q1, q2, q3"
+    assert report.tables["bootstrap"]["estimate"].isna().all()
+    summary = report.summary_json()
+    assert summary["incomplete"] == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
+    cells = {(c["task"], c["horizon"]): c for c in summary["completeness"]}
+    assert cells[("q3", 2.0)]["level"] == "short" and cells[("q3", 2.0)]["answered"] == 0
+
+
+def test_include_incomplete_keeps_the_scores_but_still_marks_them(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    rule = Completeness(include_incomplete=True)
+    report = build_report(tmp_path / "runs", n_boot=20, completeness=rule)
+    row = report.tables["leaderboard_answered"].iloc[0]
+    assert row["total"] == 1.0 and row["short"] == "q1, q2, q3"
+
+
+def test_runs_on_two_datasets_are_two_sections_never_one_leaderboard(tmp_path: Path) -> None:
+    first, second = write_dataset(tmp_path / "d1"), write_dataset(tmp_path / "d2")
+    runs = tmp_path / "runs"
+    write_run(runs / "a", "baseline:oracle", first, all_answers(oracle_answer))
+    write_run(runs / "b", "baseline:oracle", second, all_answers(oracle_answer))
+    report = build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    assert [p.results.runs[0].label for p in report.parts] == ["a", "b"]
+    assert all(len(p.tables["leaderboard"]) == 1 for p in report.parts)
+    with pytest.raises(BadInput, match="2 datasets"):
+        _ = report.tables
+    summary = json.loads(json.dumps(report.summary_json(), default=str))
+    assert "leaderboard" not in summary and len(summary["datasets"]) == 2
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "answered 2 different" in page and page.count("<h2>Dataset ") == 2
+    tables = sorted(p.name for p in (tmp_path / "out" / "tables").glob("*leaderboard.md"))
+    assert len(tables) == 2  # one per dataset, prefixed with its short id
+
+
+def test_markdown_and_booktabs_exports_show_the_same_cells(runs: Path, tmp_path: Path) -> None:
+    build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    tables = tmp_path / "out" / "tables"
+    md = (tables / "by_horizon.md").read_text().splitlines()
+    assert md[0].startswith("| run | task | h1 | h2 | mean |") and md[1].startswith("| :---")
+    model_q2 = next(line for line in md if line.startswith("| litellm_model | q2"))
+    assert model_q2 == "| litellm_model | q2 | 50.0% | left out (50.0%) | left out |"
+    tex = (tables / "leaderboard.tex").read_text()
+    for rule in ("\\toprule", "\\midrule", "\\bottomrule", "\\caption{"):
+        assert tex.count(rule) == 1, rule
+    assert "baseline\\_stasis (baseline) & 100.0\\% & 87.5\\%" in tex
+    assert "%" not in tex.replace("\\%", "")  # no bare % would comment the rest of a line out
+    assert (tables / "q1_metrics.tex").is_file() and (tables / "q1_metrics.md").is_file()
+
+
+def test_json_carries_by_horizon_completeness_usage_and_confusion(runs: Path) -> None:
+    summary = build_report(runs, n_boot=20).summary_json()
+    rows = {(r["run"], r["task"], r["horizon"]): r for r in summary["by_horizon"]}
+    cell = rows[("litellm_model", "q1", 1.0)]
+    assert cell["accuracy_strict"] == 0.5 and cell["accuracy_answered"] == 1.0
+    assert cell["completeness"] == 0.5 and cell["level"] == "short"
+    assert {u["run"] for u in summary["usage"]} == {
+        "baseline_oracle",
+        "baseline_stasis",
+        "litellm_model",
+    }
+    assert {"q1_confusion", "q2_confusion"} <= set(summary["diagnostics"])
+    assert summary["completeness_rule"] == {"min_complete": 0.9, "include_incomplete": False}
+
+
+def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    write_run(tmp_path / "runs" / "nothing", "litellm:none", data, {})
+    _stopped_run(tmp_path, data)
+    report = build_report(tmp_path / "runs", tmp_path / "out", n_boot=20, gallery_size=0)
+    board = report.tables["leaderboard_answered"].set_index("run")
+    assert board.loc["nothing", "completeness"] == 0.0 and board.loc["nothing", "short"]
+    assert board.loc["nothing", ["q1", "total"]].isna().all()
+    assert (tmp_path / "out" / "charts" / "accuracy_by_horizon.png").stat().st_size > 0
+
+
+def test_diagnostic_charts_leave_out_too_incomplete_runs_and_say_so(
+    runs: Path, tmp_path: Path
+) -> None:
+    report = build_report(runs, tmp_path / "out", n_boot=20, gallery_size=0)
+    assert "litellm_model" in set(report.tables["stasis"]["run"])  # the table keeps it
+    page = (tmp_path / "out" / "report.html").read_text()
+    stasis = page[page.index("<h3>Stasis index</h3>") :]
+    assert stasis.index("left out as too incomplete: litellm_model") < stasis.index("<h2>")
+
+
+def test_a_report_without_baselines_says_the_floors_are_missing(tmp_path: Path) -> None:
+    data = write_dataset(tmp_path / "data")
+    _stopped_run(tmp_path, data)
+    build_report(tmp_path / "runs", tmp_path / "out", n_boot=20, gallery_size=0)
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "No baseline ran on this dataset" in page and "--adapter baseline:stasis" in page
