@@ -47,6 +47,12 @@ _EXPORTS: dict[str, str] = {
     "generate_dataset": "bpb_core.library",
     "load_dataset": "bpb_core.library",
     "Dataset": "bpb_core.library",
+    "DatasetScene": "bpb_core.library",
+    "build_messages": "bpb_core.library",
+    "score_answer": "bpb_core.library",
+    "AnswerScore": "bpb_core.library",
+    "UnitScore": "bpb_core.library",
+    "EvalResult": "bpb_core.library",
     "simulate_paths": "bpb_core.library",
     "run_eval": "bpb_core.library",
     "evaluate": "bpb_core.library",
@@ -113,8 +119,13 @@ if TYPE_CHECKING:
         Task as Task,
     )
     from bpb_core.library import (
+        AnswerScore as AnswerScore,
         Dataset as Dataset,
+        DatasetScene as DatasetScene,
+        EvalResult as EvalResult,
         Results as Results,
+        UnitScore as UnitScore,
+        build_messages as build_messages,
         build_report as build_report,
         evaluate as evaluate,
         generate_dataset as generate_dataset,
@@ -123,6 +134,7 @@ if TYPE_CHECKING:
         load_frame as load_frame,
         load_results as load_results,
         run_eval as run_eval,
+        score_answer as score_answer,
         simulate_paths as simulate_paths,
     )
     from bpb_core.model_calls import (
