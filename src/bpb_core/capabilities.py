@@ -13,6 +13,7 @@ without when it is missing.
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery).
+- A task: :class:`PublishesSchema` (its answer's JSON Schema, for ``--structured-output``).
 """
 
 from __future__ import annotations
@@ -201,4 +202,14 @@ class DrawsOverlay(Protocol):
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
         """Draw on ``picture.image`` and add legend entries to ``picture.legend``."""
+        ...
+
+
+@runtime_checkable
+class PublishesSchema(Protocol):
+    """A task whose answer format has a JSON Schema (published, and offered to providers that
+    accept a response schema with ``--structured-output``)."""
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema (draft 2020-12) every valid answer, once normalised, satisfies."""
         ...

@@ -180,6 +180,11 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     "--force-numeric", is_flag=True, help="Ask for numbers where a task would allow null."
 )
 @click.option(
+    "--structured-output",
+    is_flag=True,
+    help="Offer each task's answer JSON Schema to providers that accept one (not the paper's).",
+)
+@click.option(
     "--input-mode",
     type=click.Choice(["image", "image+state", "state"]),
     default="image",
@@ -259,6 +264,7 @@ def run(**kw: Any) -> None:
         max_tokens=kw["max_tokens"],
         timeout=kw["timeout"],
         force_numeric=kw["force_numeric"],
+        structured_output=kw["structured_output"],
         input_mode=kw["input_mode"],
         max_cost=kw["max_cost"],
         seed=kw["seed"],

@@ -11,7 +11,13 @@ from __future__ import annotations
 from bpb_core.dataset.generate import generate_dataset
 from bpb_core.dataset.reader import Dataset, load_dataset
 from bpb_core.dataset.scene_entry import DatasetScene
-from bpb_core.library.answers import AnswerScore, UnitScore, build_messages, score_answer
+from bpb_core.library.answers import (
+    AnswerScore,
+    UnitScore,
+    answer_schema,
+    build_messages,
+    score_answer,
+)
 from bpb_core.library.evaluation import EvalResult, evaluate, leaderboard, run_eval
 from bpb_core.report.build import Report, build_report
 from bpb_core.results.frames import Results, load_frame, load_results
@@ -27,6 +33,7 @@ __all__ = [
     "Report",
     "Results",
     "UnitScore",
+    "answer_schema",
     "build_messages",
     "build_report",
     "evaluate",

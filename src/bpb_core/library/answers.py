@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.errors import ParseFailure
+from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
 
@@ -176,3 +176,17 @@ def scene_score(rule: str, units: tuple[UnitScore, ...]) -> float:
     if rule == "all":
         return float(all(u.correct for u in units))
     return sum(u.correct for u in units) / len(units)
+
+
+def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict[str, Any]:
+    """The JSON Schema of a task's answer (published in ``docs/schemas/`` for the built-ins).
+
+    Raises:
+        BadInput: The task publishes no schema.
+    """
+    from bpb_core.capabilities import PublishesSchema
+
+    found = _task(task, registry)
+    if not isinstance(found, PublishesSchema):
+        raise BadInput(f"task {found.name!r}: publishes no answer schema")
+    return found.answer_schema()

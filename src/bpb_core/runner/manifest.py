@@ -27,7 +27,15 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
     from bpb_core.runner.state import RunState
 
-_GUARDED = ("adapter", "adapter_settings", "dataset_hash", "input_mode", "cot", "force_numeric")
+_GUARDED = (
+    "adapter",
+    "adapter_settings",
+    "dataset_hash",
+    "input_mode",
+    "cot",
+    "force_numeric",
+    "structured_output",
+)
 _UNGUARDED_SETTINGS = ("api_base",)
 
 

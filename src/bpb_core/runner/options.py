@@ -47,6 +47,8 @@ class RunOptions:
         max_cost: Stop sending calls once the run has spent this many USD.
         seed: Seed for adapters with randomness.
         retry: Retry policy.
+        structured_output: Offer each task's answer JSON Schema to the provider (off by
+            default: the paper did not use it).
     """
 
     tasks: tuple[str, ...] = ()
@@ -64,3 +66,4 @@ class RunOptions:
     max_cost: float | None = None
     seed: int = 0
     retry: RetryPolicy = RetryPolicy()
+    structured_output: bool = False

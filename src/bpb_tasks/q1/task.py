@@ -12,6 +12,7 @@ from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, check_ids, load, read_id, upper
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q1Schema, schema_of
 
 
 class BallAnswer(Item):
@@ -72,3 +73,7 @@ class Q1Task(BilliardsQuestion):
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"answers": [label.model_dump() for label in truth.q1]}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q1.answer.schema.json``)."""
+        return schema_of(Q1Schema, self.name)

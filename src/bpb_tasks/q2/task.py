@@ -13,6 +13,7 @@ from bpb_tasks.billiards.scene import WALLS, Scene, Wall
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, load, upper
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q2Schema, schema_of
 
 
 class WallAnswer(Item):
@@ -67,3 +68,7 @@ class Q2Task(BilliardsQuestion):
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"answers": [label.model_dump() for label in truth.q2]}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q2.answer.schema.json``)."""
+        return schema_of(Q2Schema, self.name)

@@ -14,6 +14,7 @@ from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import Item, check_ids, load, read_id
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q3Schema, schema_of
 
 
 class PositionAnswer(Item):
@@ -104,3 +105,7 @@ class Q3Task(BilliardsQuestion):
                 for p in truth.predictions
             ]
         }
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q3.answer.schema.json``)."""
+        return schema_of(Q3Schema, self.name)
