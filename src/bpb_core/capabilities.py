@@ -213,3 +213,15 @@ class PublishesSchema(Protocol):
     def answer_schema(self) -> dict[str, Any]:
         """The JSON Schema (draft 2020-12) every valid answer, once normalised, satisfies."""
         ...
+
+
+@runtime_checkable
+class DescribesDataset(Protocol):
+    """A family that describes its datasets for the dataset card of a published export
+    (``bpb export --format hf``)."""
+
+    def dataset_card(self) -> dict[str, Any]:
+        """The card's words: ``pretty_name``, ``description`` (Markdown), ``citation``
+        (BibTeX), ``license`` (a Hugging Face license id), ``task_categories`` and ``tags``
+        (lists of strings); any may be missing."""
+        ...

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput
@@ -113,13 +114,14 @@ def load_dataset(
     *,
     registry: Registry | None = None,
 ) -> Dataset:
-    """Open the dataset folder ``root`` (optionally narrowed with :meth:`Dataset.select`).
+    """Open the dataset folder ``root`` (optionally narrowed with :meth:`Dataset.select`); a
+    Hugging Face export of one (``bpb export --format hf``) opens as the folder it came from.
 
     Raises:
         BadInput: ``root`` is not a dataset, its manifest or index is corrupt, or its scene
             family is not installed.
     """
-    root = Path(root)
+    root = resolve_data(root)
     manifest = read_manifest(root)
     family = dataset_family(manifest, root, registry)
     dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family)

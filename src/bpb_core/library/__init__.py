@@ -19,6 +19,7 @@ from bpb_core.library.answers import (
     score_answer,
 )
 from bpb_core.library.evaluation import EvalResult, evaluate, leaderboard, run_eval
+from bpb_core.library.hf_export import HfExport, export_hf
 from bpb_core.report.build import Report, build_report
 from bpb_core.results.frames import Results, load_frame, load_results
 from bpb_core.results.tables import summary
@@ -30,6 +31,7 @@ __all__ = [
     "Dataset",
     "DatasetScene",
     "EvalResult",
+    "HfExport",
     "Report",
     "Results",
     "UnitScore",
@@ -37,6 +39,7 @@ __all__ = [
     "build_messages",
     "build_report",
     "evaluate",
+    "export_hf",
     "generate_dataset",
     "leaderboard",
     "load_dataset",

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.results.frames import Results, load_results
 from bpb_core.runner import run as runner
 from bpb_core.runner.result import RunResult
@@ -61,7 +62,7 @@ def run_eval(
     score it.
 
     Args:
-        data: Dataset folder.
+        data: Dataset folder, or a Hugging Face export of one (``bpb export --format hf``).
         adapter: An adapter spec (``baseline:oracle``, ``litellm:gpt-5``) or an adapter object
             (anything with a ``name`` and an async ``complete(request)``).
         run_dir: The run folder (created; resumed when it holds an earlier run).
@@ -72,7 +73,7 @@ def run_eval(
     Returns:
         Per-task status counts, cost and tokens, and ``scores``, the scored units frame.
     """
-    done = runner.run_eval(Path(data), adapter, Path(run_dir), options, **kwargs)
+    done = runner.run_eval(resolve_data(data), adapter, Path(run_dir), options, **kwargs)
     results = load_results(done.run_dir, registry=kwargs.get("registry"))
     return EvalResult(
         **{f.name: getattr(done, f.name) for f in dataclasses.fields(done)}, results=results
