@@ -71,7 +71,8 @@ def bpb_task(
     names = list(tasks or weights)
     if not names:
         raise BadInput("bpb_task: give tasks or a suite")
-    dataset = load_dataset(data, _horizons(horizons), limit, registry=registry)
+    chosen = _horizons(horizons)
+    dataset = load_dataset(data, chosen, limit, registry=registry)
     samples = [
         _sample(name, scene, input_mode, cot, registry) for scene in dataset for name in names
     ]
@@ -81,7 +82,14 @@ def bpb_task(
         scorer=bpb_scorer(dataset, names, weights, cot=cot, registry=registry),
         metrics=[bpb_scores(names, weights), *([] if weights else [mean(), stderr()])],
         config=GenerateConfig(temperature=0.0),
-        metadata={"bpb_tasks": names, "bpb_dataset_hash": dataset.dataset_hash},
+        metadata={  # what bpb report needs to read the log as a run (bpb_core.results)
+            "bpb_tasks": names,
+            "bpb_dataset": str(dataset.root.resolve()),
+            "bpb_dataset_hash": dataset.dataset_hash,
+            "bpb_horizons": chosen,
+            "bpb_limit": limit,
+            "bpb_input_mode": input_mode,
+        },
     )
 
 
@@ -110,7 +118,8 @@ def _sample(
     task: str, scene: DatasetScene, mode: InputMode, cot: bool | None, registry: Registry
 ) -> Sample:
     messages = build_messages(task, scene, mode, cot=cot, registry=registry)
-    expected = registry.task(task).expected(scene.truth)
+    found = registry.task(task)
+    expected = found.expected(scene.truth)
     return Sample(
         id=f"{scene.scene_id}/{task}",
         input=[to_inspect(message) for message in messages],
@@ -119,8 +128,10 @@ def _sample(
             "scene_id": scene.scene_id,
             "task": task,
             "horizon": scene.horizon,
+            "index": scene.key.index,
             "stable": scene.stable,
             "input_mode": mode,
+            "cot": found.default_cot if cot is None else cot,
         },
     )
 

@@ -12,9 +12,8 @@ import pytest
 from inspect_ai import eval as inspect_eval
 from inspect_ai.log import EvalLog
 
-from bpb_core import ModelRequest, ModelResponse, RunOptions, Usage, leaderboard, run_eval
-from bpb_core.testing.fakereplies import message_text
-from support.inspect_models import example_answer
+from bpb_core import RunOptions, leaderboard, run_eval
+from support.inspect_models import ExampleAdapter
 from support.paths import DOCS
 
 pytestmark = pytest.mark.usefixtures("quiet_inspect")
@@ -34,16 +33,6 @@ def metrics(log: EvalLog) -> dict[str, float]:
     assert log.results is not None
     (score,) = log.results.scores
     return {name: m.value for name, m in score.metrics.items()}
-
-
-class ExampleAdapter:
-    """The bpb adapter answering what ``bpbtest/example`` answers."""
-
-    name = "example"
-
-    async def complete(self, request: ModelRequest) -> ModelResponse:
-        reply = example_answer(message_text(request.messages))
-        return ModelResponse(reply, Usage(), None, 0.0, "example")
 
 
 def test_truth_scores_full_marks(small_dataset: Path) -> None:

@@ -1,6 +1,7 @@
 """Inspect AI model APIs for tests (Inspect's custom model API): ``bpbtest/truth`` answers every
 bpb prompt from the dataset's ground truth, ``bpbtest/example`` answers with the answer format's
-example that ends each prompt (a bad model). Importing this module registers both."""
+example that ends each prompt (a bad model). Importing this module registers both.
+:class:`ExampleAdapter` gives ``bpb run`` the replies of ``bpbtest/example``."""
 
 from __future__ import annotations
 
@@ -17,8 +18,9 @@ from inspect_ai.model import (
 )
 from inspect_ai.tool import ToolChoice, ToolInfo
 
+from bpb_core import ModelRequest, ModelResponse, Usage
 from bpb_core.reply_json import balanced_objects
-from bpb_core.testing.fakereplies import PromptIndex
+from bpb_core.testing.fakereplies import PromptIndex, message_text
 
 
 def prompt_text(messages: list[ChatMessage]) -> str:
@@ -70,3 +72,13 @@ class BpbTestModel(ModelAPI):
 @modelapi(name="bpbtest")
 def bpbtest() -> type[ModelAPI]:
     return BpbTestModel
+
+
+class ExampleAdapter:
+    """The bpb adapter answering what ``bpbtest/example`` answers (the same replies in a run)."""
+
+    name = "example"
+
+    async def complete(self, request: ModelRequest) -> ModelResponse:
+        reply = example_answer(message_text(request.messages))
+        return ModelResponse(reply, Usage(), None, 0.0, "example")
