@@ -56,7 +56,8 @@ def test_bpb_report_on_logs_and_a_foreign_log(
     assert "inspect_bpbtest_example" in done.stdout
     assert (tmp_path / "report" / "report.html").is_file()
     other = Task(dataset=[Sample(input="Say x", target="x")], scorer=match())
-    (log,) = inspect_eval(other, model="mockllm/model", log_dir=str(tmp_path / "other"))
+    (log,) = inspect_eval(other, model="bpbtest/example", log_dir=str(tmp_path / "other"))
+    assert log.status == "success"
     bad = run_bpb("report", log.location)
     assert bad.returncode == 2
     assert bad.stderr.strip().endswith("not an Inspect log of a bpb task (inspect eval bpb/...)")
