@@ -46,6 +46,7 @@ def test_inspect_logs_score_like_the_same_replies_in_bpb(
     assert len(units[units["adapter"] == "inspect:bpbtest/example"]) == 6 * (6 + 4)
 
 
+@pytest.mark.slow
 def test_bpb_report_on_logs_and_a_foreign_log(
     logs: Path,
     tmp_path: Path,

@@ -133,7 +133,7 @@ def _index_cells(path: Path) -> dict[str, dict[str, str]]:
 def _row(
     scene: DatasetScene, task: Task, cells: dict[str, str], registry: Registry
 ) -> dict[str, Any]:
-    images = scene.family.input_image is not None
+    images = scene.family.input_image is not None and scene.image_path().is_file()
     prompts = {
         f"prompt_{mode.replace('+', '_')}": _prompt(task, scene, mode, registry)
         if images or mode == "state"
