@@ -101,15 +101,22 @@ def test_a_run_on_the_export_scores_like_one_on_the_source(
             assert copy.read_bytes() == (scene.folder / name).read_bytes()
 
 
-def test_cli_export_and_bad_out(
+def test_cli_export_run_on_it_and_bad_out(
     small_dataset: Path,
     tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
     run_bpb: Callable[..., subprocess.CompletedProcess[str]],
 ) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
     out = tmp_path / "hf"
     done = run_bpb("export", str(small_dataset), "--format", "hf", "--out", str(out))
     assert done.returncode == 0, done.stderr
     assert "exported 18 rows (h1: 9, h3: 9) of q1, q2, q3" in done.stdout
+    runs = tmp_path / "runs"
+    ran = run_bpb("run", "--data", str(out), "--adapter", "baseline:oracle", "--out", str(runs))
+    assert ran.returncode == 0, ran.stderr
+    oracle = run_eval(out, "baseline:oracle", runs / "baseline_oracle")  # resumes: nothing asked
+    assert len(oracle.scores) == 6 * (6 + 4 + 7) and bool(oracle.scores["correct"].all())
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "notes.txt").write_text("mine", encoding="utf-8")
     bad = run_bpb("export", str(small_dataset), "--out", str(tmp_path / "busy"))
