@@ -79,10 +79,14 @@ def _unpack(path: Path, shards: list[Path], target: Path) -> None:
     partial = target.with_name(f"{target.name}.partial-{os.getpid()}")
     shutil.rmtree(partial, ignore_errors=True)
     partial.mkdir(parents=True)
-    for shard in shards:
-        _unpack_shard(shard, partial)
-    shutil.copyfile(path / SIDE / INDEX, partial / INDEX)
-    shutil.copyfile(path / SIDE / MANIFEST, partial / MANIFEST)
+    try:
+        for shard in shards:
+            _unpack_shard(shard, partial)
+        shutil.copyfile(path / SIDE / INDEX, partial / INDEX)
+        shutil.copyfile(path / SIDE / MANIFEST, partial / MANIFEST)
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
     try:
         partial.rename(target)
     except OSError:  # another process unpacked the same export first
@@ -96,7 +100,9 @@ def _unpack_shard(shard: Path, out: Path) -> None:
         table = pq.read_table(shard, columns=_COLUMNS)
     except Exception as exc:  # pyarrow raises several types for a bad file
         raise BadInput(f"{shard}: not a bpb export shard: {exc}") from None
-    for row in table.to_pylist():
+    for number, row in enumerate(table.to_pylist()):
+        if not isinstance(row["scene"], str) or not isinstance(row["truth"], str):
+            raise BadInput(f"{shard}: row {number}: scene and truth must be JSON text")
         folder = SceneKey(float(row["horizon"]), int(row["index"])).dir(out)
         if (folder / INIT).exists():
             continue  # one row per task: the scene's files are written once
@@ -104,5 +110,6 @@ def _unpack_shard(shard: Path, out: Path) -> None:
         (folder / INIT).write_bytes(row["scene"].encode("utf-8"))
         (folder / FINAL).write_bytes(row["truth"].encode("utf-8"))
         image = row["image"]
-        if image is not None:
-            (out / image["path"]).write_bytes(image["bytes"])
+        if image is not None and image.get("bytes"):
+            # only the file name: an image never lands outside its scene's folder
+            (folder / Path(str(image["path"])).name).write_bytes(image["bytes"])

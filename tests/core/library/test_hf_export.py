@@ -5,15 +5,19 @@ from __future__ import annotations
 
 import io
 import json
+import re
+import shutil
 import subprocess
 from collections.abc import Callable
 from pathlib import Path
 
 import datasets
 import pytest
+from huggingface_hub import DatasetCard
 from PIL import Image
 
 from bpb_core import RunOptions, TextPart, build_messages, load_dataset, make_registry, run_eval
+from bpb_core.errors import BadInput
 from bpb_core.library.hf_export import export_hf
 
 SCORE_COLUMNS = ["task", "scene_id", "unit", "truth", "pred", "correct"]
@@ -66,10 +70,11 @@ def test_datasets_loads_rows_features_and_images(
 def test_the_dataset_card_gives_splits_by_horizon(export: Path, tmp_path: Path) -> None:
     loaded = _load(str(export), cache=tmp_path)
     assert {split: loaded[split].num_rows for split in loaded} == {"h1": 9, "h3": 9}
-    card = (export / "README.md").read_text(encoding="utf-8")
-    front = card.split("---\n")[1]
-    assert 'license: "mit"' in front and 'path: "data/h3-*"' in front
-    assert "seed: 11" in front and "@misc{" in card and '"seed": 11' in card
+    card = DatasetCard.load(export / "README.md")
+    assert card.data.license == "mit"
+    assert card.data.configs[0]["data_files"][1] == {"split": "h3", "path": "data/h3-*"}
+    assert card.data.to_dict()["bpb"]["seed"] == 11
+    assert "@misc{" in card.text and '"seed": 11' in card.text
 
 
 def test_same_dataset_same_bytes(small_dataset: Path, export: Path, tmp_path: Path) -> None:
@@ -123,3 +128,16 @@ def test_cli_export_run_on_it_and_bad_out(
     assert bad.returncode == 2
     assert bad.stderr.strip().endswith("not a bpb export; choose a new folder")
     assert (tmp_path / "busy" / "notes.txt").read_text(encoding="utf-8") == "mine"
+
+
+def test_a_corrupt_shard_is_named(
+    export: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    broken = tmp_path / "broken"
+    shutil.copytree(export, broken)
+    shard = sorted((broken / "data").glob("h3-*.parquet"))[0]
+    shard.write_bytes(b"not parquet")
+    with pytest.raises(BadInput, match=rf"^{re.escape(str(shard))}: not a bpb export shard"):
+        load_dataset(broken)
+    assert not list((tmp_path / "cache" / "hf").iterdir())  # nothing half-made is left
