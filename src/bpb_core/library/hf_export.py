@@ -33,6 +33,10 @@ if TYPE_CHECKING:
 
 MODES: tuple[InputMode, ...] = ("image", "image+state", "state")
 SHARD_ROWS = 1000
+ROW_GROUP = 100
+# A scene's image repeats in its rows (one per task): a dictionary large enough for a row
+# group's distinct images stores each image once instead of once per task.
+DICTIONARY_BYTES = 64 * 1024 * 1024
 # name -> Hugging Face feature; the order is the column order.
 FEATURES: dict[str, dict[str, str]] = {
     "image": {"_type": "Image"},
@@ -187,7 +191,13 @@ def _write_split(
         columns = {name: [row[name] for row in chunk] for name in FEATURES}
         table = pa.table(columns, schema=schema.with_metadata(metadata))
         name = shard_name(split, number, len(chunks))
-        pq.write_table(table, out / name, compression="zstd", row_group_size=100)
+        pq.write_table(
+            table,
+            out / name,
+            compression="zstd",
+            row_group_size=ROW_GROUP,
+            dictionary_pagesize_limit=DICTIONARY_BYTES,
+        )
         names.append(name)
         nbytes += table.nbytes
     return names, nbytes

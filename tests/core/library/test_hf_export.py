@@ -141,3 +141,10 @@ def test_a_corrupt_shard_is_named(
     with pytest.raises(BadInput, match=rf"^{re.escape(str(shard))}: not a bpb export shard"):
         load_dataset(broken)
     assert not list((tmp_path / "cache" / "hf").iterdir())  # nothing half-made is left
+
+
+def test_each_scene_image_is_stored_once(small_dataset: Path, tmp_path: Path) -> None:
+    done = export_hf(small_dataset, tmp_path / "hf")
+    images = sum(scene.image_path().stat().st_size for scene in load_dataset(small_dataset))
+    stored = sum((done.out / name).stat().st_size for name in done.files)
+    assert stored < 2 * images  # three rows (tasks) per scene would make it 3x and more
