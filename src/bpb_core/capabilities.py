@@ -14,11 +14,13 @@ without when it is missing.
   :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
   :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
   ``--dry-run``).
-- A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``).
+- A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``), :class:`PublishesSchema`
+  (its answer's JSON Schema, for ``--structured-output``).
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery),
   :class:`ReportsMetrics` (metrics beside its task's accuracy in reports).
 - A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
 - A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
+- A scene family: :class:`DescribesDataset` (the dataset card of ``bpb export --format hf``).
 """
 
 from __future__ import annotations
@@ -280,6 +282,15 @@ class ExplainsInstability(Protocol):
     def unstable_reasons(self) -> list[str]:
         """Short names of the stability conditions the scene fails (empty when stable or not
         annotated)."""
+
+
+@runtime_checkable
+class PublishesSchema(Protocol):
+    """A task whose answer format has a JSON Schema (published, and offered to providers that
+    accept a response schema with ``--structured-output``)."""
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema (draft 2020-12) every valid answer, once normalised, satisfies."""
         ...
 
 
@@ -324,4 +335,15 @@ class ReportsMetrics(Protocol):
         """One row per run of ``units`` (this task's units of answered calls: status ``ok``
         or ``parse_error``) with the run columns ``run, adapter, model, baseline`` first,
         then one column per key of :attr:`metric_notes`, then any counts behind them."""
+
+
+@runtime_checkable
+class DescribesDataset(Protocol):
+    """A family that describes its datasets for the dataset card of a published export
+    (``bpb export --format hf``)."""
+
+    def dataset_card(self) -> dict[str, Any]:
+        """The card's words: ``pretty_name``, ``description`` (Markdown), ``citation``
+        (BibTeX), ``license`` (a Hugging Face license id), ``task_categories`` and ``tags``
+        (lists of strings); any may be missing."""
         ...

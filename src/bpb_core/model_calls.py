@@ -57,6 +57,9 @@ class ModelRequest:
         max_tokens: Output token cap, ``None`` for the provider default.
         timeout: Seconds before the call counts as timed out.
         attempt: 1 for the first call of a (scene, task), higher on retries.
+        response_schema: The task's answer JSON Schema when the run asks for structured output
+            (``--structured-output``); an adapter whose provider accepts a response schema
+            sends it, any other ignores it.
     """
 
     messages: tuple[Message, ...]
@@ -68,6 +71,7 @@ class ModelRequest:
     max_tokens: int | None = None
     timeout: float = 120.0
     attempt: int = 1
+    response_schema: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)

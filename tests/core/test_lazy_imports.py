@@ -5,7 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
-HEAVY = ("litellm", "pandas", "matplotlib", "pymunk", "openai")
+HEAVY = ("litellm", "pandas", "matplotlib", "pymunk", "openai", "pyarrow", "inspect_ai", "datasets")
 
 
 def _modules_after(code: str) -> set[str]:

@@ -15,6 +15,7 @@ import dataclasses
 import importlib
 import logging
 import os
+import re
 import time
 import uuid
 from collections import OrderedDict
@@ -152,6 +153,8 @@ class LiteLLMAdapter:
         requested: dict[str, Any] = {"temperature": request.temperature}
         if request.max_tokens is not None:
             requested["max_tokens"] = request.max_tokens
+        if request.response_schema is not None:
+            requested["response_format"] = response_format(request)
         requested.update(self.args)  # a model's own arguments win over the run's
         kwargs: dict[str, Any] = {
             "model": self.model,
@@ -231,6 +234,13 @@ def usage_of(raw: Any) -> Usage:
         reasoning_tokens=getattr(completion_details, "reasoning_tokens", None),
         cached_tokens=getattr(prompt_details, "cached_tokens", None),
     )
+
+
+def response_format(request: ModelRequest) -> dict[str, Any]:
+    """The OpenAI-style ``response_format`` litellm translates for each provider that takes a
+    response schema (and drops, reported as dropped, for one that does not)."""
+    name = re.sub(r"[^A-Za-z0-9_-]", "_", f"{request.task}_answer")
+    return {"type": "json_schema", "json_schema": {"name": name, "schema": request.response_schema}}
 
 
 def make_adapter(model: str, options: AdapterOptions) -> LiteLLMAdapter:

@@ -106,7 +106,8 @@ def sample_units(
     dataset = load_dataset(data, registry=registry)
     objects = {name: registry.task(name) for name in tasks}
     cases: dict[str, list[Case]] = {name: [] for name in tasks}
-    for key, scene, truth in dataset:
+    for entry in dataset:
+        key, scene, truth = entry.key, entry.state, entry.truth
         rng = random.Random(f"bench-score:{seed}:{key.horizon!r}:{key.index}")
         outcomes = _outcomes(dataset.family, scene, truth, rng)
         for name, task in objects.items():

@@ -23,6 +23,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "bench": ("bpb_core.cli.bench", "bench", "Benchmarks (speed against error)."),
     "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
     "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
+    "export": ("bpb_core.cli.export_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
     "prompt": ("bpb_core.cli.prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
     "human": ("bpb_core.cli.web_cmd", "human", "Answer the questions in the browser (a run)."),

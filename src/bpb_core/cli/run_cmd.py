@@ -113,7 +113,9 @@ def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> N
 
 def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     if data is not None:
-        return data
+        from bpb_core.dataset.hf_import import resolve_data
+
+        return resolve_data(data)
     quick = out / "data"
     if (quick / "dataset.json").exists():
         return quick
@@ -195,6 +197,11 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 @click.option(
     "--force-numeric", is_flag=True, help="Ask for numbers where a task would allow null."
+)
+@click.option(
+    "--structured-output",
+    is_flag=True,
+    help="Offer each task's answer JSON Schema to providers that accept one (not the paper's).",
 )
 @click.option(
     "--input-mode",
@@ -282,6 +289,7 @@ def run(**kw: Any) -> None:
         max_tokens=kw["max_tokens"],
         timeout=kw["timeout"],
         force_numeric=kw["force_numeric"],
+        structured_output=kw["structured_output"],
         input_mode=kw["input_mode"],
         max_cost=kw["max_cost"],
         seed=kw["seed"],

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
+from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, select_keys
@@ -29,8 +31,9 @@ if TYPE_CHECKING:
 class Dataset:
     """A dataset folder: its manifest, its scene family and a selection of its scenes.
 
-    Iterating yields ``(SceneKey, scene, truth)`` in horizon then index order; scene and truth
-    are the family's models of ``init.json`` and ``final.json``.
+    Iterating yields a :class:`~bpb_core.dataset.scene_entry.DatasetScene` per scene in horizon
+    then index order; ``dataset["h3_0007"]`` looks one up by its id. Each reads its
+    ``init.json`` (``.state``) and ``final.json`` (``.truth``) with the family's models on use.
     """
 
     root: Path
@@ -56,9 +59,23 @@ class Dataset:
     def __len__(self) -> int:
         return len(self.keys)
 
-    def __iter__(self) -> Iterator[tuple[SceneKey, Any, Any]]:
+    def __iter__(self) -> Iterator[DatasetScene]:
         for key in self.keys:
-            yield key, self.scene(key), self.truth(key)
+            yield DatasetScene(key, key.dir(self.root), self.family)
+
+    def __getitem__(self, scene_id: str) -> DatasetScene:
+        """The scene with id ``scene_id`` (``h3_0007``).
+
+        Raises:
+            KeyError: No scene of the selection has that id.
+        """
+        for key in self.keys:
+            if key.scene_id == scene_id:
+                return DatasetScene(key, key.dir(self.root), self.family)
+        raise KeyError(f"{self.root}: no scene {scene_id!r} in the selection")
+
+    def __contains__(self, scene_id: object) -> bool:
+        return any(key.scene_id == scene_id for key in self.keys)
 
     def path(self, key: SceneKey, name: str) -> Path:
         """Path of file ``name`` (``init.png``) of scene ``key``."""
@@ -97,13 +114,14 @@ def load_dataset(
     *,
     registry: Registry | None = None,
 ) -> Dataset:
-    """Open the dataset folder ``root`` (optionally narrowed with :meth:`Dataset.select`).
+    """Open the dataset folder ``root`` (optionally narrowed with :meth:`Dataset.select`); a
+    Hugging Face export of one (``bpb export --format hf``) opens as the folder it came from.
 
     Raises:
         BadInput: ``root`` is not a dataset, its manifest or index is corrupt, or its scene
             family is not installed.
     """
-    root = Path(root)
+    root = resolve_data(root)
     manifest = read_manifest(root)
     family = dataset_family(manifest, root, registry)
     dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family)

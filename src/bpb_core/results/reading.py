@@ -86,11 +86,15 @@ def find_runs(
     paths: Path | str | Iterable[Path | str], registry: Registry | None = None
 ) -> list[RunFolder]:
     """Run folders in ``paths`` (each a run folder or a folder of run folders), labelled uniquely.
+    Inspect AI logs of bpb tasks (``.eval`` files, or folders of them) count as run folders
+    (:mod:`bpb_core.results.inspect_logs`).
 
     Raises:
         BadInput: A path does not exist or holds no run folder.
     """
-    items = [paths] if isinstance(paths, (str, Path)) else list(paths)
+    from bpb_core.results.inspect_logs import with_inspect_runs
+
+    items = with_inspect_runs([paths] if isinstance(paths, (str, Path)) else list(paths))
     found: list[Path] = []
     for item in items:
         path = Path(item)

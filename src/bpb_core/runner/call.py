@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+from bpb_core.capabilities import PublishesSchema
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -121,7 +122,14 @@ class PairCall:
             options.max_tokens,
             self.timeout,
             self.tally.attempts,
+            self._schema(),
         )
+
+    def _schema(self) -> dict[str, Any] | None:
+        task = self.state.tasks[self.task]
+        if self.state.options.structured_output and isinstance(task, PublishesSchema):
+            return task.answer_schema()
+        return None
 
     async def _log(self, **fields: Any) -> None:
         entry = {

@@ -39,6 +39,7 @@ _GUARDED = (
     "cot",
     "force_numeric",
     "temperature",
+    "structured_output",
 )
 _UNGUARDED_SETTINGS = ("api_base",)
 

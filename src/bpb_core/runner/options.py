@@ -52,6 +52,8 @@ class RunOptions:
         scenes: Only these scene ids (``None`` for all selected by ``horizons``/``limit``).
         sample: A seeded random sample of this many of the selected scenes (``None``: all).
         epochs: Samples per (scene, task): each is asked ``epochs`` times, stored apart.
+        structured_output: Offer each task's answer JSON Schema to the provider (off by
+            default: the paper did not use it).
     """
 
     tasks: tuple[str, ...] = ()
@@ -72,6 +74,7 @@ class RunOptions:
     scenes: tuple[str, ...] | None = None
     sample: int | None = None
     epochs: int = 1
+    structured_output: bool = False
 
 
 def _number(option: str, value: float | None, *, zero: bool = False) -> None:

@@ -19,7 +19,7 @@ from typing import Any
 
 from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
-from bpb_tasks.billiards import bench_compare
+from bpb_tasks.billiards import bench_compare, card
 from bpb_tasks.billiards.calibrate import Calibration, calibrate_horizon
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping, horizon_key, load_config
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
@@ -122,6 +122,10 @@ class BilliardsFamily:
     bench_reference = bench_compare.REFERENCE
     bench_description = bench_compare.DESCRIPTION
     bench_measures = bench_compare.MEASURES
+
+    def dataset_card(self) -> dict[str, Any]:
+        """The words of a published dataset card (``bpb export --format hf``)."""
+        return card.dataset_card()
 
     def load_config(self, source: Any) -> DatasetConfig:
         """A :class:`DatasetConfig` from a config, a mapping of its fields, a JSON/TOML file or

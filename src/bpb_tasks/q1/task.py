@@ -14,6 +14,7 @@ from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, check_ids, load, read_id, upper
 from bpb_tasks.questions.browser import colour, read_ticks
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q1Schema, schema_of
 
 
 class BallAnswer(Item):
@@ -86,3 +87,7 @@ class Q1Task(BilliardsQuestion):
         ids = sorted(b.id for b in scene.balls if b.id != 0)
         ticked = read_ticks(fields, [f"ball{i}" for i in ids])
         return {"answers": [{"id": i, "answer": "T" if f"ball{i}" in ticked else "F"} for i in ids]}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q1.answer.schema.json``)."""
+        return schema_of(Q1Schema, self.name)

@@ -15,6 +15,7 @@ from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import TF, Item, load, upper
 from bpb_tasks.questions.browser import read_ticks
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q2Schema, schema_of
 
 
 class WallAnswer(Item):
@@ -78,3 +79,7 @@ class Q2Task(BilliardsQuestion):
         """Ticked walls are ``T``, the others ``F``."""
         ticked = read_ticks(fields, WALLS)
         return {"answers": [{"wall": w, "answer": "T" if w in ticked else "F"} for w in WALLS]}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q2.answer.schema.json``)."""
+        return schema_of(Q2Schema, self.name)

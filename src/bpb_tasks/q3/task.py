@@ -16,6 +16,7 @@ from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.answers import Item, check_ids, load, read_id
 from bpb_tasks.questions.browser import drag_context, read_positions
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.schemas import Q3Schema, schema_of
 
 
 class PositionAnswer(Item):
@@ -114,3 +115,7 @@ class Q3Task(BilliardsQuestion):
     def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
         """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket``."""
         return read_positions(fields, scene)
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/q3.answer.schema.json``)."""
+        return schema_of(Q3Schema, self.name)

@@ -84,11 +84,16 @@ def test_a_scene_regenerated_alone_equals_the_one_in_the_dataset(
 def test_reader_iterates_filters_and_limits(small_dataset: Path) -> None:
     data = load_dataset(small_dataset)
     assert len(data) == 6 and data.horizons == [1.0, 3.0]
-    key, scene, final = next(iter(data))
+    first = next(iter(data))
+    key, scene, final = first.key, first.state, first.truth
     assert key == SceneKey(1.0, 0) and scene.scene_id == final.scene_id == "h1_0000"
     assert final.stability is not None
+    assert data["h3_0001"].state.scene_id == "h3_0001" and "h3_0001" in data
+    assert data["h3_0001"].image_path("input") == small_dataset / "h3" / "scene_0001" / "init.png"
     picked = load_dataset(small_dataset, horizons=[3], limit=2)
-    assert [k.scene_id for k, _, _ in picked] == ["h3_0000", "h3_0001"]
+    assert [s.scene_id for s in picked] == ["h3_0000", "h3_0001"]
+    with pytest.raises(KeyError, match="h1_0000"):
+        picked["h1_0000"]
     assert picked.dataset_hash == data.dataset_hash
 
 

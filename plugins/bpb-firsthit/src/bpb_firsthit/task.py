@@ -65,3 +65,19 @@ class FirstHitTask(BilliardsQuestion):
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"first": first_hit(truth)}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The answer's JSON Schema: what ``--structured-output`` offers a provider."""
+        return {
+            "$schema": "https://json-schema.org/draft/2020-12/schema",
+            "title": "firsthit answer",
+            "type": "object",
+            "properties": {
+                "first": {
+                    "anyOf": [{"type": "integer", "minimum": 1}, {"type": "null"}],
+                    "description": "The first object ball the cue ball touches, or null",
+                }
+            },
+            "required": ["first"],
+            "additionalProperties": False,
+        }

@@ -1,0 +1,149 @@
+"""Build an Inspect AI :class:`~inspect_ai.Task` from bpb tasks and a bpb dataset.
+
+One sample per scene and task: the input is exactly the messages ``bpb run`` sends
+(:func:`bpb_core.build_messages`: the scene's input image and the task's prompt), the target is
+the correct answer's JSON, and the scorer is bpb's own (:mod:`bpb.inspect_scoring`). Generation
+uses the paper's protocol: temperature 0.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from inspect_ai import Task
+from inspect_ai.dataset import MemoryDataset, Sample
+from inspect_ai.model import (
+    ChatMessage,
+    ChatMessageAssistant,
+    ChatMessageSystem,
+    ChatMessageUser,
+    Content,
+    ContentImage,
+    ContentText,
+    GenerateConfig,
+)
+from inspect_ai.scorer import mean, stderr
+from inspect_ai.solver import generate
+
+from bpb.inspect_scoring import bpb_scorer, bpb_scores
+from bpb_core import ImagePart, build_messages, load_dataset, make_registry
+from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from bpb_core import DatasetScene, Message, Registry
+    from bpb_core.interfaces import InputMode
+
+_ROLES = {"system": ChatMessageSystem, "user": ChatMessageUser, "assistant": ChatMessageAssistant}
+
+
+def bpb_task(
+    tasks: Sequence[str] | None = None,
+    data: str | Path = "data",
+    *,
+    suite: str | None = None,
+    input_mode: InputMode = "image",
+    horizons: Sequence[float] | str | None = None,
+    limit: int | None = None,
+    cot: bool | None = None,
+    registry: Registry | None = None,
+) -> Task:
+    """An Inspect task asking ``tasks`` (or a suite's tasks) about every selected scene.
+
+    Args:
+        tasks: bpb task names (``q1``, or any installed plugin's task).
+        data: A dataset folder or a Hugging Face export of one.
+        suite: A bpb suite (``total``): its tasks, and its weighted total as a metric.
+        input_mode: ``image`` (default), ``image+state`` or ``state``.
+        horizons: Horizons to ask about (a list or ``"1,3"``; default: all).
+        limit: Scenes per horizon at most.
+        cot: Ask for reasoning first (default: each task's own default, as ``bpb run``).
+        registry: Where tasks, scorers and suites come from (default: every installed plugin).
+
+    Raises:
+        BadInput: No tasks and no suite, an unknown suite, or a bad dataset (names the file).
+    """
+    registry = registry or make_registry()
+    weights = _weights(suite, registry)
+    names = list(tasks or weights)
+    if not names:
+        raise BadInput("bpb_task: give tasks or a suite")
+    chosen = _horizons(horizons)
+    dataset = load_dataset(data, chosen, limit, registry=registry)
+    samples = [
+        _sample(name, scene, input_mode, cot, registry) for scene in dataset for name in names
+    ]
+    return Task(
+        dataset=MemoryDataset(samples, name=f"bpb:{dataset.root.name}"),
+        solver=generate(),
+        scorer=bpb_scorer(dataset, names, weights, cot=cot, registry=registry),
+        metrics=[bpb_scores(names, weights), *([] if weights else [mean(), stderr()])],
+        config=GenerateConfig(temperature=0.0),
+        metadata={  # what bpb report needs to read the log as a run (bpb_core.results)
+            "bpb_task_names": names,
+            "bpb_dataset": str(dataset.root.resolve()),
+            "bpb_dataset_hash": dataset.dataset_hash,
+            "bpb_horizons": chosen,
+            "bpb_limit": limit,
+            "bpb_input_mode": input_mode,
+        },
+    )
+
+
+def _weights(suite: str | None, registry: Registry) -> dict[str, float]:
+    if suite is None:
+        return {}
+    for info in registry.suites():
+        if info.name == suite:
+            return dict(info.weights)
+    known = ", ".join(info.name for info in registry.suites()) or "none"
+    raise BadInput(f"suite: no suite {suite!r} (installed: {known})")
+
+
+def _horizons(horizons: Sequence[float] | str | float | None) -> list[float] | None:
+    """Horizons from a list, a number or Inspect's ``-T horizons=1,3`` text."""
+    if horizons is None:
+        return None
+    if isinstance(horizons, str):
+        return [float(h) for h in horizons.split(",") if h.strip()]
+    if isinstance(horizons, int | float):
+        return [float(horizons)]
+    return [float(h) for h in horizons]
+
+
+def _sample(
+    task: str, scene: DatasetScene, mode: InputMode, cot: bool | None, registry: Registry
+) -> Sample:
+    messages = build_messages(task, scene, mode, cot=cot, registry=registry)
+    found = registry.task(task)
+    expected = found.expected(scene.truth)
+    return Sample(
+        id=f"{scene.scene_id}/{task}",
+        input=[to_inspect(message) for message in messages],
+        target=json.dumps(expected),
+        metadata={
+            "scene_id": scene.scene_id,
+            "task": task,
+            "horizon": scene.horizon,
+            "index": scene.key.index,
+            "stable": scene.stable,
+            "input_mode": mode,
+            "cot": found.default_cot if cot is None else cot,
+        },
+    )
+
+
+def to_inspect(message: Message) -> ChatMessage:
+    """A bpb :class:`~bpb_core.Message` as an Inspect chat message (images as data URIs)."""
+    content: list[Content] = []
+    for part in message.parts:
+        if isinstance(part, ImagePart):
+            encoded = base64.b64encode(part.data).decode("ascii")
+            content.append(ContentImage(image=f"data:{part.media_type};base64,{encoded}"))
+        else:
+            content.append(ContentText(text=part.text))
+    made: Any = _ROLES[message.role](content=content)
+    return made  # type: ignore[no-any-return]

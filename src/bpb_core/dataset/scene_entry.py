@@ -1,0 +1,104 @@
+"""One scene of a dataset as the library hands it out: its id, its files, its state and truth.
+
+:class:`DatasetScene` is what iterating or indexing a :class:`~bpb_core.dataset.reader.Dataset`
+yields. It reads ``init.json`` and ``final.json`` on first use (with the scene family's models)
+and names every image file of the scene, so embedding code never spells a file name itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.errors import BadInput
+from bpb_core.layout import FINAL, INIT, SceneKey
+from bpb_core.validated_files import read_model
+
+if TYPE_CHECKING:
+    from bpb_core.interfaces import SceneFamily
+
+INPUT = "input"
+"""The image kind models see (the family's ``input_image``)."""
+
+
+@dataclass(frozen=True)
+class DatasetScene:
+    """A scene of a dataset folder.
+
+    Attributes:
+        key: Horizon and index.
+        folder: The scene's folder (``DIR/h{t}/scene_{i:04d}``).
+        family: The scene family that made it.
+    """
+
+    key: SceneKey
+    folder: Path
+    family: SceneFamily
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def scene_id(self) -> str:
+        """The scene's id (``h3_0007``)."""
+        return self.key.scene_id
+
+    @property
+    def horizon(self) -> float:
+        """Seconds the questions are about."""
+        return self.key.horizon
+
+    @property
+    def state(self) -> Any:
+        """The initial state: ``init.json`` read with the family's scene model."""
+        if INIT not in self._cache:
+            self._cache[INIT] = read_model(self.folder / INIT, self.family.scene_model)
+        return self._cache[INIT]
+
+    @property
+    def truth(self) -> Any:
+        """The ground truth: ``final.json`` read with the family's truth model."""
+        if FINAL not in self._cache:
+            self._cache[FINAL] = read_model(self.folder / FINAL, self.family.truth_model)
+        return self._cache[FINAL]
+
+    @property
+    def stable(self) -> bool | None:
+        """The truth's stability flag (``None`` when not annotated)."""
+        stable: bool | None = self.truth.stable
+        return stable
+
+    @property
+    def image_kinds(self) -> tuple[str, ...]:
+        """The kinds :meth:`image_path` accepts: ``input`` and each image's stem."""
+        return (INPUT, *(Path(name).stem for name in self.family.image_names))
+
+    def image_path(self, kind: str = INPUT) -> Path:
+        """Path of one of the scene's images.
+
+        Args:
+            kind: ``input`` (the image models are shown) or the stem of one of the family's
+                images (``init``, ``final``, ...); a full file name works too.
+
+        Raises:
+            BadInput: The family has no such image (names the kinds it has).
+        """
+        name = self.family.input_image if kind == INPUT else None
+        for image in self.family.image_names:
+            if kind in (image, Path(image).stem):
+                name = image
+        if name is None:
+            kinds = ", ".join(self.image_kinds)
+            raise BadInput(f"{self.scene_id}: image kind {kind!r}: the scene has {kinds}")
+        return self.folder / name
+
+    def image_bytes(self, kind: str = INPUT) -> bytes:
+        """The bytes of :meth:`image_path`.
+
+        Raises:
+            BadInput: No such kind, or the file is missing.
+        """
+        path = self.image_path(kind)
+        try:
+            return path.read_bytes()
+        except OSError as exc:
+            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None

@@ -1,0 +1,192 @@
+"""One question, one answer: the prompt of a task about a scene and the score of a reply.
+
+These are the pieces another eval suite embeds: :func:`build_messages` gives the exact messages
+``bpb run`` would send, :func:`score_answer` parses a reply with the task's own parser and marks
+it with the task's own scorer, returning plain Python values (no pandas needed by the caller).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.errors import BadInput, ParseFailure
+from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
+
+if TYPE_CHECKING:
+    from bpb_core.dataset.scene_entry import DatasetScene
+    from bpb_core.interfaces import Scorer, Task
+    from bpb_core.model_calls import Message
+    from bpb_core.registry import Registry
+
+
+@dataclass(frozen=True)
+class UnitScore:
+    """One scored unit of an answer (one labelled object, one item, one position).
+
+    Attributes:
+        unit: What the unit is (an id, a name).
+        truth: The true label.
+        pred: The predicted label (``None``: the answer does not mention it).
+        correct: Whether the prediction is right.
+        distance: Distance from the truth where the task measures one, else ``None``.
+    """
+
+    unit: str
+    truth: str | None
+    pred: str | None
+    correct: bool
+    distance: float | None
+
+
+@dataclass(frozen=True)
+class AnswerScore:
+    """A reply, parsed and scored.
+
+    Attributes:
+        task: The task's name.
+        scene_id: The scene asked about.
+        status: ``ok`` (the reply holds a valid answer) or ``parse_error``.
+        answer: The parsed answer in the task's answer format (``None`` on a parse error).
+        rule: Which extraction rule found it (``None`` on a parse error).
+        error: Why parsing failed (``None`` when it did not).
+        units: Every scored unit, in the scorer's order.
+        score: The scene's score under the task's rule (share of correct units, or 1.0 only
+            when all are correct): what ``bpb report`` averages.
+    """
+
+    task: str
+    scene_id: str
+    status: str
+    answer: dict[str, Any] | None
+    rule: str | None
+    error: str | None
+    units: tuple[UnitScore, ...]
+    score: float
+
+    @property
+    def correct(self) -> bool:
+        """Whether every unit is right."""
+        return all(unit.correct for unit in self.units)
+
+
+def _task(task: str | Task, registry: Registry | None) -> Task:
+    if not isinstance(task, str):
+        return task
+    from bpb_core.registry import make_registry
+
+    found: Task = (registry or make_registry()).task(task)
+    return found
+
+
+def prompt_options(task: Task, input_mode: InputMode, cot: bool | None) -> PromptOptions:
+    """The options ``bpb run`` uses by default: the task's chain-of-thought default."""
+    return PromptOptions(input_mode=input_mode, cot=task.default_cot if cot is None else cot)
+
+
+def build_messages(
+    task: str | Task,
+    scene: DatasetScene,
+    input_mode: InputMode = "image",
+    *,
+    cot: bool | None = None,
+    registry: Registry | None = None,
+) -> tuple[Message, ...]:
+    """The messages ``bpb run`` sends for ``task`` about ``scene``: provider-neutral
+    :class:`~bpb_core.model_calls.Message` values of text and image parts.
+
+    Args:
+        task: A task name (``--tasks`` takes the same) or a task object.
+        scene: A scene of :func:`~bpb_core.dataset.reader.load_dataset`.
+        input_mode: ``image`` (default), ``image+state`` or ``state`` (no image).
+        cot: Ask for reasoning first; default: the task's own default.
+        registry: Where a task name is looked up; default: every installed plugin.
+
+    Raises:
+        BadInput: The scene's files are missing or invalid (names the file).
+    """
+    found = _task(task, registry)
+    image = None if input_mode == "state" else scene.image_bytes()
+    return found.messages(scene.state, image, prompt_options(found, input_mode, cot))
+
+
+def score_answer(
+    task: str | Task,
+    scene: DatasetScene,
+    reply_text: str,
+    *,
+    cot: bool | None = None,
+    registry: Registry | None = None,
+) -> AnswerScore:
+    """Parse ``reply_text`` with the task's parser and score it against the scene's truth.
+
+    A reply that holds no valid answer scores every unit wrong (``status="parse_error"``), as
+    ``bpb run`` does after its re-asks.
+
+    Args:
+        task: A task name or a task object.
+        scene: A scene of :func:`~bpb_core.dataset.reader.load_dataset`.
+        reply_text: The model's whole reply.
+        cot: Parse as a chain-of-thought reply (last valid JSON object); default: the task's.
+        registry: Where the task and its scorer come from; default: every installed plugin.
+    """
+    from bpb_core.registry import make_registry
+
+    registry = registry or make_registry()
+    found = _task(task, registry)
+    options = prompt_options(found, "image", cot)
+    try:
+        parsed = found.parse(reply_text, scene.state, options)
+        status, answer, rule, error = "ok", parsed.value, parsed.rule, None
+    except ParseFailure as exc:
+        status, answer, rule, error = "parse_error", None, None, str(exc)
+    scorer = registry.scorer_for(found.name)
+    units = mark(scorer, answer, status, scene)
+    score = scene_score(scorer.scene_rule, units)
+    return AnswerScore(found.name, scene.scene_id, status, answer, rule, error, units, score)
+
+
+def mark(
+    scorer: Scorer, answer: dict[str, Any] | None, status: str, scene: DatasetScene
+) -> tuple[UnitScore, ...]:
+    """Cut ``answer`` into the scorer's units and score them (the scorer's vectorised rule)."""
+    import pandas as pd
+
+    rows = scorer.units(answer, scene.truth, scene.state)
+    data: dict[str, Any] = {"status": [status] * len(rows)}
+    for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
+        data[name] = [row[position] for row in rows]
+    for position, name in enumerate(scorer.columns):
+        data[name] = [row.values[position] for row in rows]
+    dtypes = {**SCORER_INPUT, **scorer.columns}
+    frame = pd.DataFrame({k: pd.Series(v, dtype=dtypes[k]) for k, v in data.items()})
+    scored = scorer.score(frame)[list(SCORER_OUTPUT)]
+    return tuple(
+        UnitScore(row.unit, row.truth, row.pred, bool(ok), None if dist != dist else float(dist))
+        for row, ok, dist in zip(rows, scored["correct"], scored["distance"], strict=True)
+    )
+
+
+def scene_score(rule: str, units: tuple[UnitScore, ...]) -> float:
+    """A scene's score from its units: the share correct (``mean``) or all-or-nothing
+    (``all``); 0.0 without units."""
+    if not units:
+        return 0.0
+    if rule == "all":
+        return float(all(u.correct for u in units))
+    return sum(u.correct for u in units) / len(units)
+
+
+def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict[str, Any]:
+    """The JSON Schema of a task's answer (published in ``docs/schemas/`` for the built-ins).
+
+    Raises:
+        BadInput: The task publishes no schema.
+    """
+    from bpb_core.capabilities import PublishesSchema
+
+    found = _task(task, registry)
+    if not isinstance(found, PublishesSchema):
+        raise BadInput(f"task {found.name!r}: publishes no answer schema")
+    return found.answer_schema()

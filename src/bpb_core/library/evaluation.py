@@ -1,0 +1,123 @@
+"""Run evaluations from Python and get the scores back in the same call.
+
+:func:`run_eval` and :func:`evaluate` wrap the runner (:mod:`bpb_core.runner.run`, what
+``bpb run`` calls): they take paths as ``str`` or :class:`~pathlib.Path`, adapters as specs or
+objects, and return :class:`EvalResult`, the runner's result with the scored frames of the run
+folder attached.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.dataset.hf_import import resolve_data
+from bpb_core.results.frames import Results, load_results
+from bpb_core.runner import run as runner
+from bpb_core.runner.result import RunResult
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from bpb_core.interfaces import ModelAdapter
+    from bpb_core.runner.options import RunOptions
+
+
+@dataclass
+class EvalResult(RunResult):
+    """A :class:`~bpb_core.runner.result.RunResult` with the run folder's scored results.
+
+    Attributes:
+        results: Everything :func:`~bpb_core.results.frames.load_results` reads from the run
+            folder (``units`` and ``calls`` frames, the suites that apply).
+    """
+
+    results: Results | None = None
+
+    @property
+    def scores(self) -> pd.DataFrame:
+        """The scored units frame: one row per scored unit (see ``load_results``)."""
+        assert self.results is not None  # always set by run_eval
+        return self.results.units
+
+
+def _spec(adapter: str | ModelAdapter) -> str:
+    if isinstance(adapter, str):
+        return adapter
+    name = getattr(adapter, "name", None)
+    return name if isinstance(name, str) and name else type(adapter).__name__
+
+
+def run_eval(
+    data: str | Path,
+    adapter: str | ModelAdapter,
+    run_dir: str | Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> EvalResult:
+    """Ask ``adapter`` every task about every selected scene of ``data``; write ``run_dir``;
+    score it.
+
+    Args:
+        data: Dataset folder, or a Hugging Face export of one (``bpb export --format hf``).
+        adapter: An adapter spec (``baseline:oracle``, ``litellm:gpt-5``) or an adapter object
+            (anything with a ``name`` and an async ``complete(request)``).
+        run_dir: The run folder (created; resumed when it holds an earlier run).
+        options: Run options (tasks, horizons, limit, input mode, ...).
+        **kwargs: ``registry``, ``adapter_options``, ``progress``, ``spec`` (the run's name
+            when ``adapter`` is an object; default: its ``name``).
+
+    Returns:
+        Per-task status counts, cost and tokens, and ``scores``, the scored units frame.
+    """
+    done = runner.run_eval(resolve_data(data), adapter, Path(run_dir), options, **kwargs)
+    results = load_results(done.run_dir, registry=kwargs.get("registry"))
+    return EvalResult(
+        **{f.name: getattr(done, f.name) for f in dataclasses.fields(done)}, results=results
+    )
+
+
+def evaluate(
+    data: str | Path,
+    adapters: Sequence[str | ModelAdapter],
+    out: str | Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> list[EvalResult]:
+    """Run several adapters one after the other, each into ``out/<slug(name)>/``.
+
+    An adapter stopped by an authentication failure does not stop the others.
+    """
+    return [
+        run_eval(data, adapter, Path(out) / runner.slug(_spec(adapter)), options, **kwargs)
+        for adapter in adapters
+    ]
+
+
+def leaderboard(
+    results: Results | EvalResult | Sequence[EvalResult] | pd.DataFrame,
+    suites: Sequence[Any] | None = None,
+    **kwargs: Any,
+) -> pd.DataFrame:
+    """One row per run, best first: each task's score, each suite's total, completeness.
+
+    Args:
+        results: What :func:`run_eval`, :func:`evaluate` or
+            :func:`~bpb_core.results.frames.load_results` returned, or a units frame.
+        suites: Suites to total (default: those of ``results``, none for a bare frame).
+        **kwargs: ``view`` (``strict`` or ``answered``), ``stable_only``, ``sort_by``.
+    """
+    from bpb_core.results import tables
+
+    if isinstance(results, EvalResult):
+        results = [results]
+    if isinstance(results, Sequence):
+        registry = kwargs.pop("registry", None)
+        results = load_results([r.run_dir for r in results], registry=registry)
+    if isinstance(results, Results):
+        chosen = results.suites if suites is None else suites
+        return tables.leaderboard(results.units, tuple(chosen), **kwargs)
+    return tables.leaderboard(results, tuple(suites or ()), **kwargs)

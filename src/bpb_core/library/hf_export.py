@@ -1,0 +1,216 @@
+"""Export a dataset folder as a Hugging Face dataset: Parquet shards and a dataset card.
+
+One row per scene and task, split by horizon (``data/h3-00000-of-00001.parquet``): the input
+image (an ``Image`` feature), the scene id, horizon and index, the task, the exact prompt text
+per input mode, the target answer as JSON, the stability flag and annotation, the scene's family
+cells of ``index.csv``, and ``init.json`` and ``final.json`` verbatim (so ``bpb run`` can read
+the export back, see :mod:`bpb_core.dataset.hf_import`). ``bpb/`` keeps ``dataset.json`` and
+``index.csv`` verbatim. The same dataset gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
+from bpb_core.dataset.reader import Dataset, load_dataset
+from bpb_core.errors import BadInput
+from bpb_core.interfaces import InputMode
+from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, horizon_label
+from bpb_core.library.answers import build_messages
+from bpb_core.library.hf_card import card_text
+
+if TYPE_CHECKING:
+    from bpb_core.dataset.scene_entry import DatasetScene
+    from bpb_core.interfaces import Task
+    from bpb_core.registry import Registry
+
+MODES: tuple[InputMode, ...] = ("image", "image+state", "state")
+SHARD_ROWS = 1000
+ROW_GROUP = 100
+# A scene's image repeats in its rows (one per task): a dictionary large enough for a row
+# group's distinct images stores each image once instead of once per task.
+DICTIONARY_BYTES = 64 * 1024 * 1024
+# name -> Hugging Face feature; the order is the column order.
+FEATURES: dict[str, dict[str, str]] = {
+    "image": {"_type": "Image"},
+    "scene_id": {"dtype": "string", "_type": "Value"},
+    "horizon": {"dtype": "float64", "_type": "Value"},
+    "index": {"dtype": "int64", "_type": "Value"},
+    "task": {"dtype": "string", "_type": "Value"},
+    **{f"prompt_{m.replace('+', '_')}": {"dtype": "string", "_type": "Value"} for m in MODES},
+    "target": {"dtype": "string", "_type": "Value"},
+    "stable": {"dtype": "bool", "_type": "Value"},
+    "stability": {"dtype": "string", "_type": "Value"},
+    "metadata": {"dtype": "string", "_type": "Value"},
+    "scene": {"dtype": "string", "_type": "Value"},
+    "truth": {"dtype": "string", "_type": "Value"},
+}
+
+
+@dataclass(frozen=True)
+class HfExport:
+    """What :func:`export_hf` wrote.
+
+    Attributes:
+        out: The export folder.
+        splits: Rows per split (``h3``), in horizon order.
+        files: The Parquet shards, relative to ``out``.
+        tasks: The tasks exported.
+    """
+
+    out: Path
+    splits: dict[str, int]
+    files: tuple[str, ...]
+    tasks: tuple[str, ...]
+
+
+def export_hf(
+    data: str | Path,
+    out: str | Path,
+    *,
+    tasks: Sequence[str] | None = None,
+    shard_rows: int = SHARD_ROWS,
+    registry: Registry | None = None,
+) -> HfExport:
+    """Write ``data`` (a dataset folder) to ``out`` as a Hugging Face dataset.
+
+    Args:
+        data: The dataset folder.
+        out: The export folder: new, empty, or an earlier export (replaced).
+        tasks: Tasks to export (default: the family's default tasks).
+        shard_rows: Rows per Parquet file at most.
+        registry: Where the family and tasks come from; default: every installed plugin.
+
+    Raises:
+        BadInput: ``data`` is not a dataset, a task is unknown, or ``out`` holds other files.
+    """
+    from bpb_core.registry import make_registry
+
+    registry = registry or make_registry()
+    dataset = load_dataset(data, registry=registry)
+    names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
+    objects = [registry.task(name) for name in names]
+    target = _prepare(Path(out))
+    cells = _index_cells(dataset.root / INDEX)
+    splits: dict[str, int] = {}
+    sizes: dict[str, int] = {}
+    files: list[str] = []
+    for horizon in dataset.horizons:
+        rows = [
+            _row(scene, task, cells.get(scene.scene_id, {}), registry)
+            for scene in dataset.select([horizon])
+            for task in objects
+        ]
+        split = horizon_label(horizon)
+        splits[split] = len(rows)
+        written, sizes[split] = _write_split(target, split, rows, shard_rows)
+        files += written
+    _write_side_files(dataset, target)
+    card = card_text(dataset, FEATURES, {s: (splits[s], sizes[s]) for s in splits}, names)
+    (target / "README.md").write_text(card, encoding="utf-8")
+    return HfExport(target, splits, tuple(files), names)
+
+
+def _prepare(out: Path) -> Path:
+    if out.exists() and any(out.iterdir()) and not is_hf_export(out):
+        raise BadInput(f"{out}: --out: not empty and not a bpb export; choose a new folder")
+    shutil.rmtree(out / DATA, ignore_errors=True)
+    (out / DATA).mkdir(parents=True, exist_ok=True)
+    (out / SIDE).mkdir(exist_ok=True)
+    return out
+
+
+def _index_cells(path: Path) -> dict[str, dict[str, str]]:
+    """The family's cells of ``index.csv`` per scene id (without id, horizon, index, stable)."""
+    reader = csv.DictReader(path.read_text(encoding="utf-8").splitlines())
+    drop = {"scene_id", "horizon", "index", "stable"}
+    return {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in reader}
+
+
+def _row(
+    scene: DatasetScene, task: Task, cells: dict[str, str], registry: Registry
+) -> dict[str, Any]:
+    images = scene.family.input_image is not None and scene.image_path().is_file()
+    prompts = {
+        f"prompt_{mode.replace('+', '_')}": _prompt(task, scene, mode, registry)
+        if images or mode == "state"
+        else None
+        for mode in MODES
+    }
+    stability = getattr(scene.truth, "stability", None)
+    return {
+        "image": {"bytes": scene.image_bytes(), "path": _relative(scene.image_path())}
+        if images
+        else None,
+        "scene_id": scene.scene_id,
+        "horizon": scene.horizon,
+        "index": scene.key.index,
+        "task": task.name,
+        **prompts,
+        "target": json.dumps(task.expected(scene.truth)),
+        "stable": scene.stable,
+        "stability": None if stability is None else stability.model_dump_json(),
+        "metadata": json.dumps(cells),
+        "scene": (scene.folder / INIT).read_bytes().decode("utf-8"),
+        "truth": (scene.folder / FINAL).read_bytes().decode("utf-8"),
+    }
+
+
+def _relative(image: Path) -> str:
+    """``h3/scene_0007/init.png``: where the image lives in the dataset folder."""
+    return image.relative_to(image.parents[2]).as_posix()
+
+
+def _prompt(task: Task, scene: DatasetScene, mode: InputMode, registry: Registry) -> str:
+    """The text of the messages ``bpb run`` sends (the image is the ``image`` column)."""
+    messages = build_messages(task, scene, mode, registry=registry)
+    return "\n\n".join(
+        part.text for message in messages for part in message.parts if hasattr(part, "text")
+    )
+
+
+def _write_split(
+    out: Path, split: str, rows: list[dict[str, Any]], size: int
+) -> tuple[list[str], int]:
+    """Write the shards of ``split``; their names and the split's size in Arrow bytes."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    chunks = [rows[i : i + size] for i in range(0, len(rows), size)] or [[]]
+    metadata = {"huggingface": json.dumps({"info": {"features": FEATURES}}, sort_keys=True)}
+    schema = pa.schema([(name, _arrow_type(pa, feature)) for name, feature in FEATURES.items()])
+    names, nbytes = [], 0
+    for number, chunk in enumerate(chunks):
+        columns = {name: [row[name] for row in chunk] for name in FEATURES}
+        table = pa.table(columns, schema=schema.with_metadata(metadata))
+        name = shard_name(split, number, len(chunks))
+        pq.write_table(
+            table,
+            out / name,
+            compression="zstd",
+            row_group_size=ROW_GROUP,
+            dictionary_pagesize_limit=DICTIONARY_BYTES,
+        )
+        names.append(name)
+        nbytes += table.nbytes
+    return names, nbytes
+
+
+def _arrow_type(pa: Any, feature: dict[str, str]) -> Any:
+    if feature["_type"] == "Image":
+        return pa.struct([("bytes", pa.binary()), ("path", pa.string())])
+    return {"string": pa.string(), "float64": pa.float64(), "int64": pa.int64()}.get(
+        feature["dtype"], pa.bool_()
+    )
+
+
+def _write_side_files(dataset: Dataset, out: Path) -> None:
+    for name in (MANIFEST, INDEX):
+        shutil.copyfile(dataset.root / name, out / SIDE / name)

@@ -1,0 +1,161 @@
+"""Inspect AI logs of bpb's tasks, read as run folders so that one report compares models run
+with ``bpb run`` and with ``inspect eval bpb/...``.
+
+A log of a bpb task records in its task metadata the dataset (``bpb_dataset``, its hash, the
+horizons and limit asked) and, per sample, the scene, the task and bpb's own score (the parsed
+answer and its status). :func:`with_inspect_runs` turns every such log among the paths given to
+``bpb report`` / :func:`~bpb_core.results.frames.load_results` into a run folder in the cache
+(``$BPB_CACHE_DIR/inspect/...``): the logs of one model on one dataset and input mode become one
+run (the newest log wins for a task asked twice), whose answer files are scored like any run's.
+Reading logs needs ``inspect_ai`` (``pip install 'bpb[inspect]'``), imported only when a log
+is given.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from bpb_core.dataset.hf_import import cache_root
+from bpb_core.errors import BadInput
+from bpb_core.layout import RUN_MANIFEST, SceneKey
+from bpb_core.run_folder import AnswerRecord, UsageRecord, write_answer, write_manifest
+
+LOG_SUFFIXES = (".eval", ".json")
+PREFIX = "inspect"
+
+
+def with_inspect_runs(items: Iterable[Path | str]) -> list[Path]:
+    """``items`` with Inspect logs (files, or folders holding ``*.eval`` logs) replaced by the
+    run folders made from them; everything else is kept as given.
+
+    Raises:
+        BadInput: A log given by name is not a log of a bpb task, or cannot be read.
+    """
+    kept: list[Path] = []
+    named: list[Path] = []
+    found: list[Path] = []
+    for item in map(Path, items):
+        if item.is_file() and item.suffix in LOG_SUFFIXES and item.name != RUN_MANIFEST:
+            named.append(item)
+        elif item.is_dir() and not (item / RUN_MANIFEST).is_file():
+            logs = sorted(item.glob("*.eval"))
+            found += logs
+            if not logs or any((p / RUN_MANIFEST).is_file() for p in item.iterdir()):
+                kept.append(item)
+        else:
+            kept.append(item)
+    if not named and not found:
+        return kept
+    return kept + runs_from_logs(named, found)
+
+
+def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
+    """Run folders for the bpb logs among ``named`` (each must be one) and ``found``."""
+    logs = [(path, _read(path)) for path in [*named, *found]]
+    for path, log in logs[: len(named)]:
+        if _bpb(log) is None:
+            raise BadInput(f"{path}: not an Inspect log of a bpb task (inspect eval bpb/...)")
+    groups: dict[tuple[str, str, str], list[Any]] = {}
+    for _, log in sorted(logs, key=lambda pair: str(pair[1].eval.created)):
+        meta = _bpb(log)
+        if meta is not None and log.samples:
+            key = (log.eval.model, meta["bpb_dataset"], str(meta.get("bpb_input_mode")))
+            groups.setdefault(key, []).append(log)
+    digest = hashlib.sha256("\n".join(sorted(str(p.resolve()) for p, _ in logs)).encode())
+    root = cache_root() / PREFIX / digest.hexdigest()[:16]
+    shutil.rmtree(root, ignore_errors=True)
+    return [_write_run(root, key, group) for key, group in sorted(groups.items())]
+
+
+def _read(path: Path) -> Any:
+    try:
+        from inspect_ai.log import read_eval_log
+    except ImportError:
+        raise BadInput(
+            f"{path}: reading Inspect logs needs inspect_ai: pip install 'bpb[inspect]'"
+        ) from None
+    try:
+        return read_eval_log(str(path))
+    except Exception as exc:  # Inspect raises several types for a bad log
+        raise BadInput(f"{path}: cannot read Inspect log: {exc}") from None
+
+
+def _bpb(log: Any) -> dict[str, Any] | None:
+    meta = log.eval.metadata or {}
+    return meta if isinstance(meta, dict) and meta.get("bpb_dataset") else None
+
+
+def _write_run(root: Path, key: tuple[str, str, str], logs: list[Any]) -> Path:
+    model, data, mode = key
+    adapter = f"{PREFIX}:{model}"
+    slug = "".join(c if c.isalnum() or c in "-_." else "_" for c in adapter)
+    run_dir = root / (slug if mode == "image" else f"{slug}_{mode}")
+    tasks: dict[str, None] = {}
+    for log in logs:  # oldest first: a later log's answer replaces an earlier one
+        meta = log.eval.metadata
+        tasks.update(dict.fromkeys(meta["bpb_task_names"]))
+        for sample in log.samples:
+            record = _record(sample, adapter)
+            if record is not None:
+                write_answer(run_dir, SceneKey(record.horizon, record.index), record)
+    last = logs[-1].eval.metadata
+    write_manifest(run_dir, _manifest(adapter, model, data, list(tasks), last, logs))
+    return run_dir
+
+
+def _record(sample: Any, adapter: str) -> AnswerRecord | None:
+    meta = sample.metadata or {}
+    if "scene_id" not in meta or "task" not in meta:
+        return None
+    score = next(iter((sample.scores or {}).values()), None)
+    extra = (score.metadata or {}) if score is not None else {}
+    status = str(extra.get("status") or "api_error")
+    usage = UsageRecord()
+    for used in (sample.model_usage or {}).values():
+        usage.input_tokens += used.input_tokens or 0
+        usage.output_tokens += used.output_tokens or 0
+        usage.reasoning_tokens += used.reasoning_tokens or 0
+        usage.cached_tokens += used.input_tokens_cache_read or 0
+    return AnswerRecord(
+        scene_id=str(meta["scene_id"]),
+        horizon=float(meta["horizon"]),
+        index=int(meta["index"]),
+        task=str(meta["task"]),
+        adapter=adapter,
+        status=status if status in ("ok", "parse_error") else "api_error",
+        answer=json.loads(score.answer) if score is not None and score.answer else None,
+        rule=extra.get("rule"),
+        finish_reason=str(sample.output.stop_reason) if sample.output else None,
+        attempts=1,
+        usage=usage,
+        latency=float(sample.total_time or 0.0),
+        error=(score.explanation if score is not None else None) or _error(sample),
+        input_mode=str(meta.get("input_mode") or "image"),
+        cot=bool(meta.get("cot")),
+    )
+
+
+def _error(sample: Any) -> str | None:
+    return None if sample.error is None else str(sample.error.message)
+
+
+def _manifest(
+    adapter: str, model: str, data: str, tasks: list[str], meta: dict[str, Any], logs: list[Any]
+) -> dict[str, Any]:
+    return {
+        "adapter": adapter,
+        "model_id": model,
+        "data": data,
+        "dataset_hash": meta.get("bpb_dataset_hash"),
+        "tasks": tasks,
+        "horizons": meta.get("bpb_horizons"),
+        "limit": meta.get("bpb_limit"),
+        "options": {"input_mode": meta.get("bpb_input_mode")},
+        "source": "inspect_ai",
+        "inspect_logs": [str(log.location) for log in logs],
+    }

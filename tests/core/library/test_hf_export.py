@@ -1,0 +1,150 @@
+"""``bpb export --format hf``: a Hugging Face dataset that the real ``datasets`` library loads,
+the same bytes for the same dataset, and a ``bpb run --data`` on it that scores like the source."""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import shutil
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import datasets
+import pytest
+from huggingface_hub import DatasetCard
+from PIL import Image
+
+from bpb_core import RunOptions, TextPart, build_messages, load_dataset, make_registry, run_eval
+from bpb_core.errors import BadInput
+from bpb_core.library.hf_export import export_hf
+
+SCORE_COLUMNS = ["task", "scene_id", "unit", "truth", "pred", "correct"]
+
+
+@pytest.fixture(scope="module")
+def export(small_dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("hf") / "export"
+    export_hf(small_dataset, out, shard_rows=4)
+    return out
+
+
+def _load(*args: str, cache: Path, **kwargs: str) -> datasets.DatasetDict:
+    loaded = datasets.load_dataset(*args, cache_dir=str(cache), **kwargs)
+    assert isinstance(loaded, datasets.DatasetDict)
+    return loaded
+
+
+def test_datasets_loads_rows_features_and_images(
+    export: Path, small_dataset: Path, tmp_path: Path
+) -> None:
+    loaded = _load("parquet", data_dir=str(export), cache=tmp_path)
+    assert sorted(loaded) == ["h1", "h3"]
+    assert {split: loaded[split].num_rows for split in loaded} == {"h1": 9, "h3": 9}
+    features = loaded["h3"].features
+    assert isinstance(features["image"], datasets.Image)
+    assert features["horizon"] == datasets.Value("float64")
+    assert features["stable"] == datasets.Value("bool")
+    rows = list(loaded["h3"])
+    assert [(r["scene_id"], r["task"]) for r in rows[:4]] == [
+        ("h3_0000", "q1"),
+        ("h3_0000", "q2"),
+        ("h3_0000", "q3"),
+        ("h3_0001", "q1"),
+    ]
+    row = rows[3]
+    source = load_dataset(small_dataset)["h3_0001"]
+    png = source.image_path("input").read_bytes()
+    assert row["image"].size == Image.open(io.BytesIO(png)).size
+    assert row["image"].tobytes() == Image.open(io.BytesIO(png)).tobytes()
+    registry = make_registry()
+    assert json.loads(row["target"]) == registry.task("q1").expected(source.truth)
+    (message,) = build_messages("q1", source, "image+state")
+    text = message.parts[-1]
+    assert isinstance(text, TextPart) and row["prompt_image_state"] == text.text
+    assert row["stable"] is source.stable
+    assert row["truth"] == (source.folder / "final.json").read_text(encoding="utf-8")
+
+
+def test_the_dataset_card_gives_splits_by_horizon(export: Path, tmp_path: Path) -> None:
+    loaded = _load(str(export), cache=tmp_path)
+    assert {split: loaded[split].num_rows for split in loaded} == {"h1": 9, "h3": 9}
+    card = DatasetCard.load(export / "README.md")
+    assert card.data.license == "mit"
+    assert card.data.configs[0]["data_files"][1] == {"split": "h3", "path": "data/h3-*"}
+    assert card.data.to_dict()["bpb"]["seed"] == 11
+    assert "@misc{" in card.text and '"seed": 11' in card.text
+
+
+def test_same_dataset_same_bytes(small_dataset: Path, export: Path, tmp_path: Path) -> None:
+    again = export_hf(small_dataset, tmp_path / "again", shard_rows=4)
+    assert len(again.files) == 6  # 9 rows per horizon in shards of 4
+    files = sorted(p.relative_to(export) for p in export.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(again.out) for p in again.out.rglob("*") if p.is_file())
+    for name in files:
+        assert (export / name).read_bytes() == (again.out / name).read_bytes(), name
+
+
+def test_a_run_on_the_export_scores_like_one_on_the_source(
+    small_dataset: Path, export: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    options = RunOptions(tasks=("q1", "q2", "q3"))
+    on_source = run_eval(small_dataset, "baseline:straight", tmp_path / "source", options)
+    on_export = run_eval(export, "baseline:straight", tmp_path / "export", options)
+    left = on_source.scores[SCORE_COLUMNS].astype(str).reset_index(drop=True)
+    right = on_export.scores[SCORE_COLUMNS].astype(str).reset_index(drop=True)
+    assert len(left) == 6 * (6 + 4 + 7)
+    assert left.equals(right)
+    assert 0 < on_export.scores["correct"].mean() < 1
+    unpacked = load_dataset(export).root
+    assert unpacked.is_relative_to(tmp_path / "cache")
+    for scene in load_dataset(small_dataset):
+        for name in ("init.json", "final.json", "init.png"):
+            copy = scene.key.dir(unpacked) / name
+            assert copy.read_bytes() == (scene.folder / name).read_bytes()
+
+
+def test_cli_export_run_on_it_and_bad_out(
+    small_dataset: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "hf"
+    done = run_bpb("export", str(small_dataset), "--format", "hf", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    assert "exported 18 rows (h1: 9, h3: 9) of q1, q2, q3" in done.stdout
+    runs = tmp_path / "runs"
+    ran = run_bpb("run", "--data", str(out), "--adapter", "baseline:oracle", "--out", str(runs))
+    assert ran.returncode == 0, ran.stderr
+    oracle = run_eval(out, "baseline:oracle", runs / "baseline_oracle")  # resumes: nothing asked
+    assert len(oracle.scores) == 6 * (6 + 4 + 7) and bool(oracle.scores["correct"].all())
+    (tmp_path / "busy").mkdir()
+    (tmp_path / "busy" / "notes.txt").write_text("mine", encoding="utf-8")
+    bad = run_bpb("export", str(small_dataset), "--out", str(tmp_path / "busy"))
+    assert bad.returncode == 2
+    assert bad.stderr.strip().endswith("not a bpb export; choose a new folder")
+    assert (tmp_path / "busy" / "notes.txt").read_text(encoding="utf-8") == "mine"
+
+
+def test_a_corrupt_shard_is_named(
+    export: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    broken = tmp_path / "broken"
+    shutil.copytree(export, broken)
+    shard = sorted((broken / "data").glob("h3-*.parquet"))[0]
+    shard.write_bytes(b"not parquet")
+    with pytest.raises(BadInput, match=rf"^{re.escape(str(shard))}: not a bpb export shard"):
+        load_dataset(broken)
+    assert not list((tmp_path / "cache" / "hf").iterdir())  # nothing half-made is left
+
+
+def test_each_scene_image_is_stored_once(small_dataset: Path, tmp_path: Path) -> None:
+    done = export_hf(small_dataset, tmp_path / "hf")
+    images = sum(scene.image_path().stat().st_size for scene in load_dataset(small_dataset))
+    stored = sum((done.out / name).stat().st_size for name in done.files)
+    assert stored < 2 * images  # three rows (tasks) per scene would make it 3x and more

@@ -1,0 +1,65 @@
+"""``bpb report`` and ``load_results`` read Inspect logs of bpb tasks as runs, so one report
+compares a model run with ``inspect eval bpb/...`` and one run with ``bpb run``."""
+
+from __future__ import annotations
+
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from inspect_ai import Task, eval as inspect_eval
+from inspect_ai.dataset import Sample
+from inspect_ai.scorer import match
+
+from bpb_core import RunOptions, leaderboard, load_results, run_eval
+from support.inspect_models import ExampleAdapter
+
+
+@pytest.fixture
+def logs(small_dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    import support.inspect_models  # noqa: F401 (registers bpbtest/example)
+
+    monkeypatch.setenv("INSPECT_DISPLAY", "none")
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "logs"
+    for name in ("bpb/q1", "bpb/q2"):  # two logs of one model: one run with both tasks
+        inspect_eval(
+            name, model="bpbtest/example", task_args={"data": str(small_dataset)}, log_dir=str(out)
+        )
+    return out
+
+
+def test_inspect_logs_score_like_the_same_replies_in_bpb(
+    logs: Path, small_dataset: Path, tmp_path: Path
+) -> None:
+    options = RunOptions(tasks=("q1", "q2"))
+    run_eval(small_dataset, ExampleAdapter(), tmp_path / "runs" / "example", options)
+    results = load_results([logs, tmp_path / "runs"])
+    board = leaderboard(results).set_index("adapter")
+    assert sorted(board.index) == ["example", "inspect:bpbtest/example"]
+    assert board.loc["inspect:bpbtest/example", "completeness"] == 1.0
+    for task in ("q1", "q2"):
+        by_run = board[task]
+        assert by_run["inspect:bpbtest/example"] == pytest.approx(by_run["example"], abs=1e-12)
+    units = results.units
+    assert len(units[units["adapter"] == "inspect:bpbtest/example"]) == 6 * (6 + 4)
+
+
+@pytest.mark.slow
+def test_bpb_report_on_logs_and_a_foreign_log(
+    logs: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    done = run_bpb("report", str(logs), "--out", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert "inspect_bpbtest_example" in done.stdout
+    assert (tmp_path / "report" / "report.html").is_file()
+    other = Task(dataset=[Sample(input="Say x", target="x")], scorer=match())
+    (log,) = inspect_eval(other, model="bpbtest/example", log_dir=str(tmp_path / "other"))
+    assert log.status == "success"
+    bad = run_bpb("report", log.location)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().endswith("not an Inspect log of a bpb task (inspect eval bpb/...)")
+    assert len(bad.stderr.strip().splitlines()) == 1
