@@ -116,7 +116,7 @@ def read_direction(keys: Keys, spec: CanvasSpec, cue_px: tuple[float, float]) ->
         kept = points[off <= 6]
         if len(kept) >= 20:
             points = kept
-    away = centre - np.array([cue_px[1], cue_px[0]])
-    if away @ axis < 0:
-        axis = -axis
-    return math.atan2(-axis[0], axis[1])  # rows grow downward, y upward
+    # the arrow is symmetric about a line through the cue ball's centre, so the direction from
+    # that centre to the arrow's centroid holds even for a short arrow, whose fitted axis wobbles
+    away = points.mean(axis=0) - np.array([cue_px[1], cue_px[0]])
+    return math.atan2(-away[0], away[1])  # rows grow downward, y upward
