@@ -133,11 +133,13 @@ def test_the_prompt_states_every_fact_perception_needs(
         assert all(math.isclose(a, b, **close) for a, b in zip(got, want, strict=True))
 
 
-def test_an_arrow_across_the_axis_and_a_label_over_a_ball_are_read_around() -> None:
-    # a fast cue ball near the bottom-right corner: its arrow runs over the x axis and ticks,
-    # and the speed label (kept on the cloth) lands on ball 1
+def test_the_shortest_arrow_beside_a_ball_and_a_pocket_is_read() -> None:
+    # a fast cue ball near the bottom-right corner, heading for the cushion: its arrow is cut to
+    # the shortest length to stay on the cloth, beside ball 1 and the corner pocket
     balls = [Ball(id=0, pos=(1.88, 0.1), vel=(0.5, -2.95)), Ball(id=1, pos=(1.925, 0.032))]
     scene = Scene(scene_id="h1_0001", horizon=1.0, balls=balls)
     error = perception_error(perceive(_png(scene), _prompt(scene)), scene)
-    assert error["centre_error_mm"] < 2.0 and error["angle_error_deg"] < 1.0
+    # the arrow is kept on the cloth, here at its shortest (5 cm beyond the ball, 47 px from the
+    # centre to the tip): such arrows read to 0.55 degrees median, 1.3 at the 90th percentile
+    assert error["centre_error_mm"] < 2.0 and error["angle_error_deg"] < 1.5
     assert error["speed_error_mps"] <= 0.0005 + 1e-9
