@@ -102,23 +102,3 @@ def stamp(spec: CanvasSpec, ball_id: int, alpha: int = 255) -> tuple[Image.Image
     flat.paste(sprite, (0, 0), sprite)
     mask = sprite.getchannel("A").point(lambda a: 255 if a >= 24 else 0)
     return palette_for(spec).quantize(flat), mask
-
-
-def text_patch(
-    spec: CanvasSpec,
-    text: str,
-    font: st.Font,
-    colour: st.RGB,
-    back: st.RGB,
-    pad: int = 2,
-    outline: st.RGB | None = None,
-) -> Image.Image:
-    """``text`` antialiased on a ``back`` rectangle (optionally outlined), in palette mode."""
-    left, top, right, bottom = font.getbbox(text)
-    w, h = int(right - left) + 2 * pad, int(bottom - top) + 2 * pad
-    patch = Image.new("RGB", (w, h), back)
-    draw = ImageDraw.Draw(patch)
-    if outline is not None:
-        draw.rectangle((0, 0, w - 1, h - 1), outline=outline, width=1)
-    draw.text((pad - left, pad - top), text, fill=colour, font=font)
-    return palette_for(spec).quantize(patch)
