@@ -35,11 +35,16 @@ Point = tuple[float, float]
 def paste_ball(
     img: Image.Image, spec: CanvasSpec, ball_id: int, pos: Point, alpha: int = 255
 ) -> None:
-    """Draw ball ``ball_id`` centred on table point ``pos``."""
+    """Draw ball ``ball_id`` centred on table point ``pos`` (``img`` in palette mode)."""
     sprite, mask = stamp(spec, ball_id, alpha)
     px, py = spec.to_px(*pos)
     half = sprite.width // 2
-    img.paste(sprite, (round(px) - half, round(py) - half), mask)
+    x, y = round(px) - half, round(py) - half
+    if img.mode != sprite.mode or img.readonly:
+        img.paste(sprite, (x, y), mask)
+        return
+    # what Image.paste does for equal modes, without its per-call checks (a scene pastes ~30)
+    img.im.paste(sprite.im, (x, y, x + sprite.width, y + sprite.height), mask.im)
 
 
 def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
