@@ -28,7 +28,7 @@ from bpb_core.dataset import generate_dataset
 
 def encode_cpu(paths: list[Path]) -> float:
     """CPU seconds to encode the images at ``paths`` (decoded beforehand, not counted)."""
-    images = []
+    images: list[Image.Image] = []
     for path in paths:
         with Image.open(path) as img:
             img.load()
