@@ -30,9 +30,9 @@ def encode_cpu(paths: list[Path]) -> float:
     """CPU seconds to encode the images at ``paths`` (decoded beforehand, not counted)."""
     images: list[Image.Image] = []
     for path in paths:
-        with Image.open(path) as img:
-            img.load()
-            images.append(img.copy())
+        with Image.open(path) as opened:
+            opened.load()
+            images.append(opened.copy())
     started = time.process_time()
     for img in images:
         img.save(io.BytesIO(), format="PNG", compress_level=1)
