@@ -1,9 +1,10 @@
 """The fixed 8-bit palette of a canvas, and the palette-mode pieces drawn from it.
 
 Scene images are drawn directly in palette ("P") mode: copying a 1-byte-per-pixel base and
-encoding it costs a third of RGB, and no per-image colour quantisation is needed. Everything
-antialiased (ball sprites, text) is composed in RGB once, mapped to the palette, and pasted with
-a binary mask. The palette holds every flat colour exactly, plus median-cut colours for the
+encoding it costs a third of RGB, and no per-image colour quantisation is needed. Ball sprites
+are composed in RGB once, mapped to the palette, and pasted with a binary mask; text patches
+(:mod:`bpb_tasks.billiards.render_text`) give the same pixels as text drawn in RGB and mapped
+here. The palette holds every flat colour exactly, plus median-cut colours for the
 antialiased edges; it depends only on the canvas, so it is identical in every process.
 """
 
