@@ -15,6 +15,7 @@ from PIL import Image, ImageDraw
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.render_arrow import arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_palette import (
     GHOST_ALPHA,
@@ -22,8 +23,8 @@ from bpb_tasks.billiards.render_palette import (
     header_y,
     palette_for,
     stamp,
-    text_patch,
 )
+from bpb_tasks.billiards.render_text import text_patch
 from bpb_tasks.billiards.render_trajectory import draw_markers, draw_paths
 from bpb_tasks.billiards.scene import Scene
 
@@ -34,11 +35,16 @@ Point = tuple[float, float]
 def paste_ball(
     img: Image.Image, spec: CanvasSpec, ball_id: int, pos: Point, alpha: int = 255
 ) -> None:
-    """Draw ball ``ball_id`` centred on table point ``pos``."""
+    """Draw ball ``ball_id`` centred on table point ``pos`` (``img`` in palette mode)."""
     sprite, mask = stamp(spec, ball_id, alpha)
     px, py = spec.to_px(*pos)
     half = sprite.width // 2
-    img.paste(sprite, (round(px) - half, round(py) - half), mask)
+    x, y = round(px) - half, round(py) - half
+    if img.mode != sprite.mode or img.readonly:
+        img.paste(sprite, (x, y), mask)
+        return
+    # what Image.paste does for equal modes, without its per-call checks (a scene pastes ~30)
+    img.im.paste(sprite.im, (x, y, x + sprite.width, y + sprite.height), mask.im)
 
 
 def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
@@ -116,39 +122,6 @@ def _draw_velocity(
     pal = palette_for(spec)
     arrow(ImageDraw.Draw(img), start, end, spec.scale, pal.ink(st.ARROW), pal.ink(st.HALO))
     return start, end, (ux, -uy), f"{speed:.2f} m/s"
-
-
-ARROW_CLEARANCE = 0.012
-"""Metres the arrow keeps from the cushions and from every pocket's edge."""
-ARROW_MIN = 0.05
-"""The shortest arrow drawn (metres beyond the ball), even where nothing longer fits."""
-
-
-def arrow_length(spec: CanvasSpec, pos: Point, direction: Point, wanted: float) -> float:
-    """The longest arrow (metres beyond the cue ball's edge), at most ``wanted``, whose shaft
-    and head stay on the cloth and off the pockets (down to :data:`ARROW_MIN`)."""
-    length = wanted
-    while length > ARROW_MIN and not _clear(spec, pos, direction, length):
-        length -= 0.005
-    return max(length, ARROW_MIN)
-
-
-def _clear(spec: CanvasSpec, pos: Point, direction: Point, length: float) -> bool:
-    """Whether the shaft stays on the cloth and off the pockets, and the head (its
-    half-width plus :data:`ARROW_CLEARANCE`) too."""
-    head = 10 * spec.scale / spec.ppm + ARROW_CLEARANCE  # the head's half-width, in metres
-    r = spec.radius_m
-    steps = max(2, math.ceil(length / 0.005))
-    for k in range(steps + 1):
-        d = r * 1.15 + (length + r - r * 1.15) * k / steps
-        x, y = pos[0] + direction[0] * d, pos[1] + direction[1] * d
-        room = head if k == steps else 0.0
-        if not (room <= x <= spec.width_m - room and room <= y <= spec.height_m - room):
-            return False
-        pockets = (math.hypot(x - px, y - py) for px, py in spec.pockets)
-        if any(gap < spec.pocket_radius_m + room for gap in pockets):
-            return False
-    return True
 
 
 def arrow(

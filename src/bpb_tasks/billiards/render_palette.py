@@ -1,9 +1,10 @@
 """The fixed 8-bit palette of a canvas, and the palette-mode pieces drawn from it.
 
 Scene images are drawn directly in palette ("P") mode: copying a 1-byte-per-pixel base and
-encoding it costs a third of RGB, and no per-image colour quantisation is needed. Everything
-antialiased (ball sprites, text) is composed in RGB once, mapped to the palette, and pasted with
-a binary mask. The palette holds every flat colour exactly, plus median-cut colours for the
+encoding it costs a third of RGB, and no per-image colour quantisation is needed. Ball sprites
+are composed in RGB once, mapped to the palette, and pasted with a binary mask; text patches
+(:mod:`bpb_tasks.billiards.render_text`) give the same pixels as text drawn in RGB and mapped
+here. The palette holds every flat colour exactly, plus median-cut colours for the
 antialiased edges; it depends only on the canvas, so it is identical in every process.
 """
 
@@ -102,23 +103,3 @@ def stamp(spec: CanvasSpec, ball_id: int, alpha: int = 255) -> tuple[Image.Image
     flat.paste(sprite, (0, 0), sprite)
     mask = sprite.getchannel("A").point(lambda a: 255 if a >= 24 else 0)
     return palette_for(spec).quantize(flat), mask
-
-
-def text_patch(
-    spec: CanvasSpec,
-    text: str,
-    font: st.Font,
-    colour: st.RGB,
-    back: st.RGB,
-    pad: int = 2,
-    outline: st.RGB | None = None,
-) -> Image.Image:
-    """``text`` antialiased on a ``back`` rectangle (optionally outlined), in palette mode."""
-    left, top, right, bottom = font.getbbox(text)
-    w, h = int(right - left) + 2 * pad, int(bottom - top) + 2 * pad
-    patch = Image.new("RGB", (w, h), back)
-    draw = ImageDraw.Draw(patch)
-    if outline is not None:
-        draw.rectangle((0, 0, w - 1, h - 1), outline=outline, width=1)
-    draw.text((pad - left, pad - top), text, fill=colour, font=font)
-    return palette_for(spec).quantize(patch)

@@ -167,7 +167,8 @@ def perturbation_arrays(
     (drawn from a generator seeded by ``stream`` and the scene id)."""
     balls = sorted(scene.balls, key=lambda b: b.id)
     rng = random.Random(f"{stream}:{scene.scene_id}")
-    angles = np.array([[rng.random() for _ in range(len(balls) + 1)] for _ in range(samples)])
+    draws = [rng.random() for _ in range(samples * (len(balls) + 1))]  # row by row, as before
+    angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
     angles *= 2 * math.pi
     pos = np.array([b.pos for b in balls], dtype=float)[None] + delta * np.stack(
         (np.cos(angles[:, :-1]), np.sin(angles[:, :-1])), axis=-1

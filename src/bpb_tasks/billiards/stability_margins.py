@@ -22,6 +22,9 @@ from bpb_tasks.billiards.outcome import Outcome, Segment
 from bpb_tasks.simulators.analytic.numeric import FLOAT64
 from bpb_tasks.simulators.analytic.roots import critical_points, horner
 
+Piece = tuple[float, float, tuple[float, ...]]
+Box = tuple[float, float, float, float]
+
 
 def pocket_gap(
     outcome: Outcome, centers: Sequence[tuple[float, float]], radius: float
@@ -101,6 +104,7 @@ def horizon_gap(outcome: Outcome, horizon: float) -> float | None:
 def near_miss_gap(outcome: Outcome, radius: float) -> float | None:
     """Smallest gap over the trajectories of pairs that never touched (see module docstring)."""
     touched = {tuple(sorted(e.ids)) for e in outcome.events if e.kind == "ball"}
+    boxed: dict[int, list[tuple[Piece, Box]]] = {}
     best: float | None = None
     for a, b in itertools.combinations(sorted(outcome.segments), 2):
         if (a, b) in touched:
@@ -108,8 +112,11 @@ def near_miss_gap(outcome: Outcome, radius: float) -> float | None:
         sa, sb = outcome.segments[a], outcome.segments[b]
         if all(s.vel == (0.0, 0.0) for s in (*sa, *sb)):
             continue
+        for ball, segments in ((a, sa), (b, sb)):
+            if ball not in boxed:
+                boxed[ball] = [(piece, _box(piece)) for piece in _pieces(segments)]
         limit = math.inf if best is None else best + 2 * radius
-        gap = _closest(sa, sb, limit) - 2 * radius
+        gap = _closest_boxed(boxed[a], boxed[b], limit) - 2 * radius
         best = gap if best is None else min(best, gap)
     return best
 
@@ -134,13 +141,14 @@ def _pieces(segments: tuple[Segment, ...]) -> list[tuple[float, float, tuple[flo
     return out
 
 
-def _closest(sa: tuple[Segment, ...], sb: tuple[Segment, ...], limit: float = math.inf) -> float:
-    """Closest approach of two balls' centres, or at least ``limit`` when it is no closer (piece
-    pairs whose bounding boxes are ``limit`` or more apart are skipped)."""
+def _closest_boxed(
+    boxes_a: list[tuple[Piece, Box]], boxes_b: list[tuple[Piece, Box]], limit: float
+) -> float:
+    """Closest approach of two balls' centres (their pieces with bounding boxes), or at least
+    ``limit`` when it is no closer (piece pairs whose boxes are ``limit`` or more apart are
+    skipped)."""
     best = limit
-    boxes_b = [(piece, _box(piece)) for piece in _pieces(sb)]
-    for a0, a1, pa in _pieces(sa):
-        box_a = _box((a0, a1, pa))
+    for (a0, a1, pa), box_a in boxes_a:
         for (b0, b1, pb), box_b in boxes_b:
             lo, hi = max(a0, b0), min(a1, b1)
             if lo > hi or _box_gap(box_a, box_b) >= best:
@@ -149,10 +157,7 @@ def _closest(sa: tuple[Segment, ...], sb: tuple[Segment, ...], limit: float = ma
     return best
 
 
-Piece = tuple[float, float, tuple[float, ...]]
-
-
-def _box(piece: Piece) -> tuple[float, float, float, float]:
+def _box(piece: Piece) -> Box:
     """Bounding box of a piece's path (a straight stretch: its two ends)."""
     t0, t1, p = piece
     x0, y0, _, _ = _at(p, t0, t0)
@@ -170,9 +175,9 @@ def _pair_closest(
     a0: float, pa: tuple[float, ...], b0: float, pb: tuple[float, ...], lo: float, hi: float
 ) -> float:
     """Closest approach of two pieces over their common time ``[lo, hi]``."""
-    d = [_at(pa, a0, lo)[k] - _at(pb, b0, lo)[k] for k in range(4)]
+    at_a, at_b = _at(pa, a0, lo), _at(pb, b0, lo)
+    dx, dy, vx, vy = (at_a[k] - at_b[k] for k in range(4))
     ax, ay = (pa[4] - pb[4]) / 2, (pa[5] - pb[5]) / 2
-    dx, dy, vx, vy = d
     coeffs = [
         ax * ax + ay * ay,
         2 * (ax * vx + ay * vy),

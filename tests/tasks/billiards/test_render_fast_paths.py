@@ -1,0 +1,88 @@
+"""The renderer's shortcuts draw exactly what the plain definitions draw (same seed, same bytes).
+
+Text patches are made from FreeType's coverage mask and a palette-index table instead of drawing
+in RGB and quantising; the arrow fit proves a shaft clear from its two ends instead of checking
+every point. Both must give the very same pixels and lengths.
+"""
+
+from __future__ import annotations
+
+import math
+
+from hypothesis import given, settings, strategies as st
+
+from bpb_tasks.billiards import render_style as style
+from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.render_arrow import ARROW_CLEARANCE, ARROW_MIN, arrow_length
+from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render_text import drawn_patch, text_patch
+
+SPEC = CanvasSpec.from_config(DatasetConfig())
+INKS = (style.INK, style.MUTED, style.ARROW, style.MARK_BALL, style.PAGE)
+BACKS = (style.PAGE, style.CLOTH, style.POCKET)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    text=st.text(st.characters(codec="latin-1", exclude_categories=("Cc",)), min_size=1,
+                 max_size=30),
+    size=st.integers(8, 32), bold=st.booleans(), colour=st.sampled_from(INKS),
+    back=st.sampled_from(BACKS), pad=st.integers(0, 8), outlined=st.booleans(),
+)  # fmt: skip
+def test_a_text_patch_is_the_text_drawn_in_rgb_and_quantised(
+    text: str, size: int, bold: bool, colour: style.RGB, back: style.RGB, pad: int, outlined: bool
+) -> None:
+    font = style.font(size, bold)
+    outline = style.HALO if outlined else None
+    left, top, right, bottom = font.getbbox(text)
+    box = (int(right - left) + 2 * pad, int(bottom - top) + 2 * pad)
+    want = drawn_patch(SPEC, text, font, colour, back, box, (pad - left, pad - top), outline)
+    got = text_patch(SPEC, text, font, colour, back, pad, outline)
+    assert got.size == want.size
+    assert got.tobytes() == want.tobytes()
+    assert got.convert("RGB").tobytes() == want.convert("RGB").tobytes()
+
+
+def _clear_everywhere(
+    pos: tuple[float, float], direction: tuple[float, float], length: float
+) -> bool:
+    """The arrow's definition: every point every 5 mm on the cloth and off the pockets, the
+    tip with the head's half-width and clearance to spare."""
+    head = 10 * SPEC.scale / SPEC.ppm + ARROW_CLEARANCE
+    r = SPEC.radius_m
+    steps = max(2, math.ceil(length / 0.005))
+    for k in range(steps + 1):
+        d = r * 1.15 + (length + r - r * 1.15) * k / steps
+        x, y = pos[0] + direction[0] * d, pos[1] + direction[1] * d
+        room = head if k == steps else 0.0
+        if not (room <= x <= SPEC.width_m - room and room <= y <= SPEC.height_m - room):
+            return False
+        if any(math.hypot(x - px, y - py) < SPEC.pocket_radius_m + room for px, py in SPEC.pockets):
+            return False
+    return True
+
+
+def _longest(pos: tuple[float, float], direction: tuple[float, float], wanted: float) -> float:
+    length = wanted
+    while length > ARROW_MIN and not _clear_everywhere(pos, direction, length):
+        length -= 0.005
+    return max(length, ARROW_MIN)
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    x=st.floats(-0.02, 2.02), y=st.floats(-0.02, 1.02), angle=st.floats(0, 2 * math.pi),
+    wanted=st.floats(0.05, 0.5), axis=st.sampled_from([None, 0, 1, 2, 3]),
+    pocket=st.sampled_from([None, 0, 1, 2, 3, 4, 5]),
+)  # fmt: skip
+def test_the_arrow_fit_is_the_per_point_definition(
+    x: float, y: float, angle: float, wanted: float, axis: int | None, pocket: int | None
+) -> None:
+    pos = (x, y)
+    if pocket is not None:  # within 0.2 m of a pocket, where the shaft may pass one closely
+        px, py = SPEC.pockets[pocket]
+        pos = (px + (x - 1.0) / 5, py + (y - 0.5) / 2.5)
+    direction = (math.cos(angle), math.sin(angle))
+    if axis is not None:  # exactly along a cushion: the shaft's ends share a coordinate
+        direction = ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[axis]
+    assert arrow_length(SPEC, pos, direction, wanted) == _longest(pos, direction, wanted)
