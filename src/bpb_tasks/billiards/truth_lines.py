@@ -28,12 +28,21 @@ def text_lines(
     """``final.json`` lines of ``init.json`` texts read by
     :func:`~bpb_tasks.billiards.scene_text.light_scene` (no pydantic model per scene): ``None``
     for a text it does not take, or as a whole when ``simulator`` has no fast path."""
-    if not _fast(simulator):
+    if not _fast(simulator) or (len(texts) < BATCH_MIN and not _loaded(simulator)):
         return None
     scenes = light_scenes(texts)
     taken = [s for s in scenes if s is not None]
     done = iter(truth_lines(taken, simulator, horizon) or [])
     return [None if s is None else next(done) for s in scenes]
+
+
+BATCH_MIN = 256
+"""Fewer texts than this go the ordinary way unless the kernel is loaded already: loading it
+costs about a second, which the fast path saves back only over a few thousand scenes."""
+
+
+def _loaded(simulator: Simulator) -> bool:
+    return bool(getattr(simulator, "kernel_loaded", lambda: False)())
 
 
 def _fast(simulator: Simulator) -> bool:

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -102,3 +105,30 @@ def test_fast_lines_from_texts_equal_the_model_json() -> None:
     for line, s in zip(lines, scenes, strict=False):
         assert line is not None
         assert json.loads(line) == json.loads(final_state(s, python.run(s)).model_dump_json())
+
+
+def test_a_short_job_does_not_load_the_kernel_and_a_long_one_does(tmp_path: Path) -> None:
+    # loading numba and the cached kernels costs about a second: one scene is simulated in
+    # Python, 300 go through the kernel; the lines are the same bytes either way
+    files = []
+    for i in range(300):
+        files.append(tmp_path / f"scene_{i:03d}.json")
+        files[-1].write_text(random_scene(22, i).model_dump_json())
+    probe = (
+        "import sys\nfrom pathlib import Path\nfrom bpb_core.simulate import simulate_lines\n"
+        "paths = sorted(Path(sys.argv[1]).glob('*.json'))[: int(sys.argv[2])]\n"
+        "lines = list(simulate_lines(paths, workers=1))\n"
+        "print('numba' in sys.modules)\nprint('\\n'.join(lines))"
+    )
+
+    def run(count: int) -> tuple[bool, list[str]]:
+        out = subprocess.run(
+            [sys.executable, "-c", probe, str(tmp_path), str(count)],
+            capture_output=True, text=True, check=True,
+        ).stdout.splitlines()  # fmt: skip
+        return out[0] == "True", out[1:]
+
+    loaded_one, one = run(1)
+    loaded_all, every = run(300)
+    assert (loaded_one, loaded_all) == (False, True)
+    assert one == every[:1] and len(every) == 300
