@@ -5,7 +5,8 @@ without when it is missing.
 - A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
   (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
   :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Perceiving` (reading a
-  scene back from the image and prompt a model gets: ``baseline:vision``), :class:`Picturing`
+  scene back from the image and prompt a model gets: ``baseline:vision``), :class:`BoundsPerception`
+  (what the image's resolution allows even a perfect reader), :class:`Picturing`
   (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents`
   (its cost per event and against scaled scenes).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer).
@@ -118,6 +119,25 @@ class Perceiving(Protocol):
     def perception_error(self, perceived: Any, scene: Any) -> dict[str, float]:
         """How far ``perceived`` is from the true ``scene``: named numbers, stored with each
         answer (``metadata``) and summarised per horizon by the report."""
+        ...
+
+
+@runtime_checkable
+class BoundsPerception(Protocol):
+    """A :class:`Perceiving` family that can say what even a perfect reader of an image could
+    get right: the true scene as the image resolves it (e.g. rounded to its pixel grid),
+    simulated, against the ground truth. ``baseline:vision`` stores it with its perception error,
+    so the report shows the image's own ceiling beside what was read."""
+
+    def perception_ceiling(
+        self, image: bytes, prompt: str, scene: Any, simulator: Simulator
+    ) -> dict[str, bool]:
+        """Named yes/no measures (which answers survive the image's resolution), stored with
+        each answer and shown as shares per horizon by the report.
+
+        Raises:
+            ValueError: The image cannot be read (as in ``perceive``).
+        """
         ...
 
 

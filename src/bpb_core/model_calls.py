@@ -99,8 +99,8 @@ class ModelResponse:
         dropped: Requested parameters the provider route did not send (``temperature`` ...).
         reasoning: Reasoning text the provider returned, if any.
         metadata: The adapter's own measurements about this answer (JSON-ready, flat: names to
-            numbers or strings), stored with the answer and summarised by the report per
-            horizon; e.g. an offline adapter's error in reading its input.
+            numbers, yes/no values or strings), stored with the answer and summarised by the
+            report per horizon; e.g. an offline adapter's error in reading its input.
     """
 
     text: str
@@ -112,7 +112,7 @@ class ModelResponse:
     sent: dict[str, Any] | None = None
     dropped: tuple[str, ...] = ()
     reasoning: str | None = None
-    metadata: dict[str, float | str] = field(default_factory=dict)
+    metadata: dict[str, bool | float | str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

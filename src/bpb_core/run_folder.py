@@ -60,7 +60,7 @@ class AnswerRecord(BaseModel):
     input_mode: str = "image"
     cot: bool = False
     epoch: int = 1
-    metadata: dict[str, float | str] = Field(default_factory=dict)
+    metadata: dict[str, bool | float | str] = Field(default_factory=dict)
 
 
 def answer_name(task: str, epoch: int = 1) -> str:

@@ -8,7 +8,9 @@ physics on the true scene) it shows how much of a perfect physicist's score surv
 the scene from a PNG.
 
 The true scene in the request is used for one thing only: measuring the perception error
-(:meth:`~bpb_core.capabilities.Perceiving.perception_error`), returned as the reply's
+(:meth:`~bpb_core.capabilities.Perceiving.perception_error`) and, when the family offers it, the
+image's own ceiling (:meth:`~bpb_core.capabilities.BoundsPerception.perception_ceiling`: which
+answers survive the image's resolution even for a perfect reader), returned as the reply's
 ``metadata`` and summarised per horizon by the report. When the image cannot be read the reply
 says ``unknown`` and why: it fails to parse, is re-asked and finally scored wrong, and the
 reason is kept in the answer's metadata (``perception_failed``).
@@ -23,7 +25,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Perceiving
+from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import RequestRejected
 from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
 
@@ -94,8 +96,12 @@ class VisionAdapter:
         truth = family.ground_truth(perceived, simulator, stability=False)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         scene = request.scene  # the truth: only to measure the perception error
-        measured = {} if scene is None else family.perception_error(perceived, scene)
-        return json.dumps(task.expected(truth)), dict(measured)
+        measured: dict[str, Any] = {}
+        if scene is not None:
+            measured |= family.perception_error(perceived, scene)
+            if isinstance(family, BoundsPerception):
+                measured |= family.perception_ceiling(image, prompt, scene, simulator)
+        return json.dumps(task.expected(truth)), measured
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the image and prompt in ``request``."""

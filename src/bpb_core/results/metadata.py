@@ -1,9 +1,10 @@
 """The adapters' own measurements (``metadata`` of each answer), summarised per run and horizon.
 
-An adapter may return named numbers or strings with a reply (an offline adapter's error in
-reading its input, say). Core does not know what they mean: each numeric measure gets its
-count, median, mean and maximum per (run, horizon); each text measure (a reason, a label) gets
-its count. A scene whose tasks carry identical measurements counts once.
+An adapter may return named numbers, yes/no values or strings with a reply (an offline
+adapter's error in reading its input, say). Core does not know what they mean: each numeric
+measure gets its count, median, mean and maximum per (run, horizon); each yes/no measure (JSON
+``true``/``false``) its count and the share that is true (``mean``; no median); each text measure
+(a reason, a label) its count. A scene whose tasks carry identical measurements counts once.
 """
 
 from __future__ import annotations
@@ -51,7 +52,9 @@ def _summary(key: tuple[str, float, str], found: list[float | str]) -> dict[str,
     numbers = sorted(float(v) for v in found if isinstance(v, int | float) and math.isfinite(v))
     run, horizon, measure = key
     row: dict[str, object] = {"run": run, "horizon": horizon, "measure": measure, "n": len(found)}
-    if len(numbers) == len(found) and numbers:
+    if found and all(isinstance(v, bool) for v in found):  # a yes/no: its share, no median
+        row |= {"median": math.nan, "mean": statistics.fmean(numbers), "max": math.nan}
+    elif len(numbers) == len(found) and numbers:
         middle, mean = statistics.median(numbers), statistics.fmean(numbers)
         row |= {"median": middle, "mean": mean, "max": numbers[-1]}
     else:
@@ -61,16 +64,19 @@ def _summary(key: tuple[str, float, str], found: list[float | str]) -> dict[str,
 
 def metadata_by_horizon(table: pd.DataFrame) -> pd.DataFrame:
     """:func:`metadata_table` as one row per (run, measure) and one column per horizon
-    (``h1``...): the median of a numeric measure, the count of a text one (its ``statistic``
-    column says which), to read beside the accuracy by horizon."""
+    (``h1``...): the median of a numeric measure, the share of a yes/no one, the count of a text
+    one (its ``statistic`` column says which), to read beside the accuracy by horizon."""
     import pandas as pd
 
     if table.empty:
         return pd.DataFrame(columns=["run", "measure", "statistic"])
-    value = table["median"].where(table["median"].notna(), table["n"].astype("float64"))
+    share = table["median"].isna() & table["mean"].notna()
+    counted = table["n"].astype("float64")
+    value = table["median"].where(table["median"].notna(), table["mean"].where(share, counted))
+    statistic = pd.Series("count", index=table.index).mask(share, "share")
     frame = table.assign(
         value=value,
-        statistic=table["median"].notna().map({True: "median", False: "count"}),
+        statistic=statistic.mask(table["median"].notna(), "median"),
         column=[f"h{h:g}" for h in table["horizon"]],
     )
     wide = frame.pivot_table(

@@ -66,7 +66,7 @@ class PairCall:
     timeout: float = 0.0
     last_error: str | None = None
     finish_reason: str | None = None
-    metadata: dict[str, float | str] = field(default_factory=dict)
+    metadata: dict[str, bool | float | str] = field(default_factory=dict)
 
     async def run(self) -> None:
         """Attempt until the pair is settled (its answer file written) or the run stops."""

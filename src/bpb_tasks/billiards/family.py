@@ -262,6 +262,19 @@ class BilliardsFamily:
 
         return perception_error(perceived, scene)
 
+    def perception_ceiling(
+        self, image: bytes, prompt: str, scene: Scene, simulator: Simulator
+    ) -> dict[str, bool]:
+        """Which labels survive the image's pixel grid (true centres snapped to the pixel
+        each ball is drawn at, true velocities): ``pixel_ceiling_q1_set``, ``pixel_ceiling_q2``;
+        see :mod:`bpb_tasks.billiards.vision.ceiling`."""
+        from bpb_tasks.billiards.vision.ceiling import perception_ceiling
+
+        def truth_of(s: Scene) -> FinalState:
+            return self.ground_truth(s, simulator, stability=False)
+
+        return perception_ceiling(image, prompt, scene, truth_of)
+
     def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
         """The scene's trajectory image (or a plain table) for the failure gallery."""
         from bpb_tasks.billiards.picture import scene_picture

@@ -14,6 +14,7 @@ from bpb_core.runner import evaluate
 from bpb_core.runner.options import RunOptions
 
 MEASURES = {"centre_error_mm", "centre_error_max_mm", "speed_error_mps", "angle_error_deg"}
+CEILING = {"pixel_ceiling_q1_set", "pixel_ceiling_q2"}
 
 
 def test_vision_reads_generated_images_and_reports_its_perception(
@@ -23,7 +24,7 @@ def test_vision_reads_generated_images_and_reports_its_perception(
     evaluate(small_dataset, specs, tmp_path, RunOptions(input_mode="image"), registry=registry)
     records = list(iter_answers(tmp_path / "baseline_vision"))
     assert len(records) == 18 and all(r.status == "ok" for _, r in records)
-    assert all(set(r.metadata) == MEASURES for _, r in records)
+    assert all(set(r.metadata) == MEASURES | CEILING for _, r in records)
     assert all(float(r.metadata["centre_error_mm"]) < 1.2 for _, r in records)
     assert not any(r.metadata for _, r in iter_answers(tmp_path / "baseline_oracle"))
     report = build_report([tmp_path], registry=registry, n_boot=50)
@@ -34,6 +35,13 @@ def test_vision_reads_generated_images_and_reports_its_perception(
     wide = metadata_by_horizon(table).set_index("measure")
     assert list(wide.columns) == ["run", "statistic", "h1", "h3"]
     assert wide.loc["centre_error_mm", "h1"] == centre["median"].iloc[0]
+    # the image's ceiling stays yes/no through the answer files and is shown as a share
+    assert all(isinstance(r.metadata[name], bool) for _, r in records for name in CEILING)
+    for name in CEILING:
+        assert wide.loc[name, "statistic"] == "share"
+        for horizon in (1.0, 3.0):
+            kept = [r.metadata[name] for _, r in records if r.horizon == horizon]
+            assert wide.loc[name, f"h{horizon:g}"] == sum(kept) / len(kept)
 
 
 def test_an_unreadable_image_is_answered_unknown_and_scored_wrong(
