@@ -151,3 +151,37 @@ def _vertical_text(
     target.paste(
         rotated, (round(centre[0] - rotated.width / 2), round(centre[1] - rotated.height / 2))
     )
+
+
+def draw_legend(img: Image.Image, spec: CanvasSpec) -> None:
+    """The marker legend in the header of the trajectory image (drawn once, in RGB)."""
+    draw = ImageDraw.Draw(img)
+    s = spec.scale
+    font = st.font(round(14 * s))
+    y = spec.top / 2 - 14 * s  # the header line (render_palette.header_y)
+    x = float(img.width - spec.right)
+    items = (
+        ("pocketed", "pocket"),
+        ("wall contact", "wall"),
+        ("ball contact", "ball"),
+        ("faded: start", ""),
+    )
+    for text, kind in items:
+        x -= draw.textlength(text, font=font)
+        draw.text((x, y), text, fill=st.MUTED, font=font, anchor="lm")
+        x -= 10 * s
+        r = 7 * s
+        if kind == "ball":
+            draw.ellipse((x - 2 * r, y - r, x, y + r), outline=st.MARK_BALL, width=round(3 * s))
+            x -= 2 * r
+        elif kind == "wall":
+            c = x - r
+            diamond = [(c, y - r), (c + r, y), (c, y + r), (c - r, y)]
+            draw.polygon(diamond, fill=st.MARK_WALL, outline=st.HALO)
+            x -= 2 * r
+        elif kind == "pocket":
+            c = x - r
+            for dx in (-r, r):
+                draw.line(((c - dx, y - r), (c + dx, y + r)), fill=st.HALO, width=round(3 * s))
+            x -= 2 * r
+        x -= 24 * s

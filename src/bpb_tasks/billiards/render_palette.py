@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from PIL import Image, ImageDraw
 
 from bpb_tasks.billiards import render_style as st
-from bpb_tasks.billiards.render_canvas import CanvasSpec, background
+from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
 
 FLAT: tuple[st.RGB, ...] = (
     st.PAGE, st.INK, st.MUTED, st.CLOTH, st.GRID, st.RAIL, st.CUSHION, st.POCKET, st.ARROW,
@@ -77,8 +77,6 @@ def palette_for(spec: CanvasSpec) -> Palette:
 @functools.cache
 def base(spec: CanvasSpec, header: str = "", legend: bool = False) -> Image.Image:
     """The background in palette mode with a fixed header (and the trajectory legend)."""
-    from bpb_tasks.billiards.render_trajectory import draw_legend
-
     img = background(spec).copy()
     if header:
         s = spec.scale

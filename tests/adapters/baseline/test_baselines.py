@@ -7,21 +7,21 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.registry import make_registry
+from bpb_core.registry import Registry, make_registry
 from bpb_core.results import load_results, summary
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import evaluate, run_eval, slug
 from bpb_core.runner.options import RunOptions
 from bpb_tasks.billiards.scene import Scene
 
-REGISTRY = make_registry()
 BASELINES = ["baseline:oracle", "baseline:stasis", "baseline:straight", "baseline:random"]
 
 
 @pytest.fixture(scope="module")
 def runs(dataset: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("baselines")
-    evaluate(dataset, BASELINES, out, RunOptions(input_mode="image"), registry=REGISTRY)
+    options = RunOptions(input_mode="image")
+    evaluate(dataset, BASELINES, out, options, registry=make_registry())  # one per module
     return out
 
 
@@ -63,10 +63,12 @@ def _answers(run_dir: Path) -> dict[tuple[str, str], object]:
     return {(r.scene_id, r.task): r.answer for _, r in iter_answers(run_dir)}
 
 
-def test_random_is_seeded_from_seed_scene_and_task(dataset: Path, tmp_path: Path) -> None:
+def test_random_is_seeded_from_seed_scene_and_task(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
     for name, seed in (("a", 1), ("b", 1), ("c", 2)):
         run_eval(
-            dataset, "baseline:random", tmp_path / name, RunOptions(seed=seed), registry=REGISTRY
+            dataset, "baseline:random", tmp_path / name, RunOptions(seed=seed), registry=registry
         )
     assert _answers(tmp_path / "a") == _answers(tmp_path / "b")
     assert _answers(tmp_path / "a") != _answers(tmp_path / "c")
