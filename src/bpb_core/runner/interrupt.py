@@ -46,7 +46,7 @@ def interruptible(state: RunState, jobs: set[asyncio.Task[None]]) -> Iterator[No
     for sig in _SIGNALS:
         try:
             loop.add_signal_handler(sig, _on_signal, state, jobs)
-        except (ValueError, RuntimeError, NotImplementedError):  # not the main thread
+        except (RuntimeError, NotImplementedError):  # not the main thread; no signals here
             continue
         installed.append(sig)
     try:

@@ -122,3 +122,23 @@ def test_ctrl_c_stops_sending_finishes_writing_and_records_interrupted(
     assert len(_records(run_dir)) == 8
     logged = {f"{e['scene_id']}/{e['task']}" for e in read_attempts(run_dir)}
     assert logged == set(_records(run_dir))
+
+
+def test_a_run_from_another_thread_leaves_signals_to_its_caller(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    # an eval suite calling the library from a worker thread: no signal handler can be
+    # installed there, so the run goes on without one and the process keeps its own
+    import threading
+
+    before = signal.getsignal(signal.SIGINT)
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    done: list[object] = []
+    worker = threading.Thread(
+        target=lambda: done.append(_run(dataset, tmp_path / "run", registry, adapter))
+    )
+    worker.start()
+    worker.join(60)
+    assert len(done) == 1 and done[0].stopped is None  # type: ignore[attr-defined]
+    assert adapter.calls == 18 and len(_records(tmp_path / "run")) == 18
+    assert signal.getsignal(signal.SIGINT) is before
