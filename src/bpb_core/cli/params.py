@@ -27,3 +27,18 @@ class FiniteFloat(click.FloatRange):
 def positive() -> FiniteFloat:
     """A finite number above zero."""
     return FiniteFloat(min=0, min_open=True)
+
+
+input_mode_option = click.option(
+    "--input-mode",
+    type=click.Choice(["image", "image+state", "state"]),
+    default="image",
+    show_default=True,
+    help="What the model gets: the image, the image and the scene as text, or the text alone.",
+)
+"""``--input-mode`` of every command that builds prompts (``run``, ``prompt``)."""
+
+force_numeric_option = click.option(
+    "--force-numeric", is_flag=True, help="Ask for numbers where a task would allow null."
+)
+"""``--force-numeric`` of every command that builds prompts (``run``, ``prompt``)."""

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from bpb_core.cli.params import force_numeric_option, input_mode_option
+
 
 @click.command("prompt")
 @click.argument("scene", type=click.Path(path_type=Path))
@@ -13,14 +15,9 @@ import click
 @click.option(
     "--data", type=click.Path(path_type=Path), help="Dataset folder, to give SCENE as an id."
 )
-@click.option(
-    "--input-mode",
-    type=click.Choice(["image", "image+state", "state"]),
-    default="image",
-    show_default=True,
-)
+@input_mode_option
 @click.option("--cot/--no-cot", "cot", default=None, help="Chain of thought (default: the task's).")
-@click.option("--force-numeric", is_flag=True, help="Ask for numbers where the task allows null.")
+@force_numeric_option
 @click.option(
     "--escalation",
     type=click.IntRange(min=0),

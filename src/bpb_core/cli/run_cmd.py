@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from bpb_core.cli.params import FiniteFloat, positive
+from bpb_core.cli.params import FiniteFloat, force_numeric_option, input_mode_option, positive
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
@@ -195,20 +195,13 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     show_default=True,
     help="Seconds per call (grows on retries).",
 )
-@click.option(
-    "--force-numeric", is_flag=True, help="Ask for numbers where a task would allow null."
-)
+@force_numeric_option
 @click.option(
     "--structured-output",
     is_flag=True,
     help="Offer each task's answer JSON Schema to providers that accept one (not the paper's).",
 )
-@click.option(
-    "--input-mode",
-    type=click.Choice(["image", "image+state", "state"]),
-    default="image",
-    show_default=True,
-)
+@input_mode_option
 @click.option("--api-base", help="Base URL of an OpenAI-compatible or provider endpoint.")
 @click.option("--dry-run", is_flag=True, help="Count calls and estimate tokens; send nothing.")
 @click.option("--max-cost", type=positive(), help="Stop sending once USD spent.")
