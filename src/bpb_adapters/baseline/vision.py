@@ -22,8 +22,9 @@ import hashlib
 import json
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import RequestRejected
@@ -33,7 +34,22 @@ if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.registry import Registry
 
+T = TypeVar("T")
 CACHE_SIZE = 64  # perceived scenes kept (the tasks of one scene share its image)
+
+
+def _key(image: bytes, prompt: str) -> str:
+    """One scene's image: the image and the prompt's first line (which names the scene)."""
+    return hashlib.sha256(image + prompt.split("\n", 1)[0].encode()).hexdigest()
+
+
+def _cached(cache: OrderedDict[str, T], key: str, build: Callable[[], T]) -> T:
+    """``cache[key]``, built on first use; the oldest of more than :data:`CACHE_SIZE` go."""
+    if key not in cache:
+        cache[key] = build()
+        if len(cache) > CACHE_SIZE:
+            cache.popitem(last=False)
+    return cache[key]
 
 
 def _inputs(request: ModelRequest) -> tuple[bytes | None, str]:
@@ -51,6 +67,7 @@ class VisionAdapter:
     _registry: Registry | None = field(default=None, repr=False)
     _components: dict[str, Any] = field(default_factory=dict, repr=False)
     _seen: OrderedDict[str, tuple[Any, str | None]] = field(default_factory=OrderedDict, repr=False)
+    _measured: OrderedDict[str, dict[str, Any]] = field(default_factory=OrderedDict, repr=False)
 
     def _component(self, key: str, build: Any) -> Any:
         if key not in self._components:
@@ -68,16 +85,32 @@ class VisionAdapter:
         return f"the {family.name} scene family cannot read scenes from images"
 
     def _perceive(self, family: Perceiving, image: bytes, prompt: str) -> tuple[Any, str | None]:
-        first = prompt.split("\n", 1)[0]
-        key = hashlib.sha256(image + first.encode()).hexdigest()
-        if key not in self._seen:
+        def read() -> tuple[Any, str | None]:
             try:
-                self._seen[key] = (family.perceive(image, prompt), None)
+                return family.perceive(image, prompt), None
             except ValueError as exc:
-                self._seen[key] = (None, str(exc) or type(exc).__name__)
-            if len(self._seen) > CACHE_SIZE:
-                self._seen.popitem(last=False)
-        return self._seen[key]
+                return None, str(exc) or type(exc).__name__
+
+        return _cached(self._seen, _key(image, prompt), read)
+
+    def _measure(
+        self, family: Perceiving, image: bytes, prompt: str, seen: Any, request: ModelRequest,
+        simulator: Simulator,
+    ) -> dict[str, Any]:  # fmt: skip
+        """The perception error and the image's ceiling, once per image (the tasks of a scene
+        share them); nothing without the true scene."""
+        scene = request.scene  # the truth: only to measure
+
+        def measure() -> dict[str, Any]:
+            found: dict[str, Any] = dict(family.perception_error(seen, scene))
+            if isinstance(family, BoundsPerception):
+                found |= family.perception_ceiling(image, prompt, scene, simulator)
+            return found
+
+        if scene is None:
+            return {}
+        measured: dict[str, Any] = _cached(self._measured, _key(image, prompt), measure)
+        return dict(measured)
 
     def _answer(self, request: ModelRequest, family: SceneFamily) -> tuple[str, dict[str, Any]]:
         if not isinstance(family, Perceiving):
@@ -95,12 +128,7 @@ class VisionAdapter:
         )
         truth = family.ground_truth(perceived, simulator, stability=False)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
-        scene = request.scene  # the truth: only to measure the perception error
-        measured: dict[str, Any] = {}
-        if scene is not None:
-            measured |= family.perception_error(perceived, scene)
-            if isinstance(family, BoundsPerception):
-                measured |= family.perception_ceiling(image, prompt, scene, simulator)
+        measured = self._measure(family, image, prompt, perceived, request, simulator)
         return json.dumps(task.expected(truth)), measured
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
