@@ -28,7 +28,7 @@ def text_lines(
     """``final.json`` lines of ``init.json`` texts read by
     :func:`~bpb_tasks.billiards.scene_text.light_scene` (no pydantic model per scene): ``None``
     for a text it does not take, or as a whole when ``simulator`` has no fast path."""
-    if not _fast(simulator) or (len(texts) < BATCH_MIN and not _loaded(simulator)):
+    if not _fast(simulator, worth_loading=len(texts) >= BATCH_MIN):
         return None
     scenes = light_scenes(texts)
     taken = [s for s in scenes if s is not None]
@@ -41,14 +41,13 @@ BATCH_MIN = 256
 costs about a second, which the fast path saves back only over a few thousand scenes."""
 
 
-def _loaded(simulator: Simulator) -> bool:
-    return bool(getattr(simulator, "kernel_loaded", lambda: False)())
-
-
-def _fast(simulator: Simulator) -> bool:
+def _fast(simulator: Simulator, *, worth_loading: bool = True) -> bool:
+    """Whether ``simulator`` has the compiled path, and it is loaded or ``worth_loading``."""
     from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
-    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
+    if not isinstance(simulator, AnalyticSimulator) or not simulator.compiled:
+        return False
+    return worth_loading or simulator.kernel_loaded()
 
 
 def truth_lines(
