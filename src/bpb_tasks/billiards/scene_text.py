@@ -1,62 +1,60 @@
 """Reading ``init.json`` texts without building a pydantic model per scene (``bpb simulate``'s
 fast path).
 
-:func:`light_scene` accepts a text only when it is plainly valid: one pydantic-core call checks
-it against plain typed dicts with the :class:`~bpb_tasks.billiards.scene.Scene` fields and no
-others (same types and coercions, finite numbers, a positive horizon, non-negative integer ids;
-no model instance is built); then ids must be distinct and include the cue ball (0), speeds at
-most :data:`~bpb_tasks.billiards.scene.MAX_SPEED`, and every centre on the table, outside
-every pocket circle and not overlapping another ball (:func:`light_scenes` checks this on
-arrays, the tolerance as in :func:`~bpb_tasks.billiards.scene.check_geometry` or stricter).
-Table, physics and pockets, when given, are validated by their pydantic models once per distinct
-value. Any other text gives ``None``: the caller then reads it the ordinary way, which names the
-file and field of whatever is wrong.
+:func:`light_scene` decodes a text with msgspec into plain structs with the
+:class:`~bpb_tasks.billiards.scene.Scene` fields and no others (unknown fields refused, integer
+ids >= 0, number pairs, a positive horizon, at least one ball). msgspec is stricter than the
+model: it takes no strings for numbers, no floats for ids and no numbers out of float range, so
+every text it accepts the model accepts with the same values. :func:`scene_groups` then checks,
+on arrays and for many scenes at once: ids distinct and including the cue ball (0),
+finite numbers, speeds below :data:`~bpb_tasks.billiards.scene.MAX_SPEED`, every centre on the
+table, outside every pocket circle and not overlapping another ball, each with a margin on the
+safe side of :func:`~bpb_tasks.billiards.scene.check_geometry`. Table, physics and pockets, when
+given, are validated by their pydantic models once per distinct text. Any other text gives
+``None``: the caller then reads it the ordinary way, which names the file and field of whatever
+is wrong.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from typing import Annotated, Any, NamedTuple, NotRequired
+from dataclasses import dataclass
+from itertools import chain
+from typing import Annotated, Any, NamedTuple
 
+import msgspec
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
-from typing_extensions import TypedDict
+from pydantic import BaseModel, ValidationError
 
 from bpb_tasks.billiards.scene import MAX_SPEED, TOUCH_TOLERANCE, Physics, Pockets, Table
 
 PARTS: dict[str, type[BaseModel]] = {"table": Table, "physics": Physics, "pockets": Pockets}
-_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False)
+_ABSENT = msgspec.Raw(b"")
+_MAX_ID = 2**31 - 1  # ids travel through float arrays on the way to the kernel
+_MARGIN = 1e-12  # metres or m/s on the safe side of the model's own checks
 
 
-class _BallData(TypedDict):
-    __pydantic_config__ = _STRICT  # type: ignore[misc]
-    id: Annotated[int, Field(ge=0)]
+class LightBall(msgspec.Struct, forbid_unknown_fields=True):
+    """A ball as ``init.json`` holds it."""
+
+    id: Annotated[int, msgspec.Meta(ge=0, le=_MAX_ID)]
     pos: tuple[float, float]
-    vel: NotRequired[tuple[float, float]]
+    vel: tuple[float, float] = (0.0, 0.0)
 
 
-class _SceneData(TypedDict):
-    __pydantic_config__ = _STRICT  # type: ignore[misc]
+class _SceneText(msgspec.Struct, forbid_unknown_fields=True):
     scene_id: str
-    horizon: Annotated[float, Field(gt=0)]
-    table: NotRequired[dict[str, Any]]
-    physics: NotRequired[dict[str, Any]]
-    pockets: NotRequired[dict[str, Any]]
-    balls: Annotated[list[_BallData], Field(min_length=1)]
+    horizon: Annotated[float, msgspec.Meta(gt=0)]
+    balls: Annotated[list[LightBall], msgspec.Meta(min_length=1)]
+    table: msgspec.Raw = _ABSENT
+    physics: msgspec.Raw = _ABSENT
+    pockets: msgspec.Raw = _ABSENT
 
 
-_ADAPTER = TypeAdapter(_SceneData)
-_SEEN: dict[str, list[tuple[object, BaseModel | None]]] = {}
+_DECODER = msgspec.json.Decoder(_SceneText)
+_SEEN: dict[tuple[str, bytes], BaseModel | None] = {}
+_LAST: dict[str, tuple[msgspec.Raw, BaseModel | None]] = {}
 _DEFAULTS: dict[str, BaseModel] = {name: model() for name, model in PARTS.items()}
-
-
-class LightBall(NamedTuple):
-    """A ball as the kernel needs it."""
-
-    id: int
-    pos: tuple[float, float]
-    vel: tuple[float, float]
 
 
 class LightScene(NamedTuple):
@@ -70,75 +68,193 @@ class LightScene(NamedTuple):
     balls: list[LightBall]
 
 
+@dataclass
+class SceneGroup:
+    """Scenes sharing table, physics, pockets and ball count, as arrays sorted by ball id.
+
+    Attributes:
+        members: Positions of the scenes in the caller's sequence.
+        scenes: The scenes themselves (anything with ``scene_id``, ``horizon`` and ``balls``).
+        parts: Their table, physics and pockets models.
+        ids: ``(k, n)`` ball ids, ascending per scene.
+        pos: ``(k, n, 2)`` centres in that order.
+        vel: ``(k, n, 2)`` velocities in that order.
+    """
+
+    members: list[int]
+    scenes: list[Any]
+    parts: tuple[Any, Any, Any]
+    ids: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+
+
 def light_scenes(texts: Sequence[bytes | str]) -> list[LightScene | None]:
-    """The scenes of many ``init.json`` texts, ``None`` for each that is not plainly valid (the
-    geometry is checked on arrays, all scenes of one table and ball count at once)."""
-    scenes = [light_scene(t, geometry=False) for t in texts]
-    groups: dict[tuple[int, ...], list[int]] = {}
-    for i, s in enumerate(scenes):
-        if s is not None:
-            key = (len(s.balls), id(s.table), id(s.physics), id(s.pockets))
-            groups.setdefault(key, []).append(i)
-    for members in groups.values():
-        ok = _geometry_many([scenes[i] for i in members])  # type: ignore[misc]
-        for i, good in zip(members, ok, strict=True):
-            if not good:
-                scenes[i] = None
+    """The scenes of many ``init.json`` texts, ``None`` for each that is not plainly valid."""
+    scenes = decode_scenes(texts)
+    kept: list[LightScene | None] = [None] * len(scenes)
+    for group in scene_groups(scenes, checks=True):
+        for i in group.members:
+            kept[i] = scenes[i]
+    return kept
+
+
+def light_scene(text: bytes | str, *, checks: bool = True) -> LightScene | None:
+    """The scene of an ``init.json`` text, or ``None`` when it is not plainly valid (without
+    ``checks``, only decoded: ids, numbers and geometry are left to :func:`scene_groups`)."""
+    scene = decode_scenes([text])[0]
+    if scene is None or not checks:
+        return scene
+    return scene if scene_groups([scene], checks=True) else None
+
+
+def decode_scenes(texts: Sequence[bytes | str]) -> list[LightScene | None]:
+    """:func:`light_scene` without checks for each of ``texts``."""
+    scenes: list[LightScene | None] = [None] * len(texts)
+    for parts, members, decoded in _decoded(texts).values():
+        for i, data in zip(members, decoded, strict=True):
+            table, physics, pockets = parts
+            scenes[i] = LightScene(data.scene_id, data.horizon, table, physics, pockets, data.balls)
     return scenes
 
 
-def light_scene(text: bytes | str, *, geometry: bool = True) -> LightScene | None:
-    """The scene of an ``init.json`` text, or ``None`` when it is not plainly valid."""
-    try:
-        data = _ADAPTER.validate_json(text)
-    except ValidationError:
-        return None
-    table, physics, pockets = (_part(name, data.get(name)) for name in PARTS)
-    if table is None or physics is None or pockets is None:
-        return None
-    balls = [LightBall(b["id"], b["pos"], b.get("vel", (0.0, 0.0))) for b in data["balls"]]
-    ids = {b.id for b in balls}
-    if len(ids) != len(balls) or 0 not in ids:  # repeated ids or no cue ball
-        return None
-    if any(math.hypot(*b.vel) > MAX_SPEED for b in balls):
-        return None
-    scene = LightScene(data["scene_id"], data["horizon"], table, physics, pockets, balls)
-    return scene if not geometry or _geometry_many([scene])[0] else None
+def text_groups(texts: Sequence[bytes | str]) -> list[SceneGroup]:
+    """The plainly valid scenes of ``texts`` in groups (see :func:`scene_groups`), straight from
+    the decoded structs; a text left out of every group is not plainly valid."""
+    groups = (_arrays(members, found, parts) for parts, members, found in _decoded(texts).values())
+    return [g for g in map(_checked, groups) if g.members]
 
 
-def _part(name: str, value: object) -> BaseModel | None:
-    if value is None:
+_Parts = tuple[Any, Any, Any]
+_Decoded = dict[tuple[int, ...], tuple[_Parts, list[int], list[Any]]]
+
+
+def _decoded(texts: Sequence[bytes | str]) -> _Decoded:
+    """The texts that decode, by ball count and parts: ``(parts, positions, structs)``; the
+    parts of the previous text are reused when the next one has the same texts for them."""
+    keyed: _Decoded = {}
+    decode = _DECODER.decode
+    last: tuple[Any, ...] = ()
+    parts: _Parts = (None, None, None)
+    ok = False
+    for i, text in enumerate(texts):
+        try:
+            data = decode(text)
+        except msgspec.MsgspecError:
+            continue
+        raws = (data.table, data.physics, data.pockets)
+        if raws != last:
+            last = raws
+            parts = (_part("table", raws[0]), _part("physics", raws[1]), _part("pockets", raws[2]))
+            ok = None not in parts
+        if ok:
+            key = (len(data.balls), id(parts[0]), id(parts[1]), id(parts[2]))
+            found = keyed.get(key)
+            if found is None:
+                found = keyed[key] = (parts, [], [])
+            found[1].append(i)
+            found[2].append(data)
+    return keyed
+
+
+def _part(name: str, raw: msgspec.Raw) -> BaseModel | None:
+    if not len(raw):
         return _DEFAULTS[name]
-    seen = _SEEN.setdefault(name, [])
-    for known, model in seen:
-        if known == value:
-            return model
-    try:
-        found: BaseModel | None = PARTS[name].model_validate(value)
-    except ValidationError:
-        found = None
-    if len(seen) < 64:
-        seen.append((value, found))
+    last = _LAST.get(name)
+    if last is not None and last[0] == raw:  # the usual case: every scene has the same text
+        return last[1]
+    key = (name, bytes(raw))
+    if key in _SEEN:
+        found = _SEEN[key]
+    else:
+        try:
+            found = PARTS[name].model_validate_json(key[1])
+        except ValidationError:
+            found = None
+        if len(_SEEN) < 64:
+            _SEEN[key] = found
+    _LAST[name] = (raw, found)
     return found
 
 
-def _geometry_many(scenes: Sequence[LightScene]) -> list[bool]:
-    """On the table, outside the pocket circles, no overlap; for scenes sharing table, physics,
-    pockets and ball count."""
-    first = scenes[0]
-    radius = first.physics.ball_radius
-    pos = np.array([[b.pos for b in s.balls] for s in scenes], dtype=float)  # (k, n, 2)
-    x, y = pos[..., 0], pos[..., 1]
-    on_table = (x >= radius) & (x <= first.table.width - radius)
-    on_table &= (y >= radius) & (y <= first.table.height - radius)
-    good = on_table.all(axis=1)
-    centres = np.array(first.pockets.centers, dtype=float).reshape(-1, 2)
-    if len(centres):
-        gaps = np.hypot(x[..., None] - centres[:, 0], y[..., None] - centres[:, 1])
-        good &= (gaps > first.pockets.radius).all(axis=(1, 2))
-    n = pos.shape[1]
-    if n > 1:
-        i, j = np.triu_indices(n, 1)
-        apart = np.hypot(x[:, i] - x[:, j], y[:, i] - y[:, j])
-        good &= (apart >= 2 * radius - TOUCH_TOLERANCE).all(axis=1)
-    return [bool(g) for g in good]
+def scene_groups(scenes: Sequence[Any], *, checks: bool) -> list[SceneGroup]:
+    """The scenes (light scenes or scene models; ``None`` entries skipped) grouped by table,
+    physics, pockets and ball count, as arrays sorted by ball id; with ``checks``, a scene that
+    is not plainly valid (see the module's text) is left out of every group."""
+    keyed: dict[tuple[Any, ...], list[int]] = {}
+    for i, s in enumerate(scenes):
+        if s is None:
+            continue
+        if isinstance(s, LightScene):  # parts are shared objects, one per distinct text
+            key: tuple[Any, ...] = (len(s.balls), id(s.table), id(s.physics), id(s.pockets))
+        else:
+            pockets = (s.pockets.radius, tuple(map(tuple, s.pockets.centers)))
+            key = (len(s.balls), s.table, s.physics, pockets)
+        keyed.setdefault(key, []).append(i)
+    groups = []
+    for members in keyed.values():
+        chosen = [scenes[i] for i in members]
+        first = chosen[0]
+        group = _arrays(members, chosen, (first.table, first.physics, first.pockets))
+        if checks:
+            group = _checked(group)
+        if group.members:
+            groups.append(group)
+    return groups
+
+
+def _checked(group: SceneGroup) -> SceneGroup:
+    """``group`` without the scenes that are not plainly valid."""
+    ok = _plain(group)
+    if ok.all():
+        return group
+    keep = np.flatnonzero(ok).tolist()
+    return SceneGroup(
+        [group.members[i] for i in keep],
+        [group.scenes[i] for i in keep],
+        group.parts,
+        group.ids[keep],
+        group.pos[keep],
+        group.vel[keep],
+    )
+
+
+def _arrays(members: list[int], scenes: list[Any], parts: tuple[Any, Any, Any]) -> SceneGroup:
+    k, n = len(scenes), len(scenes[0].balls)
+    balls = [b for s in scenes for b in s.balls]
+    ids = np.fromiter((b.id for b in balls), np.int64, k * n).reshape(k, n)
+    flat = chain.from_iterable(b.pos + b.vel for b in balls)
+    values = np.fromiter(flat, float, 4 * k * n).reshape(k, n, 4)
+    if n > 1 and not (np.diff(ids, axis=1) > 0).all():
+        order = np.argsort(ids, axis=1, kind="stable")
+        ids = np.take_along_axis(ids, order, axis=1)
+        values = np.take_along_axis(values, order[..., None], axis=1)
+    return SceneGroup(members, scenes, parts, ids, values[..., :2], values[..., 2:])
+
+
+def _plain(group: SceneGroup) -> np.ndarray:
+    """Per scene of ``group``: ids, numbers and geometry plainly valid."""
+    table, physics, pockets = group.parts
+    ids, pos, vel = group.ids, group.pos, group.vel
+    good = ids[:, 0] == 0
+    if ids.shape[1] > 1:
+        good &= (np.diff(ids, axis=1) > 0).all(axis=1)  # sorted: distinct means increasing
+    good &= np.array([s.horizon < np.inf for s in group.scenes])
+    good &= np.isfinite(pos).all(axis=(1, 2)) & np.isfinite(vel).all(axis=(1, 2))
+    with np.errstate(invalid="ignore", over="ignore"):
+        good &= (np.hypot(vel[..., 0], vel[..., 1]) < MAX_SPEED - _MARGIN).all(axis=1)
+        radius = physics.ball_radius
+        x, y = pos[..., 0], pos[..., 1]
+        on_table = (x >= radius) & (x <= table.width - radius)
+        on_table &= (y >= radius) & (y <= table.height - radius)
+        good &= on_table.all(axis=1)
+        centres = np.array(pockets.centers, dtype=float).reshape(-1, 2)
+        if len(centres):
+            gaps = np.hypot(x[..., None] - centres[:, 0], y[..., None] - centres[:, 1])
+            good &= (gaps > pockets.radius + _MARGIN).all(axis=(1, 2))
+        n = pos.shape[1]
+        if n > 1:
+            i, j = np.triu_indices(n, 1)
+            apart = np.hypot(x[:, i] - x[:, j], y[:, i] - y[:, j])
+            good &= (apart >= 2 * radius - TOUCH_TOLERANCE + _MARGIN).all(axis=1)
+    return np.asarray(good, dtype=bool)

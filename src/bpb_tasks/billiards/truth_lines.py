@@ -1,25 +1,38 @@
 """The fast path of ``bpb simulate``: ``final.json`` lines straight from the compiled kernel's
 arrays, without building :class:`~bpb_tasks.billiards.truth.FinalState` models or event objects.
 
-The lines hold the same content as ``FinalState.model_dump_json()`` (same keys in the same order,
-equal numbers; a test compares them); only the analytic simulator on float64 with the kernel
-available has this path, everything else goes through the models.
+The lines are the bytes of ``FinalState.model_dump_json()`` (same keys in the same order, same
+number formatting; a test compares): every number of a chunk is formatted by one call of
+pydantic-core's own writer, and the lines are put together from those pieces. Only the analytic
+simulator on float64 with the kernel (and msgspec, which reads the texts) installed has this path;
+everything else goes through the models.
 """
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
 from pydantic_core import to_json
 
 from bpb_core.interfaces import Simulator
-from bpb_tasks.billiards.outcome import CUE_ID
 from bpb_tasks.billiards.scene import WALLS, Scene
-from bpb_tasks.billiards.scene_text import LightScene, light_scenes
 
 KINDS = ("ball", "wall", "pocket", "stop")
 CHUNK = 512  # scenes per compiled call
+BATCH_MIN = 256
+"""Fewer texts than this go the ordinary way unless the kernel is loaded already: loading it
+costs about a second, which the fast path saves back only over a few thousand scenes."""
+
+_WALL_NAMES = {**{i: f'"{w}"' for i, w in enumerate(WALLS)}, -1: "null"}
+_Q2 = [
+    ",".join(
+        f'{{"wall":"{w}","answer":"{"T" if bits >> k & 1 else "F"}"}}' for k, w in enumerate(WALLS)
+    )
+    for bits in range(1 << len(WALLS))
+]  # the q2 list for each set of walls the cue ball touched, as bits
 
 
 def text_lines(
@@ -30,15 +43,12 @@ def text_lines(
     for a text it does not take, or as a whole when ``simulator`` has no fast path."""
     if not _fast(simulator, worth_loading=len(texts) >= BATCH_MIN):
         return None
-    scenes = light_scenes(texts)
-    taken = [s for s in scenes if s is not None]
-    done = iter(truth_lines(taken, simulator, horizon) or [])
-    return [None if s is None else next(done) for s in scenes]
+    from bpb_tasks.billiards.scene_text import text_groups
 
-
-BATCH_MIN = 256
-"""Fewer texts than this go the ordinary way unless the kernel is loaded already: loading it
-costs about a second, which the fast path saves back only over a few thousand scenes."""
+    lines: list[str | None] = [None] * len(texts)
+    for group in text_groups(texts):
+        _group_lines(group, simulator, horizon, lines)
+    return lines
 
 
 def _fast(simulator: Simulator, *, worth_loading: bool = True) -> bool:
@@ -47,84 +57,162 @@ def _fast(simulator: Simulator, *, worth_loading: bool = True) -> bool:
 
     if not isinstance(simulator, AnalyticSimulator) or not simulator.compiled:
         return False
+    if importlib.util.find_spec("msgspec") is None:
+        return False
     return worth_loading or simulator.kernel_loaded()
 
 
 def truth_lines(
-    scenes: Sequence[Scene | LightScene], simulator: Simulator, horizon: float | None
+    scenes: Sequence[Scene], simulator: Simulator, horizon: float | None
 ) -> list[str] | None:
-    """``final.json`` lines of ``scenes`` or ``None`` when ``simulator`` has no fast path."""
-    from bpb_tasks.simulators.analytic.engine import SimulationError
-
+    """``final.json`` lines of validated ``scenes``, or ``None`` when ``simulator`` has no fast
+    path."""
     if not _fast(simulator):
         return None
-    assert hasattr(simulator, "max_events") and hasattr(simulator, "name")
-    from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, run_batch
+    from bpb_tasks.billiards.scene_text import scene_groups
 
-    groups: dict[Any, list[int]] = {}
-    for i, s in enumerate(scenes):
-        key = (s.table, s.physics, s.pockets.radius, tuple(s.pockets.centers))
-        groups.setdefault(key, []).append(i)
-    lines: list[str] = [""] * len(scenes)
-    for members in groups.values():
-        for at in range(0, len(members), CHUNK):
-            chunk = members[at : at + CHUNK]
-            group: list[Any] = [scenes[i] for i in chunk]
-            ends = [s.horizon if horizon is None else horizon for s in group]
-            try:
-                arrays, starts, final, events = run_batch(group, ends, simulator.max_events)
-            except KernelBudgetError as exc:
-                raise SimulationError(str(exc)) from None
-            per_scene: list[list[list[float]]] = [[] for _ in group]
-            for row in events.tolist():
-                per_scene[int(row[0])].append(row)
-            rows = final.tolist()
-            for j, s in enumerate(group):
-                ids = arrays[j][0]
-                own = rows[int(starts[j]) : int(starts[j + 1])]
-                lines[chunk[j]] = _line(s, ids, own, per_scene[j], ends[j], simulator.name)
-    return lines
+    lines: list[str | None] = [None] * len(scenes)
+    for group in scene_groups(scenes, checks=False):
+        _group_lines(group, simulator, horizon, lines)
+    return [line for line in lines if line is not None]
 
 
-def _line(
-    scene: Scene | LightScene,
-    ids: list[int],
-    final: list[list[float]],
-    events: list[list[float]],
-    horizon: float,
-    simulator: str,
-) -> str:
-    contacts: set[int] = set()
-    walls: set[str] = set()
-    records = []
-    for _, t, kind, a, b, wall, xa, ya, xb, yb in events:
-        ia = ids[int(a)]
-        if b >= 0:
-            ib = ids[int(b)]
-            if CUE_ID in (ia, ib):
-                contacts.add(ib if ia == CUE_ID else ia)
-            records.append(
-                {"t": t, "kind": "ball", "ids": [ia, ib], "wall": None,
-                 "positions": [[xa, ya], [xb, yb]]}
-            )  # fmt: skip
-            continue
-        name = WALLS[int(wall)] if wall >= 0 else None
-        if name is not None and ia == CUE_ID:
-            walls.add(name)
-        records.append(
-            {"t": t, "kind": KINDS[int(kind)], "ids": [ia], "wall": name, "positions": [[xa, ya]]}
+def _group_lines(
+    group: Any, simulator: Any, horizon: float | None, lines: list[str | None]
+) -> None:
+    """Simulate ``group`` (a :class:`~bpb_tasks.billiards.scene_text.SceneGroup`) in chunks and
+    put each scene's line at its member position in ``lines``."""
+    from bpb_tasks.billiards.scene_text import LightScene
+    from bpb_tasks.simulators.analytic.compiled import table_params
+    from bpb_tasks.simulators.analytic.engine import SimulationError
+    from bpb_tasks.simulators.analytic.kernel import run_many_arrays
+
+    table, physics, pockets = group.parts
+    shape = LightScene("", 1.0, table, physics, pockets, [])
+    prm, centres = table_params(shape)  # type: ignore[arg-type]  # reads only the three parts
+    n = group.ids.shape[1]
+    name = to_json(simulator.name).decode()
+    for at in range(0, len(group.members), CHUNK):
+        scenes = group.scenes[at : at + CHUNK]
+        k = len(scenes)
+        ends = [s.horizon if horizon is None else horizon for s in scenes]
+        pos = np.ascontiguousarray(group.pos[at : at + k].reshape(-1, 2))
+        vel = np.ascontiguousarray(group.vel[at : at + k].reshape(-1, 2))
+        starts = np.arange(k + 1, dtype=np.int64) * n
+        final, status, events = run_many_arrays(
+            pos, vel, starts, prm, centres, np.array(ends, dtype=float), simulator.max_events
         )
-    truth = {
-        "scene_id": scene.scene_id,
-        "horizon": horizon,
-        "q1": [{"id": i, "answer": "T" if i in contacts else "F"} for i in ids if i != CUE_ID],
-        "q2": [{"wall": w, "answer": "T" if w in walls else "F"} for w in WALLS],
-        "predictions": [
-            {"id": i, "pos": [round(r[0], 4) + 0.0, round(r[1], 4) + 0.0] if r[2] else None}
-            for i, r in zip(ids, final, strict=True)
-        ],
-        "events": records,
-        "stability": None,
-        "simulator": simulator,
-    }
-    return to_json(truth).decode()  # pydantic's own writer: the model path's bytes
+        if status.any():
+            raise SimulationError(f"more than {simulator.max_events} events in a scene")
+        made = _lines(scenes, group.ids[at : at + k], ends, final, events, name)
+        for member, line in zip(group.members[at : at + k], made, strict=True):
+            lines[member] = line
+
+
+def round4(values: np.ndarray) -> np.ndarray:
+    """``round(v, 4) + 0.0`` of every value, bit for bit, on arrays: ``rint(v * 1e4) / 1e4`` is
+    that (both are the double nearest to the decimal m / 10**4, by IEEE division) whenever the
+    scaled value is not within 1e-6 of a rounding tie, where its own rounding error could move
+    it to the other side; those values, and huge or non-finite ones, go through ``round``."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        scaled = values * 1e4
+        out = np.rint(scaled) / 1e4 + 0.0
+        doubtful = ~(np.abs(values) < 1e9) | (np.abs(scaled - np.floor(scaled) - 0.5) < 1e-6)
+    for i in np.flatnonzero(doubtful).tolist():
+        value = float(values[i])
+        out[i] = round(value, 4) + 0.0 if np.isfinite(value) else value
+    return out
+
+
+def _lines(
+    scenes: Sequence[Any],
+    ids: np.ndarray,
+    ends: list[float],
+    final: np.ndarray,
+    events: np.ndarray,
+    simulator: str,
+) -> list[str]:
+    """The lines of one compiled call's results (``ids``: ``(k, n)``, ascending per scene, so
+    index 0 is the cue ball, id 0): every number formatted by one pydantic-core call, the labels
+    worked out on arrays, the records put together in flat comprehensions, not per scene."""
+    k, n = ids.shape
+    m = len(events)
+    scene = events[:, 0].astype(np.int64)
+    kind, a, b, wall = (events[:, c].astype(np.int64) for c in (2, 3, 4, 5))
+    pair = b >= 0
+    flat_ids = ids.ravel()
+    id_a = flat_ids[scene * n + a]
+    id_b = np.where(pair, flat_ids[scene * n + np.maximum(b, 0)], -1)
+    numbers = events[:, [1, 6, 7, 8, 9]].ravel().tolist()
+    text = to_json(ends + numbers + round4(final[:, :2].ravel()).tolist()).decode()[1:-1]
+    parts = text.split(",")
+    t, xa, ya, xb, yb = (parts[k + c : k + 5 * m : 5] for c in range(5))
+    records = [
+        f'{{"t":{t_},"kind":"ball","ids":[{i},{j}],"wall":null,"positions":[[{x},{y}],[{u},{v}]]}}'
+        if two
+        else f'{{"t":{t_},"kind":"{KINDS[kd]}","ids":[{i}],"wall":{_WALL_NAMES[w]},'
+        f'"positions":[[{x},{y}]]}}'
+        for two, kd, i, j, w, t_, x, y, u, v in zip(
+            pair.tolist(), kind.tolist(), id_a.tolist(), id_b.tolist(), wall.tolist(),
+            t, xa, ya, xb, yb, strict=True,
+        )
+    ]  # fmt: skip
+    at = k + 5 * m
+    predictions = [
+        f'{{"id":{i},"pos":[{x},{y}]}}' if alive else f'{{"id":{i},"pos":null}}'
+        for i, x, y, alive in zip(
+            flat_ids.tolist(), parts[at::2], parts[at + 1 :: 2], final[:, 2].tolist(), strict=True
+        )
+    ]
+    cue = (a == 0) | (pair & (b == 0))
+    walls = np.zeros(k, dtype=np.int64)
+    hit = cue & ~pair & (wall >= 0)
+    np.bitwise_or.at(walls, scene[hit], np.left_shift(1, wall[hit]))
+    q1 = _q1_texts(ids, scene[cue & pair], np.where(a == 0, b, a)[cue & pair])
+    bounds = np.searchsorted(scene, np.arange(k + 1)).tolist()
+    return [
+        f'{{"scene_id":{_string(s.scene_id)},"horizon":{h},"q1":[{q}],"q2":[{_Q2[w]}],'
+        f'"predictions":[{",".join(predictions[n * j : n * j + n])}],'
+        f'"events":[{",".join(records[lo:hi])}],"stability":null,"simulator":{simulator}}}'
+        for j, (s, h, q, w, lo, hi) in enumerate(
+            zip(scenes, parts[:k], q1, walls.tolist(), bounds[:-1], bounds[1:], strict=True)
+        )
+    ]
+
+
+def _q1_texts(ids: np.ndarray, scene: np.ndarray, touched: np.ndarray) -> list[str]:
+    """The q1 list of each scene of ``ids`` whose cue ball touched the balls at indices
+    ``touched`` (of scenes ``scene``)."""
+    k, n = ids.shape
+    hits = np.zeros((k, n), dtype=bool)
+    hits[scene, touched] = True
+    rows = hits[:, 1:].tolist()
+    if (ids == ids[0]).all():  # the usual case: every scene has the same ids
+        same = tuple(ids[0].tolist())
+        return [_q1(same, tuple(r)) for r in rows]
+    return [_q1(tuple(own), tuple(r)) for own, r in zip(ids.tolist(), rows, strict=True)]
+
+
+def _string(value: str) -> str:
+    """``value`` as pydantic-core writes it: quoted as it is when nothing in it needs escaping."""
+    if value.isascii() and value.isprintable() and '"' not in value and "\\" not in value:
+        return f'"{value}"'
+    return to_json(value).decode()
+
+
+_Q1: dict[tuple[tuple[int, ...], tuple[bool, ...]], str] = {}
+
+
+def _q1(ids: tuple[int, ...], hits: tuple[bool, ...]) -> str:
+    """The q1 list of a scene with ``ids`` (cue ball first) whose cue ball touched the others
+    where ``hits`` is true."""
+    key = (ids, hits)
+    found = _Q1.get(key)
+    if found is None:
+        found = ",".join(
+            f'{{"id":{i},"answer":"{"T" if hit else "F"}"}}'
+            for i, hit in zip(ids[1:], hits, strict=True)
+        )
+        if len(_Q1) < 4096:
+            _Q1[key] = found
+    return found

@@ -48,13 +48,17 @@ def test_texts_are_read_without_models_only_when_plainly_valid() -> None:
 
     @settings(max_examples=300, deadline=None)
     @given(
-        st.sampled_from(["horizon", "pos", "vel", "id", "extra", "table", "pockets", "none"]),
+        st.sampled_from(
+            ["horizon", "pos", "vel", "id", "extra", "table", "pockets", "none", "raw", "order"]
+        ),
         st.one_of(
             st.floats(allow_nan=True, allow_infinity=True),
             st.integers(-3, 3),
+            st.integers(2**31 - 2, 2**70),
             st.text(max_size=3),
             st.booleans(),
             st.none(),
+            st.sampled_from(["1.0", "1e400", "-0", "1", "2.0e0"]),
         ),
         st.integers(0, 6),
     )
@@ -72,12 +76,18 @@ def test_texts_are_read_without_models_only_when_plainly_valid() -> None:
             data["table"] = {"width": value, "height": 1.0}
         elif field == "pockets":
             data["pockets"]["radius"] = value
+        elif field == "order":
+            data["balls"].reverse()  # ids out of order: sorted on the way to the kernel
         text = json.dumps(data)
+        if field == "raw" and isinstance(value, str):  # a bare token, duplicated key
+            text = text.replace('"horizon": ', f'"horizon": {value}, "horizon": ', 1)
+            text = text.replace('"id": 2', f'"id": {value}', 1)
         light = light_scene(text)
         if light is None:
             return  # left to the ordinary path
         model = Scene.model_validate_json(text)  # never refused by the model
         assert light.scene_id == model.scene_id and light.horizon == model.horizon
+        assert isinstance(light.horizon, float)
         assert (light.table, light.physics, light.pockets) == (
             model.table,
             model.physics,
@@ -132,3 +142,75 @@ def test_a_short_job_does_not_load_the_kernel_and_a_long_one_does(tmp_path: Path
     loaded_all, every = run(300)
     assert (loaded_one, loaded_all) == (False, True)
     assert one == every[:1] and len(every) == 300
+
+
+def test_rounding_on_arrays_is_pythons_round_bit_for_bit() -> None:
+    import numpy as np
+    from hypothesis import given, settings, strategies as st
+
+    from bpb_tasks.billiards.truth_lines import round4
+
+    ties = st.integers(-(10**8), 10**8).map(lambda m: (m + 0.5) / 1e4)  # near and at ties
+
+    @settings(max_examples=300, deadline=None)
+    @given(st.lists(st.one_of(st.floats(allow_nan=False), ties), min_size=1, max_size=50))
+    def check(values: list[float]) -> None:
+        got = round4(np.array(values, dtype=float))
+        want = np.array([round(v, 4) + 0.0 for v in values])
+        assert got.tobytes() == want.tobytes()  # signs of zero included
+
+    check()
+
+
+def test_texts_of_every_kind_give_the_model_bytes_or_are_left_to_it() -> None:
+    # unsorted ids, other ball counts, another table, ids to escape, a bad text among them
+    from bpb_tasks.billiards.scene import Scene
+    from bpb_tasks.billiards.truth_lines import text_lines
+
+    scenes = [random_scene(23, i, speeds=(0.1, 6.0)) for i in range(300)]
+    texts = []
+    for i, s in enumerate(scenes):
+        data = json.loads(s.model_dump_json())
+        if i % 5 == 2:
+            data["balls"] = data["balls"][: 2 + i % 4]
+        if i % 3 == 1:
+            data["balls"].reverse()
+        if i % 7 == 3:
+            data["table"] = {"width": 2.5, "height": 1.25}
+        if i % 11 == 4:
+            data["scene_id"] = f'ü "quoted" \\ tab\t {i} \u0001 /'
+        texts.append(json.dumps(data).encode())
+    texts[10] = texts[10].replace(b'"horizon"', b'"horizon": 1, "x"')
+    lines = text_lines(texts, AnalyticSimulator(), None)
+    assert lines is not None and lines[10] is None
+    python = AnalyticSimulator(engine="python")
+    taken = 0
+    for line, text in zip(lines, texts, strict=True):
+        if line is None:
+            continue
+        model = Scene.model_validate_json(text)
+        assert line == final_state(model, python.run(model)).model_dump_json()
+        taken += 1
+    assert taken == len(texts) - 1
+
+
+def test_simulate_reads_large_files_and_restores_the_collector(tmp_path: Path) -> None:
+    import gc
+
+    from bpb_core.simulate import simulate_lines
+
+    files = []
+    for i in range(300):
+        files.append(tmp_path / f"scene_{i:03d}.json")
+        text = random_scene(24, i).model_dump_json()
+        files[-1].write_text(text if i != 7 else text[:-1] + " " * 200_000 + "}")
+    python = AnalyticSimulator(engine="python")
+    want = [final_state(s, python.run(s)).model_dump_json()
+            for s in (random_scene(24, i) for i in range(300))]  # fmt: skip
+    for enabled in (True, False):
+        (gc.enable if enabled else gc.disable)()
+        try:
+            assert list(simulate_lines(files, workers=1)) == want
+            assert gc.isenabled() is enabled
+        finally:
+            gc.enable()
