@@ -35,6 +35,11 @@ def scene_files(paths: Iterable[str | Path]) -> list[Path]:
     return [Path(name) for name in _scene_names(paths)]
 
 
+_SPECIAL: set[str] = set()
+"""Named paths that are not regular files (a pipe such as ``<(...)``, a device): read to the end
+of their data, where a short read does not mean the end."""
+
+
 def _scene_names(paths: Iterable[str | Path]) -> list[str]:
     """:func:`scene_files` as strings (one ``stat`` per named file, no path objects: with ten
     thousand files named on the command line this is a sizeable part of ``bpb simulate``)."""
@@ -45,6 +50,8 @@ def _scene_names(paths: Iterable[str | Path]) -> list[str]:
             mode = os.stat(name).st_mode
         except (OSError, ValueError):
             raise BadInput(f"{name}: no such file or directory") from None
+        if not stat.S_ISREG(mode):
+            _SPECIAL.add(name)
         if stat.S_ISDIR(mode):
             names.extend(str(p) for p in _folder_scenes(Path(name)))
         elif name.endswith(FINAL) and os.path.basename(name) == FINAL:
@@ -253,8 +260,7 @@ def _collector_paused() -> Iterator[None]:
 
 def _read_all(files: Sequence[str]) -> list[bytes]:
     """The bytes of ``files`` up to the first that cannot be read (the ordinary path reads it
-    again and names the error): ``os.open`` and ``os.read`` to the end, no file object per
-    scene."""
+    again and names the error): ``os.open`` and ``os.read``, no file object per scene."""
     texts: list[bytes] = []
     flags = os.O_RDONLY | getattr(os, "O_BINARY", 0)
     for path in files:
@@ -264,8 +270,9 @@ def _read_all(files: Sequence[str]) -> list[bytes]:
             break
         try:
             data = os.read(fd, _READ)
-            while more := os.read(fd, _READ):
-                data += more
+            if len(data) == _READ or path in _SPECIAL:  # else a regular file read to its end
+                while more := os.read(fd, _READ):
+                    data += more
         except OSError:
             break
         finally:
