@@ -34,7 +34,7 @@ _MAX_ID = 2**31 - 1  # ids travel through float arrays on the way to the kernel
 _MARGIN = 1e-12  # metres or m/s on the safe side of the model's own checks
 
 
-class LightBall(msgspec.Struct, forbid_unknown_fields=True):
+class LightBall(msgspec.Struct, forbid_unknown_fields=True, gc=False):
     """A ball as ``init.json`` holds it."""
 
     id: Annotated[int, msgspec.Meta(ge=0, le=_MAX_ID)]
@@ -42,7 +42,7 @@ class LightBall(msgspec.Struct, forbid_unknown_fields=True):
     vel: tuple[float, float] = (0.0, 0.0)
 
 
-class _SceneText(msgspec.Struct, forbid_unknown_fields=True):
+class _SceneText(msgspec.Struct, forbid_unknown_fields=True, gc=False):
     scene_id: str
     horizon: Annotated[float, msgspec.Meta(gt=0)]
     balls: Annotated[list[LightBall], msgspec.Meta(min_length=1)]
