@@ -31,7 +31,7 @@ from bpb_tasks.billiards.scene import MAX_SPEED, TOUCH_TOLERANCE, Physics, Pocke
 PARTS: dict[str, type[BaseModel]] = {"table": Table, "physics": Physics, "pockets": Pockets}
 _ABSENT = msgspec.Raw(b"")
 _MAX_ID = 2**31 - 1  # ids travel through float arrays on the way to the kernel
-_MARGIN = 1e-12  # metres or m/s on the safe side of the model's own checks
+_MARGIN = 1e-10  # metres or m/s on the safe side of the model's own checks
 
 
 class LightBall(msgspec.Struct, forbid_unknown_fields=True, gc=False):
@@ -136,7 +136,7 @@ def _decoded(texts: Sequence[bytes | str]) -> _Decoded:
     decode = _DECODER.decode
     last: tuple[Any, ...] = ()
     parts: _Parts = (None, None, None)
-    ok = False
+    by_count: dict[int, tuple[_Parts, list[int], list[Any]]] = {}
     for i, text in enumerate(texts):
         try:
             data = decode(text)
@@ -146,15 +146,22 @@ def _decoded(texts: Sequence[bytes | str]) -> _Decoded:
         if raws != last:
             last = raws
             parts = (_part("table", raws[0]), _part("physics", raws[1]), _part("pockets", raws[2]))
-            ok = None not in parts
-        if ok:
-            key = (len(data.balls), id(parts[0]), id(parts[1]), id(parts[2]))
-            found = keyed.get(key)
-            if found is None:
-                found = keyed[key] = (parts, [], [])
-            found[1].append(i)
-            found[2].append(data)
+            by_count = {} if None in parts else _bucket(keyed, parts)
+        if parts[2] is None or parts[1] is None or parts[0] is None:
+            continue
+        n = len(data.balls)
+        found = by_count.get(n)
+        if found is None:
+            found = keyed[(n, *map(id, parts))] = by_count[n] = (parts, [], [])
+        found[1].append(i)
+        found[2].append(data)
     return keyed
+
+
+def _bucket(keyed: _Decoded, parts: _Parts) -> dict[int, tuple[_Parts, list[int], list[Any]]]:
+    """The groups of ``keyed`` with these parts, by ball count."""
+    ids = tuple(map(id, parts))
+    return {key[0]: group for key, group in keyed.items() if key[1:] == ids}
 
 
 def _part(name: str, raw: msgspec.Raw) -> BaseModel | None:
@@ -233,16 +240,19 @@ def _arrays(members: list[int], scenes: list[Any], parts: tuple[Any, Any, Any]) 
 
 
 def _plain(group: SceneGroup) -> np.ndarray:
-    """Per scene of ``group``: ids, numbers and geometry plainly valid."""
+    """Per scene of ``group``: ids, numbers and geometry plainly valid (squared distances, with
+    :data:`_MARGIN` far above their rounding error)."""
     table, physics, pockets = group.parts
     ids, pos, vel = group.ids, group.pos, group.vel
     good = ids[:, 0] == 0
     if ids.shape[1] > 1:
         good &= (np.diff(ids, axis=1) > 0).all(axis=1)  # sorted: distinct means increasing
-    good &= np.array([s.horizon < np.inf for s in group.scenes])
+    horizons = np.fromiter((s.horizon for s in group.scenes), float, len(group.scenes))
+    good &= np.isfinite(horizons)
     good &= np.isfinite(pos).all(axis=(1, 2)) & np.isfinite(vel).all(axis=(1, 2))
     with np.errstate(invalid="ignore", over="ignore"):
-        good &= (np.hypot(vel[..., 0], vel[..., 1]) < MAX_SPEED - _MARGIN).all(axis=1)
+        speed2 = vel[..., 0] ** 2 + vel[..., 1] ** 2
+        good &= (speed2 < (MAX_SPEED - _MARGIN) ** 2).all(axis=1)
         radius = physics.ball_radius
         x, y = pos[..., 0], pos[..., 1]
         on_table = (x >= radius) & (x <= table.width - radius)
@@ -250,11 +260,12 @@ def _plain(group: SceneGroup) -> np.ndarray:
         good &= on_table.all(axis=1)
         centres = np.array(pockets.centers, dtype=float).reshape(-1, 2)
         if len(centres):
-            gaps = np.hypot(x[..., None] - centres[:, 0], y[..., None] - centres[:, 1])
-            good &= (gaps > pockets.radius + _MARGIN).all(axis=(1, 2))
+            dx, dy = x[..., None] - centres[:, 0], y[..., None] - centres[:, 1]
+            good &= (dx * dx + dy * dy > (pockets.radius + _MARGIN) ** 2).all(axis=(1, 2))
         n = pos.shape[1]
         if n > 1:
             i, j = np.triu_indices(n, 1)
-            apart = np.hypot(x[:, i] - x[:, j], y[:, i] - y[:, j])
-            good &= (apart >= 2 * radius - TOUCH_TOLERANCE + _MARGIN).all(axis=1)
+            dx, dy = x[:, i] - x[:, j], y[:, i] - y[:, j]
+            least = 2 * radius - TOUCH_TOLERANCE + _MARGIN
+            good &= (dx * dx + dy * dy >= least * least).all(axis=1)
     return np.asarray(good, dtype=bool)
