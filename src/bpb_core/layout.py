@@ -55,18 +55,22 @@ class SceneKey:
 
 
 def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
-    """Every ``h{t}/scene_{i}`` folder under ``root``, sorted by horizon then index."""
+    """Every ``h{t}/scene_{i}`` folder under ``root``, sorted by horizon then index (folders
+    listed with ``os.scandir``, whose entries know they are folders without a ``stat`` each)."""
     keys: list[SceneKey] = []
     if not root.is_dir():
         return iter(())
-    for hdir in root.iterdir():
-        hmatch = _HORIZON_DIR.match(hdir.name)
-        if not hmatch or not hdir.is_dir():
-            continue
-        for sdir in hdir.iterdir():
-            smatch = _SCENE_DIR.match(sdir.name)
-            if smatch and sdir.is_dir():
-                keys.append(SceneKey(float(hmatch.group(1)), int(smatch.group(1))))
+    with os.scandir(root) as hdirs:
+        for hdir in hdirs:
+            hmatch = _HORIZON_DIR.match(hdir.name)
+            if not hmatch or not hdir.is_dir():
+                continue
+            horizon = float(hmatch.group(1))
+            with os.scandir(hdir.path) as sdirs:
+                for sdir in sdirs:
+                    smatch = _SCENE_DIR.match(sdir.name)
+                    if smatch and sdir.is_dir():
+                        keys.append(SceneKey(horizon, int(smatch.group(1))))
     return iter(sorted(keys))
 
 

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput, BpbError
-from bpb_core.layout import FINAL, INIT, MANIFEST, iter_scene_keys
+from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, iter_scene_keys
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -53,7 +53,7 @@ def _scene_names(paths: Iterable[str | Path]) -> list[str]:
         if not stat.S_ISREG(mode):
             _SPECIAL.add(name)
         if stat.S_ISDIR(mode):
-            names.extend(str(p) for p in _folder_scenes(Path(name)))
+            names.extend(_folder_scenes(Path(name)))
         elif name.endswith(FINAL) and os.path.basename(name) == FINAL:
             names.append(os.path.join(os.path.dirname(name), INIT))
         else:
@@ -61,10 +61,14 @@ def _scene_names(paths: Iterable[str | Path]) -> list[str]:
     return names
 
 
-def _folder_scenes(folder: Path) -> list[Path]:
+def _folder_scenes(folder: Path) -> list[str]:
     if (folder / INIT).is_file():
-        return [folder / INIT]
-    found = [key.dir(folder) / INIT for key in iter_scene_keys(folder)]
+        return [str(folder / INIT)]
+    top = str(folder)
+    found = [
+        os.path.join(top, horizon_label(key.horizon), f"scene_{key.index:04d}", INIT)
+        for key in iter_scene_keys(folder)
+    ]  # the paths of SceneKey.dir, as strings
     if not found:
         raise BadInput(f"{folder}: no {INIT} and no dataset scene folders (h<t>/scene_<i>) in it")
     return found
