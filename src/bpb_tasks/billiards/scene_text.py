@@ -252,7 +252,8 @@ def _plain(group: SceneGroup) -> np.ndarray:
     good &= np.isfinite(pos).all(axis=(1, 2)) & np.isfinite(vel).all(axis=(1, 2))
     with np.errstate(invalid="ignore", over="ignore"):
         speed2 = vel[..., 0] ** 2 + vel[..., 1] ** 2
-        good &= (speed2 < (MAX_SPEED - _MARGIN) ** 2).all(axis=1)
+        fastest = MAX_SPEED - _MARGIN
+        good &= (speed2 < fastest * fastest).all(axis=1)
         radius = physics.ball_radius
         x, y = pos[..., 0], pos[..., 1]
         on_table = (x >= radius) & (x <= table.width - radius)
@@ -261,7 +262,8 @@ def _plain(group: SceneGroup) -> np.ndarray:
         centres = np.array(pockets.centers, dtype=float).reshape(-1, 2)
         if len(centres):
             dx, dy = x[..., None] - centres[:, 0], y[..., None] - centres[:, 1]
-            good &= (dx * dx + dy * dy > (pockets.radius + _MARGIN) ** 2).all(axis=(1, 2))
+            reach = pockets.radius + _MARGIN  # float products overflow to inf, ** would raise
+            good &= (dx * dx + dy * dy > reach * reach).all(axis=(1, 2))
         n = pos.shape[1]
         if n > 1:
             i, j = np.triu_indices(n, 1)
