@@ -1,8 +1,9 @@
 """CPU per scene of ``bpb simulate``, start-up excluded: the command runs twice in one process
 over the same scene files (output to ``/dev/null``) and only the second run is counted.
 
-Usage: ``python scripts/simulate_cpu.py FILE_LIST [ROUNDS]``, where ``FILE_LIST`` names one scene
-file per line. Which code runs is whatever ``bpb_core`` this interpreter imports, so putting
+Usage: ``python scripts/simulate_cpu.py PATH_LIST [ROUNDS]``, where ``PATH_LIST`` names what to
+give ``bpb simulate``, one per line: scene files, or a dataset folder. Scenes are counted from
+the lines printed. Which code runs is whatever ``bpb_core`` this interpreter imports, so putting
 another checkout's ``src`` first on ``PYTHONPATH`` measures that checkout. The first run pays
 for the imports, numba's cached kernels and the caches of the code; the counted run is the
 steady per-scene cost of reading, validating, simulating and writing.
@@ -11,35 +12,47 @@ steady per-scene cost of reading, validating, simulating and writing.
 from __future__ import annotations
 
 import contextlib
-import os
+import io
 import sys
 import time
 from pathlib import Path
 
 
-def run_once(files: list[str]) -> float:
-    """CPU seconds of one ``bpb simulate --workers 1 FILES`` inside this process."""
+class _Counting(io.TextIOBase):
+    """Standard output thrown away, its lines counted."""
+
+    def __init__(self) -> None:
+        self.lines = 0
+
+    def write(self, text: str) -> int:
+        self.lines += text.count("\n")
+        return len(text)
+
+
+def run_once(paths: list[str]) -> tuple[float, int]:
+    """CPU seconds and scenes of one ``bpb simulate --workers 1 PATHS`` inside this process."""
     from bpb_core.cli.main import main
 
+    sink = _Counting()
     started = time.process_time()
-    with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink):
+    with contextlib.redirect_stdout(sink):
         try:
-            main(["simulate", "--workers", "1", *files])
+            main(["simulate", "--workers", "1", *paths])
         except SystemExit as exc:
             if exc.code not in (0, None):
                 raise
-    return time.process_time() - started
+    return time.process_time() - started, sink.lines
 
 
 def main(listing: str, rounds: int) -> None:
     """Print the warm CPU per scene of each round."""
-    files = Path(listing).read_text().split()
-    first = run_once(files)
+    paths = Path(listing).read_text().split()
+    first, _ = run_once(paths)
     for r in range(rounds):
-        took = run_once(files)
+        took, scenes = run_once(paths)
         print(
-            f"round {r + 1}: {len(files)} scenes, first run {first:.2f} s, counted run "
-            f"{took:.2f} s CPU, {took / len(files) * 1e6:.1f} us per scene",
+            f"round {r + 1}: {scenes} scenes, first run {first:.2f} s, counted run "
+            f"{took:.2f} s CPU, {took / scenes * 1e6:.1f} us per scene",
             flush=True,
         )
 

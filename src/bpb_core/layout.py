@@ -56,8 +56,9 @@ class SceneKey:
 
 def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
     """Every ``h{t}/scene_{i}`` folder under ``root``, sorted by horizon then index (folders
-    listed with ``os.scandir``, whose entries know they are folders without a ``stat`` each)."""
-    keys: list[SceneKey] = []
+    listed with ``os.scandir``, whose entries know they are folders without a ``stat`` each;
+    sorted as plain tuples, not through the dataclass's ``__lt__``)."""
+    found: list[tuple[float, int]] = []
     if not root.is_dir():
         return iter(())
     with os.scandir(root) as hdirs:
@@ -70,8 +71,9 @@ def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
                 for sdir in sdirs:
                     smatch = _SCENE_DIR.match(sdir.name)
                     if smatch and sdir.is_dir():
-                        keys.append(SceneKey(horizon, int(smatch.group(1))))
-    return iter(sorted(keys))
+                        found.append((horizon, int(smatch.group(1))))
+    found.sort()
+    return (SceneKey(horizon, index) for horizon, index in found)
 
 
 def select_keys(
