@@ -22,6 +22,7 @@ installed they run as one batch in the compiled kernel.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import random
 from collections.abc import Iterator, Sequence
@@ -180,7 +181,8 @@ def perturbation_arrays(
     (drawn from a generator seeded by ``stream`` and the scene id)."""
     balls = sorted(scene.balls, key=lambda b: b.id)
     rng = random.Random(f"{stream}:{scene.scene_id}")
-    draws = [rng.random() for _ in range(samples * (len(balls) + 1))]  # row by row, as before
+    count = samples * (len(balls) + 1)
+    draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row
     angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
     angles *= 2 * math.pi
     pos = np.array([b.pos for b in balls], dtype=float)[None] + delta * np.stack(
