@@ -10,12 +10,13 @@ from __future__ import annotations
 import math
 
 from hypothesis import given, settings, strategies as st
+from PIL import ImageFont
 
 from bpb_tasks.billiards import render_style as style
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.render_arrow import ARROW_CLEARANCE, ARROW_MIN, arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_text import drawn_patch, text_patch
+from bpb_tasks.billiards.render_text import _coverage, drawn_patch, text_patch
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
 INKS = (style.INK, style.MUTED, style.ARROW, style.MARK_BALL, style.PAGE)
@@ -86,3 +87,23 @@ def test_the_arrow_fit_is_the_per_point_definition(
     if axis is not None:  # exactly along a cushion: the shaft's ends share a coordinate
         direction = ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[axis]
     assert arrow_length(SPEC, pos, direction, wanted) == _longest(pos, direction, wanted)
+
+
+@settings(max_examples=300, deadline=None)
+@given(speed=st.floats(0, 20), pocketed=st.lists(st.integers(1, 15), max_size=6, unique=True))
+def test_scene_texts_put_together_from_kept_pieces_are_the_whole_text(
+    speed: float, pocketed: list[int]
+) -> None:
+    """The header notes and speed labels of scene images (numbers change, words do not) come
+    from kept glyph pieces; their masks are FreeType's mask of the whole text."""
+    texts = [
+        (style.font(round(16 * SPEC.scale)), f"cue ball 0 speed {speed:.3f} m/s"),
+        (style.font(round(17 * SPEC.scale), bold=True), f"{speed:.2f} m/s"),
+        (style.font(round(16 * SPEC.scale)), f"pocketed: balls {', '.join(map(str, pocketed))}"),
+    ]
+    for font, text in texts:
+        whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
+        assert isinstance(font, ImageFont.FreeTypeFont)
+        got = _coverage(font, text)
+        assert got.size == whole.size
+        assert bytes(got) == bytes(whole)
