@@ -32,7 +32,7 @@ FAMILIES: dict[str, Callable[[int], str]] = {
     "escaped quotes": lambda n: '{"' + '\\"' * (n // 2),
     'empty strings ""': lambda n: "{" + '"",' * (n // 3),
     "random braces/quotes": _mixed,
-    "prose, answer last": lambda n: "The ball moves. " * (n // 16) + '{"answer": 1}',
+    "prose, answer last": lambda n: "The body moves. " * (n // 16) + '{"answer": 1}',
 }
 
 
