@@ -55,12 +55,17 @@ class SceneKey:
 
 
 def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
-    """Every ``h{t}/scene_{i}`` folder under ``root``, sorted by horizon then index (folders
-    listed with ``os.scandir``, whose entries know they are folders without a ``stat`` each;
-    sorted as plain tuples, not through the dataclass's ``__lt__``)."""
+    """Every ``h{t}/scene_{i}`` folder under ``root``, sorted by horizon then index."""
+    return (SceneKey(horizon, index) for horizon, index in scene_places(root))
+
+
+def scene_places(root: Path) -> list[tuple[float, int]]:
+    """:func:`iter_scene_keys` as plain ``(horizon, index)`` tuples (folders listed with
+    ``os.scandir``, whose entries know they are folders without a ``stat`` each; sorted as
+    tuples, not through the dataclass's ``__lt__``)."""
     found: list[tuple[float, int]] = []
     if not root.is_dir():
-        return iter(())
+        return found
     with os.scandir(root) as hdirs:
         for hdir in hdirs:
             hmatch = _HORIZON_DIR.match(hdir.name)
@@ -73,7 +78,7 @@ def iter_scene_keys(root: Path) -> Iterator[SceneKey]:
                     if smatch and sdir.is_dir():
                         found.append((horizon, int(smatch.group(1))))
     found.sort()
-    return (SceneKey(horizon, index) for horizon, index in found)
+    return found
 
 
 def select_keys(

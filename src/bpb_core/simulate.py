@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput, BpbError
-from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, iter_scene_keys
+from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -65,10 +65,13 @@ def _folder_scenes(folder: Path) -> list[str]:
     if (folder / INIT).is_file():
         return [str(folder / INIT)]
     top, sep = str(folder), os.sep
-    found = [
-        f"{top}{sep}{horizon_label(key.horizon)}{sep}scene_{key.index:04d}{sep}{INIT}"
-        for key in iter_scene_keys(folder)
-    ]  # the paths of SceneKey.dir, as strings
+    labels: dict[float, str] = {}
+    found = []
+    for horizon, index in scene_places(folder):  # the paths of SceneKey.dir, as strings
+        label = labels.get(horizon)
+        if label is None:
+            label = labels[horizon] = f"{top}{sep}{horizon_label(horizon)}"
+        found.append(f"{label}{sep}scene_{index:04d}{sep}{INIT}")
     if not found:
         raise BadInput(f"{folder}: no {INIT} and no dataset scene folders (h<t>/scene_<i>) in it")
     return found
