@@ -198,11 +198,15 @@ class Registry:
 
 
 def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[object, PluginSource]]:
+    known: dict[int, tuple[str, str]] = {}  # a distribution's metadata is parsed once
     for ep in sorted(metadata.entry_points(group=group), key=lambda e: e.name):
         dist = ep.dist
-        source = PluginSource(
-            ep.name, dist.name if dist else LOCAL, dist.version if dist else "unknown"
-        )
+        if dist is None:
+            source = PluginSource(ep.name, LOCAL, "unknown")
+        else:
+            if id(dist) not in known:
+                known[id(dist)] = (dist.name, dist.version)
+            source = PluginSource(ep.name, *known[id(dist)])
         try:
             yield ep.load(), source
         except Exception as exc:  # any import failure of a third-party plugin must not spread

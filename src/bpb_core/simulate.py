@@ -41,24 +41,73 @@ of their data, where a short read does not mean the end."""
 
 
 def _scene_names(paths: Iterable[str | Path]) -> list[str]:
-    """:func:`scene_files` as strings (one ``stat`` per named file, no path objects: with ten
-    thousand files named on the command line this is a sizeable part of ``bpb simulate``)."""
-    names: list[str] = []
-    for raw in paths:
-        name = os.fspath(raw)
-        try:
-            mode = os.stat(name).st_mode
-        except (OSError, ValueError):
-            raise BadInput(f"{name}: no such file or directory") from None
+    """:func:`scene_files` as strings, with no path objects and the kind of each named path
+    found from its folder's listing when many names share that folder (see :func:`_kinds`),
+    else with one ``stat``: with ten thousand files named on the command line, a ``stat`` each
+    was a tenth of ``bpb simulate``'s time per scene."""
+    names = [os.fspath(raw) for raw in paths]
+    kinds = _kinds(names)
+    found: list[str] = []
+    for name in names:
+        mode = kinds.get(name)
+        if mode is None:
+            try:
+                mode = os.stat(name).st_mode
+            except (OSError, ValueError):
+                raise BadInput(f"{name}: no such file or directory") from None
         if not stat.S_ISREG(mode):
             _SPECIAL.add(name)
         if stat.S_ISDIR(mode):
-            names.extend(_folder_scenes(Path(name)))
+            found.extend(_folder_scenes(Path(name)))
         elif name.endswith(FINAL) and os.path.basename(name) == FINAL:
-            names.append(os.path.join(os.path.dirname(name), INIT))
+            found.append(os.path.join(os.path.dirname(name), INIT))
         else:
-            names.append(name)
-    return names
+            found.append(name)
+    return found
+
+
+LISTED_MIN = 32
+"""Named paths in one folder from which that folder is listed instead of ``stat``-ing each."""
+
+
+def _kinds(names: Sequence[str]) -> dict[str, int]:
+    """The type bits (``S_IFREG``, ``S_IFDIR``, or 0 for a pipe, a device or a socket) of the
+    names that lie :data:`LISTED_MIN` or more to a folder, read from the folder's listing: a
+    directory entry knows its type without a ``stat`` (one system call per file, several
+    microseconds here). Symbolic links, ``.``, ``..``, names ending in a separator and
+    anything the listing does not show are left out, for ``stat`` to settle."""
+    by_folder: dict[str, dict[str, str]] = {}
+    sep = os.sep
+    for name in names:
+        if os.altsep and os.altsep in name:
+            continue
+        head, root, tail = name.rpartition(sep)  # not os.path.split: a third of the time
+        by_folder.setdefault(head or root, {})[tail] = name
+    kinds: dict[str, int] = {}
+    for folder, wanted in by_folder.items():
+        if len(wanted) < LISTED_MIN:
+            continue
+        left = len(wanted)
+        try:
+            with os.scandir(folder or os.curdir) as entries:
+                for entry in entries:
+                    named = wanted.get(entry.name)
+                    if named is None:
+                        continue
+                    if not entry.is_symlink():
+                        kinds[named] = (
+                            stat.S_IFDIR
+                            if entry.is_dir(follow_symlinks=False)
+                            else stat.S_IFREG
+                            if entry.is_file(follow_symlinks=False)
+                            else 0
+                        )
+                    left -= 1
+                    if not left:
+                        break
+        except OSError:
+            continue
+    return kinds
 
 
 def _folder_scenes(folder: Path) -> list[str]:
@@ -187,6 +236,31 @@ def simulate_lines(
 
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
+    for lines in simulate_chunks(
+        paths,
+        horizon=horizon,
+        simulator=simulator,
+        stability=stability,
+        registry=registry,
+        options=options,
+        workers=workers,
+    ):
+        yield from lines
+
+
+def simulate_chunks(
+    paths: Iterable[str | Path],
+    *,
+    horizon: float | None = None,
+    simulator: str | Simulator | None = None,
+    stability: bool = False,
+    registry: Registry | None = None,
+    options: Mapping[str, Any] | None = None,
+    workers: int = 0,
+) -> Iterator[list[str]]:
+    """:func:`simulate_lines` a few hundred lines at a time, in input order, for a writer that
+    writes each list at once (``bpb simulate``). A bad file ends the output: the lines before
+    it come in a last list, then its :class:`~bpb_core.errors.BadInput` is raised."""
     global _JOB
     if workers < 0:
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
@@ -195,16 +269,22 @@ def simulate_lines(
     job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]])
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
-    chunks = [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
     if count <= 1:
-        for chunk in chunks:
-            yield from _emit(_lines(chunk))
+        results: Iterator[tuple[list[str], BadInput | None]] = map(
+            _lines, [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
+        )
+        for lines, error in results:
+            yield lines
+            if error is not None:
+                raise error
         return
     import multiprocessing
 
     with multiprocessing.get_context("fork").Pool(count) as pool:
-        for result in pool.imap(_lines, _split(files, count)):
-            yield from _emit(result)
+        for lines, error in pool.imap(_lines, _split(files, count)):
+            yield lines
+            if error is not None:
+                raise error
 
 
 CHUNK = 512  # scenes handed to a family's batch path at once
@@ -213,13 +293,6 @@ CHUNK = 512  # scenes handed to a family's batch path at once
 def _split(files: Sequence[str], count: int) -> list[Sequence[str]]:
     size = max(16, min(CHUNK, len(files) // (4 * count) or 1))
     return [files[i : i + size] for i in range(0, len(files), size)]
-
-
-def _emit(result: tuple[list[str], BadInput | None]) -> Iterator[str]:
-    lines, error = result
-    yield from lines
-    if error is not None:
-        raise error
 
 
 def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:

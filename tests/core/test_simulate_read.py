@@ -37,3 +37,43 @@ def test_regular_files_of_any_size_are_read_whole(tmp_path: Path) -> None:
         (tmp_path / f"{size}.json").write_bytes(bytes(i % 251 for i in range(size)))
     names = simulate._scene_names([str(tmp_path / f"{size}.json") for size in sizes])
     assert [len(t) for t in simulate._read_all(names)] == sizes
+
+
+def test_many_names_in_one_folder_get_the_kinds_stat_would_give(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # past LISTED_MIN names in a folder, kinds come from its listing: the same outcome as a
+    # stat of each, for files, folders, pipes, links and missing or dangling names
+    from bpb_core.errors import BadInput
+
+    names = []
+    for i in range(simulate.LISTED_MIN + 8):
+        (tmp_path / f"s{i}.json").write_text("{}")
+        names.append(str(tmp_path / f"s{i}.json"))
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "folder" / "init.json").write_text("{}")
+    (tmp_path / "link.json").symlink_to(tmp_path / "s0.json")
+    names += [str(tmp_path / "folder"), str(tmp_path / "link.json"), f"{tmp_path}/final.json"]
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(tmp_path / "pipe.json")
+        names.append(str(tmp_path / "pipe.json"))
+    (tmp_path / "final.json").write_text("{}")
+    simulate._SPECIAL.clear()
+    listed = simulate._scene_names(names)
+    special = set(simulate._SPECIAL)
+    assert len(simulate._kinds(names)) == len(names) - 1  # all but the link
+    monkeypatch.setattr(simulate, "LISTED_MIN", 10**9)
+    simulate._SPECIAL.clear()
+    assert simulate._scene_names(names) == listed
+    assert special == simulate._SPECIAL
+    monkeypatch.undo()
+    assert listed[-4:-1] == [
+        str(tmp_path / "folder" / "init.json"), str(tmp_path / "link.json"),
+        str(tmp_path / "init.json"),
+    ]  # fmt: skip
+    assert str(tmp_path / "link.json") not in special and names[0] not in special
+    assert (str(tmp_path / "pipe.json") in special) == hasattr(os, "mkfifo")
+    (tmp_path / "dangling.json").symlink_to(tmp_path / "nowhere.json")
+    for bad in ("missing.json", "dangling.json"):
+        with pytest.raises(BadInput, match=f"{bad}: no such file or directory"):
+            simulate._scene_names([*names, str(tmp_path / bad)])

@@ -53,7 +53,7 @@ def simulate(
     workers: int,
 ) -> None:
     """Simulate init.json files, scene folders or dataset folders, in input order."""
-    from bpb_core.simulate import simulate_lines
+    from bpb_core.simulate import simulate_chunks
 
     options: dict[str, Any] = {}
     if dt is not None:
@@ -63,7 +63,7 @@ def simulate(
     if engine is not None:
         options["engine"] = engine
     out = sys.stdout
-    for line in simulate_lines(
+    for lines in simulate_chunks(
         paths,
         horizon=horizon,
         simulator=simulator,
@@ -71,4 +71,6 @@ def simulate(
         options=options,
         workers=workers,
     ):
-        out.write(line + "\n")
+        if lines:  # one write per few hundred lines, not one per line
+            out.write("\n".join(lines))
+            out.write("\n")

@@ -17,6 +17,7 @@ is wrong.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import chain
@@ -241,33 +242,39 @@ def _arrays(members: list[int], scenes: list[Any], parts: tuple[Any, Any, Any]) 
 
 def _plain(group: SceneGroup) -> np.ndarray:
     """Per scene of ``group``: ids, numbers and geometry plainly valid (squared distances, with
-    :data:`_MARGIN` far above their rounding error)."""
+    :data:`_MARGIN` far above their rounding error). Coordinates are copied to contiguous
+    ``(k, n)`` arrays first and pockets are taken one at a time: broadcasting strided views
+    against every pocket at once cost four times as much."""
     table, physics, pockets = group.parts
-    ids, pos, vel = group.ids, group.pos, group.vel
+    ids = group.ids
+    k, n = ids.shape
+    x, y, vx, vy = (np.ascontiguousarray(a[..., c]) for a in (group.pos, group.vel) for c in (0, 1))
     good = ids[:, 0] == 0
-    if ids.shape[1] > 1:
-        good &= (np.diff(ids, axis=1) > 0).all(axis=1)  # sorted: distinct means increasing
-    horizons = np.fromiter((s.horizon for s in group.scenes), float, len(group.scenes))
+    if n > 1:
+        good &= (ids[:, 1:] > ids[:, :-1]).all(axis=1)  # sorted: distinct means increasing
+    horizons = np.fromiter((s.horizon for s in group.scenes), float, k)
     good &= np.isfinite(horizons)
-    good &= np.isfinite(pos).all(axis=(1, 2)) & np.isfinite(vel).all(axis=(1, 2))
-    with np.errstate(invalid="ignore", over="ignore"):
-        speed2 = vel[..., 0] ** 2 + vel[..., 1] ** 2
+    # No separate finiteness test of positions and velocities: a NaN fails every comparison
+    # below and an infinity fails the speed or the table bounds.
+    with np.errstate(invalid="ignore", over="ignore"):  # float products overflow to inf
         fastest = MAX_SPEED - _MARGIN
-        good &= (speed2 < fastest * fastest).all(axis=1)
+        good &= (vx * vx + vy * vy < fastest * fastest).all(axis=1)
         radius = physics.ball_radius
-        x, y = pos[..., 0], pos[..., 1]
-        on_table = (x >= radius) & (x <= table.width - radius)
-        on_table &= (y >= radius) & (y <= table.height - radius)
-        good &= on_table.all(axis=1)
-        centres = np.array(pockets.centers, dtype=float).reshape(-1, 2)
-        if len(centres):
-            dx, dy = x[..., None] - centres[:, 0], y[..., None] - centres[:, 1]
-            reach = pockets.radius + _MARGIN  # float products overflow to inf, ** would raise
-            good &= (dx * dx + dy * dy > reach * reach).all(axis=(1, 2))
-        n = pos.shape[1]
+        good &= ((x >= radius) & (x <= table.width - radius)).all(axis=1)
+        good &= ((y >= radius) & (y <= table.height - radius)).all(axis=1)
+        reach = pockets.radius + _MARGIN
+        for cx, cy in pockets.centers:
+            dx, dy = x - cx, y - cy
+            good &= (dx * dx + dy * dy > reach * reach).all(axis=1)
         if n > 1:
-            i, j = np.triu_indices(n, 1)
+            i, j = _pairs(n)
             dx, dy = x[:, i] - x[:, j], y[:, i] - y[:, j]
             least = 2 * radius - TOUCH_TOLERANCE + _MARGIN
             good &= (dx * dx + dy * dy >= least * least).all(axis=1)
     return np.asarray(good, dtype=bool)
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The index pairs ``i < j`` of ``n`` balls."""
+    return np.triu_indices(n, 1)

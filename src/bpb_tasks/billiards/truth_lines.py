@@ -133,36 +133,27 @@ def _lines(
     simulator: str,
 ) -> list[str]:
     """The lines of one compiled call's results (``ids``: ``(k, n)``, ascending per scene, so
-    index 0 is the cue ball, id 0): every number formatted by one pydantic-core call, the labels
-    worked out on arrays, the records put together in flat comprehensions, not per scene."""
+    index 0 is the cue ball, id 0).
+
+    Every number of the chunk, in the order the lines hold them, is formatted by one
+    pydantic-core call; each line's text around its numbers is a template (``%s`` where a
+    number goes) put together from cached pieces (the predictions for a set of ids and pocketed
+    balls, each event for its kind, ids and wall, the q1 and q2 lists); one ``%`` over the
+    whole chunk fills the numbers in. No string is made per number or per record."""
     k, n = ids.shape
-    m = len(events)
     scene = events[:, 0].astype(np.int64)
     kind, a, b, wall = (events[:, c].astype(np.int64) for c in (2, 3, 4, 5))
     pair = b >= 0
     flat_ids = ids.ravel()
     id_a = flat_ids[scene * n + a]
     id_b = np.where(pair, flat_ids[scene * n + np.maximum(b, 0)], -1)
-    numbers = events[:, [1, 6, 7, 8, 9]].ravel().tolist()
-    text = to_json(ends + numbers + round4(final[:, :2].ravel()).tolist()).decode()[1:-1]
-    parts = text.split(",")
-    t, xa, ya, xb, yb = (parts[k + c : k + 5 * m : 5] for c in range(5))
+    alive = final[:, 2] != 0
+    numbers = _numbers(np.array(ends, dtype=float), final, alive, events, scene, pair)
+    values = to_json(numbers.tolist()).decode()[1:-1].split(",")
+    found = _EVENTS.get
     records = [
-        f'{{"t":{t_},"kind":"ball","ids":[{i},{j}],"wall":null,"positions":[[{x},{y}],[{u},{v}]]}}'
-        if two
-        else f'{{"t":{t_},"kind":"{KINDS[kd]}","ids":[{i}],"wall":{_WALL_NAMES[w]},'
-        f'"positions":[[{x},{y}]]}}'
-        for two, kd, i, j, w, t_, x, y, u, v in zip(
-            pair.tolist(), kind.tolist(), id_a.tolist(), id_b.tolist(), wall.tolist(),
-            t, xa, ya, xb, yb, strict=True,
-        )
-    ]  # fmt: skip
-    at = k + 5 * m
-    predictions = [
-        f'{{"id":{i},"pos":[{x},{y}]}}' if alive else f'{{"id":{i},"pos":null}}'
-        for i, x, y, alive in zip(
-            flat_ids.tolist(), parts[at::2], parts[at + 1 :: 2], final[:, 2].tolist(), strict=True
-        )
+        found(key) or _event(key)
+        for key in zip(kind.tolist(), id_a.tolist(), id_b.tolist(), wall.tolist(), strict=True)
     ]
     cue = (a == 0) | (pair & (b == 0))
     walls = np.zeros(k, dtype=np.int64)
@@ -170,14 +161,97 @@ def _lines(
     np.bitwise_or.at(walls, scene[hit], np.left_shift(1, wall[hit]))
     q1 = _q1_texts(ids, scene[cue & pair], np.where(a == 0, b, a)[cue & pair])
     bounds = np.searchsorted(scene, np.arange(k + 1)).tolist()
-    return [
-        f'{{"scene_id":{_string(s.scene_id)},"horizon":{h},"q1":[{q}],"q2":[{_Q2[w]}],'
-        f'"predictions":[{",".join(predictions[n * j : n * j + n])}],'
-        f'"events":[{",".join(records[lo:hi])}],"stability":null,"simulator":{simulator}}}'
-        for j, (s, h, q, w, lo, hi) in enumerate(
-            zip(scenes, parts[:k], q1, walls.tolist(), bounds[:-1], bounds[1:], strict=True)
+    tail = f'],"stability":null,"simulator":{simulator.replace("%", "%%")}}}'
+    template = "\n".join(
+        f'{{"scene_id":{_string(s.scene_id)},"horizon":%s,"q1":[{q}],"q2":[{_Q2[w]}],'
+        f'"predictions":[{p}],"events":[{",".join(records[lo:hi])}{tail}'
+        for s, q, w, p, lo, hi in zip(
+            scenes, q1, walls.tolist(), _predictions(ids, alive.reshape(k, n)), bounds[:-1],
+            bounds[1:], strict=True,
         )
-    ]
+    )  # fmt: skip
+    return (template % tuple(values)).split("\n")
+
+
+def _numbers(
+    ends: np.ndarray,
+    final: np.ndarray,
+    alive: np.ndarray,
+    events: np.ndarray,
+    scene: np.ndarray,
+    pair: np.ndarray,
+) -> np.ndarray:
+    """The numbers of each scene's line in the order the line holds them: its horizon, the
+    rounded final position of each ball not pocketed, then each event's time and position(s)
+    (two for a ball-ball contact, one otherwise). Three sections already in scene order are
+    interleaved by computing where each value goes."""
+    k, n = len(ends), final.shape[0] // len(ends)
+    preds = round4(final[:, :2].ravel()).reshape(-1, 2)[alive].ravel()
+    pred_scene = np.repeat(np.arange(k), n)[alive]
+    taken = np.ones((len(events), 5), dtype=bool)
+    taken[:, 3:] = pair[:, None]
+    ev = events[:, [1, 6, 7, 8, 9]][taken]
+    ev_scene = np.repeat(scene, taken.sum(axis=1))
+    pred_count = 2 * np.bincount(pred_scene, minlength=k)
+    ev_count = np.bincount(ev_scene, minlength=k)
+    start = np.cumsum(1 + pred_count + ev_count) - (1 + pred_count + ev_count)
+    out = np.empty(k + len(preds) + len(ev))
+    out[start] = ends
+    first_pred = np.cumsum(pred_count) - pred_count
+    where = np.arange(len(preds)) + np.repeat(start + 1 - first_pred, pred_count)
+    out[where] = preds
+    first_ev = np.cumsum(ev_count) - ev_count
+    where = np.arange(len(ev)) + np.repeat(start + 1 + pred_count - first_ev, ev_count)
+    out[where] = ev
+    return out
+
+
+_EVENTS: dict[tuple[int, int, int, int], str] = {}
+
+
+def _event(key: tuple[int, int, int, int]) -> str:
+    """The template of an event record (``%s`` for its time and coordinates) by kind, ids and
+    wall (second id -1 when there is one ball)."""
+    kind, i, j, wall = key
+    if j >= 0:
+        found = (
+            f'{{"t":%s,"kind":"ball","ids":[{i},{j}],"wall":null,"positions":[[%s,%s],[%s,%s]]}}'
+        )
+    else:
+        found = (
+            f'{{"t":%s,"kind":"{KINDS[kind]}","ids":[{i}],"wall":{_WALL_NAMES[wall]},'
+            f'"positions":[[%s,%s]]}}'
+        )
+    if len(_EVENTS) < 4096:
+        _EVENTS[key] = found
+    return found
+
+
+_PREDICTIONS: dict[tuple[tuple[int, ...], tuple[bool, ...]], str] = {}
+
+
+def _predictions(ids: np.ndarray, alive: np.ndarray) -> list[str]:
+    """The template of each scene's predictions list (``%s`` for the coordinates of each ball
+    not pocketed) for ``ids`` and ``alive`` (both ``(k, n)``)."""
+    rows = list(map(tuple, alive.tolist()))
+    if (ids == ids[0]).all():  # the usual case: every scene has the same ids
+        same = tuple(ids[0].tolist())
+        keys = [(same, r) for r in rows]
+    else:
+        keys = list(zip(map(tuple, ids.tolist()), rows, strict=True))
+    found = _PREDICTIONS.get
+    return [found(key) or _prediction(key) for key in keys]
+
+
+def _prediction(key: tuple[tuple[int, ...], tuple[bool, ...]]) -> str:
+    ids, alive = key
+    found = ",".join(
+        f'{{"id":{i},"pos":[%s,%s]}}' if up else f'{{"id":{i},"pos":null}}'
+        for i, up in zip(ids, alive, strict=True)
+    )
+    if len(_PREDICTIONS) < 4096:
+        _PREDICTIONS[key] = found
+    return found
 
 
 def _q1_texts(ids: np.ndarray, scene: np.ndarray, touched: np.ndarray) -> list[str]:
@@ -194,10 +268,12 @@ def _q1_texts(ids: np.ndarray, scene: np.ndarray, touched: np.ndarray) -> list[s
 
 
 def _string(value: str) -> str:
-    """``value`` as pydantic-core writes it: quoted as it is when nothing in it needs escaping."""
-    if value.isascii() and value.isprintable() and '"' not in value and "\\" not in value:
+    """``value`` as pydantic-core writes it (quoted as it is when nothing in it needs escaping),
+    with ``%`` doubled for the line's template."""
+    plain = value.isascii() and value.isprintable()
+    if plain and not ('"' in value or "\\" in value or "%" in value):
         return f'"{value}"'
-    return to_json(value).decode()
+    return to_json(value).decode().replace("%", "%%")
 
 
 _Q1: dict[tuple[tuple[int, ...], tuple[bool, ...]], str] = {}

@@ -178,7 +178,12 @@ def test_texts_of_every_kind_give_the_model_bytes_or_are_left_to_it() -> None:
         if i % 7 == 3:
             data["table"] = {"width": 2.5, "height": 1.25}
         if i % 11 == 4:
-            data["scene_id"] = f'ü "quoted" \\ tab\t {i} \u0001 /'
+            data["scene_id"] = f'ü "quoted" \\ tab\t {i} \u0001 / 100%'
+        if i % 13 == 5:  # the lines are templates filled with %: ids holding % stay as they are
+            data["scene_id"] = f"100% {i} %s %(x)s %%"
+        if i % 17 == 6:  # other ids than the group's others
+            for k, ball in enumerate(data["balls"]):
+                ball["id"] = 7 * k
         texts.append(json.dumps(data).encode())
     texts[10] = texts[10].replace(b'"horizon"', b'"horizon": 1, "x"')
     lines = text_lines(texts, AnalyticSimulator(), None)
@@ -192,6 +197,9 @@ def test_texts_of_every_kind_give_the_model_bytes_or_are_left_to_it() -> None:
         assert line == final_state(model, python.run(model)).model_dump_json()
         taken += 1
     assert taken == len(texts) - 1
+    kept = "".join(line for line in lines if line is not None)  # the suite has every case
+    assert '"pos":null' in kept and '"kind":"pocket"' in kept and '"kind":"ball"' in kept
+    assert '"kind":"wall"' in kept and '"kind":"stop"' in kept and "%s %(x)s %%" in kept
 
 
 def test_simulate_reads_large_files_and_restores_the_collector(tmp_path: Path) -> None:
