@@ -184,6 +184,10 @@ def test_texts_of_every_kind_give_the_model_bytes_or_are_left_to_it() -> None:
         if i % 17 == 6:  # other ids than the group's others
             for k, ball in enumerate(data["balls"]):
                 ball["id"] = 7 * k
+        if i % 19 == 7:  # ids of every length up to the largest taken
+            others = [ball for ball in data["balls"] if ball["id"] != 0]
+            for k, ball in enumerate(others):
+                ball["id"] = 2**31 - 1 - 10**k
         texts.append(json.dumps(data).encode())
     texts[10] = texts[10].replace(b'"horizon"', b'"horizon": 1, "x"')
     lines = text_lines(texts, AnalyticSimulator(), None)
