@@ -209,3 +209,23 @@ def test_parallel_simulate_lines_keep_input_order(tmp_path: Path) -> None:
     two = list(simulate_lines(paths, workers=2))
     assert one == two and len(one) == 40
     assert '"scene_id":"r9_00039"' in one[0]
+
+
+def test_parallel_simulate_lines_stop_at_a_bad_file_with_the_lines_before_it(
+    tmp_path: Path,
+) -> None:
+    # a bad file in the first piece or in a later one ends the output with the lines before
+    # it, then names the file
+    paths, scenes = [], list(random_scenes(60, seed=9))
+    for i, scene in enumerate(scenes):
+        paths.append(tmp_path / f"s{i:02d}.json")
+        paths[-1].write_text(scene.model_dump_json())
+    good = list(simulate_lines(paths, workers=1))
+    for bad in (3, 41):
+        paths[bad].write_text("{")
+        got: list[str] = []
+        with pytest.raises(BadInput, match=f"s{bad:02d}.json"):
+            for line in simulate_lines(paths, workers=2):
+                got.append(line)
+        assert got == good[:bad]
+        paths[bad].write_text(scenes[bad].model_dump_json())
