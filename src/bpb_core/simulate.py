@@ -236,31 +236,6 @@ def simulate_lines(
 
     Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
     """
-    for lines in simulate_chunks(
-        paths,
-        horizon=horizon,
-        simulator=simulator,
-        stability=stability,
-        registry=registry,
-        options=options,
-        workers=workers,
-    ):
-        yield from lines
-
-
-def simulate_chunks(
-    paths: Iterable[str | Path],
-    *,
-    horizon: float | None = None,
-    simulator: str | Simulator | None = None,
-    stability: bool = False,
-    registry: Registry | None = None,
-    options: Mapping[str, Any] | None = None,
-    workers: int = 0,
-) -> Iterator[list[str]]:
-    """:func:`simulate_lines` a few hundred lines at a time, in input order, for a writer that
-    writes each list at once (``bpb simulate``). A bad file ends the output: the lines before
-    it come in a last list, then its :class:`~bpb_core.errors.BadInput` is raised."""
     global _JOB
     if workers < 0:
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
@@ -269,22 +244,16 @@ def simulate_chunks(
     job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]])
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
+    chunks = [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
     if count <= 1:
-        results: Iterator[tuple[list[str], BadInput | None]] = map(
-            _lines, [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
-        )
-        for lines, error in results:
-            yield lines
-            if error is not None:
-                raise error
+        for chunk in chunks:
+            yield from _emit(_lines(chunk))
         return
     import multiprocessing
 
     with multiprocessing.get_context("fork").Pool(count) as pool:
-        for lines, error in pool.imap(_lines, _split(files, count)):
-            yield lines
-            if error is not None:
-                raise error
+        for result in pool.imap(_lines, _split(files, count)):
+            yield from _emit(result)
 
 
 CHUNK = 512  # scenes handed to a family's batch path at once
@@ -293,6 +262,13 @@ CHUNK = 512  # scenes handed to a family's batch path at once
 def _split(files: Sequence[str], count: int) -> list[Sequence[str]]:
     size = max(16, min(CHUNK, len(files) // (4 * count) or 1))
     return [files[i : i + size] for i in range(0, len(files), size)]
+
+
+def _emit(result: tuple[list[str], BadInput | None]) -> Iterator[str]:
+    lines, error = result
+    yield from lines
+    if error is not None:
+        raise error
 
 
 def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:

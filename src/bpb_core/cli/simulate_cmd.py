@@ -53,7 +53,7 @@ def simulate(
     workers: int,
 ) -> None:
     """Simulate init.json files, scene folders or dataset folders, in input order."""
-    from bpb_core.simulate import simulate_chunks
+    from bpb_core.simulate import simulate_lines
 
     options: dict[str, Any] = {}
     if dt is not None:
@@ -63,14 +63,28 @@ def simulate(
     if engine is not None:
         options["engine"] = engine
     out = sys.stdout
-    for lines in simulate_chunks(
-        paths,
-        horizon=horizon,
-        simulator=simulator,
-        stability=stability,
-        options=options,
-        workers=workers,
-    ):
-        if lines:  # one write per few hundred lines, not one per line
-            out.write("\n".join(lines))
-            out.write("\n")
+    chunk: list[str] = []  # written a few hundred lines at a time, not one write per line
+    try:
+        for line in simulate_lines(
+            paths,
+            horizon=horizon,
+            simulator=simulator,
+            stability=stability,
+            options=options,
+            workers=workers,
+        ):
+            chunk.append(line)
+            if len(chunk) == _WRITE_EVERY:
+                _write(out, chunk)
+    finally:  # the lines before a bad file are written before its error
+        _write(out, chunk)
+
+
+_WRITE_EVERY = 512
+
+
+def _write(out: Any, chunk: list[str]) -> None:
+    if chunk:
+        out.write("\n".join(chunk))
+        out.write("\n")
+        chunk.clear()

@@ -90,16 +90,6 @@ class SceneGroup:
     vel: np.ndarray
 
 
-def light_scenes(texts: Sequence[bytes | str]) -> list[LightScene | None]:
-    """The scenes of many ``init.json`` texts, ``None`` for each that is not plainly valid."""
-    scenes = decode_scenes(texts)
-    kept: list[LightScene | None] = [None] * len(scenes)
-    for group in scene_groups(scenes, checks=True):
-        for i in group.members:
-            kept[i] = scenes[i]
-    return kept
-
-
 def light_scene(text: bytes | str, *, checks: bool = True) -> LightScene | None:
     """The scene of an ``init.json`` text, or ``None`` when it is not plainly valid (without
     ``checks``, only decoded: ids, numbers and geometry are left to :func:`scene_groups`)."""

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from bpb_tasks.billiards.scene import WALLS
-from bpb_tasks.simulators.analytic.kernel_roots import jit, jit_inlined
+from bpb_tasks.simulators.analytic.compiled import KINDS  # the kernel's event kinds, in order
+from bpb_tasks.simulators.analytic.kernel_roots import jit
 
-KINDS = ("ball", "wall", "pocket", "stop")  # the kernel's event kinds, in code order
 if len(KINDS) != 4 or len(WALLS) != 4:  # the indices below are compiled in as constants
     raise RuntimeError("truth_bytes expects four event kinds and four walls")
 
@@ -94,7 +94,7 @@ def assemble(
     return out[:size].tobytes().decode().split("\n")
 
 
-@jit_inlined
+@jit
 def _put(out: np.ndarray, at: int, table: np.ndarray, start: int, end: int) -> int:
     """Copy ``table[start:end]`` to ``out[at:]``; unsigned indices spare numba the check for
     negative ones on every byte (three times faster)."""
@@ -105,18 +105,18 @@ def _put(out: np.ndarray, at: int, table: np.ndarray, start: int, end: int) -> i
     return np.int64(to)  # type: ignore[return-value]  # an int in compiled code
 
 
-@jit_inlined
+@jit
 def _byte(out: np.ndarray, at: int, value: int) -> int:
     out[np.uint64(at)] = value
     return at + 1
 
 
-@jit_inlined
+@jit
 def _lit(out: np.ndarray, at: int, table: np.ndarray, offsets: np.ndarray, which: int) -> int:
     return _put(out, at, table, offsets[which], offsets[which + 1])
 
 
-@jit_inlined
+@jit
 def _int(out: np.ndarray, at: int, value: int) -> int:
     """``value`` (>= 0) in decimal."""
     digits = 1

@@ -87,12 +87,12 @@ def _group_lines(
     for at in range(0, len(group.members), CHUNK):
         scenes = group.scenes[at : at + CHUNK]
         k = len(scenes)
-        ends = [s.horizon if horizon is None else horizon for s in scenes]
+        ends = np.array([s.horizon if horizon is None else horizon for s in scenes], dtype=float)
         pos = np.ascontiguousarray(group.pos[at : at + k].reshape(-1, 2))
         vel = np.ascontiguousarray(group.vel[at : at + k].reshape(-1, 2))
         starts = np.arange(k + 1, dtype=np.int64) * n
         final, status, events = run_many_arrays(
-            pos, vel, starts, prm, centres, np.array(ends, dtype=float), simulator.max_events
+            pos, vel, starts, prm, centres, ends, simulator.max_events
         )
         if status.any():
             raise SimulationError(f"more than {simulator.max_events} events in a scene")
@@ -119,7 +119,7 @@ def round4(values: np.ndarray) -> np.ndarray:
 def _lines(
     scenes: Sequence[Any],
     ids: np.ndarray,
-    ends: list[float],
+    ends: np.ndarray,
     final: np.ndarray,
     events: np.ndarray,
     simulator: str,
@@ -138,7 +138,7 @@ def _lines(
     id_a = flat_ids[scene * n + a]
     id_b = np.where(pair, flat_ids[scene * n + np.maximum(b, 0)], -1)
     xy, times_and_places = round4(final[:, :2].ravel()), events[:, [1, 6, 7, 8, 9]].ravel()
-    numbers = np.concatenate([np.array(ends, dtype=float), xy, times_and_places])
+    numbers = np.concatenate([ends, xy, times_and_places])
     cue = (a == 0) | (pair & (b == 0))
     walls = np.zeros(k, dtype=np.int64)
     hit = cue & ~pair & (wall >= 0)

@@ -35,15 +35,6 @@ def jit(func: F) -> F:
     return compiled
 
 
-def jit_inlined(func: F) -> F:
-    """:func:`jit`, and inlined into the compiled functions that call it (numba's own inlining,
-    for small helpers called many times per item, where a call costs more than the work)."""
-    if _numba is None:
-        return func
-    compiled: F = _numba.njit(cache=True, inline="always")(func)
-    return compiled
-
-
 Poly = tuple[float, float, float, float, float]
 
 
