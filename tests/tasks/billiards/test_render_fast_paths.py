@@ -8,7 +8,9 @@ every point. Both must give the very same pixels and lengths.
 from __future__ import annotations
 
 import math
+from typing import Any
 
+import pytest
 from hypothesis import given, settings, strategies as st
 from PIL import ImageFont
 
@@ -102,8 +104,29 @@ def test_scene_texts_put_together_from_kept_pieces_are_the_whole_text(
         (style.font(round(16 * SPEC.scale)), f"pocketed: balls {', '.join(map(str, pocketed))}"),
     ]
     for font, text in texts:
-        whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
         assert isinstance(font, ImageFont.FreeTypeFont)
+        whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
         got = _coverage(font, text)
         assert got.size == whole.size
         assert bytes(got) == bytes(whole)
+
+
+def test_scene_texts_are_put_together_from_pieces_not_rendered_whole(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The test above compares with the whole text's mask; this one checks the pieces are what
+    made it (a fallback to rendering the whole text would pass the comparison trivially)."""
+    font = style.font(round(16 * SPEC.scale))
+    assert isinstance(font, ImageFont.FreeTypeFont)
+    rendered: list[str] = []
+    real = ImageFont.FreeTypeFont.getmask2
+
+    def spy(self: ImageFont.FreeTypeFont, text: str, *args: Any, **kwargs: Any) -> Any:
+        rendered.append(text)
+        return real(self, text, *args, **kwargs)
+
+    monkeypatch.setattr(ImageFont.FreeTypeFont, "getmask2", spy)
+    for speed in (0.0, 1.234, 7.5, 19.999):
+        text = f"cue ball 0 speed {speed:.3f} m/s"
+        _coverage(font, text)
+        assert text not in rendered
