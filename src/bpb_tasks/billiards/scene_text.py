@@ -26,6 +26,7 @@ from typing import Annotated, Any, NamedTuple
 import msgspec
 import numpy as np
 from pydantic import BaseModel, ValidationError
+from pydantic_core import to_json
 
 from bpb_tasks.billiards.scene import MAX_SPEED, TOUCH_TOLERANCE, Physics, Pockets, Table
 
@@ -75,7 +76,8 @@ class SceneGroup:
 
     Attributes:
         members: Positions of the scenes in the caller's sequence.
-        scenes: The scenes themselves (anything with ``scene_id``, ``horizon`` and ``balls``).
+        horizons: ``(k,)`` the scenes' own horizons.
+        names: The scenes' ids as JSON texts (quoted, escaped as pydantic-core writes them).
         parts: Their table, physics and pockets models.
         ids: ``(k, n)`` ball ids, ascending per scene.
         pos: ``(k, n, 2)`` centres in that order.
@@ -83,7 +85,8 @@ class SceneGroup:
     """
 
     members: list[int]
-    scenes: list[Any]
+    horizons: np.ndarray
+    names: list[str]
     parts: tuple[Any, Any, Any]
     ids: np.ndarray
     pos: np.ndarray
@@ -109,11 +112,11 @@ def decode_scenes(texts: Sequence[bytes | str]) -> list[LightScene | None]:
     return scenes
 
 
-def text_groups(texts: Sequence[bytes | str]) -> list[SceneGroup]:
+def decoded_groups(texts: Sequence[bytes | str]) -> list[SceneGroup]:
     """The plainly valid scenes of ``texts`` in groups (see :func:`scene_groups`), straight from
     the decoded structs; a text left out of every group is not plainly valid."""
     groups = (_arrays(members, found, parts) for parts, members, found in _decoded(texts).values())
-    return [g for g in map(_checked, groups) if g.members]
+    return [g for g in map(checked, groups) if g.members]
 
 
 _Parts = tuple[Any, Any, Any]
@@ -136,7 +139,7 @@ def _decoded(texts: Sequence[bytes | str]) -> _Decoded:
         raws = (data.table, data.physics, data.pockets)
         if raws != last:
             last = raws
-            parts = (_part("table", raws[0]), _part("physics", raws[1]), _part("pockets", raws[2]))
+            parts = (part("table", raws[0]), part("physics", raws[1]), part("pockets", raws[2]))
             by_count = {} if None in parts else _bucket(keyed, parts)
         if parts[2] is None or parts[1] is None or parts[0] is None:
             continue
@@ -155,7 +158,9 @@ def _bucket(keyed: _Decoded, parts: _Parts) -> dict[int, tuple[_Parts, list[int]
     return {key[0]: group for key, group in keyed.items() if key[1:] == ids}
 
 
-def _part(name: str, raw: msgspec.Raw) -> BaseModel | None:
+def part(name: str, raw: msgspec.Raw) -> BaseModel | None:
+    """The model of a table, physics or pockets text (``None``: not valid), validated once per
+    distinct text."""
     if not len(raw):
         return _DEFAULTS[name]
     last = _LAST.get(name)
@@ -195,13 +200,13 @@ def scene_groups(scenes: Sequence[Any], *, checks: bool) -> list[SceneGroup]:
         first = chosen[0]
         group = _arrays(members, chosen, (first.table, first.physics, first.pockets))
         if checks:
-            group = _checked(group)
+            group = checked(group)
         if group.members:
             groups.append(group)
     return groups
 
 
-def _checked(group: SceneGroup) -> SceneGroup:
+def checked(group: SceneGroup) -> SceneGroup:
     """``group`` without the scenes that are not plainly valid."""
     ok = _plain(group)
     if ok.all():
@@ -209,7 +214,8 @@ def _checked(group: SceneGroup) -> SceneGroup:
     keep = np.flatnonzero(ok).tolist()
     return SceneGroup(
         [group.members[i] for i in keep],
-        [group.scenes[i] for i in keep],
+        group.horizons[keep],
+        [group.names[i] for i in keep],
         group.parts,
         group.ids[keep],
         group.pos[keep],
@@ -223,11 +229,32 @@ def _arrays(members: list[int], scenes: list[Any], parts: tuple[Any, Any, Any]) 
     ids = np.fromiter((b.id for b in balls), np.int64, k * n).reshape(k, n)
     flat = chain.from_iterable(b.pos + b.vel for b in balls)
     values = np.fromiter(flat, float, 4 * k * n).reshape(k, n, 4)
-    if n > 1 and not (np.diff(ids, axis=1) > 0).all():
+    horizons = np.fromiter((s.horizon for s in scenes), float, k)
+    return by_id(members, horizons, [json_text(s.scene_id) for s in scenes], parts, ids, values)
+
+
+def by_id(
+    members: list[int],
+    horizons: np.ndarray,
+    names: list[str],
+    parts: tuple[Any, Any, Any],
+    ids: np.ndarray,
+    values: np.ndarray,
+) -> SceneGroup:
+    """A group from ``(k, n)`` ids and ``(k, n, 4)`` ``x, y, vx, vy`` in any ball order, sorted by
+    id within each scene."""
+    if ids.shape[1] > 1 and not (np.diff(ids, axis=1) > 0).all():
         order = np.argsort(ids, axis=1, kind="stable")
         ids = np.take_along_axis(ids, order, axis=1)
         values = np.take_along_axis(values, order[..., None], axis=1)
-    return SceneGroup(members, scenes, parts, ids, values[..., :2], values[..., 2:])
+    return SceneGroup(members, horizons, names, parts, ids, values[..., :2], values[..., 2:])
+
+
+def json_text(value: str) -> str:
+    """``value`` as pydantic-core writes it: quoted as it is when nothing in it needs escaping."""
+    if value.isascii() and value.isprintable() and '"' not in value and "\\" not in value:
+        return f'"{value}"'
+    return to_json(value).decode()
 
 
 def _plain(group: SceneGroup) -> np.ndarray:
@@ -237,13 +264,13 @@ def _plain(group: SceneGroup) -> np.ndarray:
     against every pocket at once cost four times as much."""
     table, physics, pockets = group.parts
     ids = group.ids
-    k, n = ids.shape
+    n = ids.shape[1]
     x, y, vx, vy = (np.ascontiguousarray(a[..., c]) for a in (group.pos, group.vel) for c in (0, 1))
     good = ids[:, 0] == 0
     if n > 1:
         good &= (ids[:, 1:] > ids[:, :-1]).all(axis=1)  # sorted: distinct means increasing
-    horizons = np.fromiter((s.horizon for s in group.scenes), float, k)
-    good &= np.isfinite(horizons)
+    horizons = group.horizons
+    good &= np.isfinite(horizons) & (horizons > 0)
     # No separate finiteness test of positions and velocities: a NaN fails every comparison
     # below and an infinity fails the speed or the table bounds.
     with np.errstate(invalid="ignore", over="ignore"):  # float products overflow to inf

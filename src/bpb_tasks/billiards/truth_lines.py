@@ -35,7 +35,7 @@ def text_lines(
     for a text it does not take, or as a whole when ``simulator`` has no fast path."""
     if not _fast(simulator, worth_loading=len(texts) >= BATCH_MIN):
         return None
-    from bpb_tasks.billiards.scene_text import text_groups
+    from bpb_tasks.billiards.scene_scan import text_groups
 
     lines: list[str | None] = [None] * len(texts)
     for group in text_groups(texts):
@@ -85,9 +85,9 @@ def _group_lines(
     n = group.ids.shape[1]
     name = to_json(simulator.name).decode()
     for at in range(0, len(group.members), CHUNK):
-        scenes = group.scenes[at : at + CHUNK]
-        k = len(scenes)
-        ends = np.array([s.horizon if horizon is None else horizon for s in scenes], dtype=float)
+        names = group.names[at : at + CHUNK]
+        k = len(names)
+        ends = group.horizons[at : at + k] if horizon is None else np.full(k, float(horizon))
         pos = np.ascontiguousarray(group.pos[at : at + k].reshape(-1, 2))
         vel = np.ascontiguousarray(group.vel[at : at + k].reshape(-1, 2))
         starts = np.arange(k + 1, dtype=np.int64) * n
@@ -96,7 +96,7 @@ def _group_lines(
         )
         if status.any():
             raise SimulationError(f"more than {simulator.max_events} events in a scene")
-        made = _lines(scenes, group.ids[at : at + k], ends, final, events, name)
+        made = _lines(names, group.ids[at : at + k], ends, final, events, name)
         for member, line in zip(group.members[at : at + k], made, strict=True):
             lines[member] = line
 
@@ -117,7 +117,7 @@ def round4(values: np.ndarray) -> np.ndarray:
 
 
 def _lines(
-    scenes: Sequence[Any],
+    names: list[str],
     ids: np.ndarray,
     ends: np.ndarray,
     final: np.ndarray,
@@ -153,13 +153,6 @@ def _lines(
         hits,
         walls,
         (kind, id_a, id_b, wall, bounds),
-        [_string(s.scene_id) for s in scenes],
+        names,
         simulator,
     )
-
-
-def _string(value: str) -> str:
-    """``value`` as pydantic-core writes it: quoted as it is when nothing in it needs escaping."""
-    if value.isascii() and value.isprintable() and '"' not in value and "\\" not in value:
-        return f'"{value}"'
-    return to_json(value).decode()
