@@ -126,7 +126,8 @@ def _values(numbers: bytes) -> np.ndarray | None:
     if len(numbers) <= 1:
         return np.zeros(0)
     try:
-        return np.array(_FLOATS.decode(numbers), dtype=float)
+        found = _FLOATS.decode(numbers)
+        return np.fromiter(found, float, len(found))
     except msgspec.DecodeError:
         return None
 

@@ -134,7 +134,7 @@ def _decoded(texts: Sequence[bytes | str]) -> _Decoded:
     for i, text in enumerate(texts):
         try:
             data = decode(text)
-        except msgspec.MsgspecError:
+        except (msgspec.MsgspecError, UnicodeDecodeError):  # not UTF-8: not a MsgspecError
             continue
         raws = (data.table, data.physics, data.pockets)
         if raws != last:

@@ -226,3 +226,22 @@ def test_simulate_reads_large_files_and_restores_the_collector(tmp_path: Path) -
             assert gc.isenabled() is enabled
         finally:
             gc.enable()
+
+
+def test_a_scene_file_that_is_not_utf8_is_named_after_the_lines_before_it(tmp_path: Path) -> None:
+    # msgspec raises UnicodeDecodeError, not one of its own errors, for such a text
+    from bpb_core.errors import BadInput
+    from bpb_core.simulate import simulate_lines
+
+    files = []
+    for i in range(300):
+        text = random_scene(25, i).model_dump_json().encode()
+        if i == 150:
+            text = text.replace(b'"scene_id":"', b'"scene_id":"\xc3 ', 1)
+        files.append(tmp_path / f"scene_{i:03d}.json")
+        files[-1].write_bytes(text)
+    lines = []
+    with pytest.raises(BadInput, match=r"scene_150\.json: Invalid JSON"):
+        for line in simulate_lines(files, workers=1):
+            lines.append(line)
+    assert len(lines) == 150
