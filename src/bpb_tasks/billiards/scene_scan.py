@@ -209,20 +209,13 @@ def _put_number(t: np.ndarray, p: int, end: int, out: np.ndarray, at: int) -> tu
 
 @jit
 def _pair(t: np.ndarray, p: int, end: int, out: np.ndarray, at: int) -> tuple[int, int]:
-    """``[number, number]`` copied as two numbers."""
-    p = _char(t, p, end, 91)
-    if p < 0:
-        return -1, at
-    p, at = _put_number(t, p, end, out, at)
-    if p < 0:
-        return -1, at
-    p = _char(t, p, end, 44)
-    if p < 0:
-        return -1, at
-    p, at = _put_number(t, p, end, out, at)
-    if p < 0:
-        return -1, at
-    return _char(t, p, end, 93), at
+    """``[number, number]`` copied as two numbers: ``(after it, new at)``, ``p`` -1 if not."""
+    for c in (91, 44):  # "[" before the first number, "," before the second
+        p = _char(t, p, end, c) if p >= 0 else -1
+        if p < 0:
+            return -1, at
+        p, at = _put_number(t, p, end, out, at)
+    return (_char(t, p, end, 93) if p >= 0 else -1), at
 
 
 @jit
