@@ -32,6 +32,7 @@ from bpb_tasks.billiards.scene_text import (
     decoded_groups,
     part,
 )
+from bpb_tasks.billiards.truth_bytes import put
 from bpb_tasks.simulators.analytic.kernel_roots import jit
 
 _KEYS = [b'"scene_id"', b'"horizon"', b'"table"', b'"physics"', b'"pockets"', b'"balls"']
@@ -122,9 +123,8 @@ def _scanned(
 
 def _values(numbers: bytes) -> np.ndarray | None:
     """The floats of the numbers' JSON list (msgspec's values), or ``None`` when one is out of
-    float range: then the whole chunk goes the struct way, which finds which text holds it."""
-    if len(numbers) <= 1:
-        return np.zeros(0)
+    float range or not a JSON number: then the whole chunk goes the struct way, which finds which
+    text holds it."""
     try:
         found = _FLOATS.decode(numbers)
         return np.fromiter(found, float, len(found))
@@ -175,15 +175,6 @@ def _digits(t: np.ndarray, p: int, end: int) -> int:
     while p < end and 48 <= _b(t, p) <= 57:
         p += 1
     return p
-
-
-@jit
-def _copy(out: np.ndarray, at: int, t: np.ndarray, start: int, stop: int) -> int:
-    to = np.uint64(at)
-    for p in range(start, stop):
-        out[to] = _b(t, p)
-        to += np.uint64(1)
-    return np.int64(to)  # type: ignore[return-value]  # an int in compiled code
 
 
 @jit
@@ -319,7 +310,7 @@ def _scene(
         p += 1
     if p >= end or _b(t, p) != 34:
         return fail
-    named = _copy(names, named, t, start - 1, p + 1)
+    named = put(names, named, t, start - 1, p + 1)
     p = _char(t, p + 1, end, 44)
     p = _key(t, p, end, keys, offsets, HORIZON) if p >= 0 else -1
     if p < 0:

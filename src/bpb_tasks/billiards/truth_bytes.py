@@ -95,7 +95,7 @@ def assemble(
 
 
 @jit
-def _put(out: np.ndarray, at: int, table: np.ndarray, start: int, end: int) -> int:
+def put(out: np.ndarray, at: int, table: np.ndarray, start: int, end: int) -> int:
     """Copy ``table[start:end]`` to ``out[at:]``; unsigned indices spare numba the check for
     negative ones on every byte (three times faster)."""
     to = np.uint64(at)
@@ -113,7 +113,7 @@ def _byte(out: np.ndarray, at: int, value: int) -> int:
 
 @jit
 def _lit(out: np.ndarray, at: int, table: np.ndarray, offsets: np.ndarray, which: int) -> int:
-    return _put(out, at, table, offsets[which], offsets[which + 1])
+    return put(out, at, table, offsets[which], offsets[which + 1])
 
 
 @jit
@@ -165,9 +165,9 @@ def _assemble(
         if j:
             at = _byte(out, at, 10)
         at = _lit(out, at, table, offsets, HEAD)
-        at = _put(out, at, sid, sid_at[j], sid_at[j + 1])
+        at = put(out, at, sid, sid_at[j], sid_at[j + 1])
         at = _lit(out, at, table, offsets, HORIZON)
-        at = _put(out, at, text, starts[j], starts[j + 1] - 1)
+        at = put(out, at, text, starts[j], starts[j + 1] - 1)
         at = _lit(out, at, table, offsets, Q1)
         for i in range(1, n):
             if i > 1:
@@ -189,9 +189,9 @@ def _assemble(
             b = j * n + i
             if alive[b]:
                 at = _lit(out, at, table, offsets, POS)
-                at = _put(out, at, text, starts[xy + 2 * b], starts[xy + 2 * b + 1] - 1)
+                at = put(out, at, text, starts[xy + 2 * b], starts[xy + 2 * b + 1] - 1)
                 at = _byte(out, at, 44)
-                at = _put(out, at, text, starts[xy + 2 * b + 1], starts[xy + 2 * b + 2] - 1)
+                at = put(out, at, text, starts[xy + 2 * b + 1], starts[xy + 2 * b + 2] - 1)
                 at = _lit(out, at, table, offsets, POS_END)
             else:
                 at = _lit(out, at, table, offsets, POS_NULL)
@@ -201,7 +201,7 @@ def _assemble(
                 at = _byte(out, at, 44)
             base = ev + 5 * e
             at = _lit(out, at, table, offsets, TIME)
-            at = _put(out, at, text, starts[base], starts[base + 1] - 1)
+            at = put(out, at, text, starts[base], starts[base + 1] - 1)
             pair = second[e] >= 0
             at = _lit(out, at, table, offsets, KIND0 if pair else KIND0 + kind[e])
             at = _int(out, at, first[e])
@@ -210,16 +210,16 @@ def _assemble(
                 at = _int(out, at, second[e])
             named = not pair and wall[e] >= 0
             at = _lit(out, at, table, offsets, WALL0 + wall[e] if named else WALL_NULL)
-            at = _put(out, at, text, starts[base + 1], starts[base + 2] - 1)
+            at = put(out, at, text, starts[base + 1], starts[base + 2] - 1)
             at = _byte(out, at, 44)
-            at = _put(out, at, text, starts[base + 2], starts[base + 3] - 1)
+            at = put(out, at, text, starts[base + 2], starts[base + 3] - 1)
             if pair:
                 at = _lit(out, at, table, offsets, NEXT)
-                at = _put(out, at, text, starts[base + 3], starts[base + 4] - 1)
+                at = put(out, at, text, starts[base + 3], starts[base + 4] - 1)
                 at = _byte(out, at, 44)
-                at = _put(out, at, text, starts[base + 4], starts[base + 5] - 1)
+                at = put(out, at, text, starts[base + 4], starts[base + 5] - 1)
             at = _lit(out, at, table, offsets, POSITIONS_END)
         at = _lit(out, at, table, offsets, TAIL)
-        at = _put(out, at, sim, 0, sim.shape[0])
+        at = put(out, at, sim, 0, sim.shape[0])
         at = _lit(out, at, table, offsets, END)
     return out, at

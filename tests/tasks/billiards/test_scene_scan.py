@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from typing import Any
 
 import numpy as np
@@ -78,15 +79,21 @@ def test_texts_the_scan_leaves_go_the_decoded_way_with_the_same_values() -> None
         "trailing newline": base + b"\n",
         "cut short": base[:-2],
         "no balls": base[: base.index(b'"balls":[') + 9] + b"]}",
+        "horizon zero": re.sub(rb'"horizon":[^,]*', b'"horizon":0.0', base, count=1),
+        "horizon below zero": re.sub(rb'"horizon":[^,]*', b'"horizon":-1.5', base, count=1),
     }
     names = ["base", *edits, "base again"]
     texts = [base, *edits.values(), base]
     left = scanned_groups(texts)[1]
     scanned = {name for i, name in enumerate(names) if i not in left}
     assert scanned == {
-        "base", "largest id", "exponents", "integers", "trailing newline", "base again"
+        "base", "largest id", "exponents", "integers", "trailing newline", "base again",
+        "horizon zero", "horizon below zero",
     }  # fmt: skip
-    assert {0, 1, 2, len(texts) - 1} <= _same_as_decoded(texts).keys()  # the id edits read too
+    found = _same_as_decoded(texts).keys()
+    assert {0, 1, 2, len(texts) - 1} <= found  # the id edits read too
+    assert names.index("horizon zero") not in found  # scanned, then refused by the checks
+    assert names.index("horizon below zero") not in found
     # a number out of float range or not a number sends the whole chunk the decoded way
     for bad in (b'"horizon":1e999', b'"horizon":1.2.'):
         odd = base.replace(b'"horizon":', bad, 1).replace(bad + b"1.0", bad, 1)
