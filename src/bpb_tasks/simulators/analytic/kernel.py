@@ -48,7 +48,7 @@ from bpb_tasks.simulators.analytic.kernel_predict import (
     set_velocity,
     state,
 )
-from bpb_tasks.simulators.analytic.kernel_roots import jit
+from bpb_tasks.simulators.analytic.kernel_roots import SPEED_TOL, jit
 
 __all__ = ["run_arrays", "run_many_arrays"]
 
@@ -80,7 +80,7 @@ def _collide(
     nx, ny = nx / norm, ny / norm
     pvx, pvy, qvx, qvy = st[p, UX] * ps, st[p, UY] * ps, st[q, UX] * qs, st[q, UY] * qs
     vn = (pvx - qvx) * nx + (pvy - qvy) * ny
-    if not vn > 0:
+    if not vn > SPEED_TOL * (ps + qs):  # as engine._Simulation.collide
         return False
     st[p, _X], st[p, _Y], st[q, _X], st[q, _Y] = px, py, qx, qy
     _changed(st, iv, prm, pieces, p, t, pvx - vn * nx, pvy - vn * ny)

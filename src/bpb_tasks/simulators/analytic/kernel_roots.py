@@ -16,6 +16,7 @@ from typing import Any, TypeVar
 
 F = TypeVar("F", bound=Callable[..., Any])
 TIME_TOL = 1e-15  # FLOAT64.time_tol
+SPEED_TOL = 1e-15  # FLOAT64.speed_tol
 MAX_ITER = 200  # FLOAT64.max_iter
 NO_ROOT = -1.0  # contact times are never negative
 

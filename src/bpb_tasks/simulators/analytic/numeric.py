@@ -26,6 +26,9 @@ class Numeric:
         sqrt: Square root in the backend.
         time_tol: Root refinement stops when the bracket is this narrow (seconds).
         max_iter: Upper bound on refinement iterations per root.
+        speed_tol: Two touching balls whose approach speed is at most this fraction of the sum
+            of their speeds do not collide: the exchange would be lost in the rounding of the
+            speeds (the backend's relative precision, with a margin).
     """
 
     name: str
@@ -33,9 +36,10 @@ class Numeric:
     sqrt: Callable[[Number], Number]
     time_tol: Number
     max_iter: int
+    speed_tol: Number
 
 
-FLOAT64 = Numeric("float64", float, math.sqrt, 1e-15, 200)
+FLOAT64 = Numeric("float64", float, math.sqrt, 1e-15, 200, 1e-15)
 
 
 def mpmath_backend(digits: int = 50) -> Numeric:
@@ -46,7 +50,7 @@ def mpmath_backend(digits: int = 50) -> Numeric:
     ctx = mpmath.MPContext()
     ctx.dps = digits
     tol = ctx.mpf(10) ** (-(digits - 8))
-    return Numeric(f"mpmath{digits}", ctx.mpf, ctx.sqrt, tol, 400)
+    return Numeric(f"mpmath{digits}", ctx.mpf, ctx.sqrt, tol, 400, tol)
 
 
 def backend(precision: str | int | None) -> Numeric:
