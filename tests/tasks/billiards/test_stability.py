@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from bpb_tasks.billiards.config import DatasetConfig
@@ -17,7 +18,9 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
+from bpb_tasks.billiards.stability_batch import kernel_tally
 from bpb_tasks.simulators.analytic import AnalyticSimulator
+from bpb_tasks.simulators.analytic.compiled import KernelBudgetError
 from support.phys_helpers import R, scene
 
 PYTHON = AnalyticSimulator(engine="python")
@@ -91,6 +94,18 @@ def test_kernel_batch_and_python_engine_annotate_alike() -> None:
         assert python == annotate(s, simulator=AnalyticSimulator(), samples=32)
         unstable += not python.stable
     assert unstable >= 2  # flips and spreads were compared, not only zeros
+
+
+def test_the_first_copy_over_the_event_budget_is_named() -> None:
+    """A perturbed copy running past the event budget stops the tally with that copy's index
+    (copy 0 only rolls to a stop; copy 1 bounces between the walls)."""
+    s = scene([(0.5, 0.5, 0.01, 0.0), (1.5, 0.2, 0.0, 0.0)], horizon=5)
+    pos = np.array([[[0.5, 0.5], [1.5, 0.2]]] * 2)
+    vel = np.array([[[0.01, 0.0], [0.0, 0.0]], [[3.0, 0.0], [0.0, 0.0]]])
+    base = PYTHON.run(s)
+    assert kernel_tally(s, base, [0, 1], pos[:1], vel[:1], 3).any_flip == 0
+    with pytest.raises(KernelBudgetError, match=r"^copy 1: more than 3 events$"):
+        kernel_tally(s, base, [0, 1], pos, vel, 3)
 
 
 @pytest.mark.slow
