@@ -32,7 +32,7 @@ import numpy as np
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.stability_batch import Tally, kernel_tally
+from bpb_tasks.billiards.stability_batch import Tally, kernel_near_miss_gap, kernel_tally
 from bpb_tasks.billiards.stability_margins import (
     horizon_gap,
     min_event_gap,
@@ -75,7 +75,7 @@ def annotate(
         flip_rate_upper95=upper_bound(any_flip, samples),
         q3_spread=spread,
         q3_stable=spread <= radius / 2,
-        near_miss_gap=near_miss_gap(base, radius),
+        near_miss_gap=_near_miss_gap(base, radius, simulator),
         min_graze_cos=min_graze_cos(base),
         min_event_gap=min_event_gap(base),
         horizon_gap=_horizon_gap(scene, base.horizon, simulator),
@@ -105,6 +105,15 @@ def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: S
             tally.counts[group] += a != b
         tally.spread = max(tally.spread, q3_spread(base.positions, out.positions))
     return tally
+
+
+def _near_miss_gap(base: Outcome, radius: float, simulator: Simulator) -> float | None:
+    """:func:`near_miss_gap`, in compiled code when ``simulator`` runs the kernel."""
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
+        return kernel_near_miss_gap(base, radius)
+    return near_miss_gap(base, radius)
 
 
 def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | None:

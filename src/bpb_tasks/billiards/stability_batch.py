@@ -76,3 +76,29 @@ def _nominal(base: Outcome, ids: list[int]) -> tuple[int, int, int]:
     walls = sum(1 << WALLS.index(w) for w in base.cue_walls())
     pocketed = sum(1 << index[i] for i, p in base.positions.items() if p is None)
     return contacts, walls, pocketed
+
+
+def kernel_near_miss_gap(outcome: Outcome, radius: float) -> float | None:
+    """:func:`~bpb_tasks.billiards.stability_margins.near_miss_gap` in compiled code (the same
+    value to the bit; a test compares)."""
+    from bpb_tasks.billiards.stability_compiled import near_miss_arrays
+
+    ids = sorted(outcome.segments)
+    index = {ball: k for k, ball in enumerate(ids)}
+    rows = [
+        (index[ball], s.t0, s.t1, s.pos[0], s.pos[1], s.vel[0], s.vel[1], s.decel)
+        for ball in ids
+        for s in outcome.segments[ball]
+    ]
+    touched = np.zeros((len(ids), len(ids)), dtype=np.bool_)
+    for event in outcome.events:
+        if event.kind == "ball":
+            a, b = sorted(index[i] for i in event.ids)
+            touched[a, b] = True
+    moving = np.array(
+        [any(s.vel != (0.0, 0.0) for s in outcome.segments[ball]) for ball in ids], dtype=np.bool_
+    )
+    gap, found = near_miss_arrays(
+        np.array(rows, dtype=float).reshape(-1, 8), len(ids), touched, moving, radius
+    )
+    return float(gap) if found else None

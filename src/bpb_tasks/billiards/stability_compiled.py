@@ -8,11 +8,13 @@ of a ball from its nominal final position. No per-copy table leaves compiled cod
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from bpb_tasks.simulators.analytic.kernel import run_arrays
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, WALL, Arr
-from bpb_tasks.simulators.analytic.kernel_roots import jit
+from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
 
 
 @jit
@@ -70,3 +72,169 @@ def tally_copies(
                 flipped = True
         any_flip += flipped
     return counts, unions, any_flip, spread, -1
+
+
+@jit
+def near_miss_arrays(
+    rows: Arr, balls: int, touched: Arr, moving: Arr, radius: float
+) -> tuple[float, bool]:
+    """:func:`~bpb_tasks.billiards.stability_margins.near_miss_gap` on arrays, with the same
+    float64 operations in the same order (same result to the bit).
+
+    ``rows`` holds every segment as ``(ball, t0, t1, x, y, vx, vy, decel)``, balls numbered
+    ``0..balls-1`` in id order and each ball's segments in time order; ``touched[a, b]`` marks
+    pairs with a ball-ball event and ``moving[a]`` balls with a segment of non-zero velocity.
+    Returns the gap and whether there is one.
+    """
+    pieces = np.empty((2 * rows.shape[0], 12))
+    first = np.zeros(balls + 1, dtype=np.int64)
+    count = 0
+    for b in range(balls):
+        first[b] = count
+        for r in range(rows.shape[0]):
+            if int(rows[r, 0]) == b:
+                count = _add_pieces(pieces, count, rows[r])
+    first[balls] = count
+    best = 0.0
+    found = False
+    for a in range(balls):
+        for b in range(a + 1, balls):
+            if touched[a, b] or not (moving[a] or moving[b]):
+                continue
+            limit = best + 2 * radius if found else np.inf
+            closest = _closest(pieces, first[a], first[a + 1], first[b], first[b + 1], limit)
+            gap = closest - 2 * radius
+            best = gap if not found or gap < best else best
+            found = True
+    return best, found
+
+
+@jit
+def _add_pieces(pieces: Arr, count: int, row: Arr) -> int:
+    """Append a segment's pieces ``(t0, t1, x, y, vx, vy, ax, ay, box)`` (``_pieces`` and
+    ``_box`` of the reference); returns the new count."""
+    t0, t1, x, y, vx, vy, decel = row[1], row[2], row[3], row[4], row[5], row[6], row[7]
+    speed = math.hypot(vx, vy)
+    if speed == 0 or decel == 0:
+        _piece(pieces, count, t0, t1, x, y, vx, vy, 0.0, 0.0)
+        return count + 1
+    ux, uy = vx / speed, vy / speed
+    stop = t0 + speed / decel
+    _piece(pieces, count, t0, t1 if t1 < stop else stop, x, y, vx, vy, -decel * ux, -decel * uy)
+    if stop < t1:
+        reach = speed * speed / (2 * decel)
+        _piece(pieces, count + 1, stop, t1, x + ux * reach, y + uy * reach, 0.0, 0.0, 0.0, 0.0)
+        return count + 2
+    return count + 1
+
+
+@jit
+def _piece(
+    pieces: Arr,
+    k: int,
+    t0: float,
+    t1: float,
+    x: float,
+    y: float,
+    vx: float,
+    vy: float,
+    ax: float,
+    ay: float,
+) -> None:
+    p = pieces[k]
+    p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7] = t0, t1, x, y, vx, vy, ax, ay
+    x0, y0 = _at_x(p, t0), _at_y(p, t0)
+    x1, y1 = _at_x(p, t1), _at_y(p, t1)
+    p[8], p[9] = _min(x0, x1), _max(x0, x1)
+    p[10], p[11] = _min(y0, y1), _max(y0, y1)
+
+
+@jit
+def _closest(pieces: Arr, a0: int, a1: int, b0: int, b1: int, limit: float) -> float:
+    """``_closest_boxed`` of the reference over pieces ``a0:a1`` and ``b0:b1``."""
+    best = limit
+    for i in range(a0, a1):
+        pa = pieces[i]
+        for j in range(b0, b1):
+            pb = pieces[j]
+            lo, hi = _max(pa[0], pb[0]), _min(pa[1], pb[1])
+            if lo > hi or _box_gap(pa, pb) >= best:
+                continue
+            best = _min(best, _pair_closest(pa, pb, lo, hi))
+    return best
+
+
+@jit
+def _box_gap(a: Arr, b: Arr) -> float:
+    dx = _max(_max(0.0, b[8] - a[9]), a[8] - b[9])
+    dy = _max(_max(0.0, b[10] - a[11]), a[10] - b[11])
+    return math.hypot(dx, dy) * (1 - 1e-12)
+
+
+@jit
+def _pair_closest(pa: Arr, pb: Arr, lo: float, hi: float) -> float:
+    dx, dy = _at_x(pa, lo) - _at_x(pb, lo), _at_y(pa, lo) - _at_y(pb, lo)
+    vx, vy = _at_vx(pa, lo) - _at_vx(pb, lo), _at_vy(pa, lo) - _at_vy(pb, lo)
+    ax, ay = (pa[6] - pb[6]) / 2, (pa[7] - pb[7]) / 2
+    c = (
+        ax * ax + ay * ay,
+        2 * (ax * vx + ay * vy),
+        vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
+        2 * (vx * dx + vy * dy),
+        dx * dx + dy * dy,
+    )
+    span = hi - lo
+    best = _root_gap(c, 0.0)
+    if span > 0:
+        best = _min(best, _root_gap(c, span))
+        p1, p2, p3, n = critical_points(c, span)
+        if n > 0:
+            best = _min(best, _root_gap(c, p1))
+        if n > 1:
+            best = _min(best, _root_gap(c, p2))
+        if n > 2:
+            best = _min(best, _root_gap(c, p3))
+    return best
+
+
+@jit
+def _root_gap(c: Poly, t: float) -> float:
+    return math.sqrt(_max(horner(c, t), 0.0))
+
+
+@jit
+def _at_x(p: Arr, t: float) -> float:
+    tau = t - p[0]
+    x: float = p[2] + p[4] * tau + p[6] * tau * tau / 2
+    return x
+
+
+@jit
+def _at_y(p: Arr, t: float) -> float:
+    tau = t - p[0]
+    y: float = p[3] + p[5] * tau + p[7] * tau * tau / 2
+    return y
+
+
+@jit
+def _at_vx(p: Arr, t: float) -> float:
+    vx: float = p[4] + p[6] * (t - p[0])
+    return vx
+
+
+@jit
+def _at_vy(p: Arr, t: float) -> float:
+    vy: float = p[5] + p[7] * (t - p[0])
+    return vy
+
+
+@jit
+def _min(a: float, b: float) -> float:
+    """Python's ``min(a, b)``: ``a`` unless ``b`` is smaller."""
+    return b if b < a else a
+
+
+@jit
+def _max(a: float, b: float) -> float:
+    """Python's ``max(a, b)``: ``a`` unless ``b`` is larger."""
+    return b if b > a else a

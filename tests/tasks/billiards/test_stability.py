@@ -7,7 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
+from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
 from bpb_tasks.billiards.scene import Scene
@@ -18,7 +20,8 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_batch import kernel_tally
+from bpb_tasks.billiards.stability_batch import kernel_near_miss_gap, kernel_tally
+from bpb_tasks.billiards.stability_margins import near_miss_gap
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.compiled import KernelBudgetError
 from support.phys_helpers import R, scene
@@ -94,6 +97,46 @@ def test_kernel_batch_and_python_engine_annotate_alike() -> None:
         assert python == annotate(s, simulator=AnalyticSimulator(), samples=32)
         unstable += not python.stable
     assert unstable >= 2  # flips and spreads were compared, not only zeros
+
+
+def _same_gap(outcome_scene: Scene) -> None:
+    out = PYTHON.run(outcome_scene)
+    radius = outcome_scene.physics.ball_radius
+    compiled, reference = kernel_near_miss_gap(out, radius), near_miss_gap(out, radius)
+    assert (compiled is None) == (reference is None)
+    if compiled is not None and reference is not None:
+        assert compiled.hex() == reference.hex()
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    seed=st.integers(0, 10**6),
+    balls=st.integers(2, 9),
+    mu=st.sampled_from([0.002, 0.02, 0.0]),
+    horizon=st.sampled_from([0.5, 3.0, 5.0]),
+)
+def test_compiled_near_miss_gap_is_the_reference_to_the_bit(
+    seed: int, balls: int, mu: float, horizon: float
+) -> None:
+    data = random_scene(seed, 0, balls=balls, speeds=(0.05, 3.0), gap=1e-6).model_dump()
+    data["physics"]["mu"], data["horizon"] = mu, horizon
+    _same_gap(Scene.model_validate(data))
+
+
+def test_compiled_near_miss_gap_on_named_cases() -> None:
+    """Nothing moves (no gap), one ball rolls past another, a graze, a stop short of a ball,
+    and a pair that touched (skipped)."""
+    cases = [
+        scene([(0.5, 0.5, 0.0, 0.0), (1.0, 0.5, 0.0, 0.0)]),
+        scene([(0.5, 0.5, 0.6, 0.0), (1.0, 0.6, 0.0, 0.0)]),
+        scene([(0.5, 0.5, 0.6, 0.0), (1.0, 0.5 + 2 * R * (1 + 1e-9), 0.0, 0.0)]),
+        scene([(0.5, 0.5, 0.1, 0.0), (1.0, 0.5, 0.0, 0.0)]),
+        scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0), (1.5, 0.8, 0.0, 0.0)], mu=0.0),
+    ]
+    for case in cases:
+        _same_gap(case)
+    assert near_miss_gap(PYTHON.run(cases[0]), R) is None
+    assert 0 < near_miss_gap(PYTHON.run(cases[2]), R) < 1e-9
 
 
 def test_the_first_copy_over_the_event_budget_is_named() -> None:
