@@ -12,6 +12,7 @@ from pathlib import Path
 from bpb_core.bench.sim import SimBench, SimRow
 
 HEADING = "## Simulators (`bpb bench sim`)"
+END = "<!-- end of the bpb bench sim output: what follows in this section is kept -->"
 WIDTH = 100
 
 
@@ -55,6 +56,7 @@ def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
         lines += ["", _wrap(_simulate_text(result))]
     if plot:
         lines += ["", f"![speed against error]({plot})"]
+    lines += ["", END]
     return "\n".join(lines) + "\n"
 
 
@@ -153,14 +155,21 @@ def _simulate_text(result: SimBench) -> str:
 
 
 def update_section(path: Path, section: str) -> None:
-    """Replace the section starting with :data:`HEADING` in ``path`` (or append it)."""
+    """Replace the generated part of the section starting with :data:`HEADING` in ``path`` (or
+    append the section). The generated part ends with the :data:`END` line; notes written below
+    it, up to the next ``## `` heading, are kept. A section without that line (written before it
+    existed) is replaced whole."""
     text = path.read_text() if path.exists() else "# Benchmarks\n"
     start = text.find(HEADING)
     if start < 0:
         text = text.rstrip("\n") + "\n\n" + section
     else:
         end = text.find("\n## ", start + len(HEADING))
-        rest = "" if end < 0 else text[end + 1 :]
+        marker = text.find(END, start, len(text) if end < 0 else end)
+        if marker >= 0:
+            rest = text[marker + len(END) :].lstrip("\n")
+        else:
+            rest = "" if end < 0 else text[end + 1 :]
         text = text[:start] + section + ("\n" + rest if rest else "")
     path.write_text(text)
 

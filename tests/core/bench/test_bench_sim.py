@@ -169,6 +169,28 @@ def test_markdown_section_is_replaced_not_duplicated(tmp_path: Path, registry: R
     assert result.machine in text and text.index(sim_report.HEADING) < text.index("## Runner")
 
 
+def test_notes_below_the_generated_part_survive_a_rerun(tmp_path: Path, registry: Registry) -> None:
+    """What a maintainer writes under the generated tables (how the run was made, its reading)
+    is kept when the section is regenerated; a section from before the end line is replaced
+    whole, and the next section is untouched either way."""
+    result = bench_simulators(2, 1, ("analytic",), registry=registry)
+    doc = tmp_path / "benchmarks.md"
+    doc.write_text(
+        "# Benchmarks\n\n## Simulators (`bpb bench sim`)\n\nold table\n\n## Runner\n\nkeep me\n"
+    )
+    sim_report.update_section(doc, sim_report.markdown(result))
+    text = doc.read_text()
+    assert "old table" not in text and text.count(sim_report.END) == 1
+    notes = "Command: `bpb bench sim ...`, run on a quiet machine.\n"
+    doc.write_text(text.replace(sim_report.END + "\n", sim_report.END + "\n\n" + notes))
+    sim_report.update_section(doc, sim_report.markdown(result))
+    sim_report.update_section(doc, sim_report.markdown(result))
+    text = doc.read_text()
+    assert text.count(notes) == 1 and text.count(sim_report.HEADING) == 1
+    assert text.index(sim_report.END) < text.index(notes) < text.index("## Runner")
+    assert text.endswith("## Runner\n\nkeep me\n")
+
+
 def test_bench_sim_command_writes_table_plot_and_docs(
     tmp_path: Path, bench: Callable[..., Any]
 ) -> None:
