@@ -26,6 +26,7 @@ import itertools
 import math
 import random
 from collections.abc import Iterator, Sequence
+from typing import TYPE_CHECKING, TypeGuard
 
 import numpy as np
 
@@ -41,6 +42,9 @@ from bpb_tasks.billiards.stability_margins import (
     pocket_gap,
 )
 from bpb_tasks.billiards.truth import Stability
+
+if TYPE_CHECKING:
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
 Labels = tuple[frozenset[int], frozenset[str], frozenset[int]]
 Positions = dict[int, tuple[float, float] | None]
@@ -87,10 +91,8 @@ def annotate(
 def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
     """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
     ``simulator`` runs the kernel, else copy by copy."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
     ids, pos, vel = perturbation_arrays(scene, delta, samples)
-    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
+    if _runs_kernel(simulator):
         return kernel_tally(scene, base, ids, pos, vel, simulator.max_events)
     reference = labels(base)
     tally = Tally(counts=dict.fromkeys(GROUPS, 0))
@@ -109,11 +111,16 @@ def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: S
 
 def _near_miss_gap(base: Outcome, radius: float, simulator: Simulator) -> float | None:
     """:func:`near_miss_gap`, in compiled code when ``simulator`` runs the kernel."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
-    if isinstance(simulator, AnalyticSimulator) and simulator.compiled:
+    if _runs_kernel(simulator):
         return kernel_near_miss_gap(base, radius)
     return near_miss_gap(base, radius)
+
+
+def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
+    """Whether ``simulator`` is the analytic engine with its compiled kernel."""
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
 
 
 def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | None:

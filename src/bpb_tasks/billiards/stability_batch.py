@@ -1,11 +1,13 @@
-"""The perturbed copies of the stability annotation in one compiled call.
+"""The kernel's side of the stability annotation: Python wrappers around
+:mod:`bpb_tasks.billiards.stability_compiled`.
 
-:func:`kernel_tally` hands every copy to
+:func:`kernel_tally` hands every perturbed copy to
 :func:`~bpb_tasks.billiards.stability_compiled.tally_copies`, which runs them through the kernel
 and keeps only bit masks per copy (cue contacts, cue walls, pocketed balls, one bit per ball index
 or wall), so flips are XORs against the nominal masks; no per-copy Python objects or tables are
-built. It gives the same tally as running each copy
-through :meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.run` (a test compares).
+built. It gives the same tally as running each copy through
+:meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.run` (a test compares).
+:func:`kernel_near_miss_gap` gives the near-miss margin to the bit (a test compares).
 """
 
 from __future__ import annotations

@@ -1,9 +1,13 @@
-"""The stability tally of :mod:`bpb_tasks.billiards.stability_batch` in one compiled call.
+"""The compiled parts of the stability annotation (called from
+:mod:`bpb_tasks.billiards.stability_batch`).
 
-:func:`tally_copies` runs each perturbed copy through the kernel and folds its event log and
-final state into the tally at once: label bit masks per copy (cue contacts, cue walls, pocketed
-balls; one bit per ball index or wall), XORed against the nominal masks, and the largest distance
-of a ball from its nominal final position. No per-copy table leaves compiled code.
+* :func:`tally_copies` runs each perturbed copy through the kernel and folds its event rows and
+  final state into the tally at once: label bit masks per copy (cue contacts, cue walls,
+  pocketed balls; one bit per ball index or wall), XORed against the nominal masks, and the
+  largest distance of a ball from its nominal final position. No per-copy table is built.
+* :func:`near_miss_arrays` is the near-miss margin of
+  :mod:`bpb_tasks.billiards.stability_margins` (the reference) with the same float64 operations
+  in the same order.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ import math
 
 import numpy as np
 
-from bpb_tasks.simulators.analytic.kernel import run_arrays
+from bpb_tasks.simulators.analytic.kernel import run_rows
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, WALL, Arr
 from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
 
@@ -46,13 +50,13 @@ def tally_copies(
     spread = 0.0
     for c in range(copies):
         a, b = c * n, (c + 1) * n
-        events, _, final, status = run_arrays(pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
+        events, _, final, status = run_rows(pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
         if status != 0:
             return counts, unions, any_flip, spread, c
         masks[:] = 0
         if cue >= 0:
-            for r in range(events.shape[0]):
-                kind, p, q, wall = events[r, 1], int(events[r, 2]), int(events[r, 3]), events[r, 4]
+            for row in events:
+                kind, p, q, wall = row[1], int(row[2]), int(row[3]), row[4]
                 if kind == BALL and (p == cue or q == cue):
                     masks[0] |= np.int64(1) << (q if p == cue else p)
                 elif kind == WALL and p == cue and wall >= 0:

@@ -176,6 +176,16 @@ def run_arrays(
 ) -> tuple[Arr, Arr, Arr, int]:
     """Simulate one scene (see the module docstring); ``pos``/``vel`` are ``(n, 2)`` arrays of
     the balls sorted by id and ``prm`` the table constants of ``kernel_predict``."""
+    events, pieces, final, status = run_rows(pos, vel, prm, pockets, horizon, max_events)
+    return _table(events, 9), _table(pieces, 6), final, status
+
+
+@jit
+def run_rows(
+    pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, max_events: int
+) -> tuple[Any, Any, Arr, int]:
+    """:func:`run_arrays` with the events and pieces as the lists of row tuples the loop
+    appends (for compiled callers that read them once)."""
     n = pos.shape[0]
     st = np.zeros((n, 8))
     st[:, 0] = pos[:, 0]
@@ -197,7 +207,7 @@ def run_arrays(
             x, y, _ = state(st, prm, i, horizon)
             final[i, 0], final[i, 1], final[i, 2] = x, y, 1.0
         final[i, 3] = ended[i]
-    return _table(events, 9), _table(pieces, 6), final, status
+    return events, pieces, final, status
 
 
 @jit
