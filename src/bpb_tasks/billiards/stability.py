@@ -42,6 +42,7 @@ from bpb_tasks.billiards.stability_margins import (
     pocket_gap,
 )
 from bpb_tasks.billiards.truth import Stability
+from bpb_tasks.simulators.analytic.engine import SimulationError
 
 if TYPE_CHECKING:
     from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
@@ -49,6 +50,8 @@ if TYPE_CHECKING:
 Labels = tuple[frozenset[int], frozenset[str], frozenset[int]]
 Positions = dict[int, tuple[float, float] | None]
 DEFAULT_SAMPLES = 64
+COPY_MIN_EVENTS = 1_000
+COPY_EVENT_FACTOR = 10
 GROUPS = ("q1", "q2", "pocketed")
 
 
@@ -88,17 +91,30 @@ def annotate(
     )
 
 
+def copy_budget(nominal_events: int, max_events: int) -> int:
+    """The event budget of a perturbed copy: :data:`COPY_EVENT_FACTOR` times the nominal run's
+    events, at least :data:`COPY_MIN_EVENTS`, at most the simulator's own ``max_events``."""
+    return min(max_events, max(COPY_MIN_EVENTS, COPY_EVENT_FACTOR * nominal_events))
+
+
 def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
     """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
-    ``simulator`` runs the kernel, else copy by copy."""
+    ``simulator`` runs the kernel, else copy by copy. A copy the analytic engine cannot finish
+    within :func:`copy_budget` events is counted unfinished, not simulated further."""
     ids, pos, vel = perturbation_arrays(scene, delta, samples)
     if _runs_kernel(simulator):
-        return kernel_tally(scene, base, ids, pos, vel, simulator.max_events)
+        budget = copy_budget(len(base.events), simulator.max_events)
+        return kernel_tally(scene, base, ids, pos, vel, budget)
     reference = labels(base)
     tally = Tally(counts=dict.fromkeys(GROUPS, 0))
+    runner = _budgeted(simulator, len(base.events))
     for k in range(samples):
         copy = unvalidated_copy(scene, ids, pos[k].tolist(), vel[k].tolist())
-        out = simulator.run(copy, base.horizon)
+        try:
+            out = runner.run(copy, base.horizon)
+        except SimulationError:
+            tally.add_unfinished()
+            continue
         other = labels(out)
         names = list(flipped(reference, other))
         tally.flips.update(names)
@@ -107,6 +123,15 @@ def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: S
             tally.counts[group] += a != b
         tally.spread = max(tally.spread, q3_spread(base.positions, out.positions))
     return tally
+
+
+def _budgeted(simulator: Simulator, nominal_events: int) -> Simulator:
+    """``simulator`` with the copies' event budget (the analytic engine; others as they are)."""
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    if isinstance(simulator, AnalyticSimulator):
+        return simulator.with_max_events(copy_budget(nominal_events, simulator.max_events))
+    return simulator
 
 
 def _near_miss_gap(base: Outcome, radius: float, simulator: Simulator) -> float | None:

@@ -19,15 +19,27 @@ import numpy as np
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import WALLS, Scene
 
+UNFINISHED = "unfinished"
+"""The name :attr:`Tally.flips` holds when some copy was left unfinished."""
+
 
 @dataclass
 class Tally:
-    """Flip counts per label group, copies with any flip, flipped label names, Q3 spread."""
+    """Flip counts per label group, copies with any flip, flipped label names, Q3 spread, and
+    copies left unfinished at the event budget (counted among the copies with any flip and
+    named :data:`UNFINISHED` in ``flips``)."""
 
     counts: dict[str, int]
     any_flip: int = 0
     flips: set[str] = field(default_factory=set)
     spread: float = 0.0
+    unfinished: int = 0
+
+    def add_unfinished(self) -> None:
+        """Count a copy the simulator could not finish within its event budget."""
+        self.unfinished += 1
+        self.any_flip += 1
+        self.flips.add(UNFINISHED)
 
 
 def kernel_tally(
@@ -39,13 +51,14 @@ def kernel_tally(
     max_events: int,
 ) -> Tally:
     """Tally the copies ``pos``/``vel`` (``(k, n, 2)``, balls in ``ids`` order) of ``scene``
-    against its nominal outcome ``base``."""
+    against its nominal outcome ``base``; a copy needing more than ``max_events`` events is
+    counted unfinished."""
     from bpb_tasks.billiards.stability_compiled import tally_copies
-    from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, table_params
+    from bpb_tasks.simulators.analytic.compiled import table_params
 
     n = pos.shape[1]
     prm, pockets = table_params(scene)
-    counts, unions, any_flip, spread, bad = tally_copies(
+    counts, unions, any_flip, spread, unfinished = tally_copies(
         np.ascontiguousarray(pos.reshape(-1, 2)),
         np.ascontiguousarray(vel.reshape(-1, 2)),
         n,
@@ -57,9 +70,10 @@ def kernel_tally(
         np.array(_nominal(base, ids), dtype=np.int64),
         np.array([base.positions[i] or (np.nan, np.nan) for i in ids], dtype=float),
     )
-    if bad >= 0:
-        raise KernelBudgetError(f"copy {bad}: more than {max_events} events")
     tally = Tally(counts={}, any_flip=int(any_flip), spread=float(spread))
+    tally.unfinished = int(unfinished)
+    if unfinished:
+        tally.flips.add(UNFINISHED)
     for (group, prefix, names), count, union in zip(_groups(ids), counts, unions, strict=True):
         tally.counts[group] = int(count)
         tally.flips.update(f"{prefix}:{names[j]}" for j in range(len(names)) if union >> j & 1)

@@ -39,8 +39,9 @@ def tally_copies(
     ``cue`` is the cue ball's index (-1 without one), ``reference`` the nominal
     ``(contacts, walls, pocketed)`` masks and ``nominal`` the ``(n, 2)`` nominal final positions
     (NaN for pocketed balls). Returns the flip count per label group, the union of flipped bits
-    per group, the number of copies with any flip, the Q3 spread, and the index of the first copy
-    that exceeded ``max_events`` (-1 when none did; the tally then stops there).
+    per group, the number of copies with any flip, the Q3 spread, and the number of copies left
+    unfinished after ``max_events`` events: those count among the copies with a flip, in no
+    group and not in the spread (their labels and final positions are unknown).
     """
     copies = pos.shape[0] // n if n else 0
     counts = np.zeros(3, dtype=np.int64)
@@ -48,11 +49,14 @@ def tally_copies(
     masks = np.zeros(3, dtype=np.int64)
     any_flip = 0
     spread = 0.0
+    unfinished = 0
     for c in range(copies):
         a, b = c * n, (c + 1) * n
         events, _, final, status = run_rows(pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
         if status != 0:
-            return counts, unions, any_flip, spread, c
+            unfinished += 1
+            any_flip += 1
+            continue
         masks[:] = 0
         if cue >= 0:
             for row in events:
@@ -75,7 +79,7 @@ def tally_copies(
                 unions[g] |= xor
                 flipped = True
         any_flip += flipped
-    return counts, unions, any_flip, spread, -1
+    return counts, unions, any_flip, spread, unfinished
 
 
 @jit

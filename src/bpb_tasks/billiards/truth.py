@@ -73,7 +73,10 @@ class Stability(BaseModel):
         horizon_gap: Time (s) between the horizon and the nearest event.
         pocket_gap: Nearest pocket-edge pass (m): closest distance of a moving centre to a pocket
             it does not enter, minus the pocket radius.
-        flips: Labels that flipped under perturbation, e.g. ``q1:3``, ``q2:TOP``, ``q3:pocket:5``.
+        flips: Labels that flipped under perturbation, e.g. ``q1:3``, ``q2:TOP``, ``q3:pocket:5``,
+            and ``unfinished`` when the simulator could not finish some perturbed copy within
+            its event budget (balls chattering in a pressing contact). Such a copy counts in
+            ``flip_rate``, in no group of ``flip_rates`` and not in ``q3_spread``.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -114,13 +117,14 @@ class FinalState(StrictModel):
     @property
     def unstable_reasons(self) -> list[str]:
         """The stability conditions the scene fails: ``q1``, ``q2``, ``pocketed`` (a label of
-        that kind flipped) and ``q3`` (Q3 spread over half a ball radius); empty when stable or
-        not annotated."""
+        that kind flipped), ``q3`` (Q3 spread over half a ball radius) and ``unfinished`` (a
+        perturbed copy ran past its event budget); empty when stable or not annotated."""
         s = self.stability
         if s is None:
             return []
         flipped = [g for g in ("q1", "q2", "pocketed") if s.flip_rates.get(g, 0.0) > 0]
-        return flipped + ([] if s.q3_stable else ["q3"])
+        unfinished = ["unfinished"] if "unfinished" in s.flips else []
+        return flipped + ([] if s.q3_stable else ["q3"]) + unfinished
 
 
 def final_json_schema() -> dict[str, Any]:

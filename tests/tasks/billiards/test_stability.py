@@ -15,15 +15,17 @@ from bpb_tasks.billiards.family import BilliardsFamily
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.stability import (
     annotate,
+    copy_budget,
     labels,
     perturbation_arrays,
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_batch import kernel_near_miss_gap, kernel_tally
+from bpb_tasks.billiards.stability_batch import UNFINISHED, kernel_near_miss_gap, kernel_tally
 from bpb_tasks.billiards.stability_margins import near_miss_gap
+from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import KernelBudgetError
+from bpb_tasks.simulators.analytic.engine import SimulationError
 from support.phys_helpers import R, scene
 
 PYTHON = AnalyticSimulator(engine="python")
@@ -139,16 +141,49 @@ def test_compiled_near_miss_gap_on_named_cases() -> None:
     assert 0 < near_miss_gap(PYTHON.run(cases[2]), R) < 1e-9
 
 
-def test_the_first_copy_over_the_event_budget_is_named() -> None:
-    """A perturbed copy running past the event budget stops the tally with that copy's index
-    (copy 0 only rolls to a stop; copy 1 bounces between the walls)."""
+def test_a_copy_over_the_event_budget_counts_unfinished_and_the_tally_goes_on() -> None:
+    """Copy 1 bounces between the walls past a budget of 3 events: it is counted unfinished
+    (a flip, in no label group, not in the spread) and copy 2 after it is still tallied."""
     s = scene([(0.5, 0.5, 0.01, 0.0), (1.5, 0.2, 0.0, 0.0)], horizon=5)
-    pos = np.array([[[0.5, 0.5], [1.5, 0.2]]] * 2)
-    vel = np.array([[[0.01, 0.0], [0.0, 0.0]], [[3.0, 0.0], [0.0, 0.0]]])
+    pos = np.array([[[0.5, 0.5], [1.5, 0.2]]] * 3)
+    vel = np.array([[[0.01, 0.0], [0.0, 0.0]], [[3.0, 0.0], [0.0, 0.0]], [[0.02, 0.0], [0, 0]]])
     base = PYTHON.run(s)
-    assert kernel_tally(s, base, [0, 1], pos[:1], vel[:1], 3).any_flip == 0
-    with pytest.raises(KernelBudgetError, match=r"^copy 1: more than 3 events$"):
-        kernel_tally(s, base, [0, 1], pos, vel, 3)
+    tally = kernel_tally(s, base, [0, 1], pos, vel, 3)
+    assert (tally.unfinished, tally.any_flip, tally.flips) == (1, 1, {UNFINISHED})
+    assert tally.counts == {"q1": 0, "q2": 0, "pocketed": 0}
+    assert tally.spread == pytest.approx(0.02**2 / (2 * 0.002 * 9.8) - 0.01**2 / (2 * 0.002 * 9.8))
+
+
+def rack_break(vx: float, vy: float) -> Scene:
+    """Ten touching balls in a triangle, the cue ball at (0.5, 0.5) with velocity (vx, vy)."""
+    rows = [
+        (1.3 + row * math.sqrt(3) * R, 0.5 + (j - row / 2) * 2 * R)
+        for row in range(4)
+        for j in range(row + 1)
+    ]
+    balls = [{"id": 0, "pos": [0.5, 0.5], "vel": [vx, vy]}]
+    balls += [{"id": i + 1, "pos": list(p)} for i, p in enumerate(rows)]
+    return Scene.model_validate(
+        {"scene_id": "rack", "horizon": 5.0, "physics": {"mu": 0.002}, "balls": balls}
+    )
+
+
+def test_a_copy_chattering_in_a_pressing_contact_makes_the_scene_unstable_not_an_error() -> None:
+    """The rack break of the dataset card's known limitation: one perturbed copy squeezes a
+    ball between two others at ever shorter intervals (it would run to the 100,000-event
+    budget). Kernel and Python engine count it unfinished alike; the scene is unstable for it."""
+    s = rack_break(1.6857654904001647, 0.07649157715652259)
+    base = PYTHON.run(s)
+    assert copy_budget(len(base.events), PYTHON.max_events) == 1000
+    ids, pos, vel = perturbation_arrays(s, 1e-4, 64)
+    chatter = unvalidated_copy(s, ids, pos[34].tolist(), vel[34].tolist())
+    with pytest.raises(SimulationError, match="more than 20000 events"):
+        PYTHON.with_max_events(20_000).run(chatter)
+    python = annotate(s, base, simulator=PYTHON)
+    assert python == annotate(s, base, simulator=AnalyticSimulator())
+    assert not python.stable and "unfinished" in python.flips
+    truth = final_state(s, base).model_copy(update={"stability": python})
+    assert truth.unstable_reasons[-1] == "unfinished"
 
 
 @pytest.mark.slow

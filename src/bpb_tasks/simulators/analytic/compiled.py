@@ -215,27 +215,3 @@ def _batch(
         elif kind_ == 1 and ids[int(a_)] == 0:
             walls[int(s)].add(WALLS[int(wall)])
     return BatchResult(positions, contacts, walls, counts)
-
-
-def simulate_copies(
-    scene: Scene, pos: np.ndarray, vel: np.ndarray, horizon: float, max_events: int = 100_000
-) -> BatchResult:
-    """Simulate ``k`` copies of ``scene`` with other ball states, unvalidated (for perturbation
-    studies): ``pos`` and ``vel`` are ``(k, n, 2)`` arrays of the balls in id order."""
-    ids = sorted(b.id for b in scene.balls)
-    copies, n = pos.shape[0], len(ids)
-    starts = np.arange(copies + 1, dtype=np.int64) * n
-    prm, pockets = table_params(scene)
-    final, status, events = run_many_arrays(
-        np.ascontiguousarray(pos.reshape(-1, 2)),
-        np.ascontiguousarray(vel.reshape(-1, 2)),
-        starts,
-        prm,
-        pockets,
-        np.full(copies, float(horizon)),
-        max_events,
-    )
-    if status.any():
-        raise KernelBudgetError(f"copy {int(np.argmax(status))}: more than {max_events} events")
-    empty = np.zeros((0, 2))
-    return _batch([(ids, empty, empty)] * copies, starts, final, events)

@@ -46,6 +46,7 @@ a few answered by the oracle) does not pay for it. Batches (stability copies, ca
 
 from __future__ import annotations
 
+import copy
 import heapq
 import importlib.util
 import sys
@@ -98,6 +99,12 @@ class AnalyticSimulator:
         self.max_events = max_events
         self.compiled = _use_kernel(engine, self.numeric is FLOAT64)
         self.engine = engine
+
+    def with_max_events(self, max_events: int) -> AnalyticSimulator:
+        """This simulator with another event budget (same precision and engine)."""
+        other = copy.copy(self)
+        other.max_events = max_events
+        return other
 
     def kernel_loaded(self) -> bool:
         """Whether single runs take the kernel now: always with ``engine="kernel"``, with
