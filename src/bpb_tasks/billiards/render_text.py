@@ -63,7 +63,7 @@ def drawn_patch(
     w, h = size
     patch = Image.new("RGB", size, back)
     draw = ImageDraw.Draw(patch)
-    if outline is not None:
+    if outline is not None and w > 0 and h > 0:  # an empty patch (blank text, no pad) has none
         draw.rectangle((0, 0, w - 1, h - 1), outline=outline, width=1)
     draw.text(at, text, fill=colour, font=font)
     return palette_for(spec).quantize(patch)
