@@ -26,7 +26,7 @@ import itertools
 import math
 import random
 from collections.abc import Iterator, Sequence
-from typing import TYPE_CHECKING, TypeGuard
+from typing import TypeGuard
 
 import numpy as np
 
@@ -42,10 +42,7 @@ from bpb_tasks.billiards.stability_margins import (
     pocket_gap,
 )
 from bpb_tasks.billiards.truth import Stability
-from bpb_tasks.simulators.analytic.engine import SimulationError
-
-if TYPE_CHECKING:
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
 
 Labels = tuple[frozenset[int], frozenset[str], frozenset[int]]
 Positions = dict[int, tuple[float, float] | None]
@@ -66,8 +63,6 @@ def annotate(
     """Flip rates, Q3 spread and margins of ``scene`` (simulated with ``simulator``, default
     analytic)."""
     if simulator is None:
-        from bpb_tasks.simulators.analytic import AnalyticSimulator
-
         simulator = AnalyticSimulator()
     base = outcome if outcome is not None else simulator.run(scene)
     tally = _tally(scene, base, delta, samples, simulator)
@@ -127,8 +122,6 @@ def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: S
 
 def _budgeted(simulator: Simulator, nominal_events: int) -> Simulator:
     """``simulator`` with the copies' event budget (the analytic engine; others as they are)."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
     if isinstance(simulator, AnalyticSimulator):
         return simulator.with_max_events(copy_budget(nominal_events, simulator.max_events))
     return simulator
@@ -143,8 +136,6 @@ def _near_miss_gap(base: Outcome, radius: float, simulator: Simulator) -> float 
 
 def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
     """Whether ``simulator`` is the analytic engine with its compiled kernel."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
     return isinstance(simulator, AnalyticSimulator) and simulator.compiled
 
 
@@ -152,8 +143,6 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
     """:func:`horizon_gap` of a run to ``horizon`` + 1 s: from the kernel's event times alone
     when single runs take the kernel (the same events; no outcome is built), else from the
     outcome."""
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
     if isinstance(simulator, AnalyticSimulator) and simulator.kernel_loaded():
         from bpb_tasks.simulators.analytic.compiled import event_times
 

@@ -18,9 +18,7 @@ import numpy as np
 
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import WALLS, Scene
-
-UNFINISHED = "unfinished"
-"""The name :attr:`Tally.flips` holds when some copy was left unfinished."""
+from bpb_tasks.billiards.truth import UNFINISHED
 
 
 @dataclass
@@ -35,11 +33,12 @@ class Tally:
     spread: float = 0.0
     unfinished: int = 0
 
-    def add_unfinished(self) -> None:
-        """Count a copy the simulator could not finish within its event budget."""
-        self.unfinished += 1
-        self.any_flip += 1
-        self.flips.add(UNFINISHED)
+    def add_unfinished(self, copies: int = 1) -> None:
+        """Count ``copies`` the simulator could not finish within their event budget."""
+        self.unfinished += copies
+        self.any_flip += copies
+        if copies:
+            self.flips.add(UNFINISHED)
 
 
 def kernel_tally(
@@ -71,9 +70,7 @@ def kernel_tally(
         np.array([base.positions[i] or (np.nan, np.nan) for i in ids], dtype=float),
     )
     tally = Tally(counts={}, any_flip=int(any_flip), spread=float(spread))
-    tally.unfinished = int(unfinished)
-    if unfinished:
-        tally.flips.add(UNFINISHED)
+    tally.add_unfinished(int(unfinished))
     for (group, prefix, names), count, union in zip(_groups(ids), counts, unions, strict=True):
         tally.counts[group] = int(count)
         tally.flips.update(f"{prefix}:{names[j]}" for j in range(len(names)) if union >> j & 1)

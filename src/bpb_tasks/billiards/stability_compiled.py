@@ -39,9 +39,10 @@ def tally_copies(
     ``cue`` is the cue ball's index (-1 without one), ``reference`` the nominal
     ``(contacts, walls, pocketed)`` masks and ``nominal`` the ``(n, 2)`` nominal final positions
     (NaN for pocketed balls). Returns the flip count per label group, the union of flipped bits
-    per group, the number of copies with any flip, the Q3 spread, and the number of copies left
-    unfinished after ``max_events`` events: those count among the copies with a flip, in no
-    group and not in the spread (their labels and final positions are unknown).
+    per group, the number of finished copies with any flip, the Q3 spread, and the number of
+    copies left unfinished after ``max_events`` events, which count in none of the others
+    (their labels and final positions are unknown;
+    :meth:`~bpb_tasks.billiards.stability_batch.Tally.add_unfinished` says how they count).
     """
     copies = pos.shape[0] // n if n else 0
     counts = np.zeros(3, dtype=np.int64)
@@ -55,7 +56,6 @@ def tally_copies(
         events, _, final, status = run_rows(pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
         if status != 0:
             unfinished += 1
-            any_flip += 1
             continue
         masks[:] = 0
         if cue >= 0:

@@ -52,6 +52,11 @@ class EventRecord(StrictModel):
     positions: list[Vec] = Field(default_factory=list)
 
 
+UNFINISHED = "unfinished"
+"""The name in :attr:`Stability.flips` (and :attr:`FinalState.unstable_reasons`) of perturbed
+copies the simulator could not finish within their event budget."""
+
+
 class Stability(BaseModel):
     """How likely the scene's labels are to flip (SPEC section 3;
     :mod:`bpb_tasks.billiards.stability` defines the perturbations).
@@ -123,7 +128,7 @@ class FinalState(StrictModel):
         if s is None:
             return []
         flipped = [g for g in ("q1", "q2", "pocketed") if s.flip_rates.get(g, 0.0) > 0]
-        unfinished = ["unfinished"] if "unfinished" in s.flips else []
+        unfinished = [UNFINISHED] if UNFINISHED in s.flips else []
         return flipped + ([] if s.q3_stable else ["q3"]) + unfinished
 
 

@@ -21,9 +21,9 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_batch import UNFINISHED, kernel_near_miss_gap, kernel_tally
+from bpb_tasks.billiards.stability_batch import kernel_near_miss_gap, kernel_tally
 from bpb_tasks.billiards.stability_margins import near_miss_gap
-from bpb_tasks.billiards.truth import final_state
+from bpb_tasks.billiards.truth import UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
 from support.phys_helpers import R, scene
