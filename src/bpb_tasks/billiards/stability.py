@@ -13,8 +13,10 @@ deterministic. For each perturbation the labels are compared with the nominal on
   over balls on the table in both and over perturbations. Q3 counts as unstable when the spread
   exceeds half a ball radius.
 
-``stable`` means no label flipped in any perturbation and the Q3 spread is within the bound. The
-deterministic margins (:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside.
+``stable`` means no label flipped in any perturbation, the Q3 spread is within the bound and no
+two balls overlap in the nominal run (a pressing contact, which the event model does not
+resolve; the analytic engine only). The deterministic margins
+(:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside.
 Perturbed copies skip scene validation (a copy may touch a wall or another ball); with numba
 installed they run as one batch in the compiled kernel.
 """
@@ -33,12 +35,12 @@ import numpy as np
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.stability_batch import Tally, kernel_near_miss_gap, kernel_tally
+from bpb_tasks.billiards.stability_batch import Tally, kernel_pair_margins, kernel_tally
 from bpb_tasks.billiards.stability_margins import (
     horizon_gap,
     min_event_gap,
     min_graze_cos,
-    near_miss_gap,
+    pair_margins,
     pocket_gap,
 )
 from bpb_tasks.billiards.truth import Stability
@@ -68,8 +70,9 @@ def annotate(
     tally = _tally(scene, base, delta, samples, simulator)
     counts, any_flip, flips, spread = tally.counts, tally.any_flip, tally.flips, tally.spread
     radius = scene.physics.ball_radius
+    gap, overlap = _pair_margins(base, radius, simulator)
     return Stability(
-        stable=any_flip == 0 and spread <= radius / 2,
+        stable=any_flip == 0 and spread <= radius / 2 and overlap is None,
         delta=delta,
         samples=samples,
         flip_rates={g: counts[g] / samples for g in GROUPS},
@@ -77,11 +80,12 @@ def annotate(
         flip_rate_upper95=upper_bound(any_flip, samples),
         q3_spread=spread,
         q3_stable=spread <= radius / 2,
-        near_miss_gap=_near_miss_gap(base, radius, simulator),
+        near_miss_gap=gap,
         min_graze_cos=min_graze_cos(base),
         min_event_gap=min_event_gap(base),
         horizon_gap=_horizon_gap(scene, base.horizon, simulator),
         pocket_gap=pocket_gap(base, scene.pockets.centers, scene.pockets.radius),
+        overlap=overlap,
         flips=sorted(flips, key=_flip_order),
     )
 
@@ -127,11 +131,17 @@ def _budgeted(simulator: Simulator, nominal_events: int) -> Simulator:
     return simulator
 
 
-def _near_miss_gap(base: Outcome, radius: float, simulator: Simulator) -> float | None:
-    """:func:`near_miss_gap`, in compiled code when ``simulator`` runs the kernel."""
-    if _runs_kernel(simulator):
-        return kernel_near_miss_gap(base, radius)
-    return near_miss_gap(base, radius)
+def _pair_margins(
+    base: Outcome, radius: float, simulator: Simulator
+) -> tuple[float | None, float | None]:
+    """The near-miss gap and the overlap (:func:`pair_margins`), in compiled code when
+    ``simulator`` runs the kernel. The overlap is the analytic engine's only: a simulator that
+    steps time (pymunk) lets touching balls sink into each other by design (up to about 1 mm at
+    its default step), so there it is ``None``, not a finding."""
+    gap, overlap = (
+        kernel_pair_margins(base, radius) if _runs_kernel(simulator) else pair_margins(base, radius)
+    )
+    return gap, overlap if isinstance(simulator, AnalyticSimulator) else None
 
 
 def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:

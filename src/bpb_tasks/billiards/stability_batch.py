@@ -7,7 +7,8 @@ and keeps only bit masks per copy (cue contacts, cue walls, pocketed balls, one 
 or wall), so flips are XORs against the nominal masks; no per-copy Python objects or tables are
 built. It gives the same tally as running each copy through
 :meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.run` (a test compares).
-:func:`kernel_near_miss_gap` gives the near-miss margin to the bit (a test compares).
+:func:`kernel_pair_margins` gives the near-miss margin and the overlap to the bit (a test
+compares).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
-from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.billiards.scene import TOUCH_TOLERANCE, WALLS, Scene
 from bpb_tasks.billiards.truth import UNFINISHED
 
 
@@ -91,10 +92,10 @@ def _nominal(base: Outcome, ids: list[int]) -> tuple[int, int, int]:
     return contacts, walls, pocketed
 
 
-def kernel_near_miss_gap(outcome: Outcome, radius: float) -> float | None:
-    """:func:`~bpb_tasks.billiards.stability_margins.near_miss_gap` in compiled code (the same
-    value to the bit; a test compares)."""
-    from bpb_tasks.billiards.stability_compiled import near_miss_arrays
+def kernel_pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, float | None]:
+    """:func:`~bpb_tasks.billiards.stability_margins.pair_margins` (near-miss gap, overlap) in
+    compiled code (the same values to the bit; a test compares)."""
+    from bpb_tasks.billiards.stability_compiled import pair_margin_arrays
 
     ids = sorted(outcome.segments)
     index = {ball: k for k, ball in enumerate(ids)}
@@ -111,7 +112,12 @@ def kernel_near_miss_gap(outcome: Outcome, radius: float) -> float | None:
     moving = np.array(
         [any(s.vel != (0.0, 0.0) for s in outcome.segments[ball]) for ball in ids], dtype=np.bool_
     )
-    gap, found = near_miss_arrays(
-        np.array(rows, dtype=float).reshape(-1, 8), len(ids), touched, moving, radius
+    gap, found, deepest, overlapped = pair_margin_arrays(
+        np.array(rows, dtype=float).reshape(-1, 8),
+        len(ids),
+        touched,
+        moving,
+        radius,
+        TOUCH_TOLERANCE,
     )
-    return float(gap) if found else None
+    return (float(gap) if found else None), (2 * radius - float(deepest) if overlapped else None)

@@ -5,9 +5,9 @@
   final state into the tally at once: label bit masks per copy (cue contacts, cue walls,
   pocketed balls; one bit per ball index or wall), XORed against the nominal masks, and the
   largest distance of a ball from its nominal final position. No per-copy table is built.
-* :func:`near_miss_arrays` is the near-miss margin of
-  :mod:`bpb_tasks.billiards.stability_margins` (the reference) with the same float64 operations
-  in the same order.
+* :func:`pair_margin_arrays` is the near-miss margin and the overlap of
+  :mod:`bpb_tasks.billiards.stability_margins` (the reference, ``pair_margins``) with the same
+  float64 operations in the same order.
 """
 
 from __future__ import annotations
@@ -83,16 +83,17 @@ def tally_copies(
 
 
 @jit
-def near_miss_arrays(
-    rows: Arr, balls: int, touched: Arr, moving: Arr, radius: float
-) -> tuple[float, bool]:
-    """:func:`~bpb_tasks.billiards.stability_margins.near_miss_gap` on arrays, with the same
+def pair_margin_arrays(
+    rows: Arr, balls: int, touched: Arr, moving: Arr, radius: float, tolerance: float
+) -> tuple[float, bool, float, bool]:
+    """:func:`~bpb_tasks.billiards.stability_margins.pair_margins` on arrays, with the same
     float64 operations in the same order (same result to the bit).
 
     ``rows`` holds every segment as ``(ball, t0, t1, x, y, vx, vy, decel)``, balls numbered
     ``0..balls-1`` in id order and each ball's segments in time order; ``touched[a, b]`` marks
     pairs with a ball-ball event and ``moving[a]`` balls with a segment of non-zero velocity.
-    Returns the gap and whether there is one.
+    Returns the near-miss gap and whether there is one, then the closest distance of the deepest
+    overlap and whether it is under ``2 * radius - tolerance``.
     """
     pieces = np.empty((2 * rows.shape[0], 12))
     first = np.zeros(balls + 1, dtype=np.int64)
@@ -105,16 +106,24 @@ def near_miss_arrays(
     first[balls] = count
     best = 0.0
     found = False
+    deepest = 2 * radius - tolerance
+    overlapped = False
     for a in range(balls):
         for b in range(a + 1, balls):
-            if touched[a, b] or not (moving[a] or moving[b]):
+            if not (moving[a] or moving[b]):
                 continue
-            limit = best + 2 * radius if found else np.inf
-            closest = _closest(pieces, first[a], first[a + 1], first[b], first[b + 1], limit)
-            gap = closest - 2 * radius
-            best = gap if not found or gap < best else best
-            found = True
-    return best, found
+            a0, a1, b0, b1 = first[a], first[a + 1], first[b], first[b + 1]
+            if touched[a, b]:
+                closest = _closest(pieces, a0, a1, b0, b1, deepest)
+            else:
+                limit = best + 2 * radius if found else np.inf
+                closest = _closest(pieces, a0, a1, b0, b1, limit)
+                gap = closest - 2 * radius
+                best = gap if not found or gap < best else best
+                found = True
+            if closest < deepest:
+                deepest, overlapped = closest, True
+    return best, found, deepest, overlapped
 
 
 @jit

@@ -57,13 +57,18 @@ UNFINISHED = "unfinished"
 copies the simulator could not finish within their event budget."""
 
 
+OVERLAP = "overlap"
+"""The name in :attr:`FinalState.unstable_reasons` of a nominal run in which two balls overlap
+(:attr:`Stability.overlap`)."""
+
+
 class Stability(BaseModel):
     """How likely the scene's labels are to flip (SPEC section 3;
     :mod:`bpb_tasks.billiards.stability` defines the perturbations).
 
     Attributes:
-        stable: No label flipped in any of ``samples`` perturbations and the Q3 spread is at most
-            half a ball radius.
+        stable: No label flipped in any of ``samples`` perturbations, the Q3 spread is at most
+            half a ball radius and ``overlap`` is null.
         delta: Perturbation size: metres for positions, a share of the cue speed for velocity.
         samples: Number of random perturbations.
         flip_rates: Share of perturbations flipping a Q1, a Q2 or a pocketed label.
@@ -72,12 +77,18 @@ class Stability(BaseModel):
             any label (about ``3 / samples`` when none flipped).
         q3_spread: Largest distance (m) between a ball's perturbed and nominal final positions.
         q3_stable: ``q3_spread`` is at most half a ball radius.
-        near_miss_gap: Smallest positive gap (m) between balls that did not touch.
+        near_miss_gap: Smallest gap (m) between balls that did not touch (negative when they
+            overlap, a collision the simulator missed; then ``overlap`` holds it too).
         min_graze_cos: Smallest |cos| of the approach angle over contacts (grazing near 0).
         min_event_gap: Smallest time (s) between two events sharing a ball.
         horizon_gap: Time (s) between the horizon and the nearest event.
         pocket_gap: Nearest pocket-edge pass (m): closest distance of a moving centre to a pocket
             it does not enter, minus the pocket radius.
+        overlap: Deepest overlap (m) of two balls in the nominal run, ``2R`` minus their closest
+            distance, when over the contact tolerance of 1e-9 m: balls in a pressing contact,
+            which the event model does not resolve (the dataset card's known limitation).
+            Null when there is none, and for a simulator that steps time (pymunk), whose
+            balls overlap at every contact.
         flips: Labels that flipped under perturbation, e.g. ``q1:3``, ``q2:TOP``, ``q3:pocket:5``,
             and ``unfinished`` when the simulator could not finish some perturbed copy within
             its event budget (balls chattering in a pressing contact). Such a copy counts in
@@ -99,6 +110,7 @@ class Stability(BaseModel):
     min_event_gap: float | None = None
     horizon_gap: float | None = None
     pocket_gap: float | None = None
+    overlap: float | None = None
     flips: list[str] = Field(default_factory=list)
 
 
@@ -122,14 +134,16 @@ class FinalState(StrictModel):
     @property
     def unstable_reasons(self) -> list[str]:
         """The stability conditions the scene fails: ``q1``, ``q2``, ``pocketed`` (a label of
-        that kind flipped), ``q3`` (Q3 spread over half a ball radius) and ``unfinished`` (a
-        perturbed copy ran past its event budget); empty when stable or not annotated."""
+        that kind flipped), ``q3`` (Q3 spread over half a ball radius), ``overlap`` (two balls
+        overlap in the nominal run) and ``unfinished`` (a perturbed copy ran past its event
+        budget); empty when stable or not annotated."""
         s = self.stability
         if s is None:
             return []
         flipped = [g for g in ("q1", "q2", "pocketed") if s.flip_rates.get(g, 0.0) > 0]
         unfinished = [UNFINISHED] if UNFINISHED in s.flips else []
-        return flipped + ([] if s.q3_stable else ["q3"]) + unfinished
+        overlap = [] if s.overlap is None else [OVERLAP]
+        return flipped + ([] if s.q3_stable else ["q3"]) + overlap + unfinished
 
 
 def final_json_schema() -> dict[str, Any]:

@@ -12,6 +12,7 @@ from hypothesis import given, settings, strategies as st
 from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.stability import (
     annotate,
@@ -21,9 +22,9 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_batch import kernel_near_miss_gap, kernel_tally
-from bpb_tasks.billiards.stability_margins import near_miss_gap
-from bpb_tasks.billiards.truth import UNFINISHED, final_state
+from bpb_tasks.billiards.stability_batch import kernel_pair_margins, kernel_tally
+from bpb_tasks.billiards.stability_margins import near_miss_gap, pair_margins
+from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
 from support.phys_helpers import R, scene
@@ -101,13 +102,20 @@ def test_kernel_batch_and_python_engine_annotate_alike() -> None:
     assert unstable >= 2  # flips and spreads were compared, not only zeros
 
 
+def _same_margins(out: Outcome, radius: float) -> tuple[float | None, float | None]:
+    """The kernel's near-miss gap and overlap, checked equal to the reference's to the bit."""
+    compiled, reference = kernel_pair_margins(out, radius), pair_margins(out, radius)
+    for a, b in zip(compiled, reference, strict=True):
+        assert (a is None) == (b is None)
+        if a is not None and b is not None:
+            assert a.hex() == b.hex()
+    return reference
+
+
 def _same_gap(outcome_scene: Scene) -> None:
     out = PYTHON.run(outcome_scene)
-    radius = outcome_scene.physics.ball_radius
-    compiled, reference = kernel_near_miss_gap(out, radius), near_miss_gap(out, radius)
-    assert (compiled is None) == (reference is None)
-    if compiled is not None and reference is not None:
-        assert compiled.hex() == reference.hex()
+    _same_margins(out, outcome_scene.physics.ball_radius)
+    assert pair_margins(out, outcome_scene.physics.ball_radius)[1] is None  # no pressing here
 
 
 @settings(max_examples=150, deadline=None)
@@ -139,6 +147,39 @@ def test_compiled_near_miss_gap_on_named_cases() -> None:
         _same_gap(case)
     assert near_miss_gap(PYTHON.run(cases[0]), R) is None
     assert 0 < near_miss_gap(PYTHON.run(cases[2]), R) < 1e-9
+
+
+def test_the_overlap_of_a_pressing_contact_is_measured_and_makes_the_scene_unstable() -> None:
+    """The dataset card's pressing contact: after the rack break balls 5 and 6 overlap by
+    0.52 mm at t = 2.44 s. Both engines' annotations say so, to the bit, and name it among the
+    reasons; the same annotation of a scene without pressing has no overlap."""
+    s = rack_break(1.6857654904001647, 0.07649157715652259)
+    base = PYTHON.run(s)
+    gap, overlap = _same_margins(base, R)
+    assert overlap == pytest.approx(5.21e-4, abs=1e-6)
+    assert gap is not None and abs(gap) < 1e-12  # racked neighbours that never collide touch
+    python = annotate(s, base, simulator=PYTHON, samples=8)
+    assert python == annotate(s, base, simulator=AnalyticSimulator(), samples=8)
+    assert python.overlap == overlap and not python.stable
+    truth = final_state(s, base).model_copy(update={"stability": python})
+    assert OVERLAP in truth.unstable_reasons
+    calm = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0)], mu=0.05, horizon=10)
+    assert annotate(calm, simulator=PYTHON, samples=8).overlap is None
+
+
+def test_an_overlap_of_balls_that_never_touched_is_measured_too() -> None:
+    """A hand-made outcome in which ball 0 rolls through ball 1 with no event (a missed
+    collision): the near-miss gap goes negative and the overlap is the full depth, 2R."""
+    run = Segment(0.0, 1.0, (0.5, 0.5), (1.0, 0.0), 0.0)
+    rest = Segment(0.0, 1.0, (0.75, 0.5), (0.0, 0.0), 0.0)
+    out = Outcome(1.0, {0: (1.5, 0.5), 1: (0.75, 0.5)}, (), {0: (run,), 1: (rest,)})
+    gap, overlap = _same_margins(out, R)
+    assert gap == pytest.approx(-2 * R) and overlap == pytest.approx(2 * R)
+    touched = Event(0.25 - 2 * R, "ball", (0, 1), None, ((0.75 - 2 * R, 0.5), (0.75, 0.5)))
+    assert _same_margins(Outcome(1.0, out.positions, (touched,), out.segments), R) == (
+        None,
+        pytest.approx(2 * R),
+    )
 
 
 def test_a_copy_over_the_event_budget_counts_unfinished_and_the_tally_goes_on() -> None:
