@@ -103,8 +103,7 @@ def generate_dataset(
     tallies = {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
     writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
     try:
-        with make_pool(n_workers, setup) as pool:
-            run_scenes(pool, setup, writer, hs, per_horizon, stable_only, progress)
+        run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
         _write_stats(maker, setup, writer, progress)
     finally:
         writer.close()

@@ -6,6 +6,9 @@ order however many workers run.
 
 from __future__ import annotations
 
+import gc
+import itertools
+import multiprocessing
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.pool import Pool
 from pathlib import Path
@@ -112,7 +115,7 @@ def run_calibration(
 
 
 def run_scenes(
-    pool: Pool | InProcess,
+    n_workers: int,
     setup: WorkerSetup,
     writer: DatasetWriter,
     hs: list[float],
@@ -120,16 +123,38 @@ def run_scenes(
     stable_only: bool,
     progress: GenerateProgress,
 ) -> None:
-    """Produce every scene and stream the results to ``writer`` in scene order."""
+    """Produce every scene on ``n_workers`` processes and stream the results to ``writer`` in
+    scene order.
+
+    Where workers are forked (the default on Linux up to Python 3.13), the first scene is made
+    in this process before the pool starts, so that the workers inherit what making it loaded
+    (imports, compiled code, image caches) instead of each loading it again (docs/benchmarks.md:
+    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time). The garbage
+    collector's objects are frozen across the fork, so that the workers' collections do not copy
+    the pages they share with this process.
+    """
     progress.phase("scenes", per_horizon * len(hs))
-    if not stable_only:
-        jobs = (Job(h, i) for h in hs for i in range(per_horizon))
-        for result in pool.imap(run_job, jobs, chunksize=CHUNK):
+    if stable_only:
+        with make_pool(n_workers, setup) as pool:
+            for h in hs:
+                _run_stable(pool, setup, writer, h, per_horizon, progress)
+        return
+    jobs = (Job(h, i) for h in hs for i in range(per_horizon))
+    runner: Pool | InProcess = InProcess(setup)
+    if n_workers > 1 and multiprocessing.get_start_method() == "fork":
+        for result in runner.imap(run_job, itertools.islice(jobs, 1)):
             writer.add(result)
             progress.advance()
-        return
-    for h in hs:
-        _run_stable(pool, setup, writer, h, per_horizon, progress)
+    if n_workers > 1:
+        gc.freeze()
+        try:
+            runner = make_pool(n_workers, setup)
+        finally:
+            gc.unfreeze()
+    with runner:
+        for result in runner.imap(run_job, jobs, chunksize=CHUNK):
+            writer.add(result)
+            progress.advance()
 
 
 def _run_stable(
