@@ -146,11 +146,13 @@ def run_scenes(
             writer.add(result)
             progress.advance()
     if n_workers > 1:
+        host_froze = gc.get_freeze_count() > 0  # a host process's own freeze is left as it is
         gc.freeze()
         try:
             runner = make_pool(n_workers, setup)
         finally:
-            gc.unfreeze()
+            if not host_froze:
+                gc.unfreeze()
     with runner:
         for result in runner.imap(run_job, jobs, chunksize=CHUNK):
             writer.add(result)
