@@ -71,7 +71,9 @@ def generate_dataset(
         stable_only: Keep only scenes whose ground truth is stable: unstable draws are skipped
             and further indices drawn until ``per_horizon`` are kept (scene indices then have
             gaps; the dropped count per horizon is in the manifest).
-        workers: Processes (default: all cores); 1 runs in this process.
+        workers: Processes (default: all cores); 1 runs in this process. With more, where
+            workers are forked, this process makes the first scene before they start, so they
+            inherit what it loaded (the family's modules and caches stay loaded here too).
         images: Render the family's images.
         calibrate: Recalibrate the family's sampling first (recorded in the manifest).
         overwrite: Replace an existing dataset folder at ``out``.
