@@ -96,10 +96,21 @@ class InProcess:
 
 
 def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
-    """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1)."""
+    """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1).
+
+    The garbage collector's objects are frozen while the pool starts its workers, so that where
+    they are forked their collections do not copy the pages they share with this process; they
+    are unfrozen after, unless this process had frozen objects of its own (a library caller's
+    freeze is left as it is)."""
     if n_workers == 1:
         return InProcess(setup)
-    return Pool(n_workers, initializer=init_worker, initargs=(setup,))
+    host_froze = gc.get_freeze_count() > 0
+    gc.freeze()
+    try:
+        return Pool(n_workers, initializer=init_worker, initargs=(setup,))
+    finally:
+        if not host_froze:
+            gc.unfreeze()
 
 
 def run_calibration(
@@ -129,9 +140,7 @@ def run_scenes(
     Where workers are forked (the default on Linux up to Python 3.13), the first scene is made
     in this process before the pool starts, so that the workers inherit what making it loaded
     (imports, compiled code, image caches) instead of each loading it again (docs/benchmarks.md:
-    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time). The garbage
-    collector's objects are frozen across the fork, so that the workers' collections do not copy
-    the pages they share with this process.
+    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time).
     """
     progress.phase("scenes", per_horizon * len(hs))
     if stable_only:
@@ -140,23 +149,19 @@ def run_scenes(
                 _run_stable(pool, setup, writer, h, per_horizon, progress)
         return
     jobs = (Job(h, i) for h in hs for i in range(per_horizon))
-    runner: Pool | InProcess = InProcess(setup)
     if n_workers > 1 and multiprocessing.get_start_method() == "fork":
-        for result in runner.imap(run_job, itertools.islice(jobs, 1)):
-            writer.add(result)
-            progress.advance()
-    if n_workers > 1:
-        host_froze = gc.get_freeze_count() > 0  # a host process's own freeze is left as it is
-        gc.freeze()
-        try:
-            runner = make_pool(n_workers, setup)
-        finally:
-            if not host_froze:
-                gc.unfreeze()
-    with runner:
-        for result in runner.imap(run_job, jobs, chunksize=CHUNK):
-            writer.add(result)
-            progress.advance()
+        _stream(InProcess(setup), itertools.islice(jobs, 1), writer, progress)
+    with make_pool(n_workers, setup) as pool:
+        _stream(pool, jobs, writer, progress)
+
+
+def _stream(
+    pool: Pool | InProcess, jobs: Iterable[Job], writer: DatasetWriter, progress: GenerateProgress
+) -> None:
+    """Run ``jobs`` on ``pool`` and hand each result to ``writer`` in job order."""
+    for result in pool.imap(run_job, jobs, chunksize=CHUNK):
+        writer.add(result)
+        progress.advance()
 
 
 def _run_stable(
