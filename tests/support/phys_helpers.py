@@ -36,6 +36,30 @@ def scene(
     return Scene.model_validate(data)
 
 
+PRESSING_BREAK = (1.6857654904001647, 0.07649157715652259)
+"""Cue velocity of the dataset card's pressing contact: after this :func:`rack` break (mu 0.002)
+balls 5 and 6 overlap by 0.52 mm at t = 2.44 s."""
+
+
+def rack(vel: tuple[float, float], *, cue_y: float = 0.5, mu: float = 0.002) -> Scene:
+    """Ten touching balls in a triangle (apex at x = 1.3, y = 0.5), broken by the cue ball from
+    (0.5, ``cue_y``) with velocity ``vel``; horizon 5 s, scene id ``rack``."""
+    triangle = [
+        (1.3 + row * math.sqrt(3) * R, 0.5 + (j - row / 2) * 2 * R)
+        for row in range(4)
+        for j in range(row + 1)
+    ]
+    cue = {"id": 0, "pos": [0.5, cue_y], "vel": list(vel)}
+    return Scene.model_validate(
+        {
+            "scene_id": "rack",
+            "horizon": 5.0,
+            "physics": {"mu": mu},
+            "balls": [cue, *({"id": i + 1, "pos": list(p)} for i, p in enumerate(triangle))],
+        }
+    )
+
+
 def seg_state(seg: Segment, t: float) -> tuple[float, float, float, float]:
     """Position and velocity on ``seg`` at time ``t``."""
     speed = math.hypot(*seg.vel)

@@ -27,7 +27,7 @@ from bpb_tasks.billiards.stability_margins import near_miss_gap, pair_margins
 from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
-from support.phys_helpers import R, scene
+from support.phys_helpers import PRESSING_BREAK, R, rack, scene
 
 PYTHON = AnalyticSimulator(engine="python")
 
@@ -153,7 +153,7 @@ def test_the_overlap_of_a_pressing_contact_is_measured_and_makes_the_scene_unsta
     """The dataset card's pressing contact: after the rack break balls 5 and 6 overlap by
     0.52 mm at t = 2.44 s. Both engines' annotations say so, to the bit, and name it among the
     reasons; the same annotation of a scene without pressing has no overlap."""
-    s = rack_break(1.6857654904001647, 0.07649157715652259)
+    s = rack(PRESSING_BREAK)
     base = PYTHON.run(s)
     gap, overlap = _same_margins(base, R)
     assert overlap == pytest.approx(5.21e-4, abs=1e-6)
@@ -195,25 +195,11 @@ def test_a_copy_over_the_event_budget_counts_unfinished_and_the_tally_goes_on() 
     assert tally.spread == pytest.approx(0.02**2 / (2 * 0.002 * 9.8) - 0.01**2 / (2 * 0.002 * 9.8))
 
 
-def rack_break(vx: float, vy: float) -> Scene:
-    """Ten touching balls in a triangle, the cue ball at (0.5, 0.5) with velocity (vx, vy)."""
-    rows = [
-        (1.3 + row * math.sqrt(3) * R, 0.5 + (j - row / 2) * 2 * R)
-        for row in range(4)
-        for j in range(row + 1)
-    ]
-    balls = [{"id": 0, "pos": [0.5, 0.5], "vel": [vx, vy]}]
-    balls += [{"id": i + 1, "pos": list(p)} for i, p in enumerate(rows)]
-    return Scene.model_validate(
-        {"scene_id": "rack", "horizon": 5.0, "physics": {"mu": 0.002}, "balls": balls}
-    )
-
-
 def test_a_copy_chattering_in_a_pressing_contact_makes_the_scene_unstable_not_an_error() -> None:
     """The rack break of the dataset card's known limitation: one perturbed copy squeezes a
     ball between two others at ever shorter intervals (it would run to the 100,000-event
     budget). Kernel and Python engine count it unfinished alike; the scene is unstable for it."""
-    s = rack_break(1.6857654904001647, 0.07649157715652259)
+    s = rack(PRESSING_BREAK)
     base = PYTHON.run(s)
     assert copy_budget(len(base.events), PYTHON.max_events) == 1000
     ids, pos, vel = perturbation_arrays(s, 1e-4, 64)

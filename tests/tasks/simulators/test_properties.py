@@ -14,7 +14,7 @@ from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.stability_margins import pair_margins
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from support.phys_helpers import R, seg_state, state_at
+from support.phys_helpers import PRESSING_BREAK, R, rack, seg_state, state_at
 
 FLOAT = AnalyticSimulator()
 
@@ -49,24 +49,6 @@ def test_invariants_hold_on_random_scenes(s: Scene) -> None:
     assert_invariants(s)
 
 
-def rack(cue_y: float, vel: tuple[float, float], mu: float) -> Scene:
-    """A triangle of 10 touching balls broken by the cue from (0.5, ``cue_y``)."""
-    balls = [
-        (1.3 + row * math.sqrt(3) * R, 0.5 + (j - row / 2) * 2 * R)
-        for row in range(4)
-        for j in range(row + 1)
-    ]
-    cue = {"id": 0, "pos": [0.5, cue_y], "vel": list(vel)}
-    return Scene.model_validate(
-        {
-            "scene_id": "rack",
-            "horizon": 5.0,
-            "physics": {"mu": mu},
-            "balls": [cue, *({"id": i + 1, "pos": list(p)} for i, p in enumerate(balls))],
-        }
-    )
-
-
 @st.composite
 def racks(draw: st.DrawFn) -> Scene:
     """Rack breaks at random angles and speeds: simultaneous contacts everywhere."""
@@ -74,7 +56,7 @@ def racks(draw: st.DrawFn) -> Scene:
     speed = draw(st.floats(0.3, 6.0))
     cue_y = 0.5 + draw(st.floats(-0.02, 0.02))
     mu = draw(st.sampled_from([0.002, 0.0]))
-    return rack(cue_y, (speed * math.cos(angle), speed * math.sin(angle)), mu)
+    return rack((speed * math.cos(angle), speed * math.sin(angle)), cue_y=cue_y, mu=mu)
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -86,7 +68,7 @@ def test_invariants_hold_when_breaking_a_rack_of_touching_balls(s: Scene) -> Non
 def test_the_overlap_of_a_pressing_contact_is_the_only_one_and_is_measured() -> None:
     """The dataset card's pressing contact (balls 5 and 6 overlap 0.52 mm at t = 2.44 s): the
     invariants hold because the overlap margin reports that depth, and only that pair overlaps."""
-    s = rack(0.5, (1.6857654904001647, 0.07649157715652259), 0.002)
+    s = rack(PRESSING_BREAK)
     assert_invariants(s)
     overlap = pair_margins(FLOAT.run(s), R)[1]
     assert overlap is not None and 5e-4 < overlap < 5.5e-4
