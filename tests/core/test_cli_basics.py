@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 from bpb_core import __version__
 
@@ -79,3 +82,37 @@ def test_list_shows_every_kind_of_component() -> None:
     assert {"q1_confusion", "q2_confusion", "stasis", "q3_tolerance"} <= diagnostics
     families = run("list", "scene-families").stdout
     assert families.startswith("billiards\t")
+
+
+BLAS_THREADS = """
+import os
+from bpb_core.cli.main import main
+try:
+    main(["--version"])
+except SystemExit:
+    pass
+import numpy
+print(len(os.listdir("/proc/self/task")), os.environ.get("OPENBLAS_NUM_THREADS", "unset"))
+"""
+
+
+@pytest.mark.skipif(
+    not Path("/proc/self/task").is_dir() or (os.cpu_count() or 1) < 2,
+    reason="counts threads through Linux's /proc; one core starts no BLAS pool anyway",
+)
+@pytest.mark.parametrize(("preset", "threads"), [(None, "1"), ("2", "2")])
+def test_bpb_runs_numpy_without_a_blas_thread_pool_unless_the_user_asks(
+    preset: str | None, threads: str
+) -> None:
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    }
+    if preset is not None:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    done = subprocess.run(
+        [sys.executable, "-c", BLAS_THREADS], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    count, variable = done.stdout.splitlines()[-1].split()
+    assert variable == threads
+    assert int(count) == int(threads)  # the main thread plus OpenBLAS's workers
