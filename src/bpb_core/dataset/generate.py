@@ -56,7 +56,9 @@ def generate_dataset(
     """Generate a dataset folder (SPEC section 4 layout) and return its path.
 
     The folder is built beside ``out`` under a hidden ``.NAME.partial`` name and renamed at the
-    end, so an interrupted generation never leaves a folder that looks complete.
+    end, so an interrupted generation never leaves a folder that looks complete. A generation
+    stopped by bad input (a config whose scenes cannot be made) removes that folder, and leaves
+    a dataset it was to overwrite as it was.
 
     Args:
         out: Folder to create; it must not exist or be empty (or be a dataset, with
@@ -94,24 +96,28 @@ def generate_dataset(
     progress = progress or NoProgress()
     target = Path(out)
     partial = _prepare(target, overwrite)
-    n_workers = max(1, workers or os.cpu_count() or 1)
-    setup = worker_setup(registry, name, partial, seed, cfg, images)
-    calibration = None
-    if isinstance(maker, Calibrating) and calibrate:
-        with make_pool(n_workers, setup) as pool:
-            results = run_calibration(pool, hs, progress)
-        cfg, calibration = maker.apply_calibration(cfg, results)
-        setup = replace(setup, config=cfg)
-    tallies = {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
-    writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
     try:
-        run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
-        _write_stats(maker, setup, writer, progress)
-    finally:
-        writer.close()
-    writer.write_manifest(
-        _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
-    )
+        n_workers = max(1, workers or os.cpu_count() or 1)
+        setup = worker_setup(registry, name, partial, seed, cfg, images)
+        calibration = None
+        if isinstance(maker, Calibrating) and calibrate:
+            with make_pool(n_workers, setup) as pool:
+                results = run_calibration(pool, hs, progress)
+            cfg, calibration = maker.apply_calibration(cfg, results)
+            setup = replace(setup, config=cfg)
+        tallies = {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
+        writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+        try:
+            run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
+            _write_stats(maker, setup, writer, progress)
+        finally:
+            writer.close()
+        writer.write_manifest(
+            _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
+        )
+    except BadInput:  # the message says what to change; a half-built folder is of no use
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
     if target.exists():
         shutil.rmtree(target)
     partial.rename(target)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bpb_core.errors import BadInput
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.config import DatasetConfig, SpeedRange, horizon_key
 from bpb_tasks.billiards.sampler import Draw, build_scene, draw, scene_rng
@@ -89,7 +90,10 @@ def _kernel_rate(
         100_000,
     )
     if status.any():
-        raise ValueError(f"horizon {horizon:g} s: a calibration scene exceeded the event budget")
+        raise BadInput(
+            f"--calibrate: horizon {horizon:g} s: a calibration scene needs more than 100,000 "
+            f"events at cue speeds up to {speeds.high:g} m/s; choose a shorter horizon"
+        )
     cue = (events[:, 2] == 0) & ((events[:, 3] == 0) | (events[:, 4] == 0))
     return float(len(np.unique(events[cue, 0])) / count)
 
@@ -115,7 +119,8 @@ def calibrate_horizon(
         step: Called after each evaluation of the rate (for progress bars).
 
     Raises:
-        ValueError: The target is not reached even at :data:`MAX_HIGH` m/s.
+        BadInput: The target is not reached even at :data:`MAX_HIGH` m/s (the horizon is too
+            short for it), or a calibration scene exceeds the event budget.
     """
     cal = config.calibration
     draws = calibration_draws(horizon, config)
@@ -128,10 +133,14 @@ def calibrate_horizon(
         return value
 
     lo, hi = 0.0, 0.5
-    while rate(hi) < cal.target:
+    while (reached := rate(hi)) < cal.target:
+        if hi * 2 > MAX_HIGH:
+            raise BadInput(
+                f"--calibrate: horizon {horizon:g} s: the cue ball hits another ball in only "
+                f"{reached:.1%} of calibration scenes even at {hi:g} m/s, below the "
+                f"calibration.target {cal.target:g}; choose a longer horizon or a lower target"
+            )
         lo, hi = hi, hi * 2
-        if hi > MAX_HIGH:
-            raise ValueError(f"horizon {horizon:g} s: collision rate stays below {cal.target}")
     for _ in range(cal.iterations):
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if rate(mid) < cal.target else (lo, mid)

@@ -72,3 +72,23 @@ def test_a_config_that_cannot_be_sampled_exits_2(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert "config: balls: could not place ball" in done.stderr
     assert done.stderr.strip().count("\n") == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["crowded.json"]  # no half-built folder
+
+
+def test_a_horizon_calibration_cannot_serve_exits_2_and_keeps_the_old_dataset(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "ds"
+    common = ["generate", "--out", str(out), "--per-horizon", "1", "--workers", "1",
+              "--no-images"]  # fmt: skip
+    assert bpb(*common, "--horizons", "1").returncode == 0
+    before = (out / "dataset.json").read_bytes()
+    config = tmp_path / "quick.json"
+    config.write_text('{"calibration": {"samples": 20, "iterations": 4}}')
+    done = bpb(*common, "--horizons", "0.001", "--calibrate", "--config", str(config),
+               "--overwrite")  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().count("\n") == 0
+    assert "--calibrate: horizon 0.001 s:" in done.stderr and "64 m/s" in done.stderr
+    assert (out / "dataset.json").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "quick.json"]
