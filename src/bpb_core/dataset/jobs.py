@@ -23,7 +23,7 @@ from bpb_core.dataset.worker import (
     run_job,
 )
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
-from bpb_core.errors import BpbError
+from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -176,7 +176,11 @@ def _run_stable(
     kept, start = 0, 0
     while kept < per_horizon:
         if start > MAX_DRAWS_FACTOR * per_horizon + 100:
-            raise BpbError(f"horizon {h:g} s: too few stable scenes ({kept} in {start} draws)")
+            raise BadInput(
+                f"--stable-only: horizon {h:g} s: only {kept} of {start} scenes drawn were stable "
+                f"(generation gives up after {MAX_DRAWS_FACTOR} draws per scene wanted, plus 100); "
+                "ask for fewer scenes or loosen the config's stability settings"
+            )
         size = max(8, 2 * (per_horizon - kept))
         batch = [Job(h, i, keep_unstable=False) for i in range(start, start + size)]
         start += size

@@ -92,3 +92,16 @@ def test_a_horizon_calibration_cannot_serve_exits_2_and_keeps_the_old_dataset(
     assert "--calibrate: horizon 0.001 s:" in done.stderr and "64 m/s" in done.stderr
     assert (out / "dataset.json").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "quick.json"]
+
+
+def test_stable_only_that_finds_too_few_stable_scenes_exits_2_and_writes_nothing(
+    tmp_path: Path,
+) -> None:
+    config = tmp_path / "shaky.json"  # 5 cm perturbations: (almost) no scene is stable
+    config.write_text('{"stability_delta": 0.05, "stability_samples": 8}')
+    done = bpb("generate", "--out", str(tmp_path / "ds"), "--config", str(config), "--stable-only",
+               "--per-horizon", "2", "--horizons", "3", "--no-images")  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().count("\n") == 0
+    assert "--stable-only: horizon 3 s: only 0 of" in done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["shaky.json"]
