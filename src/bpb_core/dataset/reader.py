@@ -20,7 +20,7 @@ from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import SceneFamily
-from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, select_keys
+from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -90,13 +90,28 @@ class Dataset:
         return read_model(self.path(key, FINAL), self.family.truth_model)
 
     def verify(self) -> list[str]:
-        """Files whose SHA-256 differs from ``checksums.sha256`` (or that are missing)."""
+        """What differs from the dataset as it was generated: files whose SHA-256 differs from
+        ``checksums.sha256`` (or that are missing); ``index.csv`` or ``checksums.sha256`` unlike
+        the hashes the manifest records; a manifest whose ``dataset_hash`` does not match its
+        content; scene folders ``index.csv`` does not list, or listed scenes without a folder.
+        An empty list means the dataset is intact."""
+        problems = []
+        if self.manifest.sealed().dataset_hash != self.manifest.dataset_hash:
+            problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
+        for name, digest in sorted(self.manifest.files.items()):
+            target = self.root / name
+            if not target.is_file():
+                problems.append(f"{name}: missing")
+            elif hashlib.sha256(target.read_bytes()).hexdigest() != digest:
+                problems.append(f"{name}: content differs from the hash in {MANIFEST}")
+        problems += _folder_problems(self.root, _read_index(self.root / INDEX))
         path = self.root / CHECKSUMS
         try:
             lines = path.read_text(encoding="utf-8").splitlines()
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
-        problems = []
+        except (OSError, ValueError) as exc:
+            raise BadInput(
+                f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}"
+            ) from None
         for line in lines:
             digest, _, rel = line.partition("  ")
             target = self.root / rel
@@ -105,6 +120,46 @@ class Dataset:
             elif hashlib.sha256(target.read_bytes()).hexdigest() != digest:
                 problems.append(f"{rel}: content differs from its checksum")
         return problems
+
+
+def dataset_keys(root: Path) -> list[SceneKey]:
+    """The scenes of the folder ``root``: those its ``index.csv`` lists (a generated dataset),
+    else every ``h{t}/scene_{i}`` folder (a hand-made folder of scenes).
+
+    Raises:
+        BadInput: ``index.csv`` is corrupt, lists a scene that has no folder, or does not list
+            a scene folder that is there: the folder is not the dataset its manifest describes
+            (names the first such folder).
+    """
+    if not (root / INDEX).is_file():
+        return list(iter_scene_keys(root))
+    listed = _read_index(root / INDEX)
+    problems = _folder_problems(root, listed)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise BadInput(
+            f"{root / problems[0]}{more}: the dataset no longer matches its {INDEX}; "
+            "restore it or generate it again"
+        )
+    return listed
+
+
+def _folder_problems(root: Path, listed: Sequence[SceneKey]) -> list[str]:
+    """Scene folders ``listed`` but absent, and present but not ``listed`` (relative paths)."""
+    try:
+        present = set(iter_scene_keys(root))
+    except OSError as exc:
+        raise BadInput(f"{root}: cannot list scene folders: {exc.strerror or exc}") from None
+    wanted = set(listed)
+    missing = [f"{_rel(root, k)}: listed in {INDEX} but missing" for k in sorted(wanted - present)]
+    extra = [
+        f"{_rel(root, k)}: a scene folder {INDEX} does not list" for k in sorted(present - wanted)
+    ]
+    return missing + extra
+
+
+def _rel(root: Path, key: SceneKey) -> str:
+    return key.dir(root).relative_to(root).as_posix()
 
 
 def load_dataset(
@@ -208,6 +263,8 @@ def _read_index(path: Path) -> list[SceneKey]:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except ValueError as exc:  # not UTF-8
+        raise BadInput(f"{path}: not UTF-8 text: {exc}") from None
     reader = csv.DictReader(text.splitlines())
     missing = {"scene_id", "horizon", "index"} - set(reader.fieldnames or ())
     if missing:
@@ -221,4 +278,7 @@ def _read_index(path: Path) -> list[SceneKey]:
         if key.scene_id != row["scene_id"]:
             raise BadInput(f"{path}: line {line}: scene_id {row['scene_id']!r} != {key.scene_id}")
         keys.append(key)
+    if len(set(keys)) != len(keys):
+        twice = next(k for k in keys if keys.count(k) > 1)
+        raise BadInput(f"{path}: scene {twice.scene_id} is listed twice")
     return sorted(keys)

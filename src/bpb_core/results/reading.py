@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
-from bpb_core.dataset.reader import dataset_family
+from bpb_core.dataset.reader import dataset_family, dataset_keys
 from bpb_core.errors import BadInput
 from bpb_core.layout import (
     FINAL,
@@ -28,7 +28,6 @@ from bpb_core.layout import (
     MANIFEST,
     RUN_MANIFEST,
     SceneKey,
-    iter_scene_keys,
     select_keys,
 )
 from bpb_core.run_folder import read_manifest as read_run_manifest
@@ -188,7 +187,7 @@ def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:
 def _expected_keys(manifest: dict[str, Any], dataset: Path) -> tuple[SceneKey, ...]:
     horizons = _option(manifest, "horizons") or None
     limit = _option(manifest, "limit") or None
-    keys = select_keys(iter_scene_keys(dataset), horizons, None if limit is None else int(limit))
+    keys = select_keys(dataset_keys(dataset), horizons, None if limit is None else int(limit))
     chosen = manifest.get("scene_ids")  # --scenes / --sample: only these were asked
     if isinstance(chosen, list):
         wanted = set(map(str, chosen))

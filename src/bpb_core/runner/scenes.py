@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.reader import dataset_keys
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.validated_files import read_model
@@ -69,11 +70,12 @@ def select_scenes(
     """Scenes of ``data`` at ``horizons`` (all when ``None``), the first ``limit`` per horizon.
 
     Raises:
-        BadInput: ``data`` is not a dataset folder or no scene matches.
+        BadInput: ``data`` is not a dataset folder, its scene folders do not match its
+            ``index.csv``, or no scene matches.
     """
     if not data.is_dir():
         raise BadInput(f"{data}: --data: not a dataset folder")
-    keys = select_keys(iter_scene_keys(data), horizons, limit)
+    keys = select_keys(dataset_keys(data), horizons, limit)
     if not keys:
         raise BadInput(f"{data}: --data: no scenes (h*/scene_*/init.json) match the selection")
     return [SceneRef(key, key.dir(data), family) for key in keys]

@@ -1,0 +1,135 @@
+"""A dataset changed after generation: ``verify()`` names every change, and a run or a report
+refuses scene folders that no longer match ``index.csv`` instead of asking about whatever
+folders are there."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from bpb_core.dataset import load_dataset
+from bpb_core.errors import BadInput
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+@pytest.fixture
+def copy(small_dataset: Path, tmp_path: Path) -> Path:
+    return Path(shutil.copytree(small_dataset, tmp_path / "ds"))
+
+
+def drop_index_row(root: Path) -> None:
+    lines = (root / "index.csv").read_text().splitlines(keepends=True)
+    (root / "index.csv").write_text(
+        "".join(line for line in lines if not line.startswith("h1_0001"))
+    )
+
+
+def edit_seed(root: Path) -> None:
+    manifest = json.loads((root / "dataset.json").read_text())
+    manifest["seed"] += 1
+    (root / "dataset.json").write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+
+
+def rewrite_truth_and_its_checksum(root: Path) -> None:
+    final = root / "h1" / "scene_0000" / "final.json"
+    final.write_text(final.read_text().replace('"answer": "T"', '"answer": "F"', 1) + " ")
+    digest = hashlib.sha256(final.read_bytes()).hexdigest()
+    sums = root / "checksums.sha256"
+    sums.write_text(
+        "".join(
+            f"{digest}  h1/scene_0000/final.json\n"
+            if line.endswith(" h1/scene_0000/final.json")
+            else line + "\n"
+            for line in sums.read_text().splitlines()
+        )
+    )
+
+
+def add_scene_folder(root: Path) -> None:
+    shutil.copytree(root / "h1" / "scene_0000", root / "h1" / "scene_0099")
+
+
+def remove_scene_folder(root: Path) -> None:
+    shutil.rmtree(root / "h1" / "scene_0002")
+
+
+UNLISTED = "a scene folder index.csv does not list"
+CHANGES: list[tuple[Callable[[Path], None], list[str]]] = [
+    (drop_index_row, ["index.csv: content differs", f"h1/scene_0001: {UNLISTED}"]),
+    (edit_seed, ["dataset.json: dataset_hash does not match"]),
+    (rewrite_truth_and_its_checksum, ["checksums.sha256: content differs from the hash in"]),
+    (add_scene_folder, [f"h1/scene_0099: {UNLISTED}"]),
+    (
+        remove_scene_folder,
+        ["h1/scene_0002: listed in index.csv but", "h1/scene_0002/init.json: missing"],
+    ),
+]
+
+
+@pytest.mark.parametrize(("change", "expected"), CHANGES, ids=[c.__name__ for c, _ in CHANGES])
+def test_verify_names_every_change_made_after_generation(
+    copy: Path, change: Callable[[Path], None], expected: list[str]
+) -> None:
+    assert load_dataset(copy).verify() == []
+    change(copy)
+    problems = load_dataset(copy).verify()
+    for text in expected:
+        assert any(p.startswith(text) for p in problems), problems
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        (remove_scene_folder, "h1/scene_0002: listed in index.csv but missing"),
+        (add_scene_folder, f"h1/scene_0099: {UNLISTED}"),
+    ],
+)
+def test_a_run_on_scene_folders_unlike_the_index_exits_2_naming_the_folder(
+    copy: Path, tmp_path: Path, change: Callable[[Path], None], named: str
+) -> None:
+    change(copy)
+    out = str(tmp_path / "r")
+    done = subprocess.run(
+        [BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis", "--out", out],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().count("\n") == 0
+    assert f"{copy}/{named}" in done.stderr
+    assert not (tmp_path / "r").exists() or not any((tmp_path / "r").rglob("*.json"))
+
+
+def test_a_report_on_a_dataset_that_lost_a_scene_after_the_run_says_so(
+    copy: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "runs"
+    common = dict(capture_output=True, text=True, timeout=120)
+    ran = subprocess.run([BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis",
+                          "--out", str(out)], **common)  # type: ignore[call-overload]  # fmt: skip
+    assert ran.returncode == 0, ran.stderr
+    remove_scene_folder(copy)
+    report = subprocess.run([BPB, "report", str(out), "--out",
+                             str(tmp_path / "rep")], **common)  # type: ignore[call-overload]  # fmt: skip
+    assert report.returncode == 2, report.stdout + report.stderr
+    assert "h1/scene_0002: listed in index.csv but missing" in report.stderr
+
+
+def test_an_index_listing_a_scene_twice_or_not_utf8_is_refused(copy: Path) -> None:
+    index = copy / "index.csv"
+    lines = index.read_text().splitlines(keepends=True)
+    index.write_text("".join([*lines, lines[1]]))
+    with pytest.raises(BadInput, match=r"index\.csv: scene h\d_\d{4} is listed twice"):
+        load_dataset(copy)
+    index.write_bytes(b"scene_id,horizon,index\n\xff\n")
+    with pytest.raises(BadInput, match=r"index\.csv: not UTF-8 text"):
+        load_dataset(copy)
