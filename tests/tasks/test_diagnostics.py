@@ -59,6 +59,24 @@ def test_distance_errors_and_tolerance_curve(units: pd.DataFrame) -> None:
     assert stasis.is_monotonic_increasing
 
 
+def test_the_tolerance_curve_is_over_answered_balls_so_missing_answers_rank_nothing(
+    units: pd.DataFrame,
+) -> None:
+    model = tolerance_curve(units).query("run == 'litellm_model'")
+    q3 = units[(units["run"] == "litellm_model") & (units["task"] == "q3")]
+    assert (model["balls"] == (q3["status"] == "ok").sum()).all()  # 21 of 28: 7 never sent
+    # the oracle with half its calls failed is still right on every ball it answered ...
+    failed = units.copy()
+    oracle_q3 = (failed["run"] == "baseline_oracle") & (failed["task"] == "q3")
+    failed.loc[oracle_q3 & (failed["horizon"] == failed["horizon"].min()), "status"] = "api_error"
+    oracle = tolerance_curve(failed).query("run == 'baseline_oracle'")
+    assert (oracle["accuracy"] == 1.0).all() and 0 < oracle["balls"].iloc[0] < oracle_q3.sum()
+    # ... and a run with no answer at all has no curve rather than a line at 0%
+    failed.loc[oracle_q3, "status"] = "missing"
+    oracle = tolerance_curve(failed).query("run == 'baseline_oracle'")
+    assert oracle["accuracy"].isna().all() and (oracle["balls"] == 0).all()
+
+
 def test_diagnostics_are_registered_for_their_tasks(registry: Registry) -> None:
     assert [d.name for d in registry.diagnostics_for(["q1"])] == ["q1_confusion", "stasis"]
     names = [d.name for d in registry.diagnostics_for(["q3"])]

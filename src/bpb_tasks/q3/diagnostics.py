@@ -2,17 +2,20 @@
 
 ``q3_distance`` (and ``q3_distance_by_horizon``): the error in metres where both prediction and
 truth are positions, with the count of balls where exactly one side is ``null``.
-``q3_tolerance``: Q3 accuracy if a ball counted as right within k radii instead of one.
+``q3_tolerance``: Q3 accuracy if a ball counted as right within k radii instead of one, over the
+answered scenes (like the leaderboards' lead view: a call that never returned an answer is left
+out, not counted wrong, so missing answers cannot lower or rank a curve).
 """
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from bpb_core.results.tables import RUN_COLUMNS
+from bpb_core.results.tables import RUN_COLUMNS, UNANSWERED
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ScoredResults
@@ -44,25 +47,35 @@ def distance_errors(units: pd.DataFrame, *, by_horizon: bool = False) -> pd.Data
 def tolerance_curve(
     units: pd.DataFrame, tolerances: tuple[float, ...] = DEFAULT_TOLERANCES
 ) -> pd.DataFrame:
-    """Q3 accuracy (strict, pooled over balls) if a ball counted as right within k radii.
+    """Q3 accuracy (pooled over balls) if a ball counted as right within k radii, over the
+    answered units: a unit whose call never returned an answer (``api_error``, or never sent)
+    is left out; a parse error stays wrong.
 
     Returns:
         Columns ``run, adapter, model, baseline, tolerance`` (in radii), ``tolerance_m``
-        (metres, for the first row's radius) and ``accuracy``. At ``tolerance == 1`` this is
-        the Q3 per-ball accuracy pooled over all scenes.
+        (metres, for the first row's radius), ``accuracy`` (NaN for a run with no answered Q3
+        unit) and ``balls`` (the answered units it is over). At ``tolerance == 1`` this is the
+        Q3 per-ball accuracy pooled over the answered scenes.
     """
     frame = units[units["task"] == "q3"]
-    ok = ((frame["status"] == "ok") & ~frame["duplicate"]).to_numpy(dtype=bool)
+    frame = frame[~frame["status"].isin(UNANSWERED) & ~frame["duplicate"].astype(bool)]
+    ok = (frame["status"] == "ok").to_numpy(dtype=bool)
     both_null = ((frame["truth"] == "null") & (frame["pred"] == "null")).to_numpy(dtype=bool)
     ratio = (frame["distance"] / frame["radius"]).to_numpy(dtype=float)
     ks = np.asarray(tolerances, dtype=float)
     hits = ok[:, None] & (both_null[:, None] | (ratio[:, None] <= ks[None, :]))
     wide = pd.DataFrame(hits, columns=ks, index=frame.index)
     wide[RUN_COLUMNS] = frame[RUN_COLUMNS]
-    means = wide.groupby(RUN_COLUMNS, observed=True)[list(ks)].mean()
+    runs = units.loc[units["task"] == "q3", RUN_COLUMNS].drop_duplicates()
+    grouped = wide.groupby(RUN_COLUMNS, observed=True)
+    means = grouped[list(ks)].mean()
+    counts = grouped.size().rename("balls")
+    index = pd.MultiIndex.from_frame(runs)  # every run with Q3 units, answered or not
+    means = means.reindex(index)
     long = means.melt(ignore_index=False, var_name="tolerance", value_name="accuracy")
+    long = long.join(counts.reindex(index).fillna(0).astype("int64"))
     long = long.reset_index().sort_values(["run", "tolerance"], kind="stable")
-    radius = float(frame["radius"].iloc[0]) if len(frame) else float("nan")
+    radius = float(units.loc[units["task"] == "q3", "radius"].iloc[0]) if len(runs) else math.nan
     long["tolerance"] = long["tolerance"].astype("float64")
     long.insert(len(RUN_COLUMNS) + 1, "tolerance_m", long["tolerance"] * radius)
     return long.reset_index(drop=True)
@@ -122,7 +135,7 @@ class Q3Tolerance:
         ax.axvline(1.0, color="black", lw=0.8, ls=":")
         ax.text(1.05, 2, "Q3 rule (1 R)", fontsize=8)
         ax.set_xlabel("tolerance (ball radii)")
-        ax.set_ylabel("Q3 accuracy (%)")
+        ax.set_ylabel("Q3 accuracy, answered balls (%)")
         ax.set_ylim(-3, 103)
         ax.set_title("Q3 tolerance curve")
         ax.grid(alpha=0.3)
