@@ -137,6 +137,7 @@ def write_report(
         (out / sub).mkdir(parents=True, exist_ok=True)
     several = len(report.parts) > 1
     pages, cases = [], []
+    answered = 0  # fully answered (run, scene) pairs: what the gallery picks from
     for part in report.parts:
         prefix = f"{part.short_id}_" if several else ""
         pngs = chart_pngs(part, titles(part.results, registry), report.completeness)
@@ -146,13 +147,14 @@ def write_report(
         files.update(write_exports(part, out, prefix, report.completeness))
         scorers = {task: registry.scorer_for(task) for task in part.results.tasks}
         cases += gallery.build_cases(part.results, scorers, gallery_size)
+        answered += len(gallery.scene_totals(part.results.units, part.results.suites))
         pages.append(_page_part(part, pngs, report.completeness))
     for i, case in enumerate(cases):
         if case.png:
             name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
             files[f"gallery:{i}"] = _write(out / "gallery" / name, case.png)
     files.update(_export_frames(report, out))
-    page = html.render(title="bpb report", parts=pages, cases=cases)
+    page = html.render(title="bpb report", parts=pages, cases=cases, answered=answered)
     files["html"] = _write(out / "report.html", page.encode("utf-8"))
     return files
 

@@ -93,7 +93,9 @@ baselines; the legend above each picture explains its marks.</p>
 {{ case.scores }}</div>{% if case.uri %}<img alt="{{ case.scene_id }}" src="{{ case.uri }}">
 {% endif %}{% for title, items in case.wrong %}<div class="key"><span>{{ title }}:</span>
 {% if items %}<ul>{% for i in items %}<li>{{ i }}</li>{% endfor %}</ul>{% else %} all right
-{% endif %}</div>{% endfor %}</div>{% else %}<p class="muted">no answered scenes</p>
+{% endif %}</div>{% endfor %}</div>{% else %}<p class="muted">{% if answered %}every one of the
+{{ answered }} fully answered scenes scored 100%: nothing to show{% else %}no fully answered
+scenes{% endif %}</p>
 {% endfor %}</div><script>{{ script }}</script></main></body></html>"""
 
 
@@ -165,6 +167,7 @@ def render(
     title: str,
     parts: Sequence[dict[str, Any]],
     cases: Sequence[Case],
+    answered: int = 0,
 ) -> str:
     """The whole page: per dataset its runs, headline sections, charts and sections, then the
     failure gallery.
@@ -182,6 +185,7 @@ def render(
         script=Markup(SCRIPT),
         parts=shown,
         cases=[_case(c) for c in cases],
+        answered=answered,
     )
 
 

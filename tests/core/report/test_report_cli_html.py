@@ -166,3 +166,14 @@ def test_include_incomplete_puts_the_run_back_marked(report_dir: Path) -> None:
     }
     model = board["litellm_model"]
     assert model["q1_answered"] == 1.0 and model["short"] == "q1, q2, q3"
+
+
+def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(tmp_path: Path) -> None:
+    from support.reports_fixture import write_runs
+
+    runs = write_runs(tmp_path)
+    done = bpb("report", str(runs / "baseline_oracle"), "--out", str(tmp_path / "rep"))
+    assert done.returncode == 0, done.stderr
+    page = re.sub(r"\s+", " ", (tmp_path / "rep" / "report.html").read_text())
+    assert "every one of the 4 fully answered scenes scored 100%: nothing to show" in page
+    assert "no fully answered scenes" not in page
