@@ -15,7 +15,7 @@ import json
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -215,4 +215,30 @@ def read_manifest(run_dir: Path) -> dict[str, Any] | None:
         raise BadInput(f"{path}: cannot read run manifest: {exc}") from None
     if not isinstance(data, dict):
         raise BadInput(f"{path}: expected a JSON object")
+    try:
+        _ManifestFields.model_validate(data)
+    except ValidationError as exc:
+        raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
     return data
+
+
+Seconds = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+Count = Annotated[int, Field(ge=1)]
+
+
+class RunOptions(BaseModel):
+    """The fields of ``run.json`` (top level or under ``options``) that decide which scenes a
+    report expects: checked so that a hand-edited value is refused, not read as an empty or
+    narrower selection."""
+
+    model_config = ConfigDict(extra="allow", strict=True)
+
+    horizons: list[Seconds] | None = None
+    limit: Count | None = None
+    epochs: Count | None = None
+
+
+class _ManifestFields(RunOptions):
+    tasks: list[Annotated[str, Field(min_length=1)]] | None = None
+    scene_ids: list[str] | None = None
+    options: RunOptions | None = None

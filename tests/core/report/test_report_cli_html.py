@@ -177,3 +177,27 @@ def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(tmp_path: Pa
     page = re.sub(r"\s+", " ", (tmp_path / "rep" / "report.html").read_text())
     assert "every one of the 4 fully answered scenes scored 100%: nothing to show" in page
     assert "no fully answered scenes" not in page
+
+
+@pytest.mark.parametrize(
+    ("edit", "field"),
+    [
+        ({"options": []}, "options:"),
+        ({"options": {"horizons": [float("nan")]}}, "options.horizons[0]:"),
+        ({"options": {"limit": -1}}, "options.limit:"),
+        ({"scene_ids": "h1_0000"}, "scene_ids:"),
+        ({"tasks": "q1"}, "tasks:"),
+    ],
+)
+def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scenes(
+    tmp_path: Path, edit: dict[str, object], field: str
+) -> None:
+    from support.reports_fixture import write_runs
+
+    run = write_runs(tmp_path) / "baseline_stasis"
+    manifest = json.loads((run / "run.json").read_text())
+    (run / "run.json").write_text(json.dumps({**manifest, **edit}))
+    done = bpb("report", str(run), "--out", str(tmp_path / "rep"))
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.strip().count("\n") == 0
+    assert f"{run / 'run.json'}: {field}" in done.stderr
