@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import Describing
 from bpb_core.errors import BadInput
 from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
-from bpb_core.run_folder import read_manifest, write_manifest
+from bpb_core.run_folder import iter_answers, read_manifest, write_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
 from bpb_core.version import __version__
@@ -123,6 +123,23 @@ def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> No
             )
 
 
+def _check_selection(run_dir: Path, scene_ids: list[str], options: RunOptions) -> None:
+    """Refuse a resume whose selection leaves out answers the folder already holds: its
+    ``run.json`` would describe fewer scenes, tasks or epochs, and reports would silently drop
+    those answers."""
+    wanted, tasks = set(scene_ids), set(options.tasks)
+    for _, record in iter_answers(run_dir):
+        if record.scene_id in wanted and record.task in tasks and record.epoch <= options.epochs:
+            continue
+        raise BadInput(
+            f"{run_dir}: holds answers outside this selection ({record.scene_id} "
+            f"{record.task}, epoch {record.epoch}); resuming with fewer scenes, tasks or epochs "
+            "(--horizons, --limit, --scenes, --sample, --tasks, --epochs) would leave them out "
+            "of the run and its reports: resume with the same or a wider selection, or use "
+            "another --out"
+        )
+
+
 def start_manifest(
     run_dir: Path,
     spec: str,
@@ -141,7 +158,8 @@ def start_manifest(
     ``--sample`` chose them (the results expect answers for these only).
 
     Raises:
-        BadInput: The folder holds a run with other answer-shaping settings.
+        BadInput: The folder holds a run with other answer-shaping settings, or answers
+            outside this selection.
     """
     manifest: dict[str, Any] = {
         "adapter": spec,
@@ -166,6 +184,8 @@ def start_manifest(
         _check_log(run_dir, logged or set(), manifest["config_hash"])
     else:
         _check_resume(run_dir, old, manifest)
+        if scene_ids is not None:
+            _check_selection(run_dir, scene_ids, options)
         manifest["started"] = old.get("started", manifest["started"])
         if isinstance(old.get("order_seed"), int):  # the resumed run goes on in its own order
             manifest["order_seed"] = old["order_seed"]

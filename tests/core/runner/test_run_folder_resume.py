@@ -75,6 +75,25 @@ def test_without_run_json_the_attempts_log_still_refuses_another_configuration(
     assert {r.input_mode for r in _records(run_dir).values()} == {"state"}
 
 
+@pytest.mark.parametrize(
+    "narrower",
+    [{"limit": 1}, {"horizons": (1.0,)}, {"scenes": ("h1_0000",)}],
+    ids=["limit", "horizons", "scenes"],
+)
+def test_resuming_with_a_narrower_selection_is_refused_and_keeps_every_answer(
+    dataset: Path, tmp_path: Path, registry: Registry, narrower: dict[str, object]
+) -> None:
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    _run(dataset, run_dir, registry, adapter, limit=2)
+    before = (run_dir / "run.json").read_bytes(), sorted(_records(run_dir))
+    with pytest.raises(BadInput, match=r"holds answers outside this selection"):
+        _run(dataset, run_dir, registry, adapter, **narrower)
+    assert ((run_dir / "run.json").read_bytes(), sorted(_records(run_dir))) == before
+    _run(dataset, run_dir, registry, adapter)  # a wider selection resumes, asking the rest
+    assert adapter.calls == 18 and len(_records(run_dir)) == 18
+
+
 def test_an_ok_reply_whose_answer_file_is_missing_is_recovered_not_resent(
     dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
