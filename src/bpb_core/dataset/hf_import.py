@@ -10,6 +10,7 @@ export's content (``$BPB_CACHE_DIR``, default ``~/.cache/bpb``, then ``hf/<diges
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import shutil
 from pathlib import Path
@@ -103,7 +104,15 @@ def _unpack_shard(shard: Path, out: Path) -> None:
     for number, row in enumerate(table.to_pylist()):
         if not isinstance(row["scene"], str) or not isinstance(row["truth"], str):
             raise BadInput(f"{shard}: row {number}: scene and truth must be JSON text")
-        folder = SceneKey(float(row["horizon"]), int(row["index"])).dir(out)
+        horizon, index = row["horizon"], row["index"]
+        if not (
+            isinstance(horizon, int | float) and math.isfinite(horizon) and horizon > 0
+        ) or not (isinstance(index, int) and index >= 0):
+            raise BadInput(
+                f"{shard}: row {number}: horizon and index must be a positive number of seconds "
+                f"and a scene number, not {horizon!r} and {index!r}"
+            )
+        folder = SceneKey(float(horizon), index).dir(out)
         if (folder / INIT).exists():
             continue  # one row per task: the scene's files are written once
         folder.mkdir(parents=True, exist_ok=True)
@@ -112,4 +121,10 @@ def _unpack_shard(shard: Path, out: Path) -> None:
         image = row["image"]
         if image is not None and image.get("bytes"):
             # only the file name: an image never lands outside its scene's folder
-            (folder / Path(str(image["path"])).name).write_bytes(image["bytes"])
+            name = Path(str(image.get("path") or "")).name
+            if name in ("", ".", "..") or name in (INIT, FINAL):
+                raise BadInput(
+                    f"{shard}: row {number}: image.path: {image.get('path')!r} is not an "
+                    "image file name"
+                )
+            (folder / name).write_bytes(image["bytes"])

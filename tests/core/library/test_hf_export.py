@@ -148,3 +148,37 @@ def test_each_scene_image_is_stored_once(small_dataset: Path, tmp_path: Path) ->
     images = sum(scene.image_path().stat().st_size for scene in load_dataset(small_dataset))
     stored = sum((done.out / name).stat().st_size for name in done.files)
     assert stored < 2 * images  # three rows (tasks) per scene would make it 3x and more
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [
+        ("horizon", None, "horizon and index must be"),
+        ("index", -1, "horizon and index must be"),
+        ("image", {"path": "..", "bytes": b"\x89PNG"}, "image.path: '..' is not an image file"),
+    ],
+)
+def test_an_edited_shard_row_is_named_not_an_internal_error(
+    export: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    column: str,
+    value: object,
+    message: str,
+) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    edited = Path(shutil.copytree(export, tmp_path / "edited"))
+    shard = sorted((edited / "data").glob("h1-*.parquet"))[0]
+    table = pq.read_table(shard)
+    values = table.column(column).to_pylist()
+    values[0] = value
+    field = table.schema.field(column)
+    table = table.set_column(
+        table.schema.get_field_index(column), field, pa.array(values, field.type)
+    )
+    pq.write_table(table, shard)
+    with pytest.raises(BadInput, match=rf"^{re.escape(str(shard))}: row 0: {re.escape(message)}"):
+        load_dataset(edited)
