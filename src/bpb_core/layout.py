@@ -14,6 +14,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from bpb_core.errors import BadInput
+
 MANIFEST = "dataset.json"
 INDEX = "index.csv"
 INIT = "init.json"
@@ -69,16 +71,25 @@ def scene_places(root: Path) -> list[tuple[float, int]]:
     with os.scandir(root) as hdirs:
         for hdir in hdirs:
             hmatch = _HORIZON_DIR.match(hdir.name)
-            if not hmatch or not hdir.is_dir():
+            if not hmatch or not _is_dir(hdir):
                 continue
             horizon = float(hmatch.group(1))
             with os.scandir(hdir.path) as sdirs:
                 for sdir in sdirs:
                     smatch = _SCENE_DIR.match(sdir.name)
-                    if smatch and sdir.is_dir():
+                    if smatch and _is_dir(sdir):
                         found.append((horizon, int(smatch.group(1))))
     found.sort()
     return found
+
+
+def _is_dir(entry: os.DirEntry[str]) -> bool:
+    """Whether a listed entry is a folder; a symbolic link that cannot be followed (a loop, a
+    dangling target) is refused, named, rather than failing later without a name."""
+    try:
+        return entry.is_dir()
+    except OSError as exc:
+        raise BadInput(f"{entry.path}: cannot open: {exc.strerror or exc}") from None
 
 
 def select_keys(

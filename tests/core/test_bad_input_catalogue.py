@@ -37,6 +37,7 @@ CATALOGUE = [
     ("simulate {scene} --workers -1", "--workers: must be 0 (automatic) or more, got -1"),
     ("simulate {scene} --simulator pymunk --dt nan", "--dt: must be a positive finite number"),
     ("simulate {scene} --simulator pymunk --dt inf", "--dt: must be a positive finite number"),
+    ("prompt h1_0000 --data {tmp}/nowhere", "{tmp}/nowhere: --data: no such dataset folder"),
 ]  # fmt: skip
 
 
@@ -64,3 +65,23 @@ def test_run_file_numbers_must_be_finite(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert done.stderr.strip().count("\n") == 0
     assert "timeout: must be a positive finite number, got inf" in done.stderr
+
+
+@pytest.mark.parametrize(
+    "command",
+    ["simulate {data}", "run --data {data} --adapter baseline:stasis --out {tmp}/runs"],
+)
+def test_a_scene_folder_symlink_loop_is_named_not_an_internal_error(
+    command: str, tmp_path: Path, dataset: Path
+) -> None:
+    import shutil
+
+    data = Path(shutil.copytree(dataset / "h1", tmp_path / "scenes" / "h1"))
+    (data / "scene_0007").symlink_to("scene_0007")  # a link to itself: opening it loops
+    names = {"tmp": str(tmp_path), "data": str(data.parent)}
+    args = [part.format(**names) for part in command.split()]
+    done = subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip() == (
+        f"error: {data / 'scene_0007'}: cannot open: Too many levels of symbolic links"
+    )

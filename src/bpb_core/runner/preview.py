@@ -11,6 +11,7 @@ import hashlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.reader import dataset_family
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
@@ -25,6 +26,9 @@ if TYPE_CHECKING:
 def _scene_file(scene: Path, data: Path | None) -> Path:
     """``init.json`` of ``scene``: a file, a scene folder, or a scene id in ``data``."""
     if data is not None and not scene.exists():
+        if not data.is_dir():
+            raise BadInput(f"{data}: --data: no such dataset folder")
+        data = resolve_data(data)  # a Hugging Face export opens as the folder it came from
         found = [p for p in sorted(data.glob(f"h*/scene_*/{INIT}")) if _id(p) == str(scene)]
         if not found:
             raise BadInput(f"{data}: --data: no scene with id {str(scene)!r} (like h1_0000)")
