@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.report.html import Cell, plain
-from bpb_core.report.sections import Rows, headline_cells, horizon_cells
+from bpb_core.report.sections import Rows, different_scenes_note, headline_cells, horizon_cells
 from bpb_core.results.completeness import completeness_records, incomplete_lines
 from bpb_core.results.tables import summary_records
 
@@ -135,6 +135,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "by_horizon": records(by_horizon),
         "completeness": completeness_records(tables["accuracy"], rule.min_complete),
         "incomplete": incomplete_lines(results.calls),
+        "different_scenes": different_scenes_note(part),
         "usage": records(tables["usage"]),
         "pairs": records(tables["pairs"]),
         "metrics": {t: records(tables[f"{t}_metrics"]) for t in part.metric_notes},

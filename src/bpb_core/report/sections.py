@@ -112,7 +112,6 @@ def _interval(ci: pd.DataFrame, run: str, metric: str) -> Cell:
 
 def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
     suites = ", ".join(f"{s.name} ({s.summary})" for s in part.results.suites)
-    expected = set(part.tables["leaderboard"]["expected"].tolist())
     text = (
         "Mean accuracy over horizons. Answered only: calls that never returned an answer "
         "(API error, never sent) are left out; a parse error stays wrong. Strict (the paper): "
@@ -129,13 +128,23 @@ def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
             f"bpb run --data {part.path} --adapter baseline:stasis --adapter baseline:straight "
             "(offline, free), then report again."
         )
-    if len(expected) > 1:
-        note += Markup("<p class='warn'>{}</p>").format(
-            "The runs were asked different numbers of scenes "
-            f"({', '.join(str(e) for e in sorted(expected))} scene-task calls): their scores "
-            "are means over different scenes; compare them in the paired comparisons below."
-        )
+    different = different_scenes_note(part)
+    if different:
+        note += Markup("<p class='warn'>{}</p>").format(different)
     return note
+
+
+def different_scenes_note(part: ReportPart) -> str | None:
+    """The warning that the runs were asked different numbers of scenes (so their scores are
+    means over different scenes), or ``None``; shown in the terminal, JSON and HTML alike."""
+    expected = sorted(set(part.tables["leaderboard"]["expected"].tolist()))
+    if len(expected) < 2:
+        return None
+    return (
+        "The runs were asked different numbers of scenes "
+        f"({', '.join(str(e) for e in expected)} scene-task calls): their scores "
+        "are means over different scenes; compare them in the paired comparisons."
+    )
 
 
 def incomplete_notes(part: ReportPart) -> Markup:

@@ -201,3 +201,19 @@ def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scene
     assert done.returncode == 2, done.stdout + done.stderr
     assert done.stderr.strip().count("\n") == 0
     assert f"{run / 'run.json'}: {field}" in done.stderr
+
+
+def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
+    tmp_path: Path, dataset: Path
+) -> None:
+    runs = tmp_path / "runs"
+    for adapter, extra in (("baseline:stasis", []), ("baseline:straight", ["--horizons", "1"])):
+        ran = bpb("run", "--data", str(dataset), "--adapter", adapter, "--out", str(runs), *extra)
+        assert ran.returncode == 0, ran.stderr
+    shown = bpb("report", str(runs), "--out", str(tmp_path / "rep"))
+    assert shown.returncode == 0, shown.stderr
+    warning = "The runs were asked different numbers of scenes (9, 18 scene-task calls)"
+    assert warning in " ".join(shown.stdout.split())
+    summary = json.loads(bpb("report", str(runs), "--json").stdout)
+    assert summary["different_scenes"].startswith(warning)
+    assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
