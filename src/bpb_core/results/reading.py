@@ -130,7 +130,7 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     tasks = _option(manifest, "tasks")
     if not tasks:
         raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
-    keys = _expected_keys(manifest, dataset)
+    keys = _expected_keys(manifest, dataset, path)
     names = tuple(str(t) for t in tasks)
     label = label or path.name
     dropped = manifest.get("dropped_params") or []
@@ -184,13 +184,19 @@ def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:
     raise BadInput(f"{run_path / RUN_MANIFEST}: data: dataset folder {value!r} not found")
 
 
-def _expected_keys(manifest: dict[str, Any], dataset: Path) -> tuple[SceneKey, ...]:
+def _expected_keys(manifest: dict[str, Any], dataset: Path, run_path: Path) -> tuple[SceneKey, ...]:
     horizons = _option(manifest, "horizons") or None
     limit = _option(manifest, "limit") or None
     keys = select_keys(dataset_keys(dataset), horizons, None if limit is None else int(limit))
     chosen = manifest.get("scene_ids")  # --scenes / --sample: only these were asked
     if isinstance(chosen, list):
         wanted = set(map(str, chosen))
+        unknown = sorted(wanted - {key.scene_id for key in keys})
+        if unknown:
+            raise BadInput(
+                f"{run_path / RUN_MANIFEST}: scene_ids: {unknown[0]} is not a scene of {dataset} "
+                "in the run's horizons and limit"
+            )
         keys = [key for key in keys if key.scene_id in wanted]
     return tuple(keys)
 

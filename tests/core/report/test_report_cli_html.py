@@ -186,6 +186,7 @@ def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(tmp_path: Pa
         ({"options": {"horizons": [float("nan")]}}, "options.horizons[0]:"),
         ({"options": {"limit": -1}}, "options.limit:"),
         ({"scene_ids": "h1_0000"}, "scene_ids:"),
+        ({"scene_ids": ["h9_0000"]}, "scene_ids: h9_0000 is not a scene of"),
         ({"tasks": "q1"}, "tasks:"),
     ],
 )
