@@ -60,10 +60,12 @@ def install(site: Path) -> InstallFn:
 
 @pytest.fixture
 def run_bpb(site: Path) -> Callable[..., subprocess.CompletedProcess[str]]:
-    """Run the real ``bpb`` console script with ``site`` on its path."""
+    """Run the real ``bpb`` console script with ``site`` on its path (before ``PYTHONPATH``)."""
 
     def _run(*args: str) -> subprocess.CompletedProcess[str]:
-        env = {**os.environ, "PYTHONPATH": str(site)}
+        # site first; a PYTHONPATH already set (a git worktree's src) stays after it
+        path = os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")]))
+        env = {**os.environ, "PYTHONPATH": path}
         return subprocess.run([BPB, *args], capture_output=True, text=True, env=env, timeout=120)
 
     return _run
