@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -83,7 +84,9 @@ def export_hf(
 
     Args:
         data: The dataset folder.
-        out: The export folder: new, empty, or an earlier export (replaced).
+        out: The export folder: new, empty, or an earlier export. The export is built in a
+            hidden ``.NAME.partial`` folder beside it and moved in at the end, so an export
+            that fails leaves an earlier one as it was (and no partial folder).
         tasks: Tasks to export (default: the family's default tasks).
         shard_rows: Rows per Parquet file at most.
         registry: Where the family and tasks come from; default: every installed plugin.
@@ -97,7 +100,27 @@ def export_hf(
     dataset = load_dataset(data, registry=registry)
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
-    target = _prepare(Path(out))
+    target = Path(out)
+    _check_out(target)
+    partial = _partial_folder(target)
+    try:
+        splits, files, card = _write_export(dataset, partial, objects, names, shard_rows, registry)
+        (partial / "README.md").write_text(card, encoding="utf-8")
+        _swap_in(partial, target)
+    finally:
+        shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
+    return HfExport(target, splits, tuple(files), names)
+
+
+def _write_export(
+    dataset: Dataset,
+    out: Path,
+    objects: list[Task],
+    names: tuple[str, ...],
+    shard_rows: int,
+    registry: Registry,
+) -> tuple[dict[str, int], list[str], str]:
+    """Write the shards and side files to ``out``; the rows per split, the shards and the card."""
     cells = _index_cells(dataset.root / INDEX)
     splits: dict[str, int] = {}
     sizes: dict[str, int] = {}
@@ -110,21 +133,50 @@ def export_hf(
         ]
         split = horizon_label(horizon)
         splits[split] = len(rows)
-        written, sizes[split] = _write_split(target, split, rows, shard_rows)
+        written, sizes[split] = _write_split(out, split, rows, shard_rows)
         files += written
-    _write_side_files(dataset, target)
+    _write_side_files(dataset, out)
     card = card_text(dataset, FEATURES, {s: (splits[s], sizes[s]) for s in splits}, names)
-    (target / "README.md").write_text(card, encoding="utf-8")
-    return HfExport(target, splits, tuple(files), names)
+    return splits, files, card
 
 
-def _prepare(out: Path) -> Path:
+def _check_out(out: Path) -> None:
     if out.exists() and any(out.iterdir()) and not is_hf_export(out):
         raise BadInput(f"{out}: --out: not empty and not a bpb export; choose a new folder")
-    shutil.rmtree(out / DATA, ignore_errors=True)
-    (out / DATA).mkdir(parents=True, exist_ok=True)
-    (out / SIDE).mkdir(exist_ok=True)
-    return out
+
+
+def _partial_folder(out: Path) -> Path:
+    """A fresh hidden ``.NAME.partial`` folder beside ``out`` to build the export in."""
+    where = Path(os.path.abspath(out))
+    partial = where.parent / f".{where.name}.partial"
+    shutil.rmtree(partial, ignore_errors=True)  # left over from an interrupted export
+    (partial / DATA).mkdir(parents=True)
+    (partial / SIDE).mkdir()
+    return partial
+
+
+def _swap_in(partial: Path, out: Path) -> None:
+    """Put the export built in ``partial`` at ``out``: a new folder is renamed into place; in an
+    earlier export only ``data/``, ``bpb/`` and ``README.md`` are replaced (other files, such as
+    a Hugging Face repository's ``.git``, stay), the old ones kept until the new ones are in."""
+    if not out.exists():
+        partial.rename(out)
+        return
+    names = [DATA, SIDE, "README.md"]
+    old = partial / ".old"
+    old.mkdir()
+    moved: list[tuple[Path, Path]] = []
+    try:
+        for name in names:
+            if (out / name).exists() or (out / name).is_symlink():
+                (out / name).rename(old / name)
+                moved.append((old / name, out / name))
+            (partial / name).rename(out / name)
+            moved.append((out / name, partial / name))
+    except OSError as exc:
+        for there, back in reversed(moved):  # put the earlier export back as it was
+            there.rename(back)
+        raise BadInput(f"{out}: --out: cannot replace the export: {exc.strerror or exc}") from None
 
 
 def _index_cells(path: Path) -> dict[str, dict[str, str]]:

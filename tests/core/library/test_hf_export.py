@@ -182,3 +182,32 @@ def test_an_edited_shard_row_is_named_not_an_internal_error(
     pq.write_table(table, shard)
     with pytest.raises(BadInput, match=rf"^{re.escape(str(shard))}: row 0: {re.escape(message)}"):
         load_dataset(edited)
+
+
+def test_a_failed_export_leaves_the_earlier_one_as_it_was(
+    small_dataset: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    out = tmp_path / "hf"
+    assert run_bpb("export", str(small_dataset), "--out", str(out)).returncode == 0
+    (out / ".gitattributes").write_text("*.parquet filter=lfs\n", encoding="utf-8")  # a hub clone
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    broken = tmp_path / "broken"
+    shutil.copytree(small_dataset, broken)
+    (broken / "h3" / "scene_0002" / "init.json").unlink()
+    bad = run_bpb("export", str(broken), "--out", str(out))
+    assert bad.returncode == 2
+    missing = broken / "h3" / "scene_0002" / "init.json"
+    assert bad.stderr.strip().splitlines() == [
+        f"error: {missing}: cannot read: No such file or directory"
+    ]
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken", "hf"]  # no .hf.partial
+    again = run_bpb("export", str(small_dataset), "--out", str(out), "--shard-rows", "4")
+    assert again.returncode == 0, again.stderr
+    assert sorted(p.name for p in (out / "data").iterdir()) == [
+        f"h{h}-0000{i}-of-00003.parquet" for h in (1, 3) for i in range(3)
+    ]  # the earlier single shards are gone
+    assert (out / ".gitattributes").read_text(encoding="utf-8") == "*.parquet filter=lfs\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken", "hf"]
