@@ -23,7 +23,7 @@ from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.reader import Dataset, load_dataset
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
-from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, horizon_label
+from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
 from bpb_core.library.answers import build_messages
 from bpb_core.library.hf_card import card_text
 
@@ -92,7 +92,8 @@ def export_hf(
         registry: Where the family and tasks come from; default: every installed plugin.
 
     Raises:
-        BadInput: ``data`` is not a dataset, a task is unknown, or ``out`` holds other files.
+        BadInput: ``data`` is not a dataset, a task is unknown, a scene file is missing, or
+            ``out`` holds other files or cannot be a folder (a file, or under one).
     """
     from bpb_core.registry import make_registry
 
@@ -141,7 +142,15 @@ def _write_export(
 
 
 def _check_out(out: Path) -> None:
-    if out.exists() and any(out.iterdir()) and not is_hf_export(out):
+    """``out`` is, or can be made, a folder to export into (one line naming ``--out``)."""
+    if out.exists() and not out.is_dir():
+        raise BadInput(f"{out}: --out: not a folder; choose a new folder")
+    check_writable_folder(out)
+    try:
+        busy = out.exists() and any(out.iterdir())
+    except OSError as exc:
+        raise BadInput(f"{out}: --out: cannot read the folder: {exc.strerror or exc}") from None
+    if busy and not is_hf_export(out):
         raise BadInput(f"{out}: --out: not empty and not a bpb export; choose a new folder")
 
 
@@ -150,8 +159,12 @@ def _partial_folder(out: Path) -> Path:
     where = Path(os.path.abspath(out))
     partial = where.parent / f".{where.name}.partial"
     shutil.rmtree(partial, ignore_errors=True)  # left over from an interrupted export
-    (partial / DATA).mkdir(parents=True)
-    (partial / SIDE).mkdir()
+    try:
+        (partial / DATA).mkdir(parents=True)
+        (partial / SIDE).mkdir()
+    except OSError as exc:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise BadInput(f"{out}: --out: cannot create the folder: {exc.strerror or exc}") from None
     return partial
 
 

@@ -211,3 +211,29 @@ def test_a_failed_export_leaves_the_earlier_one_as_it_was(
     ]  # the earlier single shards are gone
     assert (out / ".gitattributes").read_text(encoding="utf-8") == "*.parquet filter=lfs\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["broken", "hf"]
+
+
+@pytest.mark.parametrize(
+    ("out", "message"),
+    [
+        ("afile", "{tmp}/afile: --out: not a folder; choose a new folder"),
+        ("afile/sub", "{tmp}/afile: --out: not a folder (a file is in the way of {tmp}/afile/sub)"),
+        ("/dev/null", "/dev/null: --out: not a folder; choose a new folder"),
+        ("/proc/x", "/proc/x: --out: cannot create the folder: No such file or directory"),
+    ],
+)
+def test_an_out_that_cannot_be_a_folder_is_one_line(
+    small_dataset: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    out: str,
+    message: str,
+) -> None:
+    if out.startswith("/") and not Path(out).parent.is_dir():
+        pytest.skip(f"no {Path(out).parent} here")
+    (tmp_path / "afile").write_text("mine", encoding="utf-8")
+    bad = run_bpb("export", str(small_dataset), "--out", str(tmp_path / out))
+    assert bad.returncode == 2, bad.stderr
+    assert bad.stderr.strip().splitlines() == ["error: " + message.format(tmp=tmp_path)]
+    assert (tmp_path / "afile").read_text(encoding="utf-8") == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]  # no partial folder
