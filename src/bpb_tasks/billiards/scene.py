@@ -46,6 +46,17 @@ class Physics(StrictModel):
     g: float = Field(9.8, gt=0)
     wall_restitution: float = Field(1.0, ge=0, le=1)
 
+    @model_validator(mode="after")
+    def _finite_friction(self) -> Physics:
+        # Each value alone is finite, but mu*g may overflow: the simulators would then move
+        # balls by inf - inf (NaN) or stop them at once.
+        if not math.isfinite(self.mu * self.g):
+            raise ValueError(
+                f"mu*g = {self.mu:g} * {self.g:g} overflows (not a finite deceleration in "
+                "m/s^2); make mu or g smaller"
+            )
+        return self
+
     @property
     def deceleration(self) -> float:
         """Friction deceleration mu*g in m/s^2."""

@@ -23,6 +23,7 @@ CONFIGS = [
     ("speed.toml", '[speed_ranges."1"]\nlow = 1\nhigh = 1e300\n',
      "speed_ranges.1.high: Input should be less than or equal to 100"),
     ("table.toml", "[table]\nwidth = 100\n", "table.width: 100 m at image.px_per_m 600 makes"),
+    ("mug.toml", "[physics]\nmu = 1e308\n", "physics: mu*g = 1e+308 * 9.8 overflows"),
 ]  # fmt: skip
 
 
@@ -78,6 +79,9 @@ SCENES = [
      "balls[0].vel: speed 1e+154 m/s is above 100 m/s"),
     ("huge-g", lambda: _scene(physics={"g": float("inf")}), [],
      "physics.g: Input should be a finite number"),
+    *[(f"huge-mu{'-'.join(['', *args])}", lambda: _scene(physics={"mu": 1e308}), args,
+       "physics: mu*g = 1e+308 * 9.8 overflows (not a finite deceleration in m/s^2)")
+      for args in ([], ["--engine", "kernel"], ["--engine", "python"], ["--simulator", "pymunk"])],
     ("pymunk-mu0", _bouncer, ["--simulator", "pymunk", "--horizon", "1e9"],
      "pymunk: 1e+12 steps of 0.001 s to reach t=1e+09 with balls still moving"),
     ("event-cap", _bouncer, ["--horizon", "1e9"], "more than 100000 events before t=1000000000"),
