@@ -18,6 +18,7 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
 from bpb_core.errors import BadInput
@@ -132,6 +133,11 @@ class _PymunkRun:
         contacts keep it, so it bounds every ball's speed), so all balls rest by
         ``sqrt(sum v^2) / (mu g)``; stepping stops then. Without friction they never rest.
         """
+        if not math.isfinite(horizon / self.dt):  # the step count overflows a float
+            raise BadInput(
+                f"pymunk: t={horizon:g} is more steps of {self.dt:g} s than can be counted; use "
+                f"a horizon under {sys.float_info.max * self.dt:.3g} s or a larger --dt"
+            )
         speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in self.scene.balls)))
         resting_by = speed / self.decel if self.decel > 0 else (0.0 if speed == 0 else math.inf)
         steps = min(horizon, resting_by + 1.0) / self.dt

@@ -84,6 +84,10 @@ SCENES = [
       for args in ([], ["--engine", "kernel"], ["--engine", "python"], ["--simulator", "pymunk"])],
     ("pymunk-mu0", _bouncer, ["--simulator", "pymunk", "--horizon", "1e9"],
      "pymunk: 1e+12 steps of 0.001 s to reach t=1e+09 with balls still moving"),
+    ("pymunk-huge-horizon", _scene, ["--simulator", "pymunk", "--horizon", "1e308"],
+     "pymunk: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
+    ("pymunk-huge-horizon-in-file", lambda: _scene(horizon=1e308), ["--simulator", "pymunk"],
+     "pymunk: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
     ("event-cap", _bouncer, ["--horizon", "1e9"], "more than 100000 events before t=1000000000"),
 ]  # fmt: skip
 
