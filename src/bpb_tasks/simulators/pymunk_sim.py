@@ -182,11 +182,11 @@ class _PymunkRun:
 
     def _pockets(self) -> None:
         pockets = self.scene.pockets
-        r2 = pockets.radius**2
         for ball in list(self.active):
             body = self.bodies[ball]
             x, y = body.position
-            if any((x - cx) ** 2 + (y - cy) ** 2 <= r2 for cx, cy in pockets.centers):
+            # hypot, not squares: a far pocket centre (1e300 m) would overflow ** 2
+            if any(math.hypot(x - cx, y - cy) <= pockets.radius for cx, cy in pockets.centers):
                 self._log("pocket", (ball,), None)
                 self.ended[ball] = self.t
                 self.active.discard(ball)

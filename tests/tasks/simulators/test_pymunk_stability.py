@@ -47,6 +47,16 @@ def test_pymunk_pocket_wall_and_resting_contact() -> None:
     assert bounce.cue_walls() == {"RIGHT"}
 
 
+@pytest.mark.parametrize("radius", [0.06, 1e200])
+def test_pymunk_far_pockets_do_not_overflow(radius: float) -> None:
+    # (x - 1e300) ** 2 raised OverflowError (exit 3 from bpb simulate); no ball is pocketed
+    s = scene([(0.5, 0.5, 1.0, 0.0)], horizon=1, pockets=[(1e300, 1e300)], pocket_radius=radius)
+    fast, exact = PymunkSimulator().run(s), EXACT.run(s)
+    assert [e.kind for e in fast.events] == [e.kind for e in exact.events] == []
+    p, q = fast.positions[0], exact.positions[0]
+    assert p is not None and q is not None and math.dist(p, q) < 5e-3
+
+
 def test_pymunk_labels_mostly_agree_with_exact_on_random_scenes() -> None:
     scenes = list(random_scenes(20, seed=2))
     agree = sum(
