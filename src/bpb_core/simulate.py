@@ -279,6 +279,7 @@ def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:
 
     assert _JOB is not None
     job, horizon, stability = _JOB
+    texts: list[bytes] = []  # the ordinary path takes these bytes: a pipe is read only once
     if not stability and isinstance(job.family, WritesTruthLines):
         with _collector_paused():
             texts = _read_all(files)
@@ -287,14 +288,8 @@ def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:
             except BpbError:  # e.g. an event cap overrun: the ordinary path below names the file
                 fast = None
         if fast is not None:
-            return _fill(files, fast)
-    lines: list[str] = []
-    for path in files:
-        try:
-            lines.append(_line(path))
-        except BadInput as exc:
-            return lines, exc
-    return lines, None
+            return _fill(files, fast, texts)
+    return _fill(files, [], texts)
 
 
 @contextlib.contextmanager
@@ -343,9 +338,12 @@ def _read_all(files: Sequence[str]) -> list[bytes]:
 _READ = 1 << 16
 
 
-def _fill(files: Sequence[str], fast: list[str | None]) -> tuple[list[str], BadInput | None]:
+def _fill(
+    files: Sequence[str], fast: list[str | None], texts: Sequence[bytes]
+) -> tuple[list[str], BadInput | None]:
     """The fast lines, with the files the fast path left (``None``) and those after the texts
-    it got done the ordinary way; a bad file ends the chunk."""
+    it got done the ordinary way, from the bytes already read (``texts``, a prefix of
+    ``files``) where there are some; a bad file ends the chunk."""
     if len(fast) == len(files) and None not in fast:  # the usual case: every file taken
         return fast, None  # type: ignore[return-value]  # no None in it
     lines: list[str] = []
@@ -353,7 +351,7 @@ def _fill(files: Sequence[str], fast: list[str | None]) -> tuple[list[str], BadI
         line = fast[index] if index < len(fast) else None
         if line is None:
             try:
-                line = _line(path)
+                line = _line(path, texts[index] if index < len(texts) else None)
             except BadInput as exc:
                 return lines, exc
         lines.append(line)
@@ -370,11 +368,12 @@ def _worker_count(workers: int, scenes: int) -> int:
     return (os.cpu_count() or 1) if scenes >= PARALLEL_MIN else 1
 
 
-def _line(name: str) -> str:
+def _line(name: str, data: bytes | None = None) -> str:
+    """The ``final.json`` line of the scene file ``name`` (``data``: its bytes, if read)."""
     assert _JOB is not None
     job, horizon, stability = _JOB
     path = Path(name)
-    scene = read_model(path, job.family.scene_model)
+    scene = read_model(path, job.family.scene_model, data)
     with _naming(path):
         truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
     return truth.model_dump_json()

@@ -37,16 +37,18 @@ def field_path(loc: Sequence[str | int]) -> str:
     return out
 
 
-def read_model(path: Path, model: type[M]) -> M:
-    """Read and validate a JSON file.
+def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
+    """Read and validate a JSON file; ``data``: its bytes, already read (a pipe such as
+    ``<(...)`` or ``/dev/stdin`` can be read only once).
 
     Raises:
         BadInput: ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``.
     """
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if data is None:
+        try:
+            data = path.read_bytes()
+        except OSError as exc:
+            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
         return model.model_validate_json(data)
     except ValidationError as exc:

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -147,3 +149,49 @@ def test_lines_before_a_bad_file_are_kept(scenes: list[tuple[Path, Scene]], tmp_
     assert result.returncode == 2
     assert len(result.stdout.splitlines()) == 2
     assert str(bad) in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("args", [[], ["--simulator", "pymunk"]])
+def test_a_scene_piped_on_stdin_is_read_once(
+    scenes: list[tuple[Path, Scene]], args: list[str]
+) -> None:
+    # `cat init.json | bpb simulate /dev/stdin`: the pipe was read by the batch path, then
+    # opened again by the ordinary path and found empty ("Invalid JSON: EOF")
+    path, scene = scenes[0]
+    piped = subprocess.run([BPB, "simulate", str(scenes[1][0]), "/dev/stdin", *args],
+                           input=path.read_text(), capture_output=True, text=True,
+                           timeout=120)  # fmt: skip
+    files = lines(bpb("simulate", str(scenes[1][0]), str(path), *args))
+    assert lines(piped) == files and files[1].scene_id == scene.scene_id
+    bad = json.loads(path.read_text())
+    bad["balls"][0]["vel"] = [1000.0, 0.0]
+    refused = subprocess.run([BPB, "simulate", "/dev/stdin", *args], input=json.dumps(bad),
+                             capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert refused.returncode == 2
+    assert refused.stderr.strip().splitlines() == [
+        "error: /dev/stdin: balls[0].vel: speed 1000 m/s is above 100 m/s"
+    ]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_a_named_pipe_is_simulated_not_waited_on(
+    scenes: list[tuple[Path, Scene]], tmp_path: Path
+) -> None:
+    fifo = tmp_path / "scene.fifo"
+    os.mkfifo(fifo)
+    path, scene = scenes[0]
+
+    def write() -> None:
+        with open(fifo, "w", encoding="utf-8") as pipe:
+            pipe.write(path.read_text())
+
+    writer = threading.Thread(target=write, daemon=True)
+    writer.start()
+    try:
+        result = subprocess.run([BPB, "simulate", str(fifo)], capture_output=True, text=True,
+                                timeout=30)  # fmt: skip
+    except subprocess.TimeoutExpired:
+        pytest.fail("bpb simulate waited for a second writer on the named pipe")
+    writer.join()
+    (final,) = lines(result)
+    assert final == final_state(scene, AnalyticSimulator().run(scene))
