@@ -123,12 +123,14 @@ def _write_export(
 ) -> tuple[dict[str, int], list[str], str]:
     """Write the shards and side files to ``out``; the rows per split, the shards and the card."""
     cells = _index_cells(dataset.root / INDEX)
+    # a dataset made with images needs each scene's (a missing one is an error naming it)
+    images = dataset.family.input_image is not None and dataset.manifest.images
     splits: dict[str, int] = {}
     sizes: dict[str, int] = {}
     files: list[str] = []
     for horizon in dataset.horizons:
         rows = [
-            _row(scene, task, cells.get(scene.scene_id, {}), registry)
+            _row(scene, task, cells.get(scene.scene_id, {}), images, registry)
             for scene in dataset.select([horizon])
             for task in objects
         ]
@@ -200,9 +202,8 @@ def _index_cells(path: Path) -> dict[str, dict[str, str]]:
 
 
 def _row(
-    scene: DatasetScene, task: Task, cells: dict[str, str], registry: Registry
+    scene: DatasetScene, task: Task, cells: dict[str, str], images: bool, registry: Registry
 ) -> dict[str, Any]:
-    images = scene.family.input_image is not None and scene.image_path().is_file()
     prompts = {
         f"prompt_{mode.replace('+', '_')}": _prompt(task, scene, mode, registry)
         if images or mode == "state"

@@ -17,6 +17,7 @@ from huggingface_hub import DatasetCard
 from PIL import Image
 
 from bpb_core import RunOptions, TextPart, build_messages, load_dataset, make_registry, run_eval
+from bpb_core.dataset import generate_dataset
 from bpb_core.errors import BadInput
 from bpb_core.library.hf_export import export_hf
 
@@ -237,3 +238,28 @@ def test_an_out_that_cannot_be_a_folder_is_one_line(
     assert bad.stderr.strip().splitlines() == ["error: " + message.format(tmp=tmp_path)]
     assert (tmp_path / "afile").read_text(encoding="utf-8") == "mine"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]  # no partial folder
+
+
+def test_a_missing_image_is_named_and_a_dataset_without_images_exports(
+    small_dataset: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    broken = tmp_path / "broken"
+    shutil.copytree(small_dataset, broken)
+    (broken / "h3" / "scene_0001" / "init.png").unlink()
+    bad = run_bpb("export", str(broken), "--out", str(tmp_path / "hf"))
+    assert bad.returncode == 2  # it exported h3_0001 with no image, as if made with --no-images
+    missing = broken / "h3" / "scene_0001" / "init.png"
+    assert bad.stderr.strip().splitlines() == [
+        f"error: {missing}: cannot read: No such file or directory"
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken"]
+    plain = generate_dataset(
+        tmp_path / "plain", per_horizon=2, horizons=[1.0], seed=5, images=False, workers=1
+    )
+    done = export_hf(plain, tmp_path / "hf-plain")
+    rows = _load("parquet", data_dir=str(done.out), cache=tmp_path / "cache")["h1"]
+    assert rows.num_rows == 6
+    assert set(rows["image"]) == set(rows["prompt_image"]) == {None}
+    assert all(rows["prompt_state"])
