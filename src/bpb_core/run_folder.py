@@ -54,7 +54,7 @@ class AnswerRecord(BaseModel):
     finish_reason: str | None = None
     attempts: int = 0
     usage: UsageRecord = Field(default_factory=UsageRecord)
-    cost: float | None = None
+    cost: float | None = Field(default=None, ge=0, allow_inf_nan=False)  # USD; None: unknown
     latency: float = 0.0
     error: str | None = None
     input_mode: str = "image"

@@ -9,6 +9,7 @@ the model id process-wide (litellm keeps one map).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,7 +26,7 @@ def litellm_entry(override: Mapping[str, float], provider: str | None) -> dict[s
     """The litellm model-map entry for a bpb price override.
 
     Raises:
-        ValueError: An unknown key or a price that is not a number.
+        ValueError: An unknown key or a price that is not a finite number >= 0.
     """
     entry: dict[str, Any] = {"mode": "chat"}
     if provider:
@@ -33,8 +34,9 @@ def litellm_entry(override: Mapping[str, float], provider: str | None) -> dict[s
     for key, value in override.items():
         if key not in _FIELDS:
             raise ValueError(f"unknown price {key!r}; known: {', '.join(_FIELDS)}")
-        if not isinstance(value, int | float) or isinstance(value, bool) or value < 0:
-            raise ValueError(f"price {key!r} must be a number >= 0, got {value!r}")
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not (math.isfinite(value) and value >= 0):  # NaN would void --max-cost
+            raise ValueError(f"price {key!r} must be a finite number >= 0, got {value!r}")
         entry[_FIELDS[key]] = float(value)
     if "input" in override and "cache_read" not in override:
         # litellm merges into the bundled entry: never keep its cache price beside a new input

@@ -69,14 +69,16 @@ def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
 def _adapter_options(
     api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
 ) -> AdapterOptions:
+    from bpb_core.cli.run_file import check_price_table
     from bpb_core.model_calls import AdapterOptions
 
     price_table: dict[str, dict[str, float]] = {}
     if prices is not None:
         try:
-            price_table = json.loads(prices.read_text(encoding="utf-8"))
+            loaded = json.loads(prices.read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
             raise BadInput(f"{prices}: --prices: not a JSON price table ({exc})") from None
+        price_table = check_price_table(f"{prices}: --prices", loaded)
     alias_table = {}
     for item in aliases:
         name, sep, target = item.partition("=")

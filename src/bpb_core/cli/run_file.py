@@ -105,6 +105,37 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
     for key in ("args", "headers", "price"):
         if key in table and not isinstance(table[key], dict):
             raise BadInput(f"{where}.{key}: expected a table")
+    if "price" in table:
+        check_price(f"{where}.price", table["price"])
+
+
+def check_price(where: str, price: Mapping[str, Any]) -> None:
+    """Every value of one model's price override must be a finite number >= 0 (USD per token):
+    a NaN price would make every cost NaN, and ``--max-cost`` never stop (NaN >= cap is false).
+
+    Raises:
+        BadInput: ``"<where>.<field>: must be a finite number >= 0, got nan"``.
+    """
+    for key, value in price.items():
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not (math.isfinite(value) and value >= 0):
+            raise BadInput(f"{where}.{key}: must be a finite number >= 0, got {value!r}")
+
+
+def check_price_table(source: str, table: Any) -> dict[str, dict[str, float]]:
+    """A ``--prices`` table: ``{"model": {"input": .., "output": ..}}``, every price a finite
+    number >= 0.
+
+    Raises:
+        BadInput: One line naming ``source`` and the model and field at fault.
+    """
+    if not isinstance(table, dict):
+        raise BadInput(f"{source}: expected a JSON object of models, got {type(table).__name__}")
+    for model, price in table.items():
+        if not isinstance(price, dict):
+            raise BadInput(f'{source}: {model}: expected an object like {{"input": ..}}')
+        check_price(f"{source}: {model}", price)
+    return table
 
 
 def _plan(

@@ -9,6 +9,7 @@ longer timeout. Other 4xx fail at once. An authentication failure stops the whol
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -26,7 +27,7 @@ from bpb_core.model_calls import ModelRequest, ModelResponse
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.progress import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import NotSent, RunState, Tally
+from bpb_core.runner.state import NotSent, RunState, Tally, known_cost
 
 
 @dataclass
@@ -148,6 +149,8 @@ class PairCall:
         await self.state.offload(self.state.log.append, entry)
 
     async def _replied(self, response: ModelResponse, prompt: PromptOptions) -> bool:
+        if response.cost is not None and known_cost(response.cost) is None:
+            response = dataclasses.replace(response, cost=None)  # an adapter's NaN: unknown
         self.tally.add(response)
         self.state.account(response)
         self.finish_reason = response.finish_reason

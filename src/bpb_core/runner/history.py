@@ -20,7 +20,7 @@ from typing import Any
 
 from bpb_core.run_folder import AnswerRecord, read_attempts, write_answer
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import RunState, Tally
+from bpb_core.runner.state import RunState, Tally, known_cost
 
 _USAGE = ("input_tokens", "output_tokens", "reasoning_tokens", "cached_tokens")
 REPLIED = ("ok", "parse_error")
@@ -45,9 +45,9 @@ class PairHistory:
             value = usage.get(name) if isinstance(usage, dict) else None
             if isinstance(value, int):
                 setattr(tally.usage, name, getattr(tally.usage, name) + value)
-        cost = entry.get("cost")
+        cost = known_cost(entry.get("cost"))  # a NaN logged by an older bpb: unknown
         if tally.cost is not None:
-            tally.cost = tally.cost + cost if isinstance(cost, (int, float)) else None
+            tally.cost = None if cost is None else tally.cost + cost
         latency = entry.get("latency")
         tally.latency += float(latency) if isinstance(latency, (int, float)) else 0.0
         if entry.get("outcome") == "ok" and isinstance(entry.get("answer"), dict):

@@ -75,3 +75,36 @@ def test_max_cost_refuses_unpriced_adapters_unless_priced_or_allowed(
         assert priced.returncode == 0, priced.stderr
     manifest = json.loads(next((tmp_path / "c").rglob("run.json")).read_text())
     assert manifest["last_session"]["cost"] == pytest.approx(2 * (1000 * 1e-6 + 50 * 4e-6))
+
+
+@pytest.mark.parametrize(
+    ("source", "value", "field"),
+    [
+        ("prices.json", "NaN", "--prices: openai/fake.input"),
+        ("prices.json", "Infinity", "--prices: openai/fake.input"),
+        ("run.toml", "nan", "adapter 1.price.input"),
+        ("run.toml", "inf", "adapter 1.price.input"),
+    ],
+)
+def test_non_finite_price_is_refused_before_any_call(
+    run_bpb: RunBpb, dataset: Path, tmp_path: Path, secret_key: str,
+    source: str, value: str, field: str,
+) -> None:  # fmt: skip
+    # A NaN price made every cost NaN and --max-cost never stop (NaN >= cap is false).
+    out = tmp_path / "out"
+    with fake_server(dataset) as server:
+        path = tmp_path / source
+        if source.endswith(".json"):
+            path.write_text(f'{{"openai/fake": {{"input": {value}, "output": 1e-6}}}}')
+            given = ["--adapter", "litellm:openai/fake", "--prices", str(path)]
+        else:
+            path.write_text(f'[[adapter]]\nspec = "litellm:openai/fake"\n'
+                            f"price = {{input = {value}, output = 1e-6}}\n")  # fmt: skip
+            given = ["--config", str(path)]
+        done = run_bpb("run", "--data", str(dataset), "--out", str(out), "--max-cost", "0.01",
+                       "--api-base", server.api_base, *given)  # fmt: skip
+        assert server.stats()["total"] == 0
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert "\n" not in line and str(path) in line and field in line, line
+    assert "finite number >= 0" in line and not out.exists()

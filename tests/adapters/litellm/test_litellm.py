@@ -11,6 +11,7 @@ import pytest
 
 from bpb_adapters.litellm_adapter.aliases import resolve
 from bpb_adapters.litellm_adapter.errors import redact
+from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest
 from bpb_core.registry import make_registry
@@ -51,6 +52,15 @@ def test_known_model_is_priced_offline_and_override_wins(tmp_path: Path, secret_
         unknown = REGISTRY.adapter("litellm:openai/no-such-model-xyz", base)
         assert asyncio.run(unknown.complete(_request("q3"))).cost is None
         assert server.stats()["images"] == 4
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -1e-6])
+def test_a_library_price_override_must_be_an_amount(value: float) -> None:
+    # the library path (no --prices file checked by the command line): a NaN price would make
+    # every cost NaN, which no --max-cost ever reaches
+    options = AdapterOptions(prices={"gpt-4o": {"input": 1e-6, "output": value}})
+    with pytest.raises(BadInput, match=r"price of gpt-4o: price 'output' must be a finite number"):
+        REGISTRY.adapter("litellm:gpt-4o", options)
 
 
 def test_secrets_are_redacted(monkeypatch: pytest.MonkeyPatch) -> None:

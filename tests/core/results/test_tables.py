@@ -149,3 +149,14 @@ def test_a_run_on_a_dataset_regenerated_since_is_refused(runs: Path) -> None:
     manifest.write_text(json.dumps({**record, "dataset_hash": "b" * 64}))
     with pytest.raises(BadInput, match=r"run\.json: dataset_hash bbbbbbbbbbbb but .* aaaaaaaaaaaa"):
         load_results(runs / "litellm_model")
+
+
+@pytest.mark.parametrize("cost", [float("nan"), float("inf"), -0.5])
+def test_answer_file_with_a_cost_that_is_no_amount_is_refused(runs: Path, cost: float) -> None:
+    # Summed silently, a NaN cost made the run's cost NaN and a negative one lowered it.
+    answer = runs / "litellm_model" / "h1" / "scene_0000" / "q1.json"
+    data = json.loads(answer.read_text())
+    answer.write_text(json.dumps({**data, "cost": cost}))  # written as NaN, Infinity, -0.5
+    with pytest.raises(BadInput, match=r"q1\.json: not an answer file: cost: ") as caught:
+        load_results(runs)
+    assert "\n" not in str(caught.value)

@@ -28,6 +28,7 @@ class Counting:
     fail_first: int = 0
     interrupt_at: int = 0
     signals: int = 1
+    cost: float | None = 0.5
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         self.calls += 1
@@ -38,7 +39,7 @@ class Counting:
         if self.calls <= self.fail_first:
             raise ServerError("503 try later")
         right: ModelResponse = await self.oracle.complete(request)  # type: ignore[attr-defined]
-        return dataclasses.replace(right, cost=0.5, usage=Usage(100, 10), latency=0.25)
+        return dataclasses.replace(right, cost=self.cost, usage=Usage(100, 10), latency=0.25)
 
 
 def _run(data: Path, run_dir: Path, registry: Registry, adapter: Counting, **kw: object) -> object:
@@ -106,6 +107,26 @@ def test_an_ok_reply_whose_answer_file_is_missing_is_recovered_not_resent(
     _run(dataset, run_dir, registry, adapter)
     assert adapter.calls == 18
     assert _records(run_dir) == before
+
+
+def test_a_cost_that_is_no_amount_is_recorded_as_unknown_never_summed(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    # Summed, a NaN cost made the run's spending NaN (so --max-cost never stopped it) and
+    # went into the answer files and reports as NaN.
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"), cost=float("nan"))
+    result = _run(dataset, run_dir, registry, adapter)
+    assert result.cost is None and result.not_sent == 0  # type: ignore[attr-defined]
+    assert {r.cost for r in _records(run_dir).values()} == {None}
+    # An attempts log from before the fix holds NaN costs: a pair recovered from it (answer
+    # file lost) is not paid for again and its cost is unknown, not NaN.
+    log = run_dir / "attempts.jsonl"
+    entries = [json.loads(line) for line in log.read_text().splitlines()]
+    log.write_text("".join(json.dumps({**e, "cost": float("nan")}) + "\n" for e in entries))
+    (run_dir / "h1/scene_0000/q1.json").unlink()
+    _run(dataset, run_dir, registry, adapter)
+    assert adapter.calls == 18 and _records(run_dir)["h1_0000/q1"].cost is None
 
 
 def test_usage_and_retries_count_every_session(
