@@ -8,6 +8,7 @@ the runner, never to an adapter.
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -150,3 +151,25 @@ def split_spec(spec: str) -> tuple[str, str]:
     if not sep or not name or not model:
         raise BadInput(f"--adapter {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
     return name, model
+
+
+def non_finite(value: Any, path: str = "") -> tuple[str, float] | None:
+    """The first NaN or infinite number in ``value`` (model arguments: nested tables and lists)
+    with its dotted path (``thinking.budget_tokens``, ``stop[1]``), or ``None``.
+
+    Model arguments travel as JSON, which has no NaN or infinity: a provider call with one fails
+    every time ("Out of range float values are not JSON compliant").
+    """
+    if isinstance(value, float) and not math.isfinite(value):
+        return path, value
+    if isinstance(value, dict):
+        items: Any = ((f"{path}.{k}" if path else str(k), v) for k, v in value.items())
+    elif isinstance(value, list | tuple):
+        items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
+    else:
+        return None
+    for where, inner in items:
+        found = non_finite(inner, where)
+        if found is not None:
+            return found
+    return None

@@ -22,6 +22,8 @@ CATALOGUE = [
     ("run --max-cost nan", "--max-cost': 'nan' is not a finite number"),
     ("run --max-cost -1", "--max-cost': -1.0 is not in the range x>0"),
     ("run --concurrency 0", "--concurrency': 0 is not in the range x>=1"),
+    ("run --model-arg temperature=NaN --adapter litellm:openai/fake --data {data} --out {tmp}/o",
+     "--model-arg 'temperature=NaN': temperature must be a finite number, got nan"),
     ("run --out {file}", "{file}: --out: not a folder"),
     ("run --out {file}/runs --data {data}", "{file}: --out: not a folder"),
     ("run --out /sys/bpb-unwritable --data {data} --adapter baseline:stasis",

@@ -4,6 +4,7 @@ line, and a resume with other model arguments refused."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 from collections.abc import Callable
 from pathlib import Path
@@ -63,6 +64,22 @@ def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:
         ("[defaults]\ntimeout = 3", "no [[adapter]]"),
         ('[adapters]\nspec = "x"', "unknown table 'adapters'"),
         ("[[adapter]\n", "not a readable TOML"),
+        (
+            '[[adapter]]\nspec = "litellm:x"\nargs = {temperature = nan}',
+            "adapter 1.args.temperature: must be a finite number, got nan",
+        ),
+        (
+            '[[adapter]]\nspec = "litellm:x"\nargs = {thinking = {budget_tokens = inf}}',
+            "adapter 1.args.thinking.budget_tokens: must be a finite number, got inf",
+        ),
+        (
+            '[defaults]\nargs = {stop = [1.0, -inf]}\n[[adapter]]\nspec = "litellm:x"',
+            "defaults.args.stop[1]: must be a finite number, got -inf",
+        ),
+        (
+            '[[adapter]]\nspec = "litellm:x"\nprice = {input = nan, output = 1e-6}',
+            "adapter 1.price.input: must be a finite number >= 0, got nan",
+        ),
     ],
 )
 def test_bad_run_files_name_the_field(tmp_path: Path, text: str, field: str) -> None:
@@ -87,10 +104,17 @@ def test_model_args_parse_json_values_and_nest_dotted_keys() -> None:
     for bad in ("noequals", "=1", "a..b=1"):
         with pytest.raises(BadInput, match="--model-arg"):
             model_args([bad])
+    # JSON has no NaN or infinity: sent, every call failed slowly as an api_error
+    for bad, where in [("temperature=NaN", "temperature"), ("top_p=Infinity", "top_p"),
+                       ("thinking.budget_tokens=-Infinity", "thinking.budget_tokens"),
+                       ("stop=[1, NaN]", "stop[1]")]:  # fmt: skip
+        with pytest.raises(BadInput, match=rf"--model-arg '{re.escape(bad)}': {re.escape(where)} "):
+            model_args([bad])
 
 
 KEYS = st.from_regex(r"[a-z_][a-z0-9_-]{0,11}", fullmatch=True)
-VALUES = st.one_of(st.integers(), st.booleans(), st.text(max_size=20), st.floats(allow_nan=False))
+FINITE = st.floats(allow_nan=False, allow_infinity=False)  # JSON has neither: refused
+VALUES = st.one_of(st.integers(), st.booleans(), st.text(max_size=20), FINITE)
 
 
 @given(st.dictionaries(KEYS, VALUES, max_size=5))

@@ -35,6 +35,7 @@ from bpb_core.model_calls import (
     ModelResponse,
     TextPart,
     Usage,
+    non_finite,
 )
 
 _TIMEOUT_GRACE = 5.0  # our own watchdog beyond the HTTP timeout, in case a layer ignores it
@@ -81,12 +82,15 @@ class LiteLLMAdapter:
         options: ``api_base``, model arguments, price overrides and aliases.
 
     Raises:
-        BadInput: A price override is malformed.
+        BadInput: A price override is malformed, or a model argument is NaN or infinite.
     """
 
     def __init__(self, model: str, options: AdapterOptions) -> None:
         self.model = resolve(model, options.aliases)
         self.args = dict(options.model_args)
+        bad = non_finite(self.args)
+        if bad is not None:  # sent as JSON, which has no NaN: every call would fail
+            raise BadInput(f"model argument {bad[0]}: must be a finite number, got {bad[1]!r}")
         tag = options.label if options.label is not None else model_args.label(self.args)
         self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.errors import BadInput
-from bpb_core.model_calls import AdapterOptions
+from bpb_core.model_calls import AdapterOptions, non_finite
 
 _RUN_KEYS = {
     "timeout": (int, float),
@@ -86,7 +86,14 @@ def model_args(items: Iterable[str]) -> dict[str, Any]:
             if not isinstance(inner, dict):
                 raise BadInput(f"--model-arg {item!r}: {part} is already a value")
             target = inner
-        target[last] = _value(text)
+        value = _value(text)
+        bad = non_finite(value, key.strip())
+        if bad is not None:
+            raise BadInput(
+                f"--model-arg {item!r}: {bad[0]} must be a finite number, got {bad[1]!r} "
+                "(model arguments are sent as JSON, which has no NaN or infinity)"
+            )
+        target[last] = value
     return out
 
 
@@ -107,6 +114,9 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
             raise BadInput(f"{where}.{key}: expected a table")
     if "price" in table:
         check_price(f"{where}.price", table["price"])
+    bad = non_finite(table.get("args"), f"{where}.args")
+    if bad is not None:  # TOML has nan and inf; the JSON a provider is sent has neither
+        raise BadInput(f"{bad[0]}: must be a finite number, got {bad[1]!r}")
 
 
 def check_price(where: str, price: Mapping[str, Any]) -> None:

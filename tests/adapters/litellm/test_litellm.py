@@ -63,6 +63,13 @@ def test_a_library_price_override_must_be_an_amount(value: float) -> None:
         REGISTRY.adapter("litellm:gpt-4o", options)
 
 
+def test_a_library_model_argument_must_be_json() -> None:
+    # JSON has no NaN: every call would fail as an api_error, after its retries
+    options = AdapterOptions(model_args={"thinking": {"budget_tokens": float("nan")}})
+    with pytest.raises(BadInput, match=r"model argument thinking.budget_tokens: must be a finite"):
+        REGISTRY.adapter("litellm:gpt-4o", options)
+
+
 def test_secrets_are_redacted(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ANTHROPIC_API_KEY", "abc-secret-value-42")
     text = redact("failed with abc-secret-value-42 and sk-proj-ABCDEFGHIJKLMNOPQRSTUV")
