@@ -25,6 +25,7 @@ from bpb_core.errors import (
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse
 from bpb_core.run_folder import AnswerRecord, write_answer
+from bpb_core.runner.limits import sleep_unless
 from bpb_core.runner.progress import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import NotSent, RunState, Tally, known_cost
@@ -107,7 +108,7 @@ class PairCall:
             return True
         if delay is None:
             return True
-        await asyncio.sleep(delay)  # the backoff waits outside the slot
+        await sleep_unless(self.state.stopping, delay)  # outside the slot; cut short by a stop
         return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
@@ -197,7 +198,7 @@ class PairCall:
         await self._log(outcome="api_error", error=self.last_error, latency=elapsed, retry_in=delay)
         if isinstance(error, AuthenticationFailed):
             self.state.auth_error = self.state.auth_error or error
-            self.state.stop_reason = "auth"
+            self.state.stop("auth", overrides=True)
         if delay is None or isinstance(error, AuthenticationFailed):
             await self._settle("api_error")
             return None

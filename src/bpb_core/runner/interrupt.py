@@ -23,7 +23,7 @@ _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 def _on_signal(state: RunState, jobs: set[asyncio.Task[None]]) -> None:
     state.interrupts += 1
     if state.interrupts == 1:
-        state.stop_reason = state.stop_reason or INTERRUPTED
+        state.stop(INTERRUPTED)  # also wakes the calls queued for a rate-limit slot
         state.progress.update(
             ProgressEvent(
                 state.spec,

@@ -1,10 +1,43 @@
 """Request pacing: optional requests-per-minute and tokens-per-minute caps shared by all calls
-of a run."""
+of a run.
+
+Every wait takes the run's ``stop`` event and returns early once it is set (Ctrl-C, SIGTERM,
+``--max-cost``, an authentication failure): a call queued for a slot minutes ahead must not hold
+the run open after it has stopped sending.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
+from collections.abc import Awaitable
+
+
+async def sleep_unless(stop: asyncio.Event | None, seconds: float) -> None:
+    """Sleep ``seconds``, or until ``stop`` is set if that comes first."""
+    if stop is None:
+        await asyncio.sleep(seconds)
+        return
+    with contextlib.suppress(TimeoutError):
+        await asyncio.wait_for(stop.wait(), seconds)
+
+
+async def wait_unless(stop: asyncio.Event | None, waiting: Awaitable[object]) -> None:
+    """Await ``waiting``, or until ``stop`` is set if that comes first (``waiting`` is then
+    cancelled)."""
+    if stop is None:
+        await waiting
+        return
+    task = asyncio.ensure_future(waiting)
+    stopper = asyncio.ensure_future(stop.wait())
+    try:
+        done, _ = await asyncio.wait({task, stopper}, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        task.cancel()
+        stopper.cancel()
+    if task in done:
+        task.result()
 
 
 class RateLimiter:
@@ -19,8 +52,8 @@ class RateLimiter:
         self._next = 0.0
         self._lock = asyncio.Lock()
 
-    async def wait(self) -> None:
-        """Return when the next call may start."""
+    async def wait(self, stop: asyncio.Event | None = None) -> None:
+        """Return when the next call may start (or once ``stop`` is set)."""
         if self._interval <= 0:
             return
         async with self._lock:
@@ -29,7 +62,7 @@ class RateLimiter:
             self._next = start + self._interval
         delay = start - now
         if delay > 0:
-            await asyncio.sleep(delay)
+            await sleep_unless(stop, delay)
 
 
 class TokenBudget:
@@ -48,11 +81,12 @@ class TokenBudget:
         self._replies = 0
         self._tokens = 0
 
-    async def wait(self) -> None:
-        """Return when the next call's expected tokens fit the budget."""
+    async def wait(self, stop: asyncio.Event | None = None) -> None:
+        """Return when the next call's expected tokens fit the budget (or once ``stop`` is
+        set)."""
         if self._bucket is None or self._cap is None or not self._replies:
             return
-        await self._bucket.acquire(min(self._tokens / self._replies, self._cap))
+        await wait_unless(stop, self._bucket.acquire(min(self._tokens / self._replies, self._cap)))
 
     def spent(self, tokens: int) -> None:
         """Record the tokens one reply used (input plus output)."""

@@ -69,6 +69,7 @@ class RunState:
     config_hash: str = ""
     history: History | None = None
     interrupts: int = 0
+    stopping: asyncio.Event = field(default_factory=asyncio.Event)
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
@@ -87,8 +88,16 @@ class RunState:
         """False once the run must stop sending (cost cap reached, auth failed, interrupted)."""
         cap = self.options.max_cost
         if cap is not None and self.spent >= cap and self.stop_reason is None:
-            self.stop_reason = "max-cost"
+            self.stop("max-cost")
         return self.stop_reason is None
+
+    def stop(self, reason: str, *, overrides: bool = False) -> None:
+        """Send no new call: record ``reason`` (the first one, unless ``overrides``) and wake
+        every call waiting for a rate-limit slot or a backoff, so the run ends as soon as the
+        calls in flight do."""
+        if self.stop_reason is None or overrides:
+            self.stop_reason = reason
+        self.stopping.set()
 
     @contextlib.asynccontextmanager
     async def slot(self) -> AsyncIterator[None]:
@@ -101,8 +110,8 @@ class RunState:
             NotSent: The run stopped sending while this call waited for a slot.
         """
         async with self.slots:
-            await self.limiter.wait()
-            await self.budget.wait()
+            await self.limiter.wait(self.stopping)  # both return early once the run stops
+            await self.budget.wait(self.stopping)
             if not self.may_send():  # checked again here: the cap may be hit while we queued
                 raise NotSent
             yield
@@ -116,6 +125,7 @@ class RunState:
             self.unpriced = True
         else:
             self.spent += response.cost
+            self.may_send()  # the cap reached: wake the calls queued for a slot now
         if response.model_id:
             self.model_id = response.model_id
 

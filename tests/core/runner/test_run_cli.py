@@ -76,6 +76,45 @@ def test_kill_9_then_same_command_never_resends_completed(dataset: Path, tmp_pat
         assert len(manifest["sessions"]) == 2 and manifest["finished"]
 
 
+@pytest.mark.slow
+def test_sigterm_with_a_low_rpm_stops_once_the_calls_in_flight_finish(
+    dataset: Path, tmp_path: Path
+) -> None:
+    # Calls queued for a rate-limit slot used to sleep until their slot before noticing the
+    # stop: at --rpm 12 the 16 pairs left took 80 s to leave, at --rpm 6 the tester's ~160 s.
+    with fake_server(dataset, {"latency": 1.0}, tmp_path) as server:
+        args = ["run", "--data", str(dataset), "--adapter", "litellm:openai/fake-model",
+                "--api-base", server.api_base, "--out", str(tmp_path / "out"),
+                "--concurrency", "4"]  # fmt: skip
+        run_dir = tmp_path / "out" / "litellm_openai_fake-model"
+        process = subprocess.Popen(
+            [BPB, *args, "--rpm", "12"],  # one call starts every 5 s
+            env=_env(),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        deadline = time.time() + 60
+        while server.stats()["total"] < 2 and time.time() < deadline:
+            time.sleep(0.05)
+        process.send_signal(signal.SIGTERM)  # the second call is in flight (1 s latency)
+        try:
+            _, stderr = process.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.communicate()
+            pytest.fail("bpb run was still running 20 s after SIGTERM")
+        assert process.returncode == 1, stderr
+        asked = server.counts()
+        assert len(asked) == 2 and set(asked) == _complete(run_dir)  # the one in flight is kept
+        assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
+        resumed = _bpb(*args)  # the same command (no --rpm, to be quick) sends the rest once
+        assert resumed.returncode == 0, resumed.stderr
+        counts = server.counts()
+        assert len(counts) == 18 and set(counts.values()) == {1}
+        assert len(_complete(run_dir)) == 18
+
+
 def test_unknown_adapter_or_task_is_one_line_exit_2(dataset: Path, tmp_path: Path) -> None:
     bad = _bpb("run", "--data", str(dataset), "--adapter", "nope:x", "--out", str(tmp_path))
     assert bad.returncode == 2

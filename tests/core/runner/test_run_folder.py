@@ -67,3 +67,21 @@ def test_tpm_cap_holds_calls_once_the_minute_budget_is_drawn() -> None:
 
     full, held = asyncio.run(go())
     assert full < 0.5 and 0.7 < held < 3.0
+
+
+def test_rate_limit_waits_end_when_the_run_stops() -> None:
+    # a call queued minutes ahead for its slot must not hold a stopped run open
+    async def go() -> float:
+        stop = asyncio.Event()
+        limiter = RateLimiter(rpm=1)  # one start per minute
+        budget = TokenBudget(tpm=100)
+        budget.spent(100)
+        await budget.wait(stop)  # the whole minute's budget drawn
+        started = time.monotonic()
+        waiting = asyncio.gather(*(limiter.wait(stop) for _ in range(3)), budget.wait(stop))
+        await asyncio.sleep(0.2)
+        stop.set()
+        await asyncio.wait_for(waiting, 5)
+        return time.monotonic() - started
+
+    assert asyncio.run(go()) < 2.0

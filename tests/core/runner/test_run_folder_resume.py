@@ -7,6 +7,7 @@ import dataclasses
 import json
 import os
 import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -162,6 +163,21 @@ def test_ctrl_c_stops_sending_finishes_writing_and_records_interrupted(
     assert len(_records(run_dir)) == 8
     logged = {f"{e['scene_id']}/{e['task']}" for e in read_attempts(run_dir)}
     assert logged == set(_records(run_dir))
+
+
+def test_ctrl_c_during_a_backoff_stops_the_run_at_once(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    # the pair backing off after a 503 used to sleep its whole backoff (here 30 to 60 s)
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"), fail_first=1, interrupt_at=1)
+    retry = RetryPolicy(max_retries=3, base_delay=60.0)
+    options = RunOptions(concurrency=1, retry=retry)
+    started = time.monotonic()
+    result = run_eval(dataset, adapter, run_dir, options, registry=registry, spec=adapter.name)
+    assert time.monotonic() - started < 10
+    assert result.stopped == "interrupted" and adapter.calls == 1 and result.not_sent == 18
+    assert _records(run_dir) == {}  # nothing answered, all resumable
 
 
 def test_a_run_from_another_thread_leaves_signals_to_its_caller(
