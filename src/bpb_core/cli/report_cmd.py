@@ -93,13 +93,27 @@ def report(
     leaderboards. With --out, also writes PNG charts, CSV, Parquet, Markdown and LaTeX exports
     and one self-contained report.html with a failure gallery.
     """
+    import warnings
+
+    from rich.markup import escape
+
     from bpb_core.report.build import Completeness, build_report
+    from bpb_core.results.reading import DuplicateRunWarning
 
     rule = Completeness(min_complete, include_incomplete)
-    built = build_report(
-        run_dirs, out, n_boot=n_boot, seed=seed, gallery_size=gallery_size,
-        registry=load_registry(), completeness=rule,
-    )  # fmt: skip
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DuplicateRunWarning)
+        built = build_report(
+            run_dirs, out, n_boot=n_boot, seed=seed, gallery_size=gallery_size,
+            registry=load_registry(), completeness=rule,
+        )  # fmt: skip
+    for caught_one in caught:  # a run given twice is counted once: one line says so
+        message, category = caught_one.message, caught_one.category
+        if issubclass(category, DuplicateRunWarning):
+            line = f"[yellow]warning:[/] {escape(str(message))}"
+            stderr().print(line, highlight=False, soft_wrap=True)
+        else:
+            warnings.showwarning(message, category, caught_one.filename, caught_one.lineno)
     if as_json:
         click.echo(json.dumps(built.summary_json(), indent=2, default=str))
         return

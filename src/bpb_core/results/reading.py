@@ -12,6 +12,7 @@ read with the models of the dataset's scene family.
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -36,6 +37,11 @@ from bpb_core.validated_files import describe_validation_error
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
     from bpb_core.registry import Registry
+
+
+class DuplicateRunWarning(UserWarning):
+    """The same run folder was given more than once (under other paths, or both itself and a
+    folder holding it); it is counted once."""
 
 
 @dataclass(frozen=True)
@@ -106,8 +112,27 @@ def find_runs(
         if not inner:
             raise BadInput(f"{path}: not a run folder (no {RUN_MANIFEST}) and holds none")
         found.extend(inner)
+    found = _once(found)
     labels = _labels(found)
     return [read_run(path, label, registry) for path, label in zip(found, labels, strict=True)]
+
+
+def _once(found: list[Path]) -> list[Path]:
+    """Each run folder once (by its resolved path, in the order first given), with one
+    :class:`DuplicateRunWarning` per run given more than once: counted twice, its calls, tokens,
+    cost and units would be summed twice and its bootstrap intervals narrowed."""
+    first: dict[Path, list[Path]] = {}
+    for path in found:
+        first.setdefault(path.resolve(), []).append(path)
+    for given in first.values():
+        if len(given) > 1:
+            warnings.warn(
+                f"{given[0]}: the same run folder given {len(given)} times (by other paths, "
+                "or inside a folder also given); counted once",
+                DuplicateRunWarning,
+                stacklevel=3,
+            )
+    return [given[0] for given in first.values()]
 
 
 def _labels(paths: list[Path]) -> list[str]:

@@ -218,3 +218,20 @@ def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
     summary = json.loads(bpb("report", str(runs), "--json").stdout)
     assert summary["different_scenes"].startswith(warning)
     assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
+
+
+def test_a_run_given_twice_is_counted_once_and_said_so(report_dir: Path, tmp_path: Path) -> None:
+    # Given under other paths (or inside a folder also given), a run's calls, tokens, cost and
+    # units were summed two or three times and its bootstrap intervals narrowed.
+    runs = report_dir / "runs"
+    once = bpb("report", str(runs), "--json", "--bootstrap", "50")
+    model = runs / "litellm_model"
+    again = bpb("report", str(runs), str(model), f"{model}/", "--json", "--bootstrap", "50")
+    assert once.returncode == again.returncode == 0, again.stderr
+    assert json.loads(again.stdout) == json.loads(once.stdout)
+    line = again.stderr.strip()
+    assert "\n" not in line and f"{model}: the same run folder given 3 times" in line, line
+    assert "counted once" in line and once.stderr.strip() == ""
+    done = bpb("report", str(model), str(model), "--out", str(tmp_path / "o"))
+    assert done.returncode == 0, done.stderr
+    assert len(pd.read_csv(tmp_path / "o" / "units.csv")) == 4 * 17  # one run's units
