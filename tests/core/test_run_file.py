@@ -64,6 +64,8 @@ def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:
         ("[defaults]\ntimeout = 3", "no [[adapter]]"),
         ('[adapters]\nspec = "x"', "unknown table 'adapters'"),
         ("[[adapter]\n", "not a readable TOML"),
+        ('[[adapter]]\nspec = "litellm:x"\napi_base = 3', "adapter 1.api_base: expected a string"),
+        ('[defaults]\nlabel = true\n[[adapter]]\nspec = "litellm:x"', "defaults.label: expected"),
         (
             '[[adapter]]\nspec = "litellm:x"\nargs = {temperature = nan}',
             "adapter 1.args.temperature: must be a finite number, got nan",

@@ -109,6 +109,9 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
             raise BadInput(f"{where}.{key}: expected a number, got {value!r}")
         if value is not None and not 0 < value < math.inf:  # nan and inf too (TOML has both)
             raise BadInput(f"{where}.{key}: must be a positive finite number, got {value!r}")
+    for key in ("api_base", "label"):  # else litellm names no provider for an api_base of 3
+        if key in table and not isinstance(table[key], str):
+            raise BadInput(f"{where}.{key}: expected a string, got {table[key]!r}")
     for key in ("args", "headers", "price"):
         if key in table and not isinstance(table[key], dict):
             raise BadInput(f"{where}.{key}: expected a table")
