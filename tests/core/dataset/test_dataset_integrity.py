@@ -133,3 +133,18 @@ def test_an_index_listing_a_scene_twice_or_not_utf8_is_refused(copy: Path) -> No
     index.write_bytes(b"scene_id,horizon,index\n\xff\n")
     with pytest.raises(BadInput, match=r"index\.csv: not UTF-8 text"):
         load_dataset(copy)
+
+
+def test_a_run_refuses_a_truncated_input_image_instead_of_sending_it(
+    copy: Path, tmp_path: Path
+) -> None:
+    image = copy / "h1" / "scene_0001" / "init.png"
+    image.write_bytes(image.read_bytes()[: image.stat().st_size * 6 // 10])
+    done = subprocess.run(
+        [BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis", "--out",
+         str(tmp_path / "r"), "--horizons", "1"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"error: {image}: not a readable image (OSError: Truncated File Read)")
