@@ -153,6 +153,14 @@ def split_spec(spec: str) -> tuple[str, str]:
     return name, model
 
 
+def known_cost(cost: object) -> float | None:
+    """A cost or price in USD if it is one (a finite number >= 0), else ``None`` (unknown): a
+    NaN summed into a run's spending would keep ``--max-cost`` from ever stopping it."""
+    if isinstance(cost, int | float) and not isinstance(cost, bool) and math.isfinite(cost):
+        return float(cost) if cost >= 0 else None
+    return None
+
+
 def non_finite(value: Any, path: str = "") -> tuple[str, float] | None:
     """The first NaN or infinite number in ``value`` (model arguments: nested tables and lists)
     with its dotted path (``thinking.budget_tokens``, ``stop[1]``), or ``None``.

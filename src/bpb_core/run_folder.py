@@ -226,7 +226,7 @@ Seconds = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 Count = Annotated[int, Field(ge=1)]
 
 
-class RunOptions(BaseModel):
+class RunSelection(BaseModel):
     """The fields of ``run.json`` (top level or under ``options``) that decide which scenes a
     report expects: checked so that a hand-edited value is refused, not read as an empty or
     narrower selection."""
@@ -238,7 +238,7 @@ class RunOptions(BaseModel):
     epochs: Count | None = None
 
 
-class _ManifestFields(RunOptions):
+class _ManifestFields(RunSelection):
     tasks: list[Annotated[str, Field(min_length=1)]] | None = None
     scene_ids: list[str] | None = None
-    options: RunOptions | None = None
+    options: RunSelection | None = None

@@ -9,9 +9,10 @@ the model id process-wide (litellm keeps one map).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
+
+from bpb_core.model_calls import known_cost
 
 _FIELDS = {
     "input": "input_cost_per_token",
@@ -34,8 +35,7 @@ def litellm_entry(override: Mapping[str, float], provider: str | None) -> dict[s
     for key, value in override.items():
         if key not in _FIELDS:
             raise ValueError(f"unknown price {key!r}; known: {', '.join(_FIELDS)}")
-        number = isinstance(value, int | float) and not isinstance(value, bool)
-        if not number or not (math.isfinite(value) and value >= 0):  # NaN would void --max-cost
+        if known_cost(value) is None:  # a NaN price would void --max-cost
             raise ValueError(f"price {key!r} must be a finite number >= 0, got {value!r}")
         entry[_FIELDS[key]] = float(value)
     if "input" in override and "cache_read" not in override:

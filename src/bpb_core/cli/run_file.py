@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.errors import BadInput
-from bpb_core.model_calls import AdapterOptions, non_finite
+from bpb_core.model_calls import AdapterOptions, known_cost, non_finite
 
 _RUN_KEYS = {
     "timeout": (int, float),
@@ -130,8 +130,7 @@ def check_price(where: str, price: Mapping[str, Any]) -> None:
         BadInput: ``"<where>.<field>: must be a finite number >= 0, got nan"``.
     """
     for key, value in price.items():
-        number = isinstance(value, int | float) and not isinstance(value, bool)
-        if not number or not (math.isfinite(value) and value >= 0):
+        if known_cost(value) is None:
             raise BadInput(f"{where}.{key}: must be a finite number >= 0, got {value!r}")
 
 

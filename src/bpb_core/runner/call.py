@@ -23,12 +23,12 @@ from bpb_core.errors import (
     RequestRejected,
 )
 from bpb_core.interfaces import PromptOptions
-from bpb_core.model_calls import ModelRequest, ModelResponse
+from bpb_core.model_calls import ModelRequest, ModelResponse, known_cost
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.limits import sleep_unless
 from bpb_core.runner.progress import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import NotSent, RunState, Tally, known_cost
+from bpb_core.runner.state import NotSent, RunState, Tally
 
 
 @dataclass

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import math
 import random
 from collections.abc import AsyncIterator, Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -24,14 +23,6 @@ if TYPE_CHECKING:
     from bpb_core.runner.history import History
 
 T = TypeVar("T")
-
-
-def known_cost(cost: object) -> float | None:
-    """A reply's cost in USD if it is one (a finite number >= 0), else ``None`` (unknown): a NaN
-    cost summed into the run's spending would keep ``--max-cost`` from ever stopping it."""
-    if isinstance(cost, int | float) and not isinstance(cost, bool) and math.isfinite(cost):
-        return float(cost) if cost >= 0 else None
-    return None
 
 
 class NotSent(Exception):
