@@ -14,6 +14,7 @@ import hashlib
 import json
 import platform
 import sys
+from collections.abc import Iterable
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
@@ -22,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import Describing
 from bpb_core.errors import BadInput
 from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
-from bpb_core.run_folder import iter_answers, read_manifest, write_manifest
+from bpb_core.run_folder import AnswerRecord, iter_answers, read_manifest, write_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
 from bpb_core.version import __version__
@@ -123,12 +124,14 @@ def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> No
             )
 
 
-def _check_selection(run_dir: Path, scene_ids: list[str], options: RunOptions) -> None:
+def _check_selection(
+    run_dir: Path, scene_ids: list[str], options: RunOptions, held: Iterable[AnswerRecord]
+) -> None:
     """Refuse a resume whose selection leaves out answers the folder already holds: its
     ``run.json`` would describe fewer scenes, tasks or epochs, and reports would silently drop
     those answers."""
     wanted, tasks = set(scene_ids), set(options.tasks)
-    for _, record in iter_answers(run_dir):
+    for record in held:
         if record.scene_id in wanted and record.task in tasks and record.epoch <= options.epochs:
             continue
         raise BadInput(
@@ -150,12 +153,14 @@ def start_manifest(
     adapter: object = None,
     logged: set[str] | None = None,
     scene_ids: list[str] | None = None,
+    held: Iterable[AnswerRecord] | None = None,
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
     ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
     they alone guard the resume. ``scene_ids`` lists the scenes asked when ``--scenes`` or
-    ``--sample`` chose them (the results expect answers for these only).
+    ``--sample`` chose them (the results expect answers for these only); ``held``: the answer
+    records already in the folder, if the caller has read them (else they are read here).
 
     Raises:
         BadInput: The folder holds a run with other answer-shaping settings, or answers
@@ -185,7 +190,8 @@ def start_manifest(
     else:
         _check_resume(run_dir, old, manifest)
         if scene_ids is not None:
-            _check_selection(run_dir, scene_ids, options)
+            records = held if held is not None else (r for _, r in iter_answers(run_dir))
+            _check_selection(run_dir, scene_ids, options, records)
         manifest["started"] = old.get("started", manifest["started"])
         if isinstance(old.get("order_seed"), int):  # the resumed run goes on in its own order
             manifest["order_seed"] = old["order_seed"]

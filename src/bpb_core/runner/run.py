@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
-from bpb_core.run_folder import AttemptLog, completed_epochs, make_run_folder
+from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
 from bpb_core.runner.history import read_history, recover_answers
@@ -136,13 +136,14 @@ async def _session(
     pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
     history = read_history(run_dir, spec, pairs)
     ids = [ref.scene_id for ref in refs]
+    held = [record for _, record in iter_answers(run_dir)]  # read once: guard and plan
     manifest = start_manifest(
-        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids
+        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
     )
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
     state.config_hash, state.history = manifest["config_hash"], history
     try:
-        done = completed_epochs(run_dir)
+        done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
         plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
         done |= recover_answers(run_dir, history, plan, state)
         plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
