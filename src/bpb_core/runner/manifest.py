@@ -117,11 +117,29 @@ def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> No
     for key in _GUARDED:
         before = _guarded(old, key)
         after = _guarded(new, key)
-        if before is not None and before != after:
+        if key == "cot" and isinstance(before, dict) and isinstance(after, dict):
+            _check_cot(run_dir, before, after)
+        elif before is not None and before != after:
             raise BadInput(
                 f"{run_dir / RUN_MANIFEST}: {key}: this folder holds a run with {before!r}, not "
                 f"{after!r}; use another --out to keep answers comparable"
             )
+
+
+def _check_cot(run_dir: Path, before: dict[str, Any], after: dict[str, Any]) -> None:
+    """Chain of thought is kept per task: a resume may add tasks (with their own setting), but a
+    task the folder already holds must keep the setting its answers were given under."""
+    for task, cot in after.items():
+        if task in before and before[task] != cot:
+            raise BadInput(
+                f"{run_dir / RUN_MANIFEST}: cot: this folder holds task {task} run with chain of "
+                f"thought {_on(before[task])}, not {_on(cot)}; use another --out to keep answers "
+                "comparable"
+            )
+
+
+def _on(flag: object) -> str:
+    return "on" if flag is True else "off" if flag is False else repr(flag)
 
 
 def _check_selection(

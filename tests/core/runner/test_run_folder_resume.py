@@ -96,6 +96,27 @@ def test_resuming_with_a_narrower_selection_is_refused_and_keeps_every_answer(
     assert adapter.calls == 18 and len(_records(run_dir)) == 18
 
 
+def test_a_resume_may_add_tasks_but_keeps_each_held_task_s_chain_of_thought(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    # Chain of thought was compared as one setting over all tasks, so adding a task to a
+    # folder was refused with a message about chain of thought the user had not changed.
+    run_dir = tmp_path / "run"
+    adapter = Counting(registry.adapter("baseline:oracle"))
+    _run(dataset, run_dir, registry, adapter, tasks=("q1",), cot={"q1": False})
+    assert adapter.calls == 6
+    _run(dataset, run_dir, registry, adapter, tasks=("q1", "q2"), cot={"q1": False})
+    assert adapter.calls == 12  # only q2 was asked
+    assert json.loads((run_dir / "run.json").read_text())["tasks"] == ["q1", "q2"]
+    before = (run_dir / "run.json").read_bytes(), sorted(_records(run_dir))
+    with pytest.raises(BadInput, match=r"run.json: cot: this folder holds task q1 run with chain"):
+        _run(dataset, run_dir, registry, adapter, tasks=("q1", "q2", "q3"), cot={"q1": True})
+    with pytest.raises(BadInput, match=r"holds answers outside this selection \(h1_0000 q1"):
+        _run(dataset, run_dir, registry, adapter, tasks=("q2",))
+    assert ((run_dir / "run.json").read_bytes(), sorted(_records(run_dir))) == before
+    assert adapter.calls == 12
+
+
 def test_an_ok_reply_whose_answer_file_is_missing_is_recovered_not_resent(
     dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
