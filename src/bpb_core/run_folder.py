@@ -11,6 +11,7 @@ skipped by readers and closed off before the next append.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 from collections.abc import Iterator
@@ -20,7 +21,14 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from bpb_core.errors import BadInput
-from bpb_core.layout import ATTEMPTS, RUN_MANIFEST, SceneKey, iter_scene_keys, make_folder
+from bpb_core.layout import (
+    ATTEMPTS,
+    RUN_LOCK,
+    RUN_MANIFEST,
+    SceneKey,
+    iter_scene_keys,
+    make_folder,
+)
 from bpb_core.validated_files import describe_validation_error
 
 Status = Literal["ok", "parse_error", "api_error"]
@@ -193,6 +201,31 @@ def read_attempts(run_dir: Path) -> Iterator[dict[str, Any]]:
                 continue
             if isinstance(entry, dict):
                 yield entry
+
+
+def live_run(run_dir: Path) -> str | None:
+    """The pid of another process running in ``run_dir`` now (it holds the folder's lock,
+    :mod:`bpb_core.runner.lock`), else ``None``.
+
+    A run writes its pid into the lock file and empties it when it ends; a non-empty file is
+    probed with a shared lock, which fails while a live run holds its exclusive one (a run
+    killed outright leaves its pid, but the system has dropped its lock)."""
+    try:
+        handle = os.open(run_dir / RUN_LOCK, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        pid = os.read(handle, 64).decode("ascii", "replace").strip()
+        if not pid or pid == str(os.getpid()):
+            return None
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return pid
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        return None
+    finally:
+        os.close(handle)
 
 
 def write_manifest(run_dir: Path, manifest: dict[str, Any]) -> None:

@@ -152,7 +152,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
     console.print(_cell_table(title, *headline_cells(part, rule)))
-    for run, line in incomplete_lines(part.results.calls).items():
+    for run, line in incomplete_lines(part.results).items():
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
     if different := different_scenes_note(part):
         console.print(f"[yellow]{escape(different)}[/]", highlight=False)

@@ -134,7 +134,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "stable_exclusions": records(tables["stable_exclusions"]),
         "by_horizon": records(by_horizon),
         "completeness": completeness_records(tables["accuracy"], rule.min_complete),
-        "incomplete": incomplete_lines(results.calls),
+        "incomplete": incomplete_lines(results),
         "different_scenes": different_scenes_note(part),
         "usage": records(tables["usage"]),
         "pairs": records(tables["pairs"]),

@@ -149,7 +149,7 @@ def different_scenes_note(part: ReportPart) -> str | None:
 
 def incomplete_notes(part: ReportPart) -> Markup:
     """One warning line per run with calls that failed on infrastructure or were never sent."""
-    lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results.calls).items()]
+    lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results).items()]
     return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
 
 

@@ -13,9 +13,12 @@ after the first horizons would otherwise "fall with horizon". So:
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import pandas as pd
+
+if TYPE_CHECKING:
+    from bpb_core.results.frames import Results
 
 DEFAULT_MIN_COMPLETE = 0.9
 """The share of a cell's scenes that must be answered for it to count in leaderboards."""
@@ -77,14 +80,23 @@ def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[st
     return records
 
 
-def incomplete_lines(calls: pd.DataFrame) -> dict[str, str]:
+def incomplete_lines(results: Results) -> dict[str, str]:
     """Per run with unanswered calls, what to say: how many failed on infrastructure
-    (``api_error``) or were never sent (``missing``), and that re-running resumes them."""
+    (``api_error``) or were never sent (``missing``), and that re-running resumes them; for a
+    run still running when it was read, that its calls are not answered yet."""
+    calls = results.calls
     counts = calls.groupby(["run", "status"], observed=True).size().unstack(fill_value=0)
+    live = {run.label: run.live for run in results.runs if run.live is not None}
     out: dict[str, str] = {}
     for run, row in counts.iterrows():
         failed = int(row.get("api_error", 0))
         unsent = int(row.get("missing", 0))
+        if str(run) in live and failed + unsent:
+            out[str(run)] = (
+                f"still running (bpb run pid {live[str(run)]}): {_calls(failed + unsent)} not "
+                "answered yet; report again when it ends"
+            )
+            continue
         parts = [f"{_calls(failed)} failed on infrastructure"] if failed else []
         parts += [f"{_calls(unsent)} never sent"] if unsent else []
         if parts:

@@ -31,7 +31,7 @@ from bpb_core.layout import (
     SceneKey,
     select_keys,
 )
-from bpb_core.run_folder import read_manifest as read_run_manifest
+from bpb_core.run_folder import live_run, read_manifest as read_run_manifest
 from bpb_core.validated_files import describe_validation_error
 
 if TYPE_CHECKING:
@@ -58,6 +58,8 @@ class RunFolder:
     manifest: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     family: SceneFamily | None = field(default=None, compare=False, repr=False)
     epochs: int = 1
+    live: str | None = field(default=None, compare=False)
+    """The pid of a ``bpb run`` still running in the folder when it was read, else ``None``."""
 
     @property
     def baseline(self) -> bool:
@@ -163,7 +165,9 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
         label = f"{label} [dropped: {', '.join(map(str, dropped))}]"
     epochs = _option(manifest, "epochs")
     epochs = epochs if isinstance(epochs, int) and epochs >= 1 else 1
-    return RunFolder(path, label, adapter, model, names, dataset, keys, manifest, family, epochs)
+    return RunFolder(
+        path, label, adapter, model, names, dataset, keys, manifest, family, epochs, live_run(path)
+    )
 
 
 def _same_dataset(manifest: dict[str, Any], dataset: Path, run_path: Path) -> None:

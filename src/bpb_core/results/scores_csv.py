@@ -32,5 +32,5 @@ def write_scores(run_dirs: Sequence[Path], registry: Registry | None = None) -> 
         text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
     table = summary(frame, results.suites)
-    table.attrs["incomplete"] = incomplete_lines(results.calls)  # what the summary must say
+    table.attrs["incomplete"] = incomplete_lines(results)  # what the summary must say
     return table

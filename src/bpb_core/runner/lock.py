@@ -15,8 +15,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from bpb_core.errors import BadInput
-
-LOCK = "run.lock"
+from bpb_core.layout import RUN_LOCK
 
 
 def _holder(handle: int) -> str:
@@ -33,7 +32,7 @@ def run_lock(run_dir: Path) -> Iterator[None]:
         BadInput: Another live process holds the folder (one line naming its pid), or the
             folder cannot hold a lock file (names the path).
     """
-    path = run_dir / LOCK
+    path = run_dir / RUN_LOCK
     try:
         handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError as exc:

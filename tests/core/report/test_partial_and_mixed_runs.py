@@ -4,6 +4,8 @@ never one leaderboard over two datasets."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -95,6 +97,38 @@ def test_json_carries_by_horizon_completeness_usage_and_confusion(runs: Path) ->
     }
     assert {"q1_confusion", "q2_confusion"} <= set(summary["diagnostics"])
     assert summary["completeness_rule"] == {"min_complete": 0.9, "include_incomplete": False}
+
+
+def test_a_run_still_running_is_reported_as_running_not_as_to_resume(tmp_path: Path) -> None:
+    # A report taken while bpb run was still going said "6 calls never sent, re-run to
+    # resume": re-running is refused while the run holds the folder.
+    data = write_dataset(tmp_path / "data")
+    run_dir = _stopped_run(tmp_path, data)
+    holder = subprocess.Popen(  # another process holding the folder as bpb run does
+        [
+            sys.executable,
+            "-c",
+            "import sys, pathlib\n"
+            "from bpb_core.runner.lock import run_lock\n"
+            "with run_lock(pathlib.Path(sys.argv[1])):\n"
+            "    print('held', flush=True); sys.stdin.read()\n",
+            str(run_dir),
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+        running = build_report(tmp_path / "runs", n_boot=20).summary_json()["incomplete"]
+    finally:
+        holder.communicate("")
+    assert running == {
+        "stopped": f"still running (bpb run pid {holder.pid}): 6 calls not answered yet; "
+        "report again when it ends"
+    }
+    ended = build_report(tmp_path / "runs", n_boot=20).summary_json()["incomplete"]
+    assert ended == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
 
 
 def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> None:
