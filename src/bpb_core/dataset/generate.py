@@ -32,6 +32,7 @@ from bpb_core.dataset.writer import DatasetWriter, versions
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
+from bpb_core.partial import partial_folder
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -95,32 +96,35 @@ def generate_dataset(
         maker.check_config(cfg, hs)  # fail before touching the disk
     progress = progress or NoProgress()
     target = Path(out)
-    partial = _prepare(target, overwrite)
-    try:
-        n_workers = max(1, workers or os.cpu_count() or 1)
-        setup = worker_setup(registry, name, partial, seed, cfg, images)
-        calibration = None
-        if isinstance(maker, Calibrating) and calibrate:
-            with make_pool(n_workers, setup) as pool:
-                results = run_calibration(pool, hs, progress)
-            cfg, calibration = maker.apply_calibration(cfg, results)
-            setup = replace(setup, config=cfg)
-        tallies = {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
-        writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+    _check_target(target, overwrite)
+    with partial_folder(target, "bpb generate") as partial:
         try:
-            run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
-            _write_stats(maker, setup, writer, progress)
-        finally:
-            writer.close()
-        writer.write_manifest(
-            _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
-        )
-    except BadInput:  # the message says what to change; a half-built folder is of no use
-        shutil.rmtree(partial, ignore_errors=True)
-        raise
-    if target.exists():
-        shutil.rmtree(target)
-    partial.rename(target)
+            n_workers = max(1, workers or os.cpu_count() or 1)
+            setup = worker_setup(registry, name, partial, seed, cfg, images)
+            calibration = None
+            if isinstance(maker, Calibrating) and calibrate:
+                with make_pool(n_workers, setup) as pool:
+                    results = run_calibration(pool, hs, progress)
+                cfg, calibration = maker.apply_calibration(cfg, results)
+                setup = replace(setup, config=cfg)
+            tallies = (
+                {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
+            )
+            writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+            try:
+                run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
+                _write_stats(maker, setup, writer, progress)
+            finally:
+                writer.close()
+            writer.write_manifest(
+                _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
+            )
+        except BadInput:  # the message says what to change; a half-built folder is of no use
+            shutil.rmtree(partial, ignore_errors=True)
+            raise
+        if target.exists():
+            shutil.rmtree(target)
+        partial.rename(target)
     return target
 
 
@@ -154,21 +158,13 @@ def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
     return hs
 
 
-def _prepare(target: Path, overwrite: bool) -> Path:
+def _check_target(target: Path, overwrite: bool) -> None:
     if target.exists() and (not target.is_dir() or any(target.iterdir())):
         is_dataset = (target / MANIFEST).is_file()
         if not (overwrite and is_dataset):
             hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
             raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
     check_writable_folder(target)
-    partial = target.parent / f".{target.name}.partial"
-    if partial.exists():
-        shutil.rmtree(partial)  # left over from an interrupted generation
-    try:
-        partial.mkdir(parents=True)
-    except OSError as exc:
-        raise BadInput(f"{target}: --out: cannot create the folder: {exc.strerror}") from None
-    return partial
 
 
 def _write_stats(

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -26,6 +25,7 @@ from bpb_core.interfaces import InputMode
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
 from bpb_core.library.answers import build_messages
 from bpb_core.library.hf_card import card_text
+from bpb_core.partial import partial_folder
 
 if TYPE_CHECKING:
     from bpb_core.dataset.scene_entry import DatasetScene
@@ -103,13 +103,17 @@ def export_hf(
     objects = [registry.task(name) for name in names]
     target = Path(out)
     _check_out(target)
-    partial = _partial_folder(target)
-    try:
-        splits, files, card = _write_export(dataset, partial, objects, names, shard_rows, registry)
-        (partial / "README.md").write_text(card, encoding="utf-8")
-        _swap_in(partial, target)
-    finally:
-        shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
+    with partial_folder(target, "bpb export") as partial:
+        try:
+            (partial / DATA).mkdir()
+            (partial / SIDE).mkdir()
+            splits, files, card = _write_export(
+                dataset, partial, objects, names, shard_rows, registry
+            )
+            (partial / "README.md").write_text(card, encoding="utf-8")
+            _swap_in(partial, target)
+        finally:
+            shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
     return HfExport(target, splits, tuple(files), names)
 
 
@@ -154,20 +158,6 @@ def _check_out(out: Path) -> None:
         raise BadInput(f"{out}: --out: cannot read the folder: {exc.strerror or exc}") from None
     if busy and not is_hf_export(out):
         raise BadInput(f"{out}: --out: not empty and not a bpb export; choose a new folder")
-
-
-def _partial_folder(out: Path) -> Path:
-    """A fresh hidden ``.NAME.partial`` folder beside ``out`` to build the export in."""
-    where = Path(os.path.abspath(out))
-    partial = where.parent / f".{where.name}.partial"
-    shutil.rmtree(partial, ignore_errors=True)  # left over from an interrupted export
-    try:
-        (partial / DATA).mkdir(parents=True)
-        (partial / SIDE).mkdir()
-    except OSError as exc:
-        shutil.rmtree(partial, ignore_errors=True)
-        raise BadInput(f"{out}: --out: cannot create the folder: {exc.strerror or exc}") from None
-    return partial
 
 
 def _swap_in(partial: Path, out: Path) -> None:
