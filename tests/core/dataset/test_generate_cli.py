@@ -92,6 +92,20 @@ def test_a_horizon_calibration_cannot_serve_exits_2_and_keeps_the_old_dataset(
     assert "--calibrate: horizon 0.001 s:" in done.stderr and "64 m/s" in done.stderr
     assert (out / "dataset.json").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "quick.json"]
+    # no friction, no pockets, a day-long horizon: the first calibration scenes never end
+    config.write_text(
+        '{"physics": {"mu": 0}, "pockets": {"radius": 0}, '
+        '"calibration": {"samples": 20, "iterations": 4}}'
+    )
+    done = bpb(*common, "--horizons", "100000", "--calibrate", "--config", str(config),
+               "--overwrite")  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "error: --calibrate: horizon 100000 s: a calibration scene needs more than 100,000 "
+        "events at cue speeds up to 0.5 m/s; choose a shorter horizon"
+    ]
+    assert (out / "dataset.json").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "quick.json"]
 
 
 def test_stable_only_that_finds_too_few_stable_scenes_exits_2_and_writes_nothing(
