@@ -76,16 +76,21 @@ def write_dataset(root: Path) -> Path:
 
 
 def write_run(
-    root: Path, adapter: str, dataset: Path, answers: dict[tuple[str, str], dict[str, Any] | None]
+    root: Path,
+    adapter: str,
+    dataset: Path,
+    answers: dict[tuple[str, str], dict[str, Any] | None],
+    tasks: tuple[str, ...] = ("q1", "q2", "q3"),
 ) -> Path:
-    """``answers[(scene_id, task)]`` is the record to write (None: no file, i.e. missing)."""
+    """``answers[(scene_id, task)]`` is the record to write (None: no file, i.e. missing);
+    ``tasks``: the tasks the run was asked."""
     root.mkdir(parents=True)
-    manifest = {"adapter": adapter, "model_id": adapter, "tasks": ["q1", "q2", "q3"]}
+    manifest = {"adapter": adapter, "model_id": adapter, "tasks": list(tasks)}
     manifest["data"] = str(dataset)
     (root / "run.json").write_text(json.dumps(manifest))
     for horizon, index in SCENES:
         sid = f"h{horizon:g}_{index:04d}"
-        for task in ("q1", "q2", "q3"):
+        for task in tasks:
             record = answers.get((sid, task), {"status": "missing"})
             if record.get("status") == "missing":
                 continue

@@ -9,7 +9,7 @@ ceiling. Accuracy by horizon is :mod:`bpb_core.report.horizon_chart`.
 from __future__ import annotations
 
 import io
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -89,11 +89,14 @@ def leaderboards(
     *,
     xlabel: str = "mean accuracy over horizons (%)",
     no_value: str = "left out (too incomplete)",
+    unasked: Mapping[str, Collection[str]] | None = None,
 ) -> bytes:
     """One leaderboard per metric (each task, then each suite): horizontal bars, best on
     top, every baseline also drawn as a dashed line across the panel (the floors and the
     ceiling on the same axis); a zero is drawn as a tick on the axis so it reads as a value;
-    runs with no value are named under the axis after ``no_value``."""
+    runs with no value are named under the axis after ``no_value``, except those ``unasked``
+    lists for the metric (runs not asked it), which are named after "not asked"."""
+    unasked = unasked or {}
     titles = titles or {}
     ncols = min(len(metrics), 2)
     nrows = (len(metrics) + ncols - 1) // ncols
@@ -122,8 +125,12 @@ def leaderboards(
         ax.set_xlim(0, 114)
         ax.set_xticks([0, 20, 40, 60, 80, 100])
         _floors(ax, ranked, styles, metric)
-        left_out = board.loc[board[metric].isna(), "run"].astype(str).tolist()
+        missing = board.loc[board[metric].isna(), "run"].astype(str).tolist()
+        others = set(unasked.get(metric, ()))
+        left_out = [run for run in missing if run not in others]
+        not_asked = [run for run in missing if run in others]
         note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
+        note += f"\nnot asked: {', '.join(not_asked)}" if not_asked else ""
         ax.set_xlabel(xlabel + note, fontsize=8)
         ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)

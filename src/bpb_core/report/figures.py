@@ -12,6 +12,16 @@ if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
 
 
+def unasked(part: ReportPart, scores: list[str]) -> dict[str, list[str]]:
+    """Per task or suite of ``scores``, the runs not asked it (a suite: not all its tasks)."""
+    need = {s.name: set(s.weights) for s in part.results.suites}
+    out: dict[str, list[str]] = {}
+    for metric in scores:
+        tasks = need.get(metric, {metric})
+        out[metric] = [run.label for run in part.results.runs if not tasks <= set(run.tasks)]
+    return out
+
+
 def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> dict[str, bytes]:
     """Leaderboards (answered only, incomplete tasks left out), accuracy by horizon (grouped
     bars, incomplete cells greyed), then each diagnostic's chart."""
@@ -23,6 +33,7 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
         "Leaderboards": ch.leaderboards(
             board, scores, tables["bootstrap_answered"], names,
             xlabel="mean accuracy over horizons, answered only (%)",
+            unasked=unasked(part, scores),
         ),
         "Accuracy by horizon": accuracy_by_horizon(
             tables["accuracy_answered"], order, suites, names, min_complete=rule.min_complete

@@ -38,7 +38,10 @@ def completeness_cell(value: float, rule: Completeness) -> Cell:
 
 def score_cell(value: float, worst: float, rule: Completeness) -> Cell:
     """A leaderboard score with its least complete cell ``worst``: "left out" and greyed when
-    that is under the threshold (and the score blank), marked with it when under 100%."""
+    that is under the threshold (and the score blank), marked with it when under 100%; "–"
+    when there is no cell (``worst`` NaN: the run was not asked the task)."""
+    if math.isnan(worst):  # no cell at all: the run was not asked this task
+        return Cell("–", title="not asked by this run")
     grade = level(worst, rule.min_complete)
     if grade == "short" and math.isnan(value):
         return Cell(LEFT_OUT, css="short", title=f"a horizon is under {pct(rule.min_complete)}")
@@ -90,7 +93,7 @@ def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Row
         run, short = str(row["run"]), str(row["short"])
         found = worst.loc[run].to_dict() if run in worst.index else {}
         least = {t: float(found.get(t, 1.0)) for t in tasks}
-        of = {s.name: min(least.get(t, 1.0) for t in s.weights) for s in suites}
+        of = {s.name: _least([least.get(t, 1.0) for t in s.weights]) for s in suites}
         cells = [Cell(run), completeness_cell(float(row["completeness"]), rule)]
         cells += [score_cell(float(row[m]), least[m], rule) for m in tasks]
         cells += [score_cell(float(row[s.name]), of[s.name], rule) for s in suites]
@@ -101,6 +104,11 @@ def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Row
         cells += [completeness_cell(float(row["worst_cell"]), rule), Cell(short or "–")]
         rows.append((bool(row["baseline"]), cells))
     return head, rows
+
+
+def _least(shares: list[float]) -> float:
+    """The least of ``shares``, NaN when one is NaN (a task the run was not asked)."""
+    return math.nan if any(math.isnan(x) for x in shares) else min(shares)
 
 
 def _interval(ci: pd.DataFrame, run: str, metric: str) -> Cell:

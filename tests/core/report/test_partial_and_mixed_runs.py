@@ -13,6 +13,8 @@ import pytest
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
 from bpb_core.report.build import Completeness, build_report
+from bpb_core.report.figures import unasked
+from bpb_core.report.sections import headline_cells
 from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run
 
 
@@ -129,6 +131,24 @@ def test_a_run_still_running_is_reported_as_running_not_as_to_resume(tmp_path: P
     }
     ended = build_report(tmp_path / "runs", n_boot=20).summary_json()["incomplete"]
     assert ended == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
+
+
+def test_a_task_a_run_was_not_asked_is_not_called_too_incomplete(tmp_path: Path) -> None:
+    # A run asked q1 only read "left out" (too incomplete) under q2, q3 and the suite, in the
+    # leaderboard and its chart, while its own "left out" column said nothing was.
+    data = write_dataset(tmp_path / "data")
+    q1 = {k: v for k, v in all_answers(oracle_answer).items() if k[1] == "q1"}
+    write_run(tmp_path / "runs" / "q1only", "litellm:q1only", data, q1, tasks=("q1",))
+    _stopped_run(tmp_path, data)
+    report = build_report(tmp_path / "runs", n_boot=20)
+    part = report.parts[0]
+    head, rows = headline_cells(part, Completeness())
+    cells = {str(r[0].text): dict(zip(head, (c.text for c in r), strict=True)) for _, r in rows}
+    suite = part.results.suites[0].name
+    assert cells["q1only"]["q1"] == "100.0%"
+    assert [cells["q1only"][c] for c in ("q2", "q3", suite, "left out")] == ["–"] * 4
+    assert [cells["stopped"][c] for c in ("q1", "q2", suite)] == ["left out"] * 3
+    assert unasked(part, ["q1", "q2", suite]) == {"q1": [], "q2": ["q1only"], suite: ["q1only"]}
 
 
 def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> None:
