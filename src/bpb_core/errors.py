@@ -6,7 +6,8 @@ The CLI maps them to exit codes: :class:`BadInput` is 2, anything else unexpecte
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 
 
 class BpbError(Exception):
@@ -33,9 +34,33 @@ class UnknownName(BadInput):
 
 
 class PluginError(BpbError):
-    """The plugin set is inconsistent (two plugins claim one name, a misspelt hook)."""
+    """The plugin set is inconsistent (two plugins claim one name, a misspelt hook, a hook
+    returning something other than its records)."""
 
     exit_code = 2
+
+
+class PluginBug(PluginError):
+    """A plugin's code raised or broke its contract: a bug to report to the plugin, not bad
+    input (exit code 3, like bpb's own bugs, but naming the plugin)."""
+
+    exit_code = 3
+
+
+@contextmanager
+def blamed(origin: str, what: str) -> Iterator[None]:
+    """Run plugin code; an unexpected exception leaves as a one-line :class:`PluginBug`
+    naming the plugin (``origin``, e.g. ``Registered.origin``) and what it was doing.
+
+    bpb's own errors (:class:`BpbError`: a ``BadInput``, a ``ParseFailure``, a model error)
+    pass through unchanged: raising them is part of a plugin's contract.
+    """
+    try:
+        yield
+    except BpbError:
+        raise
+    except Exception as exc:
+        raise PluginBug(f"{origin}: {what} raised {type(exc).__name__}: {exc}") from exc
 
 
 class ParseFailure(BpbError):

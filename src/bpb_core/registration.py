@@ -175,3 +175,13 @@ class Registered:
     plugin: str
     distribution: str
     version: str
+    module: str = ""
+
+    @property
+    def origin(self) -> str:
+        """Who to blame for this component: the plugin (entry point name and the module it
+        names) and its distribution, e.g. ``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1``.
+        """
+        where = f" ({self.module})" if self.module and self.module != self.plugin else ""
+        version = f" {self.version}" if self.version and self.version != "unknown" else ""
+        return f"plugin {self.plugin!r}{where} from {self.distribution}{version}"

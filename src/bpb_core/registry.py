@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 from bpb_core import hookspecs
-from bpb_core.errors import BadInput, PluginError, UnknownName
+from bpb_core.errors import BadInput, PluginBug, PluginError, UnknownName, blamed
 from bpb_core.registration import (
     KINDS,
     AdapterInfo,
@@ -44,11 +44,13 @@ class PluginWarning(UserWarning):
 
 @dataclass(frozen=True)
 class PluginSource:
-    """Where a registered plugin object came from."""
+    """Where a registered plugin object came from: the entry point's name, its distribution
+    and version, and the module the entry point names (``module``)."""
 
     name: str
     distribution: str
     version: str
+    module: str = ""
 
 
 class Registry:
@@ -77,9 +79,30 @@ class Registry:
         except KeyError:
             raise UnknownName(kind.replace("_", " "), name, self._components[kind]) from None
 
+    def origin(self, kind: Kind, name: str) -> str:
+        """Who supplied ``name``: plugin, module and distribution, for one-line errors."""
+        return self.get(kind, name).origin
+
     def load(self, kind: Kind, name: str) -> Any:
-        """Import and return the component class or factory registered as ``name``."""
-        return self.get(kind, name).info.load()
+        """Import and return the component class or factory registered as ``name``.
+
+        Raises:
+            PluginBug: The plugin's loader failed (a wrong ``lazy`` reference, an import
+                error), naming the plugin.
+        """
+        entry = self.get(kind, name)
+        with blamed(entry.origin, f"loading the {kind.replace('_', ' ')} {name!r}"):
+            return entry.info.load()
+
+    def build(self, kind: Kind, name: str) -> Any:
+        """A fresh instance of the component class registered as ``name``.
+
+        Raises:
+            PluginBug: Loading or creating it failed, naming the plugin.
+        """
+        made = self.load(kind, name)
+        with blamed(self.origin(kind, name), f"creating the {kind.replace('_', ' ')} {name!r}"):
+            return made()
 
     def __iter__(self) -> Iterator[Registered]:
         for kind in KINDS:
@@ -88,7 +111,7 @@ class Registry:
     # The typed facade: every component comes out as its interface.
     def task(self, name: str) -> Task:
         """A fresh instance of the task ``name``."""
-        task: Task = self.load("task", name)()
+        task: Task = self.build("task", name)
         return task
 
     def task_info(self, name: str) -> TaskInfo:
@@ -116,10 +139,14 @@ class Registry:
         """
         factory = self.load("simulator", name)
         try:
-            simulator: Simulator = factory(**options)
-        except TypeError as exc:
+            with blamed(self.origin("simulator", name), f"creating the simulator {name!r}"):
+                simulator: Simulator = factory(**options)
+        except PluginBug as exc:
+            if not isinstance(exc.__cause__, TypeError) or not options:
+                raise
             given = ", ".join(f"--{k}" for k in options)
-            raise BadInput(f"simulator {name!r}: does not accept {given}: {exc}") from None
+            why = exc.__cause__
+            raise BadInput(f"simulator {name!r}: does not accept {given}: {why}") from None
         return simulator
 
     def simulator_info(self, name: str) -> SimulatorInfo:
@@ -130,7 +157,7 @@ class Registry:
 
     def scene_family(self, name: str) -> SceneFamily:
         """A fresh instance of the scene family ``name``."""
-        family: SceneFamily = self.load("scene_family", name)()
+        family: SceneFamily = self.build("scene_family", name)
         return family
 
     def default_family(self) -> str:
@@ -150,7 +177,7 @@ class Registry:
 
     def scorer(self, name: str) -> Scorer:
         """A fresh instance of the scorer ``name``."""
-        scorer: Scorer = self.load("scorer", name)()
+        scorer: Scorer = self.build("scorer", name)
         return scorer
 
     def scorer_for(self, task: str) -> Scorer:
@@ -159,9 +186,17 @@ class Registry:
         Raises:
             BadInput: No installed scorer scores ``task``.
         """
+        return self.scorer(self.scorer_entry(task).info.name)
+
+    def scorer_entry(self, task: str) -> Registered:
+        """The record of the scorer of ``task`` (its name and who supplied it).
+
+        Raises:
+            BadInput: No installed scorer scores ``task``.
+        """
         for entry in self.entries("scorer").values():
             if isinstance(entry.info, ScorerInfo) and entry.info.task == task:
-                return self.scorer(entry.info.name)
+                return entry
         raise BadInput(f"task {task!r}: no installed scorer scores it")
 
     def adapter(self, spec: str, options: AdapterOptions | None = None) -> ModelAdapter:
@@ -170,7 +205,9 @@ class Registry:
 
         name, model = split_spec(spec)
         factory = self.load("adapter", name)
-        adapter: ModelAdapter = factory(model, options if options is not None else AdapterOptions())
+        with blamed(self.origin("adapter", name), f"the adapter factory for {spec!r}"):
+            made = factory(model, options if options is not None else AdapterOptions())
+        adapter: ModelAdapter = made
         return adapter
 
     def offline_specs(self) -> list[str]:
@@ -193,7 +230,7 @@ class Registry:
         for entry in self.entries("diagnostic").values():
             info = entry.info
             if isinstance(info, DiagnosticInfo) and wanted & set(info.tasks):
-                found.append(info.load()())
+                found.append(self.build("diagnostic", info.name))
         return found
 
 
@@ -202,17 +239,43 @@ def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[obje
     for ep in sorted(metadata.entry_points(group=group), key=lambda e: e.name):
         dist = ep.dist
         if dist is None:
-            source = PluginSource(ep.name, LOCAL, "unknown")
+            source = PluginSource(ep.name, LOCAL, "unknown", ep.value)
         else:
             if id(dist) not in known:
                 known[id(dist)] = (dist.name, dist.version)
-            source = PluginSource(ep.name, *known[id(dist)])
+            source = PluginSource(ep.name, *known[id(dist)], ep.value)
         try:
             yield ep.load(), source
         except Exception as exc:  # any import failure of a third-party plugin must not spread
             problems.append(
                 f"plugin {ep.name!r} from {source.distribution} {source.version} "
                 f"failed to import: {type(exc).__name__}: {exc}"
+            )
+
+
+def _article(word: str) -> str:
+    return "an" if word[0] in "aeiou" else "a"
+
+
+def _origin(source: PluginSource) -> str:
+    """``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1.0``, as :attr:`Registered.origin`."""
+    info = ComponentInfo("")
+    return Registered(info, source.name, source.distribution, source.version, source.module).origin
+
+
+def _check_hook_names(pm: pluggy.PluginManager, sources: dict[int, PluginSource]) -> None:
+    """Refuse a hook implementation bpb has no hook for (a misspelt ``bpb_model_adapter``),
+    naming the plugin, its module and distribution."""
+    for hook_name, caller in vars(pm.hook).items():
+        if hook_name.startswith("_") or caller.has_spec():
+            continue
+        for impl in caller.get_hookimpls():
+            if impl.optionalhook:
+                continue
+            known = ", ".join(hookspecs.HOOK_KINDS)
+            raise PluginError(
+                f"{_origin(sources[id(impl.plugin)])}: unknown hook {hook_name!r}; "
+                f"bpb's hooks: {known}"
             )
 
 
@@ -225,11 +288,18 @@ def _collect(
         for impl in caller.get_hookimpls():
             source = sources[id(impl.plugin)]
             try:
-                records = list(impl.function() or ())
+                returned = impl.function()
+                if isinstance(returned, ComponentInfo):
+                    raise PluginError(
+                        f"{_origin(source)}: hook {hook_name} returned one {_RECORDS[kind]}; "
+                        "yield each record (or return a list of them)"
+                    )
+                records = list(returned or ())
+            except PluginError:
+                raise
             except Exception as exc:
                 problems.append(
-                    f"plugin {source.name!r} from {source.distribution}: hook {hook_name} "
-                    f"failed: {type(exc).__name__}: {exc}"
+                    f"{_origin(source)}: hook {hook_name} failed: {type(exc).__name__}: {exc}"
                 )
                 continue
             for info in records:
@@ -242,8 +312,8 @@ def _add(
 ) -> None:
     if not isinstance(info, ComponentInfo) or info.kind != kind:
         raise PluginError(
-            f"plugin {source.name!r} from {source.distribution} returned {info!r} "
-            f"from its {kind} hook; expected a {kind} record"
+            f"{_origin(source)} returned {info!r} from its {kind.replace('_', ' ')} hook; "
+            f"expected {_article(kind)} {kind.replace('_', ' ')} record ({_RECORDS[kind]})"
         )
     existing = table.get(info.name)
     if existing is not None:
@@ -251,7 +321,20 @@ def _add(
             f"two plugins register the {kind} {info.name!r}: "
             f"{existing.distribution} ({existing.plugin}) and {source.distribution} ({source.name})"
         )
-    table[info.name] = Registered(info, source.name, source.distribution, source.version)
+    table[info.name] = Registered(
+        info, source.name, source.distribution, source.version, source.module
+    )
+
+
+_RECORDS: dict[Kind, str] = {
+    "task": "TaskInfo",
+    "scene_family": "SceneFamilyInfo",
+    "simulator": "SimulatorInfo",
+    "adapter": "AdapterInfo",
+    "scorer": "ScorerInfo",
+    "suite": "SuiteInfo",
+    "diagnostic": "DiagnosticInfo",
+}
 
 
 def make_registry(
@@ -283,16 +366,13 @@ def make_registry(
             found.append(item)
         else:
             label = getattr(item, "__name__", type(item).__name__)
-            found.append((item, PluginSource(label, LOCAL, "unknown")))
+            found.append((item, PluginSource(label, LOCAL, "unknown", label)))
     for plugin, source in found:
         if pm.is_registered(plugin):
             continue
         pm.register(plugin, name=f"{source.distribution}:{source.name}")
         sources[id(plugin)] = source
-    try:
-        pm.check_pending()
-    except pluggy.PluginValidationError as exc:
-        raise PluginError(f"plugin {exc.plugin!r}: {exc}") from None
+    _check_hook_names(pm, sources)
     components = _collect(pm, sources, problems)
     for line in problems:
         warnings.warn(line, PluginWarning, stacklevel=2)

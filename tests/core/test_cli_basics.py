@@ -61,7 +61,7 @@ def make(model, options):
 """
 
 
-def test_an_internal_error_is_one_line_and_exit_3(
+def test_a_plugin_bug_is_one_line_naming_the_plugin_and_exit_3(
     install: Any, run_bpb: Any, dataset: Path, tmp_path: Path
 ) -> None:
     install("bpb-buggy", "0.1", {"buggy_hooks": BUGGY_PLUGIN, "buggy_impl": BUGGY_IMPL},
@@ -70,7 +70,8 @@ def test_an_internal_error_is_one_line_and_exit_3(
     assert done.returncode == 3
     lines = done.stderr.strip().splitlines()
     assert lines == [
-        "internal error: RuntimeError: the plugin's own bug (set BPB_DEBUG=1 for a traceback)"
+        "error: plugin 'buggy' (buggy_hooks) from bpb-buggy 0.1: the adapter factory for "
+        "'buggy:x' raised RuntimeError: the plugin's own bug (set BPB_DEBUG=1 for a traceback)"
     ]
 
 

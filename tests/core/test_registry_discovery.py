@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from bpb_core import AdapterInfo, hookimpl, lazy, make_registry
-from bpb_core.errors import PluginError, UnknownName
+from bpb_core.errors import PluginBug, PluginError, UnknownName
 from bpb_core.registry import PluginSource, PluginWarning
 
 GOOD_PLUGIN = """
@@ -156,3 +156,65 @@ def test_fresh_registries_do_not_share_state() -> None:
     plain = make_registry(entry_points=False)
     assert with_extra.names("adapter") == ["extra"]
     assert plain.names("adapter") == []
+
+
+FAULTY = PluginSource("faulty", "bpb-faulty", "1.2", "faulty_hooks")
+
+
+def test_misspelt_hook_names_the_plugin_module_and_distribution() -> None:
+    class Misspelt:
+        @hookimpl
+        def bpb_eval_task(self) -> list[AdapterInfo]:  # missing the final s
+            return []
+
+    with pytest.raises(PluginError) as info:
+        make_registry([(Misspelt(), FAULTY)], entry_points=False)
+    assert str(info.value).startswith(
+        "plugin 'faulty' (faulty_hooks) from bpb-faulty 1.2: unknown hook 'bpb_eval_task'"
+    )
+    assert "<" not in str(info.value)  # no object reprs
+
+
+def test_a_hook_returning_one_record_instead_of_an_iterable_is_an_error() -> None:
+    class Bare:
+        @hookimpl
+        def bpb_model_adapters(self) -> AdapterInfo:
+            return AdapterInfo("bare", lazy("os:getcwd"))
+
+    with pytest.raises(PluginError, match=r"'faulty' .*returned one AdapterInfo; yield"):
+        make_registry([(Bare(), FAULTY)], entry_points=False)
+
+
+def test_plugin_code_failing_to_load_or_build_names_the_plugin() -> None:
+    from bpb_core import TaskInfo
+    from bpb_core.errors import BadInput
+
+    def factory(model: str, options: object) -> object:
+        if model == "unknown":
+            raise BadInput("--adapter bad:unknown: no such model")
+        raise ValueError("factory exploded")
+
+    class Faulty:
+        @hookimpl
+        def bpb_eval_tasks(self) -> list[TaskInfo]:
+            return [TaskInfo("nope", lazy("os.path:no_such_attribute"), family="billiards")]
+
+        @hookimpl
+        def bpb_model_adapters(self) -> list[AdapterInfo]:
+            return [AdapterInfo("bad", lambda: factory)]
+
+    registry = make_registry([(Faulty(), FAULTY)], entry_points=False)
+    origin = "plugin 'faulty' (faulty_hooks) from bpb-faulty 1.2"
+    with pytest.raises(PluginBug) as info:
+        registry.task("nope")
+    assert str(info.value) == (
+        f"{origin}: loading the task 'nope' raised AttributeError: "
+        "module 'posixpath' has no attribute 'no_such_attribute'"
+    )
+    with pytest.raises(PluginBug) as info:
+        registry.adapter("bad:x")
+    assert str(info.value) == (
+        f"{origin}: the adapter factory for 'bad:x' raised ValueError: factory exploded"
+    )
+    with pytest.raises(BadInput, match="no such model"):  # bpb's own errors pass through
+        registry.adapter("bad:unknown")

@@ -100,12 +100,15 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def _report_error(exc: BaseException) -> int:
-    from bpb_core.errors import BpbError
+    from bpb_core.errors import BpbError, PluginBug
 
     if os.environ.get("BPB_DEBUG"):
         import traceback
 
         traceback.print_exception(exc)
+    if isinstance(exc, PluginBug):  # the plugin's author wants the traceback
+        click.echo(f"error: {exc} (set BPB_DEBUG=1 for a traceback)", err=True)
+        return exc.exit_code
     if isinstance(exc, BpbError):
         click.echo(f"error: {exc}", err=True)
         return exc.exit_code
