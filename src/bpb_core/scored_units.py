@@ -68,3 +68,55 @@ def entries(answer: Mapping[str, Any] | None, key: str) -> list[Mapping[str, Any
     if not isinstance(items, list):
         return []
     return [item for item in items if isinstance(item, Mapping)]
+
+
+def unit_rows(scorer: Any, origin: str, answer: Any, truth: Any, scene: Any) -> list[UnitRow]:
+    """``scorer.units(answer, truth, scene)``, checked: a list of :class:`UnitRow` with one
+    value per declared column.
+
+    Raises:
+        PluginBug: The scorer raised or returned something else, naming ``origin`` (who
+            supplied it) and the scorer.
+    """
+    from bpb_core.errors import PluginBug, blamed
+
+    name = getattr(scorer, "name", type(scorer).__name__)
+    with blamed(origin, f"scorer {name!r}: units()"):
+        rows = scorer.units(answer, truth, scene)
+    width = len(scorer.columns)
+    if isinstance(rows, list | tuple) and all(
+        isinstance(row, UnitRow) and len(row.values) == width for row in rows
+    ):
+        return list(rows)
+    shown = repr(rows)
+    shown = shown if len(shown) <= 80 else shown[:77] + "..."
+    raise PluginBug(
+        f"{origin}: scorer {name!r}: units() returned {shown}; expected a list of "
+        f"bpb_core.UnitRow, each with {width} values (one per declared column)"
+    )
+
+
+def scored_units(scorer: Any, origin: str, frame: Any) -> Any:
+    """``scorer.score(frame)``, checked: a frame with ``correct`` and ``distance`` and one row
+    per row of ``frame``, on its index.
+
+    Raises:
+        PluginBug: The scorer raised or returned something else, naming ``origin``.
+    """
+    import pandas as pd
+
+    from bpb_core.errors import PluginBug, blamed
+
+    name = getattr(scorer, "name", type(scorer).__name__)
+    with blamed(origin, f"scorer {name!r}: score()"):
+        scored = scorer.score(frame)
+    fits = isinstance(scored, pd.DataFrame) and set(SCORER_OUTPUT) <= set(scored.columns)
+    if fits and len(scored) == len(frame) and scored.index.equals(frame.index):
+        return scored
+    what = type(scored).__name__
+    if isinstance(scored, pd.DataFrame):
+        what = f"a DataFrame with columns {list(scored.columns)} and {len(scored)} rows"
+    raise PluginBug(
+        f"{origin}: scorer {name!r}: score() returned {what}; expected a DataFrame with the "
+        f"columns correct and distance, on the index of its input ({len(frame)} rows)"
+    )

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from bpb_core.errors import PluginBug, blamed
 from bpb_core.report import charts as ch
 from bpb_core.report.horizon_chart import accuracy_by_horizon
 from bpb_core.results.tables import metrics
 
 if TYPE_CHECKING:
+    import pandas as pd
+
+    from bpb_core.interfaces import Diagnostic
     from bpb_core.report.parts import Completeness, ReportPart
 
 
@@ -54,10 +58,22 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
         left_out = [] if rule.include_incomplete else diagnostic_left_out(part, diagnostic.name)
         if "run" in table.columns and left_out:
             table = table[~table["run"].astype(str).isin(left_out)]
-        png = diagnostic.chart(table) if not table.empty else None
+        png = _chart(part, diagnostic, table) if not table.empty else None
         if png is not None:
             pngs[diagnostic.title] = png
     return pngs
+
+
+def _chart(part: ReportPart, diagnostic: Diagnostic, table: pd.DataFrame) -> bytes | None:
+    origin = part.origin(diagnostic.name)
+    with blamed(origin, f"diagnostic {diagnostic.name!r}: chart()"):
+        png = diagnostic.chart(table)
+    if png is not None and not isinstance(png, bytes):
+        raise PluginBug(
+            f"{origin}: diagnostic {diagnostic.name!r}: chart() returned "
+            f"{type(png).__name__}; expected PNG bytes or None"
+        )
+    return png
 
 
 def diagnostic_left_out(part: ReportPart, name: str) -> list[str]:

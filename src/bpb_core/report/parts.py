@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.capabilities import ReportsMetrics
+from bpb_core.errors import PluginBug, blamed
 from bpb_core.registration import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.datasets import by_dataset
@@ -59,6 +60,12 @@ class ReportPart:
     """Per task with a ``<task>_metrics`` table: its metrics and what each says."""
     diagnostic_tasks: dict[str, tuple[str, ...]] = field(default_factory=dict)
     """Per diagnostic, the tasks it looks at."""
+    origins: dict[str, str] = field(default_factory=dict)
+    """Per diagnostic, who supplied it (``Registered.origin``), for one-line plugin errors."""
+
+    def origin(self, diagnostic: str) -> str:
+        """Who supplied ``diagnostic`` (its name when not known)."""
+        return self.origins.get(diagnostic, f"diagnostic {diagnostic!r}")
 
     def too_incomplete(self, tasks: Sequence[str]) -> list[str]:
         """Runs with a task of ``tasks`` left out of the leaderboards (a cell too incomplete)."""
@@ -93,16 +100,28 @@ def report_parts(
     for part in by_dataset(results):
         diagnostics = tuple(registry.diagnostics_for(part.tasks))
         scorers = {task: registry.scorer_for(task) for task in part.tasks}
+        infos = registry.entries("diagnostic")
+        origins = {d.name: infos[d.name].origin for d in diagnostics if d.name in infos}
         tables = report_tables(
             part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness,
-            scorers=scorers,
+            scorers=scorers, origins=origins,
         )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
         notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
-        infos = registry.entries("diagnostic")
         looks = {d.name: _tasks_of(infos.get(d.name)) for d in diagnostics}
-        parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks))
+        parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks, origins))
     return tuple(parts)
+
+
+def _table(diagnostic: Diagnostic, origin: str, results: Results) -> pd.DataFrame:
+    with blamed(origin, f"diagnostic {diagnostic.name!r}: table()"):
+        table = diagnostic.table(results)
+    if not isinstance(table, pd.DataFrame):
+        raise PluginBug(
+            f"{origin}: diagnostic {diagnostic.name!r}: table() returned "
+            f"{type(table).__name__}; expected a pandas DataFrame"
+        )
+    return table
 
 
 def _tasks_of(entry: object) -> tuple[str, ...]:
@@ -118,6 +137,7 @@ def report_tables(
     seed: int = 0,
     completeness: Completeness | None = None,
     scorers: Mapping[str, Scorer] | None = None,
+    origins: Mapping[str, str] | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Every table of a report, derived from ``results`` (nothing is written or printed).
 
@@ -125,7 +145,8 @@ def report_tables(
     ``include_incomplete``); accuracy tables carry each cell's ``level`` (full, partial,
     short); bootstrap intervals are blanked where the leaderboard is; paired comparisons use
     the scenes both runs answered. A scorer that :class:`~bpb_core.capabilities.ReportsMetrics`
-    adds the table ``<task>_metrics``.
+    adds the table ``<task>_metrics``. ``origins`` names who supplied each diagnostic, for
+    the :class:`~bpb_core.errors.PluginBug` raised when one fails or returns no DataFrame.
     """
     rule = completeness or Completeness()
     units, calls, suites = results.units, results.calls, results.suites
@@ -150,7 +171,8 @@ def report_tables(
     tables["completeness"] = tables["accuracy"].drop(columns=["accuracy", "scenes"])
     done = tables["leaderboard"].set_index("run")["completeness"]
     for diagnostic in diagnostics:
-        tables[diagnostic.name] = _with_completeness(diagnostic.table(results), done)
+        origin = (origins or {}).get(diagnostic.name, f"diagnostic {diagnostic.name!r}")
+        tables[diagnostic.name] = _with_completeness(_table(diagnostic, origin, results), done)
     for task, scorer in (scorers or {}).items():
         if isinstance(scorer, ReportsMetrics):
             table = task_metrics(units, task, scorer, tables["leaderboard_answered"], rule)

@@ -28,7 +28,7 @@ from bpb_core.errors import BadInput
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
-from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT, UnitRow
+from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT, UnitRow, scored_units, unit_rows
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -114,16 +114,18 @@ def load_results(
     registry = registry if registry is not None else make_registry()
     runs = find_runs(run_dirs, registry)
     scorers: dict[str, Scorer] = {}
+    origins: dict[str, str] = {}  # who supplied each scorer, for one-line plugin errors
     for run in runs:
         for task in run.tasks:
             if task not in scorers:
                 scorers[task] = registry.scorer_for(task)
+                origins[task] = registry.scorer_entry(task).origin
     extra = _extra_columns(scorers.values())
     units = _Columns({**META_DTYPES, **SCORER_INPUT, **extra, **SCORER_OUTPUT})
     calls = _Columns(CALL_DTYPES)
     for run in runs:
-        _read_one(run, scorers, units, calls)
-    unit_frame = _score(units.frame(), scorers)
+        _read_one(run, scorers, origins, units, calls)
+    unit_frame = _score(units.frame(), scorers, origins)
     present = set(scorers)
     suites = tuple(s for s in registry.suites() if set(s.weights) <= present)
     return Results(unit_frame, calls.frame(), tuple(runs), suites)
@@ -189,7 +191,13 @@ class _Columns:
         return pd.DataFrame(columns)
 
 
-def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls: _Columns) -> None:
+def _read_one(
+    run: RunFolder,
+    scorers: dict[str, Scorer],
+    origins: dict[str, str],
+    units: _Columns,
+    calls: _Columns,
+) -> None:
     for key in run.scene_keys:
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
@@ -201,7 +209,7 @@ def _read_one(run: RunFolder, scorers: dict[str, Scorer], units: _Columns, calls
             status = "missing" if record is None else record.status
             answer = None if record is None else record.answer
             scorer = scorers[task]
-            rows: list[UnitRow] = scorer.units(answer, truth, scene)
+            rows: list[UnitRow] = unit_rows(scorer, origins[task], answer, truth, scene)
             units.repeat({**meta, "task": task, "scene_rule": scorer.scene_rule}, len(rows))
             units.repeat({"status": status, "correct": False}, len(rows))
             for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
@@ -241,12 +249,16 @@ def _add_call(
     calls.repeat(values, 1)
 
 
-def _score(frame: pd.DataFrame, scorers: dict[str, Scorer]) -> pd.DataFrame:
+def _score(
+    frame: pd.DataFrame, scorers: dict[str, Scorer], origins: dict[str, str]
+) -> pd.DataFrame:
     for task, scorer in scorers.items():
         mask = (frame["task"] == task).to_numpy(dtype=bool)
         if not mask.any():
             continue
-        scored = scorer.score(frame.loc[mask, [*SCORER_INPUT, *scorer.columns]])
+        scored = scored_units(
+            scorer, origins[task], frame.loc[mask, [*SCORER_INPUT, *scorer.columns]]
+        )
         frame.loc[mask, "correct"] = scored["correct"].to_numpy(dtype=bool)
         frame.loc[mask, "distance"] = scored["distance"].to_numpy(dtype=float)
     return frame
