@@ -20,10 +20,12 @@ from bpb_core.errors import (
     ModelError,
     ModelTimeout,
     ParseFailure,
+    PluginBug,
     RequestRejected,
+    blamed,
 )
 from bpb_core.interfaces import PromptOptions
-from bpb_core.model_calls import ModelRequest, ModelResponse, known_cost
+from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.limits import sleep_unless
 from bpb_core.runner.progress import ProgressEvent
@@ -91,9 +93,10 @@ class PairCall:
         delay: float | None = None
         try:
             async with self.state.slot():  # held until the reply is logged and written
+                request = self._request(prompt)  # a task's bug stops the run: PluginBug
                 started = time.perf_counter()
                 try:
-                    response = await self.state.adapter.complete(self._request(prompt))
+                    response = await self.state.adapter.complete(request)
                 except ModelError as error:
                     delay = await self._failed(error, time.perf_counter() - started)
                 except Exception as exc:  # an adapter bug: record it for this pair, keep going
@@ -102,7 +105,7 @@ class PairCall:
                     )
                     delay = await self._failed(bug, time.perf_counter() - started)
                 else:
-                    return await self._replied(response, prompt)
+                    return await self._replied(self._checked(response), prompt)
         except NotSent:
             self.state.not_sent(self.task)
             return True
@@ -112,7 +115,8 @@ class PairCall:
         return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
-        messages = self.state.tasks[self.task].messages(self.scene, self.image, prompt)
+        with blamed(self.state.origin(self.task), f"task {self.task!r}: messages()"):
+            messages = self.state.tasks[self.task].messages(self.scene, self.image, prompt)
         options = self.state.options
         return ModelRequest(
             messages,
@@ -125,6 +129,21 @@ class PairCall:
             self.timeout,
             self.tally.attempts,
             self._schema(),
+        )
+
+    def _checked(self, response: object) -> ModelResponse:
+        """The adapter's reply, if it is a :class:`ModelResponse` with text and usage."""
+        if isinstance(response, ModelResponse):
+            if isinstance(response.text, str) and isinstance(response.usage, Usage):
+                return response
+            what = f"a ModelResponse with text {type(response.text).__name__} and usage "
+            what += type(response.usage).__name__
+        else:
+            what = type(response).__name__
+        spec = self.state.spec
+        raise PluginBug(
+            f"{self.state.origin(spec)}: adapter {spec!r}: complete() returned {what}; "
+            "expected a bpb_core.ModelResponse (text a str, usage a bpb_core.Usage)"
         )
 
     def _schema(self) -> dict[str, Any] | None:

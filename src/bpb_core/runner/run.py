@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
-from bpb_core.model_calls import AdapterOptions
+from bpb_core.model_calls import AdapterOptions, split_spec
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
@@ -141,6 +141,7 @@ async def _session(
         run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
     )
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
+    state.origins = _origins(registry, spec, asked.tasks)
     state.config_hash, state.history = manifest["config_hash"], history
     try:
         done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
@@ -154,6 +155,15 @@ async def _session(
         state.log.close()
         finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)
+
+
+def _origins(registry: Registry, spec: str, tasks: dict[str, Task]) -> dict[str, str]:
+    """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
+    found = {name: registry.origin("task", name) for name in tasks}
+    adapter = split_spec(spec)[0]
+    if adapter in registry.names("adapter"):
+        found[spec] = registry.origin("adapter", adapter)
+    return found
 
 
 def _adapter(

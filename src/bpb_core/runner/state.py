@@ -61,6 +61,13 @@ class RunState:
     history: History | None = None
     interrupts: int = 0
     stopping: asyncio.Event = field(default_factory=asyncio.Event)
+    origins: dict[str, str] = field(default_factory=dict)
+    """Who supplied each task (by name) and the adapter (under ``spec``), as
+    ``Registered.origin``: a plugin's bug stops the run with one line naming it."""
+
+    def origin(self, name: str) -> str:
+        """Who supplied the task or adapter ``name`` (the name itself when not known)."""
+        return self.origins.get(name, repr(name))
 
     async def offload(self, fn: Callable[..., T], *args: Any) -> T:
         """Run blocking file work on the run's single IO thread (FIFO, so the attempt lines and
