@@ -117,3 +117,33 @@ def test_bpb_runs_numpy_without_a_blas_thread_pool_unless_the_user_asks(
     count, variable = done.stdout.splitlines()[-1].split()
     assert variable == threads
     assert int(count) == int(threads)  # the main thread plus OpenBLAS's workers
+
+
+FAILING_ADAPTER = """
+from bpb_core import AdapterInfo, hookimpl, lazy
+from bpb_core.errors import ServerError
+
+class Down:
+    name = "down:x"
+
+    async def complete(self, request):
+        raise ServerError("503")
+
+@hookimpl
+def bpb_model_adapters():
+    yield AdapterInfo("down", lambda: lambda model, options: Down(), "Always 503", models=("x",))
+"""
+
+
+def test_an_adapter_spec_is_never_read_as_an_emoji_code(
+    install: Any, run_bpb: Any, dataset: Path, tmp_path: Path
+) -> None:
+    install("bpb-down", "0.1", {"down_hooks": FAILING_ADAPTER}, {"down": "down_hooks"})
+    out = str(tmp_path / "runs")
+    done = run_bpb(
+        "run", "--data", str(dataset), "--adapter", "down:x", "--tasks", "q2", "--limit", "1",
+        "--retries", "0", "--out", out,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "down:x: 2 api errors" in done.stderr  # rich turned ":x:" into an emoji
+    assert "\u274c" not in done.stderr + done.stdout

@@ -1,4 +1,8 @@
-"""The rich console the CLI writes to, and how registry warnings reach the user."""
+"""The rich console the CLI writes to, and how registry warnings reach the user.
+
+Emoji codes are off: adapter specs are ``name:model``, and a line such as ``echo:x: 2 api
+errors`` must not print ``echo❌ 2 api errors`` (rich reads ``:x:`` as an emoji code).
+"""
 
 from __future__ import annotations
 
@@ -23,7 +27,7 @@ def stdout() -> Console:
     from rich.console import Console
 
     piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
-    return Console(width=PIPE_WIDTH if piped else None)
+    return Console(width=PIPE_WIDTH if piped else None, emoji=False)
 
 
 @functools.cache
@@ -31,7 +35,7 @@ def stderr() -> Console:
     """Console on standard error (progress, warnings)."""
     from rich.console import Console
 
-    return Console(stderr=True)
+    return Console(stderr=True, emoji=False)
 
 
 def load_registry() -> Registry:
