@@ -40,3 +40,17 @@ def test_every_registered_builtin_loads(registry: Registry) -> None:
             continue
         assert entry.info.load() is not None, entry.info.name
     assert kinds == set(hookspecs.HOOK_KINDS.values())  # every hook is used by a built-in
+
+
+def test_the_guide_names_every_method_a_billiards_question_must_write() -> None:
+    """A plugin author subclassing BilliardsQuestion from section 5 alone must learn every
+    abstract method (the guide once named only "its question and its JSON example")."""
+    from bpb_tasks.questions.question import BilliardsQuestion
+
+    text = " ".join(DOCS.read_text().split())
+    required = sorted(BilliardsQuestion.__abstractmethods__)
+    assert required == ["example", "expected", "question", "validate"]
+    for name in required:
+        signature = inspect.signature(getattr(BilliardsQuestion, name))
+        params = ", ".join(p for p in signature.parameters if p != "self")
+        assert f"`{name}({params})`" in text, f"{name}({params}) missing from docs/plugins.md"
