@@ -160,7 +160,10 @@ async def _session(
 def _origins(registry: Registry, spec: str, tasks: dict[str, Task]) -> dict[str, str]:
     """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
     found = {name: registry.origin("task", name) for name in tasks}
-    adapter = split_spec(spec)[0]
+    try:
+        adapter = split_spec(spec)[0]
+    except BadInput:  # an adapter object's own name ("buggy"), not a NAME:MODEL spec
+        return found
     if adapter in registry.names("adapter"):
         found[spec] = registry.origin("adapter", adapter)
     return found
