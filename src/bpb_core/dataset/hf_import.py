@@ -1,8 +1,8 @@
 """Read a Hugging Face export of a dataset back as a dataset folder.
 
 ``bpb export --format hf`` (:mod:`bpb_core.library.hf_export`) writes Parquet shards under
-``data/`` and the manifest and index verbatim under ``bpb/``. :func:`resolve_data` turns such a
-folder into a dataset folder that every reader understands: it unpacks each scene's
+``data/`` and the manifest, index and checksums verbatim under ``bpb/``. :func:`resolve_data`
+turns such a folder into a dataset folder that every reader understands: it unpacks each scene's
 ``init.json``, ``final.json`` and input image, byte for byte, into a cache folder named by the
 export's content (``$BPB_CACHE_DIR``, default ``~/.cache/bpb``, then ``hf/<digest>``), once.
 """
@@ -15,6 +15,7 @@ import os
 import shutil
 from pathlib import Path
 
+from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
 
@@ -61,7 +62,9 @@ def cache_root() -> Path:
 
 def _digest(path: Path, shards: list[Path]) -> str:
     digest = hashlib.sha256()
-    for file in [path / SIDE / MANIFEST, path / SIDE / INDEX, *shards]:
+    # checksums only when there (an export made before they were kept keeps its digest)
+    sums = [path / SIDE / CHECKSUMS] if (path / SIDE / CHECKSUMS).is_file() else []
+    for file in [path / SIDE / MANIFEST, path / SIDE / INDEX, *sums, *shards]:
         digest.update(file.name.encode() + b"\0")
         digest.update(_read(file))
     return digest.hexdigest()[:24]
@@ -85,6 +88,8 @@ def _unpack(path: Path, shards: list[Path], target: Path) -> None:
             _unpack_shard(shard, partial)
         shutil.copyfile(path / SIDE / INDEX, partial / INDEX)
         shutil.copyfile(path / SIDE / MANIFEST, partial / MANIFEST)
+        if (path / SIDE / CHECKSUMS).is_file():
+            shutil.copyfile(path / SIDE / CHECKSUMS, partial / CHECKSUMS)
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
         raise

@@ -12,10 +12,10 @@ import hashlib
 import json
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.hf_import import resolve_data
+from bpb_core.dataset.hf_import import SIDE, resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput
@@ -34,12 +34,16 @@ class Dataset:
     Iterating yields a :class:`~bpb_core.dataset.scene_entry.DatasetScene` per scene in horizon
     then index order; ``dataset["h3_0007"]`` looks one up by its id. Each reads its
     ``init.json`` (``.state``) and ``final.json`` (``.truth``) with the family's models on use.
+
+    Attributes:
+        export: The Hugging Face export ``root`` was unpacked from (``None``: a dataset folder).
     """
 
     root: Path
     manifest: DatasetManifest
     keys: tuple[SceneKey, ...]
     family: SceneFamily
+    export: Path | None = None
 
     @property
     def dataset_hash(self) -> str:
@@ -54,7 +58,7 @@ class Dataset:
     def select(self, horizons: Sequence[float] | None = None, limit: int | None = None) -> Dataset:
         """The scenes at ``horizons`` (all when ``None``), at most ``limit`` per horizon."""
         keys = select_keys(self.keys, horizons, limit)
-        return Dataset(self.root, self.manifest, tuple(keys), self.family)
+        return Dataset(self.root, self.manifest, tuple(keys), self.family, self.export)
 
     def __len__(self) -> int:
         return len(self.keys)
@@ -94,7 +98,17 @@ class Dataset:
         ``checksums.sha256`` (or that are missing); ``index.csv`` or ``checksums.sha256`` unlike
         the hashes the manifest records; a manifest whose ``dataset_hash`` does not match its
         content; scene folders ``index.csv`` does not list, or listed scenes without a folder.
-        An empty list means the dataset is intact."""
+        An empty list means the dataset is intact.
+
+        For a Hugging Face export the same, but only the files an export carries are checked
+        against ``checksums.sha256`` (each scene's ``init.json``, ``final.json`` and input
+        image; not the other images or the stats figures).
+
+        Raises:
+            BadInput: ``checksums.sha256`` cannot be read, or the export has none (an export
+                made by an earlier bpb).
+        """
+        carried = self._exported_names()
         problems = []
         if self.manifest.sealed().dataset_hash != self.manifest.dataset_hash:
             problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
@@ -114,12 +128,27 @@ class Dataset:
             ) from None
         for line in lines:
             digest, _, rel = line.partition("  ")
+            if carried is not None and PurePosixPath(rel).name not in carried:
+                continue
             target = self.root / rel
             if not target.is_file():
                 problems.append(f"{rel}: missing")
             elif hashlib.sha256(target.read_bytes()).hexdigest() != digest:
                 problems.append(f"{rel}: content differs from its checksum")
         return problems
+
+    def _exported_names(self) -> set[str] | None:
+        """The names of the scene files an export carries (``None``: a dataset folder)."""
+        if self.export is None:
+            return None
+        if not (self.root / CHECKSUMS).is_file():
+            raise BadInput(
+                f"{self.export}: this Hugging Face export has no {SIDE}/{CHECKSUMS} (made by an "
+                "earlier bpb), so its scene files cannot be checked: export the dataset again, "
+                "or verify the dataset folder it came from"
+            )
+        image = self.family.input_image if self.manifest.images else None
+        return {INIT, FINAL} | ({image} if image else set())
 
 
 def dataset_keys(root: Path) -> list[SceneKey]:
@@ -176,10 +205,12 @@ def load_dataset(
         BadInput: ``root`` is not a dataset, its manifest or index is corrupt, or its scene
             family is not installed.
     """
-    root = resolve_data(root)
+    source = Path(root)
+    root = resolve_data(source)
     manifest = read_manifest(root)
     family = dataset_family(manifest, root, registry)
-    dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family)
+    export = source if root != source else None
+    dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family, export)
     if horizons is None and limit is None:
         return dataset
     return dataset.select(horizons, limit)

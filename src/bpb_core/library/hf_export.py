@@ -4,8 +4,9 @@ One row per scene and task, split by horizon (``data/h3-00000-of-00001.parquet``
 image (an ``Image`` feature), the scene id, horizon and index, the task, the exact prompt text
 per input mode, the target answer as JSON, the stability flag and annotation, the scene's family
 cells of ``index.csv``, and ``init.json`` and ``final.json`` verbatim (so ``bpb run`` can read
-the export back, see :mod:`bpb_core.dataset.hf_import`). ``bpb/`` keeps ``dataset.json`` and
-``index.csv`` verbatim. The same dataset gives the same bytes.
+the export back, see :mod:`bpb_core.dataset.hf_import`). ``bpb/`` keeps ``dataset.json``,
+``index.csv`` and ``checksums.sha256`` verbatim (so ``verify()`` checks the scene files an export
+carries). The same dataset gives the same bytes.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
+from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.dataset.reader import Dataset, load_dataset
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
@@ -268,5 +270,11 @@ def _arrow_type(pa: Any, feature: dict[str, str]) -> Any:
 
 
 def _write_side_files(dataset: Dataset, out: Path) -> None:
-    for name in (MANIFEST, INDEX):
-        shutil.copyfile(dataset.root / name, out / SIDE / name)
+    for name in (MANIFEST, INDEX, CHECKSUMS):
+        try:
+            shutil.copyfile(dataset.root / name, out / SIDE / name)
+        except OSError as exc:
+            raise BadInput(
+                f"{dataset.root / name}: cannot read: {exc.strerror or exc}; the dataset is "
+                "damaged: load_dataset(...).verify() lists what changed"
+            ) from None

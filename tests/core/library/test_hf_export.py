@@ -263,3 +263,65 @@ def test_a_missing_image_is_named_and_a_dataset_without_images_exports(
     assert rows.num_rows == 6
     assert set(rows["image"]) == set(rows["prompt_image"]) == {None}
     assert all(rows["prompt_state"])
+
+
+def _set_cell(shard: Path, column: str, row: int, value: object) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(shard)
+    values = table.column(column).to_pylist()
+    values[row] = value
+    field = table.schema.field(column)
+    table = table.set_column(
+        table.schema.get_field_index(column), field, pa.array(values, field.type)
+    )
+    pq.write_table(table, shard)
+
+
+def test_verify_on_an_export_checks_the_files_it_carries(
+    export: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    assert (export / "bpb" / "checksums.sha256").is_file()
+    assert load_dataset(export).verify() == []  # final.png, stats/ are not exported: not missing
+    edited = Path(shutil.copytree(export, tmp_path / "edited"))
+    shard = sorted((edited / "data").glob("h1-*.parquet"))[0]
+    _set_cell(
+        shard, "truth", 0, _cell(shard, "truth", 0).replace('"answer": "F"', '"answer": "T"', 1)
+    )
+    assert load_dataset(edited).verify() == [
+        "h1/scene_0000/final.json: content differs from its checksum"
+    ]
+    (edited / "bpb" / "checksums.sha256").unlink()  # an export made before bpb kept it
+    with pytest.raises(BadInput) as caught:
+        load_dataset(edited).verify()
+    assert str(caught.value) == (
+        f"{edited}: this Hugging Face export has no bpb/checksums.sha256 (made by an earlier "
+        "bpb), so its scene files cannot be checked: export the dataset again, or verify the "
+        "dataset folder it came from"
+    )
+
+
+def _cell(shard: Path, column: str, row: int) -> str:
+    import pyarrow.parquet as pq
+
+    value = pq.read_table(shard).column(column).to_pylist()[row]
+    assert isinstance(value, str)
+    return value
+
+
+def test_a_dataset_without_its_checksums_is_not_exported(
+    small_dataset: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    broken = Path(shutil.copytree(small_dataset, tmp_path / "broken"))
+    (broken / "checksums.sha256").unlink()
+    bad = run_bpb("export", str(broken), "--out", str(tmp_path / "hf"))
+    assert bad.returncode == 2, bad.stderr
+    assert bad.stderr.strip().splitlines() == [
+        f"error: {broken}/checksums.sha256: cannot read: No such file or directory; the dataset "
+        "is damaged: load_dataset(...).verify() lists what changed"
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken"]
