@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.reader import dataset_family
+from bpb_core.dataset.scene_entry import check_image
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import INIT, MANIFEST
@@ -63,7 +64,7 @@ def preview_messages(
 
     Raises:
         BadInput: No such scene, an invalid scene file, an unknown task, a task of another
-            scene family, or a missing image for image input.
+            scene family, or a missing or damaged image for image input.
     """
     init = _scene_file(scene, data)
     family = dataset_family(None, _dataset_root(init), registry)
@@ -75,10 +76,12 @@ def preview_messages(
     if options.input_mode != "state":
         if family.input_image is None:
             raise BadInput(f"{init.parent}: the {family.name} family has no images")
+        path = init.parent / family.input_image
         try:
-            image = (init.parent / family.input_image).read_bytes()
+            image = path.read_bytes()
         except OSError:
-            raise BadInput(f"{init.parent / family.input_image}: missing") from None
+            raise BadInput(f"{path}: missing") from None
+        check_image(path, image)
     return registry.task(task).messages(value, image, options)
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import dataset_keys
+from bpb_core.dataset.scene_entry import check_image
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.validated_files import read_model
@@ -46,7 +47,7 @@ class SceneRef:
         """The bytes of the family's input image.
 
         Raises:
-            BadInput: The image is missing (image input modes need it).
+            BadInput: The image is missing (image input modes need it), truncated or damaged.
         """
         name = self.family.input_image
         if name is None:
@@ -59,26 +60,8 @@ class SceneRef:
             data = path.read_bytes()
         except OSError:
             raise BadInput(f"{path}: missing; use --input-mode state for text-only runs") from None
-        _check_image(path, data)
+        check_image(path, data)
         return data
-
-
-def _check_image(path: Path, data: bytes) -> None:
-    """Refuse an image Pillow cannot read whole (a truncated or damaged file), which a model
-    would otherwise be sent, and paid for, as it is. ``verify`` walks the file's structure and
-    checksums without decoding the pixels (about 0.1 ms for a scene image)."""
-    import io
-
-    from PIL import Image
-
-    try:
-        with Image.open(io.BytesIO(data)) as image:
-            image.verify()
-    except Exception as exc:  # Pillow raises several types for a damaged file
-        raise BadInput(
-            f"{path}: not a readable image ({type(exc).__name__}: {exc}); the dataset is "
-            "damaged: load_dataset(...).verify() lists what changed"
-        ) from None
 
 
 def select_scenes(

@@ -78,6 +78,9 @@ class HumanSession:
         if unable:
             raise BadInput(f"--tasks: {', '.join(unable)} cannot be answered in the browser")
         self.order = list(ask.scenes)
+        if ask.family.input_image is not None:
+            for ref in self.order:  # a damaged image stops the session now, not on its page
+                ref.image()
         random.Random(f"human:{self.seed}").shuffle(self.order)
         count = len(self.order)
         start_manifest(self.run_dir, self.spec, self.data, self.options, self.registry, count)

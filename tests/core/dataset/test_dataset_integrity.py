@@ -148,3 +148,46 @@ def test_a_run_refuses_a_truncated_input_image_instead_of_sending_it(
     assert done.returncode == 2, done.stderr
     last = done.stderr.strip().splitlines()[-1]
     assert last.startswith(f"error: {image}: not a readable image (OSError: Truncated File Read)")
+
+
+def truncate_image(root: Path) -> Path:
+    image = root / "h1" / "scene_0001" / "init.png"
+    image.write_bytes(image.read_bytes()[: image.stat().st_size * 6 // 10])
+    return image
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["export", "{data}", "--out", "{tmp}/hf"],
+        ["prompt", "h1_0001", "--data", "{data}"],
+        ["prompt", "{data}/h1/scene_0001", "--input-mode", "image+state"],
+    ],
+    ids=["export", "prompt-by-id", "prompt-by-folder"],
+)
+def test_a_truncated_input_image_is_named_not_exported_or_printed(
+    copy: Path, tmp_path: Path, command: list[str]
+) -> None:
+    image = truncate_image(copy)
+    args = [arg.format(data=copy, tmp=tmp_path) for arg in command]
+    done = subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"error: {image}: not a readable image (OSError: Truncated File Read); the dataset is "
+        "damaged: load_dataset(...).verify() lists what changed"
+    ]
+    assert done.stdout == ""
+    assert not (tmp_path / "hf").exists()
+
+
+def test_a_truncated_input_image_stops_bpb_human_before_it_serves(
+    copy: Path, tmp_path: Path
+) -> None:
+    from bpb_core.registry import make_registry
+    from bpb_core.web.human import HumanSession
+
+    image = truncate_image(copy)
+    with pytest.raises(BadInput) as caught:
+        HumanSession(copy, tmp_path / "run", "ann", make_registry())
+    assert str(caught.value).startswith(f"{image}: not a readable image")
+    assert not (tmp_path / "run").exists()
