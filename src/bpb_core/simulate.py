@@ -165,23 +165,29 @@ def prepare(
         raise BadInput(f"--horizon: must be a positive finite number, got {horizon}")
     reg = registry if registry is not None else make_registry()
     if simulator is None:
-        family, config = _made_with(files, reg)
+        family, config, manifest = _made_with(files, reg)
         simulator = family.simulator_name(config)
+        if manifest is not None and simulator not in reg.names("simulator"):
+            known = ", ".join(reg.names("simulator")) or "none"
+            raise BadInput(
+                f"{manifest}: config: names simulator {simulator!r}, which is not installed "
+                f"(installed: {known}); or choose one with --simulator"
+            )
     if isinstance(simulator, str):
         name = reg.simulator_info(simulator).family or reg.default_family()
         return Prepared(reg.simulator(simulator, **dict(options or {})), reg.scene_family(name))
     return Prepared(simulator, reg.scene_family(reg.default_family()))
 
 
-def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any]:
-    """The family and config of the dataset the first scene file belongs to (the default
-    family and its default config for loose scene files)."""
+def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any, Path | None]:
+    """The family, config and manifest of the dataset the first scene file belongs to (the
+    default family, its default config and ``None`` for loose scene files)."""
     for folder in list(files[0].parents)[:3] if files else []:
-        if (folder / MANIFEST).is_file():
+        if (folder / MANIFEST).exists():  # a folder by that name is named as unreadable
             family = dataset_family(None, folder, registry)
-            return family, dataset_config(folder, family)
+            return family, dataset_config(folder, family), folder / MANIFEST
     family = registry.scene_family(registry.default_family())
-    return family, family.load_config(None)
+    return family, family.load_config(None), None
 
 
 def simulate_paths(

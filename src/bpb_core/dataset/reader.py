@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -21,7 +22,7 @@ from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
-from bpb_core.validated_files import read_model
+from bpb_core.validated_files import read_model, validate_mapping
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -227,12 +228,16 @@ def read_manifest(root: Path) -> DatasetManifest:
     return read_model(root / MANIFEST, DatasetManifest)
 
 
-def family_name(root: Path) -> str | None:
-    """The scene family named by ``root/dataset.json`` (``config.family``), or ``None`` when
-    there is no manifest or it names none (a hand-made folder of scenes).
+def manifest_data(root: Path) -> dict[str, Any] | None:
+    """The JSON object of ``root/dataset.json`` (``None`` when there is none), checked where
+    the lenient readers look (a hand-made folder's manifest may hold only a few keys): no
+    NaN or infinity anywhere; ``dataset_hash``, when there, a string; ``config``, when there,
+    an object whose ``family``, when there, is a non-empty string. A manifest that names its
+    ``format`` (one ``bpb generate`` wrote) is checked whole, as :func:`read_manifest` does.
 
     Raises:
-        BadInput: ``dataset.json`` exists but is not JSON.
+        BadInput: The file cannot be read, is not a JSON object, or one of those fields is
+            wrong (names the file and the field).
     """
     path = root / MANIFEST
     try:
@@ -240,8 +245,76 @@ def family_name(root: Path) -> str | None:
     except FileNotFoundError:
         return None
     except (OSError, ValueError) as exc:
-        raise BadInput(f"{path}: cannot read dataset manifest: {exc}") from None
-    config = data.get("config") if isinstance(data, dict) else None
+        why = getattr(exc, "strerror", None) or exc
+        raise BadInput(f"{path}: cannot read dataset manifest: {why}") from None
+    if not isinstance(data, dict):
+        raise BadInput(
+            f"{path}: not a dataset manifest: a JSON object ({{...}}) expected, "
+            f"not {_json_kind(data)}"
+        )
+    where = _non_finite(data)
+    if where is not None:
+        raise BadInput(f"{path}: {where}: not a finite number (NaN and infinity are not JSON)")
+    recorded = data.get("dataset_hash")
+    if recorded is not None and not isinstance(recorded, str):
+        raise BadInput(f"{path}: dataset_hash: a string expected, not {_json_kind(recorded)}")
+    if "config" in data:
+        config = data["config"]
+        if not isinstance(config, dict):
+            raise BadInput(
+                f"{path}: config: an object of the scene family's settings expected, "
+                f"not {_json_kind(config)}"
+            )
+        name = config.get("family")
+        if "family" in config and not (isinstance(name, str) and name):
+            raise BadInput(
+                f"{path}: config.family: a scene family name expected, not {_json_kind(name)}"
+            )
+    if "format" in data:  # written by bpb generate: every field it writes is checked
+        validate_mapping(DatasetManifest, data, str(path))
+    return data
+
+
+def _json_kind(value: object) -> str:
+    """``a list``, ``the number 3``: what a JSON value is, for a message."""
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, list):
+        return "a list"
+    if value is None:
+        return "null"
+    text = json.dumps(value)
+    return f"{text[:40]}..." if len(text) > 40 else text
+
+
+def _non_finite(value: object, where: str = "") -> str | None:
+    """The field path of the first NaN or infinity in ``value`` (``None``: there is none)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return where or "(top level)"
+    if isinstance(value, dict):
+        items: list[tuple[str, object]] = [
+            (f"{where}.{key}" if where else str(key), item) for key, item in value.items()
+        ]
+    elif isinstance(value, list):
+        items = [(f"{where}[{index}]", item) for index, item in enumerate(value)]
+    else:
+        return None
+    for path, item in items:
+        found = _non_finite(item, path)
+        if found is not None:
+            return found
+    return None
+
+
+def family_name(root: Path) -> str | None:
+    """The scene family named by ``root/dataset.json`` (``config.family``), or ``None`` when
+    there is no manifest or it names none (a hand-made folder of scenes).
+
+    Raises:
+        BadInput: ``dataset.json`` exists but is not a valid manifest (:func:`manifest_data`).
+    """
+    data = manifest_data(root)
+    config = data.get("config") if data is not None else None
     name = config.get("family") if isinstance(config, dict) else None
     return name if isinstance(name, str) and name else None
 
@@ -251,18 +324,19 @@ def dataset_config(root: Path, family: SceneFamily) -> Any:
     scenes with no manifest, or a manifest without a config).
 
     Raises:
-        BadInput: The recorded config is not valid for the family (names the field).
+        BadInput: The manifest is invalid (:func:`manifest_data`) or its config is not valid
+            for the family (names the file and the field).
     """
     path = root / MANIFEST
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return family.load_config(None)
-    config = data.get("config") if isinstance(data, dict) else None
+    data = manifest_data(root)
+    config = data.get("config") if data is not None else None
     if not isinstance(config, dict):
         return family.load_config(None)
     fields = getattr(family.config_model, "model_fields", {})
-    return family.load_config({k: v for k, v in config.items() if k != "family" or k in fields})
+    try:
+        return family.load_config({k: v for k, v in config.items() if k != "family" or k in fields})
+    except BadInput as exc:  # the family names the field ("config: balls: ..."), not the file
+        raise BadInput(f"{path}: {exc}") from None
 
 
 def dataset_family(

@@ -7,13 +7,12 @@ looks at ground truth. Scenes stream one at a time so a large dataset costs no m
 from __future__ import annotations
 
 import hashlib
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.reader import dataset_keys
+from bpb_core.dataset.reader import dataset_keys, manifest_data
 from bpb_core.dataset.scene_entry import check_image
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
@@ -86,15 +85,17 @@ def select_scenes(
 
 def dataset_hash(data: Path) -> str:
     """A hash identifying the dataset: the manifest's own when it records one, else a digest of
-    ``dataset.json`` (or, without a manifest, of every ``init.json``)."""
+    ``dataset.json`` (or, without a manifest, of every ``init.json``).
+
+    Raises:
+        BadInput: ``dataset.json`` is not a valid manifest (names the file and the field).
+    """
     manifest = data / MANIFEST
-    if manifest.exists():
-        try:
-            recorded = json.loads(manifest.read_text(encoding="utf-8")).get("dataset_hash")
-        except (OSError, ValueError, AttributeError):
-            recorded = None
-        if isinstance(recorded, str) and recorded:
-            return recorded
+    recorded = manifest_data(data)
+    if recorded is not None:
+        value = recorded.get("dataset_hash")
+        if isinstance(value, str) and value:
+            return value
         return hashlib.sha256(manifest.read_bytes()).hexdigest()
     digest = hashlib.sha256()
     for key in iter_scene_keys(data):

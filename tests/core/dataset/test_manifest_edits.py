@@ -1,0 +1,119 @@
+"""A hand-edited ``dataset.json``: ``bpb run`` and ``bpb simulate`` read its family, config and
+hash, and every edit that breaks one of them (or any field of a generated manifest) is one line
+naming the file and the field, exit 2, with nothing asked or printed."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+def edit(change: Callable[[dict[str, Any]], object]) -> Callable[[Path], None]:
+    def apply(path: Path) -> None:
+        manifest = json.loads(path.read_text())
+        change(manifest)
+        path.write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+
+    return apply
+
+
+def text(old: str, new: str) -> Callable[[Path], None]:
+    def apply(path: Path) -> None:
+        assert old in path.read_text()
+        path.write_text(path.read_text().replace(old, new, 1))
+
+    return apply
+
+
+def write(content: str) -> Callable[[Path], None]:
+    return lambda path: path.write_text(content)
+
+
+def folder(path: Path) -> None:
+    path.unlink()
+    path.mkdir()
+
+
+NOT_FINITE = "not a finite number (NaN and infinity are not JSON)"
+EDITS: dict[str, tuple[Callable[[Path], None], str]] = {
+    "empty": (write(""), "cannot read dataset manifest: Expecting value"),
+    "a list": (write("[1, 2]\n"), "not a dataset manifest: a JSON object ({...}) expected"),
+    "null": (write("null\n"), "not a dataset manifest: a JSON object ({...}) expected, not null"),
+    "a folder": (folder, "cannot read dataset manifest: Is a directory"),
+    "config a list": (
+        edit(lambda m: m.update(config=[1])),
+        "config: an object of the scene family's settings expected, not a list",
+    ),
+    "no config": (edit(lambda m: m.pop("config")), "config: Field required"),
+    "family a number": (
+        edit(lambda m: m["config"].update(family=3)),
+        "config.family: a scene family name expected, not 3",
+    ),
+    "balls a word": (
+        edit(lambda m: m["config"].update(balls="seven")),
+        "config: balls: Input should be a valid integer",
+    ),
+    "config junk": (
+        edit(lambda m: m["config"].update(junk=1)),
+        "config: junk: Extra inputs are not permitted",
+    ),
+    "mu NaN": (text('"mu": 0.002', '"mu": NaN'), f"config.physics.mu: {NOT_FINITE}"),
+    "seed NaN": (text('"seed": 11', '"seed": NaN'), f"seed: {NOT_FINITE}"),
+    "seed a word": (edit(lambda m: m.update(seed="x")), "seed: Input should be a valid integer"),
+    "no summary": (edit(lambda m: m.pop("summary")), "summary: Field required"),
+    "hash a number": (
+        edit(lambda m: m.update(dataset_hash=5)),
+        "dataset_hash: a string expected, not 5",
+    ),
+}
+
+
+@pytest.fixture
+def copy(small_dataset: Path, tmp_path: Path) -> Path:
+    return Path(shutil.copytree(small_dataset, tmp_path / "ds"))
+
+
+@pytest.mark.parametrize(("change", "named"), EDITS.values(), ids=EDITS.keys())
+def test_an_edited_manifest_is_one_line_naming_the_file_and_field(
+    copy: Path, tmp_path: Path, change: Callable[[Path], None], named: str
+) -> None:
+    change(copy / "dataset.json")
+    out = tmp_path / "runs"
+    commands = [
+        ["run", "--data", str(copy), "--adapter", "baseline:stasis", "--out", str(out),
+         "--tasks", "q1", "--limit", "1"],
+        ["simulate", str(copy / "h1" / "scene_0000")],
+    ]  # fmt: skip
+    for command in commands:
+        done = subprocess.run([BPB, *command], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2, (command[0], done.stdout, done.stderr)
+        assert done.stdout == ""
+        (line,) = done.stderr.strip().splitlines()
+        assert line.startswith(f"error: {copy}/dataset.json: {named}"), (command[0], line)
+    assert not out.exists() or not list(out.rglob("q1.json"))
+
+
+def test_simulate_names_a_simulator_the_manifest_names_but_is_not_installed(
+    copy: Path,
+) -> None:
+    edit(lambda m: m["config"].update(simulator="nope"))(copy / "dataset.json")
+    done = subprocess.run([BPB, "simulate", str(copy)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stdout == ""
+    (line,) = done.stderr.strip().splitlines()
+    assert line.startswith(
+        f"error: {copy}/dataset.json: config: names simulator 'nope', which is not installed "
+        "(installed: analytic"
+    )
+    assert line.endswith("; or choose one with --simulator")
+    ok = subprocess.run([BPB, "simulate", str(copy), "--simulator", "analytic"],
+                        capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert ok.returncode == 0 and len(ok.stdout.splitlines()) == 6
