@@ -37,7 +37,13 @@ def scene_files(paths: Iterable[str | Path]) -> list[Path]:
 
 _SPECIAL: set[str] = set()
 """Named paths that are not regular files (a pipe such as ``<(...)``, a device): read to the end
-of their data, where a short read does not mean the end."""
+of their data, where a short read does not mean the end, and once each (:data:`_PIPED`)."""
+
+_PIPED: dict[tuple[int, int], bytes] = {}
+"""What each of :data:`_SPECIAL` held, by device and inode, for one call: a pipe is empty when
+read again, so a pipe named twice (``bpb simulate /dev/stdin /dev/stdin``, or ``/dev/stdin``
+and ``/dev/fd/0``) is read once and its content stands for each naming, as a file named twice
+gives the same scene twice."""
 
 
 def _scene_names(paths: Iterable[str | Path]) -> list[str]:
@@ -46,6 +52,7 @@ def _scene_names(paths: Iterable[str | Path]) -> list[str]:
     else with one ``stat``: with ten thousand files named on the command line, a ``stat`` each
     was a tenth of ``bpb simulate``'s time per scene."""
     names = [os.fspath(raw) for raw in paths]
+    _PIPED.clear()  # a pipe of an earlier call is not this call's
     kinds = _kinds(names)
     found: list[str] = []
     for name in names:
@@ -216,7 +223,7 @@ def simulate_paths(
     files = scene_files(paths)
     job = prepare(horizon, simulator, registry, options, files)
     for path in files:
-        scene = read_model(path, job.family.scene_model)
+        scene = read_model(path, job.family.scene_model, _special_data(str(path)))
         with _naming(path):
             truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
         yield truth
@@ -250,6 +257,9 @@ def simulate_lines(
     job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]])
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
+    if count > 1:  # forked workers share the pipes but not what one of them read
+        for name in files:
+            _special_data(name)
     chunks = [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
     if count <= 1:
         for chunk in chunks:
@@ -324,13 +334,19 @@ def _read_all(files: Sequence[str]) -> list[bytes]:
     texts: list[bytes] = []
     flags = os.O_RDONLY | getattr(os, "O_BINARY", 0)
     for path in files:
+        if path in _SPECIAL:
+            data = _special_data(path)
+            if data is None:
+                break
+            texts.append(data)
+            continue
         try:
             fd = os.open(path, flags)
         except OSError:
             break
         try:
             data = os.read(fd, _READ)
-            if len(data) == _READ or path in _SPECIAL:  # else a regular file read to its end
+            if len(data) == _READ:  # else a regular file read to its end
                 while more := os.read(fd, _READ):
                     data += more
         except OSError:
@@ -342,6 +358,23 @@ def _read_all(files: Sequence[str]) -> list[bytes]:
 
 
 _READ = 1 << 16
+
+
+def _special_data(path: str) -> bytes | None:
+    """The bytes of ``path`` when it is one of :data:`_SPECIAL`, read to its end the first time
+    its device and inode are met and kept (:data:`_PIPED`); ``None`` for a regular file or one
+    that cannot be read (the reader reads it again and names the error)."""
+    if path not in _SPECIAL:
+        return None
+    try:
+        info = os.stat(path)  # not open: a named pipe's open waits for a writer
+        key = (info.st_dev, info.st_ino)
+        if key not in _PIPED:
+            with open(path, "rb", buffering=0) as file:
+                _PIPED[key] = b"".join(iter(lambda: file.read(_READ), b""))
+        return _PIPED[key]
+    except OSError:
+        return None
 
 
 def _fill(
@@ -379,6 +412,8 @@ def _line(name: str, data: bytes | None = None) -> str:
     assert _JOB is not None
     job, horizon, stability = _JOB
     path = Path(name)
+    if data is None:
+        data = _special_data(name)
     scene = read_model(path, job.family.scene_model, data)
     with _naming(path):
         truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)

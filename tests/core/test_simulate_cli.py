@@ -173,6 +173,23 @@ def test_a_scene_piped_on_stdin_is_read_once(
     ]
 
 
+@pytest.mark.parametrize(
+    "args", [[], ["--simulator", "pymunk"], ["--workers", "2"]], ids=["batch", "ordinary", "forked"]
+)
+def test_a_pipe_named_twice_is_read_once_and_stands_for_both(
+    scenes: list[tuple[Path, Scene]], args: list[str]
+) -> None:
+    # `cat init.json | bpb simulate /dev/stdin /dev/stdin`: the second reading of the pipe was
+    # empty ("error: /dev/stdin: Invalid JSON: EOF"); a file named twice gives two lines
+    path, _ = scenes[0]
+    other = str(scenes[1][0])
+    named = ["/dev/stdin", other, "/dev/stdin", "/dev/fd/0"]
+    piped = subprocess.run([BPB, "simulate", *named, *args], input=path.read_text(),
+                           capture_output=True, text=True, timeout=120)  # fmt: skip
+    files = lines(bpb("simulate", str(path), other, str(path), str(path), *args))
+    assert lines(piped) == files
+
+
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
 def test_a_named_pipe_is_simulated_not_waited_on(
     scenes: list[tuple[Path, Scene]], tmp_path: Path
