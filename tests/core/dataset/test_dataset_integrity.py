@@ -191,3 +191,37 @@ def test_a_truncated_input_image_stops_bpb_human_before_it_serves(
         HumanSession(copy, tmp_path / "run", "ann", make_registry())
     assert str(caught.value).startswith(f"{image}: not a readable image")
     assert not (tmp_path / "run").exists()
+
+
+def jpeg_named_png(image: Path) -> None:
+    from PIL import Image
+
+    with Image.open(image) as png:
+        png.convert("RGB").save(image, format="JPEG")
+
+
+@pytest.mark.parametrize(
+    ("change", "why"),
+    [
+        (lambda image: image.write_bytes(b""), "an empty file"),
+        (lambda image: image.write_bytes(b"GIF87a?"), "not an image file Pillow can read"),
+        (jpeg_named_png, "a JPEG image, but its name says PNG"),
+    ],
+    ids=["empty", "not an image", "jpeg"],
+)
+def test_an_input_image_that_is_empty_or_not_what_its_name_says_is_refused(
+    copy: Path, tmp_path: Path, change: Callable[[Path], None], why: str
+) -> None:
+    image = copy / "h1" / "scene_0001" / "init.png"
+    change(image)
+    done = subprocess.run(
+        [BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis", "--out",
+         str(tmp_path / "r"), "--horizons", "1"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last == (
+        f"error: {image}: not a readable image ({why}); the dataset is damaged: "
+        "load_dataset(...).verify() lists what changed"
+    )
