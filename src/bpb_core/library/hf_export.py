@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.dataset.reader import Dataset, load_dataset
+from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
@@ -94,13 +94,15 @@ def export_hf(
         registry: Where the family and tasks come from; default: every installed plugin.
 
     Raises:
-        BadInput: ``data`` is not a dataset, a task is unknown, a scene file is missing, or
-            ``out`` holds other files or cannot be a folder (a file, or under one).
+        BadInput: ``data`` is not a dataset, its scene folders do not match its ``index.csv``,
+            a task is unknown, a scene file is missing or damaged, or ``out`` holds other files
+            or cannot be a folder (a file, or under one).
     """
     from bpb_core.registry import make_registry
 
     registry = registry or make_registry()
     dataset = load_dataset(data, registry=registry)
+    dataset_keys(dataset.root)  # scene folders unlike index.csv: refused, as bpb run does
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
     target = Path(out)

@@ -325,3 +325,20 @@ def test_a_dataset_without_its_checksums_is_not_exported(
         "is damaged: load_dataset(...).verify() lists what changed"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["broken"]
+
+
+def test_scene_folders_unlike_the_index_are_not_exported(
+    small_dataset: Path,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    broken = Path(shutil.copytree(small_dataset, tmp_path / "broken"))
+    index = broken / "index.csv"
+    index.write_text(index.read_text().splitlines()[0] + "\n")  # the rows deleted: 0 scenes
+    bad = run_bpb("export", str(broken), "--out", str(tmp_path / "hf"))
+    assert bad.returncode == 2, bad.stdout + bad.stderr
+    assert bad.stderr.strip().splitlines() == [
+        f"error: {broken}/h1/scene_0000: a scene folder index.csv does not list (and 5 more): "
+        "the dataset no longer matches its index.csv; restore it or generate it again"
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken"]
