@@ -365,7 +365,7 @@ def dataset_family(
 
 def _read_index(path: Path) -> list[SceneKey]:
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet may add a BOM
     except OSError as exc:
         raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
     except ValueError as exc:  # not UTF-8

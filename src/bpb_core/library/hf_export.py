@@ -190,7 +190,7 @@ def _swap_in(partial: Path, out: Path) -> None:
 
 def _index_cells(path: Path) -> dict[str, dict[str, str]]:
     """The family's cells of ``index.csv`` per scene id (without id, horizon, index, stable)."""
-    reader = csv.DictReader(path.read_text(encoding="utf-8").splitlines())
+    reader = csv.DictReader(path.read_text(encoding="utf-8-sig").splitlines())
     drop = {"scene_id", "horizon", "index", "stable"}
     return {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in reader}
 

@@ -225,3 +225,19 @@ def test_an_input_image_that_is_empty_or_not_what_its_name_says_is_refused(
         f"error: {image}: not a readable image ({why}); the dataset is damaged: "
         "load_dataset(...).verify() lists what changed"
     )
+
+
+def test_an_index_saved_by_a_spreadsheet_with_a_bom_and_crlf_still_reads(
+    copy: Path, tmp_path: Path
+) -> None:
+    index = copy / "index.csv"
+    index.write_bytes(b"\xef\xbb\xbf" + index.read_bytes().replace(b"\n", b"\r\n"))
+    assert [p.split(":")[0] for p in load_dataset(copy).verify()] == ["index.csv"]
+    for command in (
+        ["run", "--data", str(copy), "--adapter", "baseline:stasis", "--out", str(tmp_path / "r"),
+         "--horizons", "1", "--tasks", "q1"],
+        ["export", str(copy), "--out", str(tmp_path / "hf"), "--tasks", "q1"],
+    ):  # fmt: skip
+        done = subprocess.run([BPB, *command], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, (command[0], done.stderr)
+    assert len(list((tmp_path / "r").rglob("q1.json"))) == 3
