@@ -11,6 +11,7 @@ import csv
 import hashlib
 import json
 import math
+import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -115,7 +116,9 @@ class Dataset:
             problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
         for name, digest in sorted(self.manifest.files.items()):
             target = self.root / name
-            if not target.is_file():
+            if not _inside(name):
+                problems.append(f"{MANIFEST}: files: {name!r} is not a path inside the dataset")
+            elif not target.is_file():
                 problems.append(f"{name}: missing")
             elif hashlib.sha256(target.read_bytes()).hexdigest() != digest:
                 problems.append(f"{name}: content differs from the hash in {MANIFEST}")
@@ -127,8 +130,13 @@ class Dataset:
             raise BadInput(
                 f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}"
             ) from None
-        for line in lines:
+        for number, line in enumerate(lines, 1):
             digest, _, rel = line.partition("  ")
+            if not (_SHA256.fullmatch(digest) and _inside(rel)):
+                problems.append(
+                    f"{CHECKSUMS}: line {number}: not '<sha256>  <path inside the dataset>'"
+                )
+                continue
             if carried is not None and PurePosixPath(rel).name not in carried:
                 continue
             target = self.root / rel
@@ -150,6 +158,15 @@ class Dataset:
             )
         image = self.family.input_image if self.manifest.images else None
         return {INIT, FINAL} | ({image} if image else set())
+
+
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
+def _inside(rel: str) -> bool:
+    """Whether ``rel`` names a file inside the dataset (relative, no ``..``, not empty)."""
+    path = PurePosixPath(rel)
+    return bool(rel) and not path.is_absolute() and ".." not in path.parts and "\\" not in rel
 
 
 def dataset_keys(root: Path) -> list[SceneKey]:

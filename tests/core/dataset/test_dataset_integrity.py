@@ -241,3 +241,21 @@ def test_an_index_saved_by_a_spreadsheet_with_a_bom_and_crlf_still_reads(
         done = subprocess.run([BPB, *command], capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, (command[0], done.stderr)
     assert len(list((tmp_path / "r").rglob("q1.json"))) == 3
+
+
+def test_verify_reads_no_file_outside_the_dataset_and_names_bad_checksum_lines(
+    copy: Path,
+) -> None:
+    # A checksums line naming "../secret" made verify() hash a file outside the dataset, and a
+    # garbage line was listed as ": missing".
+    (copy.parent / "secret").write_text("not the dataset's")
+    sums = copy / "checksums.sha256"
+    digest = hashlib.sha256(b"not the dataset's").hexdigest()
+    lines = sums.read_text().splitlines()
+    sums.write_text("\n".join([*lines, f"{digest}  ../secret", "garbage", ""]))
+    problems = load_dataset(copy).verify()
+    n = len(lines)
+    assert problems[-2:] == [
+        f"checksums.sha256: line {n + 1}: not '<sha256>  <path inside the dataset>'",
+        f"checksums.sha256: line {n + 2}: not '<sha256>  <path inside the dataset>'",
+    ]
