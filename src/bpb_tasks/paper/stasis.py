@@ -81,7 +81,8 @@ class StasisIndex:
     def chart(self, table: pd.DataFrame) -> bytes | None:
         """Per run: share of true contacts predicted absent and of moved balls predicted
         unmoved (higher = more 'nothing happens' bias), each bar labelled; a zero is drawn as
-        a stub, a share with nothing to count ("n/a") as no bar."""
+        a stub, a share with nothing to count ("n/a": not asked, not answered, or no true contact or
+        moved ball among the answered units) as no bar."""
         from bpb_core.report.charts import figure, names_of, png
 
         fig, axes = figure(1, 1, (7.0, 1.3 + 0.5 * len(table)))
@@ -111,7 +112,9 @@ def _bars(ax: Any, ys: Any, values: Any, height: float, colour: str, text: str) 
     ax.barh(ys, drawn, height, color=colour, label=text)
     for y, value in zip(ys, values, strict=True):
         if np.isnan(value):
-            ax.text(1, y, "n/a (none answered)", va="center", fontsize=7, color="#666666")
+            ax.text(
+                1, y, "n/a (no answered unit to count)", va="center", fontsize=7, color="#666666"
+            )
             continue
         if value == 0:
             ax.plot([0.6, 0.6], [y - height / 2, y + height / 2], color=colour, lw=3)
