@@ -8,6 +8,7 @@ the runner, never to an adapter.
 from __future__ import annotations
 
 import hashlib
+import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -151,6 +152,26 @@ def split_spec(spec: str) -> tuple[str, str]:
     if not sep or not name or not model:
         raise BadInput(f"--adapter {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
     return name, model
+
+
+def adapter_problem(adapter: object) -> str | None:
+    """What keeps ``adapter`` from being a model adapter, or ``None`` when it has an async
+    ``complete(request)``: checked once before the first call, so a broken adapter stops the
+    run with one line instead of failing every call."""
+    if adapter is None:
+        return "None"
+    kind = type(adapter).__name__
+    complete = getattr(adapter, "complete", None)
+    if complete is None:
+        return f"{_article(kind)} {kind} without a complete() method"
+    if not inspect.iscoroutinefunction(complete):
+        made = "not callable" if not callable(complete) else "not async"
+        return f"{_article(kind)} {kind} whose complete() is {made}"
+    return None
+
+
+def _article(word: str) -> str:
+    return "an" if word[:1].lower() in "aeiou" else "a"
 
 
 def known_cost(cost: object) -> float | None:

@@ -200,13 +200,24 @@ class Registry:
         raise BadInput(f"task {task!r}: no installed scorer scores it")
 
     def adapter(self, spec: str, options: AdapterOptions | None = None) -> ModelAdapter:
-        """Build the adapter for a ``name:model`` spec (split at the first colon)."""
-        from bpb_core.model_calls import AdapterOptions, split_spec
+        """Build the adapter for a ``name:model`` spec (split at the first colon).
+
+        Raises:
+            PluginBug: The factory raised, or returned something without an async
+                ``complete(request)``, naming the plugin.
+        """
+        from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 
         name, model = split_spec(spec)
         factory = self.load("adapter", name)
         with blamed(self.origin("adapter", name), f"the adapter factory for {spec!r}"):
             made = factory(model, options if options is not None else AdapterOptions())
+        problem = adapter_problem(made)
+        if problem is not None:
+            raise PluginBug(
+                f"{self.origin('adapter', name)}: the adapter factory for {spec!r} returned "
+                f"{problem}; expected an object with an async complete(request)"
+            )
         adapter: ModelAdapter = made
         return adapter
 

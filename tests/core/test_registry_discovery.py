@@ -24,8 +24,16 @@ GOOD_IMPL = """
 import sys
 sys.modules.setdefault("shout_impl_loaded", sys)
 
+class Shout:
+    def __init__(self, model):
+        self.name = f"shout:{model}"
+
+    async def complete(self, request):
+        raise NotImplementedError
+
+
 def make(model, options):
-    return ("shout", model)
+    return Shout(model)
 """
 
 
@@ -69,7 +77,7 @@ def test_load_is_lazy_until_the_component_is_used(
     monkeypatch.syspath_prepend(str(site))
     registry = make_registry()
     assert "shout_impl" not in sys.modules
-    assert registry.adapter("shout:loud") == ("shout", "loud")
+    assert registry.adapter("shout:loud").name == "shout:loud"
     assert "shout_impl" in sys.modules
     for name in ("shout_hooks", "shout_impl", "shout_impl_loaded"):
         sys.modules.pop(name, None)

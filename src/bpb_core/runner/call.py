@@ -21,7 +21,6 @@ from bpb_core.errors import (
     ModelTimeout,
     ParseFailure,
     PluginBug,
-    RequestRejected,
     blamed,
 )
 from bpb_core.interfaces import PromptOptions
@@ -95,15 +94,14 @@ class PairCall:
             async with self.state.slot():  # held until the reply is logged and written
                 request = self._request(prompt)  # a task's bug stops the run: PluginBug
                 started = time.perf_counter()
+                spec = self.state.spec
                 try:
-                    response = await self.state.adapter.complete(request)
+                    # Any other exception is the adapter's bug: the run stops naming it, like a
+                    # task's; a call meant to fail alone raises a model error (RequestRejected).
+                    with blamed(self.state.origin(spec), f"adapter {spec!r}: complete()"):
+                        response = await self.state.adapter.complete(request)
                 except ModelError as error:
                     delay = await self._failed(error, time.perf_counter() - started)
-                except Exception as exc:  # an adapter bug: record it for this pair, keep going
-                    bug = RequestRejected(
-                        f"adapter {self.state.spec} raised {type(exc).__name__}: {exc}"
-                    )
-                    delay = await self._failed(bug, time.perf_counter() - started)
                 else:
                     return await self._replied(self._checked(response), prompt)
         except NotSent:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import KnowsFamilies, Preflighting
 from bpb_core.errors import BadInput
-from bpb_core.model_calls import AdapterOptions, split_spec
+from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
@@ -55,11 +55,18 @@ def run_name(spec: str, adapter: ModelAdapter) -> str:
 
 
 def check_adapter(spec: str, adapter: ModelAdapter) -> None:
-    """Raise :class:`BadInput` when ``adapter`` says before any call that no call can succeed.
+    """Raise :class:`BadInput` when ``adapter`` cannot make a call (it has no async
+    ``complete``: an object passed in by the caller, since the registry checks the ones its
+    plugins build) or says before any call that no call can succeed.
 
     Raises:
         BadInput: One line: what to fix (a missing key, an unknown provider, a module).
     """
+    shape = adapter_problem(adapter)
+    if shape is not None:
+        raise BadInput(
+            f"adapter {spec}: {shape}; expected an object with an async complete(request)"
+        )
     problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
     if problem:
         raise BadInput(f"--adapter {spec}: {problem}")
@@ -112,10 +119,10 @@ async def run_eval_async(
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
+    check_adapter(spec, model)
     why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
     if why is not None:
         raise BadInput(f"--adapter {spec}: {why}")
-    check_adapter(spec, model)
     make_run_folder(run_dir)
     with run_lock(run_dir):
         return await _session(asked, data, model, spec, run_dir, registry, progress)

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from bpb_adapters.baseline.adapter import BaselineAdapter
 from bpb_core import DiagnosticInfo, ParseFailure, ScorerInfo, TaskInfo, UnitRow, hookimpl
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, make_registry
@@ -96,9 +97,8 @@ def answered(dataset: Path, tmp_path: Path) -> tuple[Any, Path]:
     )
     FLAW["now"] = ""
     run = tmp_path / "run"
-    run_eval(
-        dataset, "baseline:oracle", run, RunOptions(tasks=("brk",), limit=1), registry=registry
-    )
+    oracle = BaselineAdapter("baseline:oracle", "oracle", _registry=registry)  # knows "brk"
+    run_eval(dataset, oracle, run, RunOptions(tasks=("brk",), limit=1), registry=registry)
     return registry, run
 
 

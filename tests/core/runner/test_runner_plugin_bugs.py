@@ -1,7 +1,12 @@
 """A task whose messages() raises, or an adapter whose complete() returns something other than
 a ModelResponse, stops the run with one PluginBug naming the plugin; before, the first was
 recorded as an "api error" of the adapter (blamed on it, "re-run to resume") and the second
-was an internal AttributeError."""
+was an internal AttributeError.
+
+An adapter that cannot make a call at all (its factory returns None, it has no complete(), its
+complete() is not async) is refused before the first call; before, every call was recorded as
+an API error and the summary said "failed on infrastructure, re-run to resume". An adapter
+whose complete() raises something other than a bpb model error stops the run the same way."""
 
 from __future__ import annotations
 
@@ -11,7 +16,7 @@ from typing import Any, ClassVar
 import pytest
 
 from bpb_core import AdapterInfo, TaskInfo, hookimpl
-from bpb_core.errors import PluginBug
+from bpb_core.errors import BadInput, PluginBug
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.runner import RunOptions, run_eval
 from bpb_tasks.questions.question import BilliardsQuestion
@@ -44,6 +49,28 @@ class WordsAdapter:
         return '{"answers": []}'  # a bare string, not a ModelResponse
 
 
+class NoComplete:
+    name = "nocall:x"
+
+
+class SyncComplete:
+    name = "sync:x"
+
+    def complete(self, request: Any) -> Any:
+        raise AssertionError("never called")
+
+
+class RaisingAdapter:
+    name = "raising:x"
+
+    async def complete(self, request: Any) -> Any:
+        raise KeyError("oops")
+
+
+def _factory(made: Any) -> Any:
+    return lambda: lambda model, options: made
+
+
 class Faulty:
     @hookimpl
     def bpb_eval_tasks(self) -> list[TaskInfo]:
@@ -51,7 +78,13 @@ class Faulty:
 
     @hookimpl
     def bpb_model_adapters(self) -> list[AdapterInfo]:
-        return [AdapterInfo("words", lambda: lambda model, options: WordsAdapter())]
+        return [
+            AdapterInfo("words", _factory(WordsAdapter())),
+            AdapterInfo("none", _factory(None)),
+            AdapterInfo("nocall", _factory(NoComplete())),
+            AdapterInfo("sync", _factory(SyncComplete())),
+            AdapterInfo("raising", _factory(RaisingAdapter())),
+        ]
 
 
 @pytest.fixture
@@ -81,3 +114,52 @@ def test_an_adapter_returning_a_string_stops_the_run_naming_it(
     assert str(info.value).startswith(
         f"{ORIGIN}: adapter 'words:x': complete() returned str; expected a bpb_core.ModelResponse"
     )
+
+
+@pytest.mark.parametrize(
+    ("spec", "returned"),
+    [
+        ("none:x", "None"),
+        ("nocall:x", "a NoComplete without a complete() method"),
+        ("sync:x", "a SyncComplete whose complete() is not async"),
+    ],
+)
+def test_an_adapter_that_cannot_call_is_refused_before_the_first_call(
+    registry: Any, dataset: Path, tmp_path: Path, spec: str, returned: str
+) -> None:
+    options = RunOptions(tasks=("q2",), limit=1)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, spec, tmp_path / "run", options, registry=registry)
+    assert str(info.value) == (
+        f"{ORIGIN}: the adapter factory for {spec!r} returned {returned}; "
+        "expected an object with an async complete(request)"
+    )
+    assert not (tmp_path / "run").exists()  # refused before the run folder was made
+
+
+@pytest.mark.parametrize("made", [None, NoComplete(), SyncComplete()])
+def test_an_adapter_object_that_cannot_call_is_bad_input(
+    registry: Any, dataset: Path, tmp_path: Path, made: Any
+) -> None:
+    options = RunOptions(tasks=("q2",), limit=1)
+    with pytest.raises(BadInput, match=r"expected an object with an async complete\(request\)$"):
+        run_eval(dataset, made, tmp_path / "run", options, registry=registry)
+    assert not (tmp_path / "run").exists()
+
+
+def test_an_adapter_whose_complete_raises_stops_the_run_naming_it(
+    registry: Any, dataset: Path, tmp_path: Path
+) -> None:
+    options = RunOptions(tasks=("q2",), limit=2, concurrency=1)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, "raising:x", tmp_path / "run", options, registry=registry)
+    assert str(info.value) == (f"{ORIGIN}: adapter 'raising:x': complete() raised KeyError: 'oops'")
+    assert not list((tmp_path / "run").glob("h*/*/q2.json"))  # no "api error" recorded
+
+
+def test_an_adapter_object_whose_complete_raises_stops_the_run(
+    registry: Any, dataset: Path, tmp_path: Path
+) -> None:
+    options = RunOptions(tasks=("q2",), limit=1)
+    with pytest.raises(PluginBug, match=r"adapter 'raising:x': complete\(\) raised KeyError"):
+        run_eval(dataset, RaisingAdapter(), tmp_path / "run", options, registry=registry)
