@@ -337,6 +337,22 @@ def _add(
     )
 
 
+def _check_one_scorer_per_task(scorers: dict[str, Registered]) -> None:
+    """Refuse two scorers for one task (which one scored it would be an accident of sorting),
+    naming both and who supplied them."""
+    seen: dict[str, Registered] = {}
+    for name in sorted(scorers):
+        entry = scorers[name]
+        if not isinstance(entry.info, ScorerInfo):
+            continue
+        first = seen.setdefault(entry.info.task, entry)
+        if first is not entry:
+            raise PluginError(
+                f"two scorers score the task {entry.info.task!r}: {first.info.name!r} of "
+                f"{first.origin} and {name!r} of {entry.origin}"
+            )
+
+
 _RECORDS: dict[Kind, str] = {
     "task": "TaskInfo",
     "scene_family": "SceneFamilyInfo",
@@ -363,7 +379,8 @@ def make_registry(
         group: Entry-point group to scan (tests point this at a private group).
 
     Raises:
-        PluginError: Two plugins register the same name, or a hook name is misspelt.
+        PluginError: Two plugins register the same name, two scorers score one task, or a hook
+            name is misspelt.
     """
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs)
@@ -385,6 +402,7 @@ def make_registry(
         sources[id(plugin)] = source
     _check_hook_names(pm, sources)
     components = _collect(pm, sources, problems)
+    _check_one_scorer_per_task(components["scorer"])
     for line in problems:
         warnings.warn(line, PluginWarning, stacklevel=2)
     return Registry(components, problems)

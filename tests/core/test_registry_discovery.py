@@ -226,3 +226,27 @@ def test_plugin_code_failing_to_load_or_build_names_the_plugin() -> None:
     )
     with pytest.raises(BadInput, match="no such model"):  # bpb's own errors pass through
         registry.adapter("bad:unknown")
+
+
+def test_two_scorers_for_one_task_is_an_error_naming_both_plugins() -> None:
+    """Before, the alphabetically first scorer silently scored the task."""
+    from bpb_core import ScorerInfo
+
+    class Mine:
+        @hookimpl
+        def bpb_scorers(self) -> list[ScorerInfo]:
+            return [ScorerInfo("pocketed", lazy("os:getcwd"), task="pocketed")]
+
+    class Rival:
+        @hookimpl
+        def bpb_scorers(self) -> list[ScorerInfo]:
+            return [ScorerInfo("a_pocketed", lazy("os:getcwd"), task="pocketed")]
+
+    rival = PluginSource("rival", "bpb-rival", "2.0", "rival_hooks")
+    with pytest.raises(PluginError) as info:
+        make_registry([(Mine(), FAULTY), (Rival(), rival)], entry_points=False)
+    assert str(info.value) == (
+        "two scorers score the task 'pocketed': 'a_pocketed' of plugin 'rival' (rival_hooks) "
+        "from bpb-rival 2.0 and 'pocketed' of plugin 'faulty' (faulty_hooks) from bpb-faulty 1.2"
+    )
+    assert info.value.exit_code == 2
