@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Perceiving, Predicting
-from bpb_core.errors import BadInput, RequestRejected
+from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
+from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
 
 if TYPE_CHECKING:
@@ -28,6 +29,36 @@ if TYPE_CHECKING:
 
 ORACLE = "oracle"
 VISION = "vision"
+
+
+def expected_text(
+    registry: Registry, name: str, task: Task, truth: Any, scene: Any = None, *, check: bool = False
+) -> str:
+    """The task's ``expected(truth)`` as JSON text, blaming the task's plugin, not the adapter,
+    for a bug: an ``expected()`` that raises, returns what JSON cannot hold, or (with ``check``,
+    the oracle: the truth must be a valid answer) returns what the task's own parser refuses.
+
+    Raises:
+        PluginBug: One line naming the task's plugin.
+    """
+    origin = registry.origin("task", name)
+    what = f"task {name!r}: expected()"
+    with blamed(origin, what):
+        value = task.expected(truth)
+    try:
+        text = json.dumps(value)
+    except (TypeError, ValueError) as exc:
+        raise PluginBug(f"{origin}: {what} returned what JSON cannot hold: {exc}") from None
+    if check:
+        try:
+            with blamed(origin, f"task {name!r}: parse()"):
+                task.parse(text, scene, PromptOptions())
+        except ParseFailure as failure:
+            shown = text if len(text) <= 80 else f"{text[:77]}..."
+            raise PluginBug(
+                f"{origin}: {what} returned {shown}, which the task's own parser refuses: {failure}"
+            ) from None
+    return text
 
 
 def _registry() -> Registry:
@@ -54,11 +85,14 @@ class BaselineAdapter:
     _registry: Registry | None = field(default=None, repr=False)
     _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
+    def _plugins(self) -> Registry:
+        if self._registry is None:
+            self._registry = _registry()
+        return self._registry
+
     def _component(self, key: str, build: Any) -> Any:
         if key not in self._cache:
-            if self._registry is None:
-                self._registry = _registry()
-            self._cache[key] = build(self._registry)
+            self._cache[key] = build(self._plugins())
         return self._cache[key]
 
     def cannot_answer(self, family: SceneFamily) -> str | None:
@@ -74,17 +108,20 @@ class BaselineAdapter:
     def _predict(self, request: ModelRequest, rng: random.Random) -> Any:
         name = str(request.family)
         family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
+        origin = self._plugins().origin("scene_family", name)
         if self.model == ORACLE:
             simulator_name = request.simulator or family.simulator_name(family.load_config(None))
             simulator: Simulator = self._component(
                 f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
             )
-            return family.ground_truth(request.scene, simulator, stability=False)
+            with blamed(origin, f"scene family {name!r}: ground_truth()"):
+                return family.ground_truth(request.scene, simulator, stability=False)
         why = self.cannot_answer(family)
         if why is not None:
             raise RequestRejected(f"{self.name}: {why}")
         assert isinstance(family, Predicting)
-        return family.predict(self.model, request.scene, rng)
+        with blamed(origin, f"scene family {name!r}: predict({self.model!r})"):
+            return family.predict(self.model, request.scene, rng)
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the scene in ``request`` (baselines never read the prompt)."""
@@ -94,8 +131,12 @@ class BaselineAdapter:
         rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
         truth = self._predict(request, rng)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
+        oracle = self.model == ORACLE
+        text = expected_text(
+            self._plugins(), request.task, task, truth, request.scene, check=oracle
+        )
         return ModelResponse(
-            text=json.dumps(task.expected(truth)),
+            text=text,
             usage=Usage(0, 0, 0, 0),
             cost=0.0,  # a local computation really costs nothing
             latency=time.perf_counter() - started,

@@ -19,7 +19,6 @@ reason is kept in the answer's metadata (``perception_failed``).
 from __future__ import annotations
 
 import hashlib
-import json
 import time
 from collections import OrderedDict
 from collections.abc import Callable
@@ -69,13 +68,16 @@ class VisionAdapter:
     _seen: OrderedDict[str, tuple[Any, str | None]] = field(default_factory=OrderedDict, repr=False)
     _measured: OrderedDict[str, dict[str, Any]] = field(default_factory=OrderedDict, repr=False)
 
+    def _plugins(self) -> Registry:
+        if self._registry is None:
+            from bpb_adapters.baseline.adapter import _registry
+
+            self._registry = _registry()
+        return self._registry
+
     def _component(self, key: str, build: Any) -> Any:
         if key not in self._components:
-            if self._registry is None:
-                from bpb_adapters.baseline.adapter import _registry
-
-                self._registry = _registry()
-            self._components[key] = build(self._registry)
+            self._components[key] = build(self._plugins())
         return self._components[key]
 
     def cannot_answer(self, family: SceneFamily) -> str | None:
@@ -129,7 +131,9 @@ class VisionAdapter:
         truth = family.ground_truth(perceived, simulator, stability=False)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         measured = self._measure(family, image, prompt, perceived, request, simulator)
-        return json.dumps(task.expected(truth)), measured
+        from bpb_adapters.baseline.adapter import expected_text
+
+        return expected_text(self._plugins(), request.task, task, truth), measured
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the image and prompt in ``request``."""
