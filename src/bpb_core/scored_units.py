@@ -26,7 +26,7 @@ A scorer adds its own columns (``Scorer.columns``: name to dtype), filled from
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 NAN = math.nan
@@ -120,3 +120,25 @@ def scored_units(scorer: Any, origin: str, frame: Any) -> Any:
         f"{origin}: scorer {name!r}: score() returned {what}; expected a DataFrame with the "
         f"columns correct and distance, on the index of its input ({len(frame)} rows)"
     )
+
+
+def input_frame(scorer: Any, calls: Iterable[tuple[str, Sequence[UnitRow]]]) -> Any:
+    """The typed ``Scorer.score`` input for units already cut (:func:`unit_rows`): one
+    ``(status, rows)`` per call; columns :data:`SCORER_INPUT` and the scorer's own."""
+    import pandas as pd
+
+    columns: dict[str, list[Any]] = {name: [] for name in (*SCORER_INPUT, *scorer.columns)}
+    for status, rows in calls:
+        columns["status"] += [status] * len(rows)
+        for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
+            columns[name] += [row[position] for row in rows]
+        for position, name in enumerate(scorer.columns):
+            columns[name] += [row.values[position] for row in rows]
+    dtypes = {**SCORER_INPUT, **scorer.columns}
+    return pd.DataFrame({name: pd.Series(v, dtype=dtypes[name]) for name, v in columns.items()})
+
+
+def object_origin(component: object) -> str:
+    """Who to blame for a component handed over as an object rather than registered: its
+    module (``module 'my_scorers'``)."""
+    return f"module {type(component).__module__!r}"

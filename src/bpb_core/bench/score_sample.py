@@ -18,8 +18,8 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.capabilities import Predicting
-from bpb_core.errors import BadInput
-from bpb_core.scored_units import SCORER_INPUT, UnitRow
+from bpb_core.errors import BadInput, blamed
+from bpb_core.scored_units import UnitRow, input_frame, scored_units, unit_rows
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Scorer, Task
@@ -44,15 +44,30 @@ class Case:
 
 @dataclass(frozen=True)
 class ScoreSample:
-    """A task's scorer, the calls of the sample and their units (scorer input columns)."""
+    """A task's scorer, the calls of the sample and their units (scorer input columns).
+
+    Attributes:
+        origin: Who supplied the scorer (``Registered.origin``), for one-line plugin errors.
+    """
 
     scorer: Scorer
     cases: list[Case]
     frame: pd.DataFrame = field(repr=False)
+    origin: str = ""
 
     def cut(self) -> list[list[UnitRow]]:
-        """Cut every answer of the sample into units (what ``answers -> units`` times)."""
+        """Cut every answer of the sample into units (what ``answers -> units`` times; the
+        units were checked when the sample was made)."""
         return [self.scorer.units(c.answer, c.truth, c.scene) for c in self.cases]
+
+    def score(self, frame: pd.DataFrame) -> pd.DataFrame:
+        """``scorer.score(frame)``, checked like ``bpb report`` checks it.
+
+        Raises:
+            PluginBug: The scorer raised or returned the wrong type, naming its plugin.
+        """
+        scored: pd.DataFrame = scored_units(self.scorer, self.origin, frame)
+        return scored
 
     def tiled(self, rows: int) -> pd.DataFrame:
         """The units repeated (and cut) to exactly ``rows`` rows, with a fresh index."""
@@ -111,11 +126,13 @@ def sample_units(
         rng = random.Random(f"bench-score:{seed}:{key.horizon!r}:{key.index}")
         outcomes = _outcomes(dataset.family, scene, truth, rng)
         for name, task in objects.items():
-            cases[name] += _answers(task, outcomes, truth, scene, rng)
+            origin = registry.origin("task", name)
+            cases[name] += _answers(task, origin, outcomes, truth, scene, rng)
     samples = {}
     for name, found in cases.items():
         scorer = registry.scorer_for(name)
-        samples[name] = ScoreSample(scorer, found, units_frame(scorer, found))
+        origin = registry.scorer_entry(name).origin
+        samples[name] = ScoreSample(scorer, found, units_frame(scorer, found, origin), origin)
     return samples
 
 
@@ -128,7 +145,7 @@ def _outcomes(family: Any, scene: Any, truth: Any, rng: random.Random) -> list[A
 
 
 def _answers(
-    task: Task, outcomes: list[Any], truth: Any, scene: Any, rng: random.Random
+    task: Task, origin: str, outcomes: list[Any], truth: Any, scene: Any, rng: random.Random
 ) -> list[Case]:
     found = []
     for position, outcome in enumerate(outcomes):
@@ -136,22 +153,20 @@ def _answers(
             status = rng.choice(("parse_error", "api_error"))
             found.append(Case(status, None, truth, scene))
             continue
-        answer = task.expected(outcome)
+        with blamed(origin, f"task {task.name!r}: expected()"):
+            answer = task.expected(outcome)
         if position == len(outcomes) - 1 and rng.random() < CORRUPTED:
             answer = corrupt(answer, rng)
         found.append(Case("ok", answer, truth, scene))
     return found
 
 
-def units_frame(scorer: Scorer, cases: Sequence[Case]) -> pd.DataFrame:
-    """The units of ``cases`` with the scorer input columns and the scorer's own, typed."""
-    columns: dict[str, list[Any]] = {name: [] for name in (*SCORER_INPUT, *scorer.columns)}
-    for case in cases:
-        rows = scorer.units(case.answer, case.truth, case.scene)
-        columns["status"] += [case.status] * len(rows)
-        for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
-            columns[name] += [row[position] for row in rows]
-        for position, name in enumerate(scorer.columns):
-            columns[name] += [row.values[position] for row in rows]
-    dtypes = {**SCORER_INPUT, **scorer.columns}
-    return pd.DataFrame({name: pd.Series(v, dtype=dtypes[name]) for name, v in columns.items()})
+def units_frame(scorer: Scorer, cases: Sequence[Case], origin: str) -> pd.DataFrame:
+    """The units of ``cases`` with the scorer input columns and the scorer's own, typed.
+
+    Raises:
+        PluginBug: The scorer's ``units`` raised or returned the wrong type, naming ``origin``.
+    """
+    cut = [(c.status, unit_rows(scorer, origin, c.answer, c.truth, c.scene)) for c in cases]
+    frame: pd.DataFrame = input_frame(scorer, cut)
+    return frame

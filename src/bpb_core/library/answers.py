@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
-from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
+from bpb_core.scored_units import input_frame, object_origin, scored_units, unit_rows
 
 if TYPE_CHECKING:
     from bpb_core.dataset.scene_entry import DatasetScene
@@ -142,26 +142,32 @@ def score_answer(
     except ParseFailure as exc:
         status, answer, rule, error = "parse_error", None, None, str(exc)
     scorer = registry.scorer_for(found.name)
-    units = mark(scorer, answer, status, scene)
+    units = mark(scorer, answer, status, scene, origin=registry.scorer_entry(found.name).origin)
     score = scene_score(scorer.scene_rule, units)
     return AnswerScore(found.name, scene.scene_id, status, answer, rule, error, units, score)
 
 
 def mark(
-    scorer: Scorer, answer: dict[str, Any] | None, status: str, scene: DatasetScene
+    scorer: Scorer,
+    answer: dict[str, Any] | None,
+    status: str,
+    scene: DatasetScene,
+    *,
+    origin: str | None = None,
 ) -> tuple[UnitScore, ...]:
-    """Cut ``answer`` into the scorer's units and score them (the scorer's vectorised rule)."""
-    import pandas as pd
+    """Cut ``answer`` into the scorer's units and score them (the scorer's vectorised rule).
 
-    rows = scorer.units(answer, scene.truth, scene.state)
-    data: dict[str, Any] = {"status": [status] * len(rows)}
-    for position, name in enumerate(("unit", "truth", "pred", "duplicate")):
-        data[name] = [row[position] for row in rows]
-    for position, name in enumerate(scorer.columns):
-        data[name] = [row.values[position] for row in rows]
-    dtypes = {**SCORER_INPUT, **scorer.columns}
-    frame = pd.DataFrame({k: pd.Series(v, dtype=dtypes[k]) for k, v in data.items()})
-    scored = scorer.score(frame)[list(SCORER_OUTPUT)]
+    Args:
+        origin: Who supplied the scorer, for the error below (``Registered.origin``; default:
+            the scorer's module).
+
+    Raises:
+        PluginBug: The scorer's ``units`` or ``score`` raised or returned the wrong type, in
+            one line naming ``origin``, as ``load_results`` and ``bpb report`` say it.
+    """
+    who = origin if origin is not None else object_origin(scorer)
+    rows = unit_rows(scorer, who, answer, scene.truth, scene.state)
+    scored = scored_units(scorer, who, input_frame(scorer, [(status, rows)]))
     return tuple(
         UnitScore(row.unit, row.truth, row.pred, bool(ok), None if dist != dist else float(dist))
         for row, ok, dist in zip(rows, scored["correct"], scored["distance"], strict=True)

@@ -146,7 +146,8 @@ def write_report(
             files[f"chart:{prefix}{title}"] = _write(path, png)
         files.update(write_exports(part, out, prefix, report.completeness))
         scorers = {task: registry.scorer_for(task) for task in part.results.tasks}
-        cases += gallery.build_cases(part.results, scorers, gallery_size)
+        origins = {task: registry.scorer_entry(task).origin for task in scorers}
+        cases += gallery.build_cases(part.results, scorers, gallery_size, origins)
         answered += len(gallery.scene_totals(part.results.units, part.results.suites))
         pages.append(_page_part(part, pngs, report.completeness))
     for i, case in enumerate(cases):

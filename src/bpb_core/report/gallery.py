@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from bpb_core.capabilities import DrawsOverlay, ExplainsErrors, Picturing
+from bpb_core.errors import PluginBug, blamed
 from bpb_core.layout import SceneKey
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.tables import scene_scores
@@ -85,8 +86,20 @@ def scene_totals(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.Da
     return wide
 
 
-def build_cases(results: Results, scorers: Mapping[str, Scorer], count: int = 8) -> list[Case]:
-    """Gallery cases for the worst scenes of ``results``, drawn and explained by the plugins."""
+def build_cases(
+    results: Results,
+    scorers: Mapping[str, Scorer],
+    count: int = 8,
+    origins: Mapping[str, str] | None = None,
+) -> list[Case]:
+    """Gallery cases for the worst scenes of ``results``, drawn and explained by the plugins.
+
+    Args:
+        origins: Who supplied each task's scorer (``Registered.origin``), for one-line errors.
+
+    Raises:
+        PluginBug: A scorer's ``explain`` or ``overlay`` raised or returned the wrong type.
+    """
     runs = {run.label: run for run in results.runs}
     units = results.units
     cases = []
@@ -98,19 +111,27 @@ def build_cases(results: Results, scorers: Mapping[str, Scorer], count: int = 8)
         scores = {t: float(row[t]) for t in tasks} | {SCORE: float(row[SCORE])}
         by_task = {t: rows[rows["task"] == t] for t in tasks}
         wrong = {
-            t: scorer.explain(by_task[t]) for t in tasks
+            t: _explain(scorer, _origin(origins, t), by_task[t]) for t in tasks
             if isinstance(scorer := scorers[t], ExplainsErrors)
         }  # fmt: skip
-        png = drawing(run, key, by_task, scorers)
+        png = drawing(run, key, by_task, scorers, origins)
         cases.append(Case(run.label, sid, key.horizon, scores, wrong, png))
     return cases
 
 
 def drawing(
-    run: RunFolder, key: SceneKey, rows: Mapping[str, pd.DataFrame], scorers: Mapping[str, Scorer]
+    run: RunFolder,
+    key: SceneKey,
+    rows: Mapping[str, pd.DataFrame],
+    scorers: Mapping[str, Scorer],
+    origins: Mapping[str, str] | None = None,
 ) -> bytes:
     """The family's picture of the scene with every task's overlay; empty when the family
-    draws nothing."""
+    draws nothing.
+
+    Raises:
+        PluginBug: A scorer's ``overlay`` raised, naming who supplied it (``origins``).
+    """
     if not isinstance(run.family, Picturing):
         return b""
     scene, _ = run.truth(key)
@@ -118,5 +139,28 @@ def drawing(
     for task, task_rows in rows.items():
         scorer = scorers[task]
         if isinstance(scorer, DrawsOverlay):
-            scorer.overlay(picture, task_rows)
+            with blamed(_origin(origins, task), f"scorer {_name(scorer)!r}: overlay()"):
+                scorer.overlay(picture, task_rows)
     return picture.png()
+
+
+def _origin(origins: Mapping[str, str] | None, task: str) -> str:
+    return (origins or {}).get(task, f"the scorer of task {task!r}")
+
+
+def _name(scorer: object) -> str:
+    return str(getattr(scorer, "name", type(scorer).__name__))
+
+
+def _explain(scorer: ExplainsErrors, origin: str, rows: pd.DataFrame) -> list[str]:
+    """``scorer.explain(rows)``, checked: a list of strings."""
+    name = _name(scorer)
+    with blamed(origin, f"scorer {name!r}: explain()"):
+        lines = scorer.explain(rows)
+    if isinstance(lines, list | tuple) and all(isinstance(line, str) for line in lines):
+        return list(lines)
+    shown = repr(lines)
+    shown = shown if len(shown) <= 80 else shown[:77] + "..."
+    raise PluginBug(
+        f"{origin}: scorer {name!r}: explain() returned {shown}; expected a list of str"
+    )

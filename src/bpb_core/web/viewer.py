@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from bpb_core.errors import blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import SceneKey
 from bpb_core.model_calls import TextPart
@@ -141,7 +142,8 @@ class Viewer:
         view = self.pair(run_id, scene_id, task)
         rows = self._rows(view.run.label, scene_id, task)
         scorer = self.registry.scorer_for(task)
-        return drawing(view.run, view.key, {task: rows}, {task: scorer})
+        origin = self.registry.scorer_entry(task).origin
+        return drawing(view.run, view.key, {task: rows}, {task: scorer}, {task: origin})
 
     def _rows(self, label: str, scene_id: str, task: str) -> pd.DataFrame:
         units = self.results.units
@@ -182,7 +184,8 @@ class Viewer:
         out = []
         for level in levels:
             prompt = PromptOptions(mode, cot, bool(options.get("force_numeric", False)), level)  # type: ignore[arg-type]
-            messages = component.messages(scene, image, prompt)
+            with blamed(self.registry.origin("task", task), f"task {task!r}: messages()"):
+                messages = component.messages(scene, image, prompt)
             text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
             out.append((level, text))
         return out

@@ -14,6 +14,7 @@ from starlette.requests import Request
 from starlette.responses import HTMLResponse, Response
 from starlette.routing import Route
 
+from bpb_core.errors import PluginBug
 from bpb_core.web.templating import render
 from bpb_core.web.viewer import PAGE_SIZE, QueryError, Viewer
 
@@ -50,6 +51,8 @@ def viewer_app(viewer: Viewer) -> Starlette:
             view = viewer.pair(int(p["run"]), p["scene_id"], p["task"])
         except QueryError as exc:
             return _bad(str(exc), 404)
+        except PluginBug as exc:  # one line naming the plugin, not a bare 500
+            return _bad(str(exc), 500)
         return HTMLResponse(render("view_pair.html", view=view))
 
     async def image(request: Request) -> Response:
@@ -65,6 +68,8 @@ def viewer_app(viewer: Viewer) -> Starlette:
             png = viewer.overlay(int(p["run"]), p["scene_id"], p["task"])
         except QueryError as exc:
             return _bad(str(exc), 404)
+        except PluginBug as exc:
+            return _bad(str(exc), 500)
         if not png:
             return _bad("the scene family draws no picture", 404)
         return Response(png, media_type="image/png")

@@ -1,5 +1,9 @@
 """A plugin's scorer or diagnostic that raises, or returns the wrong type, is one PluginBug
-naming the plugin (not an internal error from deep inside pandas)."""
+naming the plugin (not an internal error from deep inside pandas).
+
+The same checks guard every caller of a scorer: load_results and bpb report, the library's
+score_answer and mark, bpb bench score, and bpb view (the gallery's explain and overlay too);
+before, the last ones called the scorer unchecked."""
 
 from __future__ import annotations
 
@@ -12,12 +16,27 @@ import pandas as pd
 import pytest
 
 from bpb_adapters.baseline.adapter import BaselineAdapter
-from bpb_core import DiagnosticInfo, ParseFailure, ScorerInfo, TaskInfo, UnitRow, hookimpl
+from bpb_core import (
+    DiagnosticInfo,
+    ModelResponse,
+    ParseFailure,
+    ScorerInfo,
+    TaskInfo,
+    UnitRow,
+    Usage,
+    hookimpl,
+    load_dataset,
+    score_answer,
+)
+from bpb_core.bench.score_sample import sample_units
 from bpb_core.errors import PluginBug
+from bpb_core.library.answers import mark
 from bpb_core.registry import PluginSource, make_registry
+from bpb_core.report.build import build_report
 from bpb_core.report.parts import report_parts
 from bpb_core.results import load_results
 from bpb_core.runner import RunOptions, run_eval
+from bpb_core.web.viewer import Viewer
 from bpb_tasks.questions.question import BilliardsQuestion
 
 FLAW = {"now": ""}
@@ -63,6 +82,17 @@ class FlawedScorer:
             return same
         return pd.DataFrame({"correct": same, "distance": np.nan}, index=units.index)
 
+    def explain(self, rows: pd.DataFrame) -> Any:
+        if FLAW["now"] == "explain_raise":
+            raise RuntimeError("explain exploded")
+        if FLAW["now"] == "explain_type":
+            return "n is wrong"
+        return ["n is wrong"]
+
+    def overlay(self, picture: Any, rows: pd.DataFrame) -> None:
+        if FLAW["now"] == "overlay_raise":
+            raise RuntimeError("overlay exploded")
+
 
 class FlawedDiagnostic:
     name = "brk_diag"
@@ -73,7 +103,9 @@ class FlawedDiagnostic:
     def table(self, results: Any) -> Any:
         if FLAW["now"] == "table_raise":
             raise RuntimeError("table exploded")
-        return [1, 2]
+        if FLAW["now"] == "table_type":
+            return [1, 2]
+        return pd.DataFrame({"run": [], "adapter": [], "model": [], "baseline": []})
 
 
 class Faulty:
@@ -122,7 +154,7 @@ def test_a_flawed_scorer_is_named(answered: tuple[Any, Path], flaw: str, said: s
     ("flaw", "said"),
     [
         ("table_raise", "diagnostic 'brk_diag': table() raised RuntimeError: table exploded"),
-        ("", "diagnostic 'brk_diag': table() returned list; expected a pandas DataFrame"),
+        ("table_type", "diagnostic 'brk_diag': table() returned list; expected a pandas DataFrame"),
     ],
 )
 def test_a_flawed_diagnostic_is_named(answered: tuple[Any, Path], flaw: str, said: str) -> None:
@@ -132,3 +164,96 @@ def test_a_flawed_diagnostic_is_named(answered: tuple[Any, Path], flaw: str, sai
     with pytest.raises(PluginBug) as info:
         report_parts(results, registry, n_boot=10)
     assert str(info.value) == f"{ORIGIN}: {said}"
+
+
+SCORER_FLAWS = [
+    ("units_raise", "scorer 'brk': units() raised RuntimeError: units exploded"),
+    ("units_type", "scorer 'brk': units() returned {'n': 1}; expected a list of bpb_core."),
+    ("score_type", "scorer 'brk': score() returned Series; expected a DataFrame with the "),
+]
+
+
+@pytest.mark.parametrize(("flaw", "said"), SCORER_FLAWS)
+def test_score_answer_names_a_flawed_scorer(
+    answered: tuple[Any, Path], small_dataset: Path, flaw: str, said: str
+) -> None:
+    registry, _ = answered
+    scene = load_dataset(small_dataset, registry=registry)["h1_0000"]
+    assert score_answer("brk", scene, '{"n": 0}', registry=registry).score == 1.0
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        score_answer("brk", scene, '{"n": 0}', registry=registry)
+    assert str(info.value).startswith(f"{ORIGIN}: {said}")
+
+
+def test_mark_names_the_module_of_a_flawed_scorer_object(
+    answered: tuple[Any, Path], small_dataset: Path
+) -> None:
+    registry, _ = answered
+    scene = load_dataset(small_dataset, registry=registry)["h1_0000"]
+    FLAW["now"] = "score_type"
+    with pytest.raises(PluginBug) as info:
+        mark(FlawedScorer(), {"n": 0}, "ok", scene)
+    assert str(info.value).startswith(f"module {__name__!r}: scorer 'brk': score() returned")
+
+
+@pytest.mark.parametrize(("flaw", "said"), [SCORER_FLAWS[0], SCORER_FLAWS[1]])
+def test_bench_score_names_a_flawed_scorers_units(
+    answered: tuple[Any, Path], tmp_path: Path, flaw: str, said: str
+) -> None:
+    registry, _ = answered
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        sample_units(registry, "billiards", ["brk"], tmp_path / "data", per_horizon=1)
+    assert str(info.value).startswith(f"{ORIGIN}: {said}")
+
+
+def test_bench_score_names_a_flawed_scorers_score(
+    answered: tuple[Any, Path], tmp_path: Path
+) -> None:
+    registry, _ = answered
+    sample = sample_units(registry, "billiards", ["brk"], tmp_path / "data", per_horizon=1)["brk"]
+    FLAW["now"] = "score_type"
+    with pytest.raises(PluginBug) as info:
+        sample.score(sample.frame)
+    assert str(info.value).startswith(f"{ORIGIN}: {SCORER_FLAWS[2][1]}")
+
+
+class WrongAnswers:
+    name = "wrong:n"
+
+    async def complete(self, request: Any) -> ModelResponse:
+        return ModelResponse('{"n": 1}', Usage(), None, 0.0, "wrong")
+
+
+@pytest.mark.parametrize(
+    ("flaw", "said"),
+    [
+        ("explain_raise", "scorer 'brk': explain() raised RuntimeError: explain exploded"),
+        ("explain_type", "scorer 'brk': explain() returned 'n is wrong'; expected a list of str"),
+        ("overlay_raise", "scorer 'brk': overlay() raised RuntimeError: overlay exploded"),
+    ],
+)
+def test_the_gallery_names_a_flawed_explain_or_overlay(
+    answered: tuple[Any, Path], dataset: Path, tmp_path: Path, flaw: str, said: str
+) -> None:
+    registry, _ = answered
+    run = tmp_path / "wrong"
+    options = RunOptions(tasks=("brk",), limit=1)
+    run_eval(dataset, WrongAnswers(), run, options, registry=registry)
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        build_report([run], tmp_path / "report", registry=registry, n_boot=10)
+    assert str(info.value) == f"{ORIGIN}: {said}"
+
+
+def test_bpb_view_names_a_flawed_overlay(answered: tuple[Any, Path]) -> None:
+    registry, run = answered
+    viewer = Viewer.load([run], registry)
+    FLAW["now"] = "overlay_raise"
+    with pytest.raises(PluginBug) as info:
+        viewer.overlay(0, "h1_0000", "brk")
+    assert (
+        str(info.value)
+        == f"{ORIGIN}: scorer 'brk': overlay() raised RuntimeError: overlay exploded"
+    )
