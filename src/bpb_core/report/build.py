@@ -137,10 +137,13 @@ def write_report(
         (out / sub).mkdir(parents=True, exist_ok=True)
     several = len(report.parts) > 1
     pages, cases = [], []
+    names: dict[str, str] = {}  # display titles of the tasks, for the gallery
     answered = 0  # fully answered (run, scene) pairs: what the gallery picks from
     for part in report.parts:
         prefix = f"{part.short_id}_" if several else ""
-        pngs = chart_pngs(part, titles(part.results, registry), report.completeness)
+        named = titles(part.results, registry)
+        names |= named
+        pngs = chart_pngs(part, named, report.completeness)
         for title, png in pngs.items():
             path = out / "charts" / f"{prefix}{_slug(title)}.png"
             files[f"chart:{prefix}{title}"] = _write(path, png)
@@ -155,7 +158,9 @@ def write_report(
             name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
             files[f"gallery:{i}"] = _write(out / "gallery" / name, case.png)
     files.update(_export_frames(report, out))
-    page = html.render(title="bpb report", parts=pages, cases=cases, answered=answered)
+    page = html.render(
+        title="bpb report", parts=pages, cases=cases, answered=answered, titles=names
+    )
     files["html"] = _write(out / "report.html", page.encode("utf-8"))
     return files
 

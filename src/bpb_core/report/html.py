@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from functools import cache
@@ -168,13 +168,15 @@ def render(
     parts: Sequence[dict[str, Any]],
     cases: Sequence[Case],
     answered: int = 0,
+    titles: Mapping[str, str] | None = None,
 ) -> str:
     """The whole page: per dataset its runs, headline sections, charts and sections, then the
     failure gallery.
 
     Each part is a dict with ``name``, ``runs`` (dicts), ``headline`` and ``sections``
     ((heading, HTML body) pairs), ``charts`` ({title: PNG bytes}) and ``chart_notes``
-    ({title: a line shown under the chart}).
+    ({title: a line shown under the chart}). ``titles`` names the tasks in the gallery (a task
+    without one keeps its name).
     """
     shown = [{**p, "charts": [(k, data_uri(v)) for k, v in p["charts"].items()]} for p in parts]
     template = _environment().from_string(PAGE)
@@ -184,14 +186,15 @@ def render(
         css=Markup(CSS),
         script=Markup(SCRIPT),
         parts=shown,
-        cases=[_case(c) for c in cases],
+        cases=[_case(c, titles or {}) for c in cases],
         answered=answered,
     )
 
 
-def _case(case: Case) -> dict[str, Any]:
+def _case(case: Case, titles: Mapping[str, str]) -> dict[str, Any]:
     scores = ", ".join(f"{k} {100 * v:.0f}%" for k, v in case.scores.items() if not math.isnan(v))
-    wrong = [(f"{task.upper()} wrong", items) for task, items in case.wrong.items()]
+    named = [(titles.get(task) or task, items) for task, items in case.wrong.items()]
+    wrong = [(f"{name} wrong" if items else name, items) for name, items in named]  # or all right
     uri = data_uri(case.png) if case.png else ""
     return {"run": case.run, "scene_id": case.scene_id, "horizon": f"{case.horizon:g}"} | {
         "scores": scores,

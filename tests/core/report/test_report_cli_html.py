@@ -235,3 +235,25 @@ def test_a_run_given_twice_is_counted_once_and_said_so(report_dir: Path, tmp_pat
     done = bpb("report", str(model), str(model), "--out", str(tmp_path / "o"))
     assert done.returncode == 0, done.stderr
     assert len(pd.read_csv(tmp_path / "o" / "units.csv")) == 4 * 17  # one run's units
+
+
+def test_gallery_headings_use_task_titles_and_say_all_right_plainly() -> None:
+    """Before: "POCKETED wrong:" (the name upper-cased) and "Q2 wrong: all right"."""
+    from bpb_core.report import html
+    from bpb_core.report.gallery import Case
+
+    wrong = {"pocketed": [], "q2": ["TOP: said F, truth T"], "gone": []}
+    case = Case("run", "h1_0000", 1.0, {"pocketed": 1.0, "q2": 0.0}, wrong)
+    titles = {"q2": "Q2 wall contacts", "pocketed": "Balls pocketed"}
+    page = html.render(title="t", parts=[], cases=[case], titles=titles)
+    page = re.sub(r"\s+", " ", page)
+    assert "<span>Balls pocketed:</span> all right" in page
+    assert "<span>Q2 wall contacts wrong:</span> <ul><li>TOP: said F, truth T" in page
+    assert "<span>gone:</span> all right" in page  # no title: the name as the plugin spelled it
+    assert "POCKETED" not in page and "wrong: all right" not in page
+
+
+def test_the_reports_gallery_names_tasks_by_their_titles(report_dir: Path) -> None:
+    page = re.sub(r"\s+", " ", (report_dir / "out" / "report.html").read_text())
+    assert "<span>Q1 ball collisions wrong:</span>" in page
+    assert not re.search(r"<span>Q\d wrong:", page)
