@@ -9,7 +9,8 @@ without when it is missing.
   (what the image's resolution allows even a perfect reader), :class:`Picturing`
   (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents`
   (its cost per event and against scaled scenes).
-- An offline adapter: :class:`KnowsFamilies` (which families it can answer).
+- An offline adapter: :class:`KnowsFamilies` (which families it can answer), :class:`UsesRegistry`
+  (it looks up tasks and families itself, in the registry that built it).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
   :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
@@ -37,6 +38,7 @@ if TYPE_CHECKING:
     from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
     from bpb_core.model_calls import Message
     from bpb_core.picture import ScenePicture
+    from bpb_core.registry import Registry
 
 
 @runtime_checkable
@@ -206,6 +208,18 @@ class KnowsFamilies(Protocol):
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when it can answer questions about ``family``'s scenes, else why not (one
         line, e.g. what it could answer instead)."""
+        ...
+
+
+@runtime_checkable
+class UsesRegistry(Protocol):
+    """An adapter that looks up plugins itself (a task's expected answer, a family's
+    predictions): :meth:`bpb_core.registry.Registry.adapter` hands it the registry that built
+    it, so it knows the same tasks and families as the run (a library caller's registry of
+    local plugins included)."""
+
+    def use_registry(self, registry: Registry) -> None:
+        """Look plugins up in ``registry`` from now on."""
         ...
 
 

@@ -206,6 +206,7 @@ class Registry:
             PluginBug: The factory raised, or returned something without an async
                 ``complete(request)``, naming the plugin.
         """
+        from bpb_core.capabilities import UsesRegistry
         from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 
         name, model = split_spec(spec)
@@ -218,6 +219,8 @@ class Registry:
                 f"{self.origin('adapter', name)}: the adapter factory for {spec!r} returned "
                 f"{problem}; expected an object with an async complete(request)"
             )
+        if isinstance(made, UsesRegistry):
+            made.use_registry(self)
         adapter: ModelAdapter = made
         return adapter
 

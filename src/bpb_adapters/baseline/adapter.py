@@ -85,6 +85,11 @@ class BaselineAdapter:
     _registry: Registry | None = field(default=None, repr=False)
     _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
+    def use_registry(self, registry: Registry) -> None:
+        """Look tasks and families up in ``registry`` (the one that built this adapter)."""
+        self._registry = registry
+        self._cache.clear()
+
     def _plugins(self) -> Registry:
         if self._registry is None:
             self._registry = _registry()

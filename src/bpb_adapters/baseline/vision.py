@@ -68,6 +68,11 @@ class VisionAdapter:
     _seen: OrderedDict[str, tuple[Any, str | None]] = field(default_factory=OrderedDict, repr=False)
     _measured: OrderedDict[str, dict[str, Any]] = field(default_factory=OrderedDict, repr=False)
 
+    def use_registry(self, registry: Registry) -> None:
+        """Look tasks and families up in ``registry`` (the one that built this adapter)."""
+        self._registry = registry
+        self._components.clear()
+
     def _plugins(self) -> Registry:
         if self._registry is None:
             from bpb_adapters.baseline.adapter import _registry

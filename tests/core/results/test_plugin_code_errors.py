@@ -15,7 +15,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bpb_adapters.baseline.adapter import BaselineAdapter
 from bpb_core import (
     DiagnosticInfo,
     ModelResponse,
@@ -129,9 +128,18 @@ def answered(dataset: Path, tmp_path: Path) -> tuple[Any, Path]:
     )
     FLAW["now"] = ""
     run = tmp_path / "run"
-    oracle = BaselineAdapter("baseline:oracle", "oracle", _registry=registry)  # knows "brk"
+    # built by this registry, the oracle knows "brk" (it looked tasks up in the installed
+    # plugins only, so a library caller's local task stopped the run as unknown)
+    oracle = registry.adapter("baseline:oracle")
     run_eval(dataset, oracle, run, RunOptions(tasks=("brk",), limit=1), registry=registry)
     return registry, run
+
+
+def test_the_oracle_built_by_a_registry_answers_that_registry_s_tasks(
+    answered: tuple[Any, Path],
+) -> None:
+    statuses = [json.loads(p.read_text())["status"] for p in answered[1].rglob("brk.json")]
+    assert statuses and set(statuses) == {"ok"}
 
 
 @pytest.mark.parametrize(
