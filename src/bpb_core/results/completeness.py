@@ -80,27 +80,44 @@ def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[st
     return records
 
 
+REJECTED = ("RequestRejected:",)
+"""How the error of a call the API refused (a 4xx other than a rate limit) begins: re-running
+sends the same request again, so it is not counted with infrastructure failures."""
+
+
 def incomplete_lines(results: Results) -> dict[str, str]:
     """Per run with unanswered calls, what to say: how many failed on infrastructure
-    (``api_error``) or were never sent (``missing``), and that re-running resumes them; for a
+    (``api_error``), were refused by the API (an ``api_error`` whose error is one of
+    :data:`REJECTED`) or were never sent (``missing``), and that re-running resumes them; for a
     run still running when it was read, that its calls are not answered yet."""
     calls = results.calls
-    counts = calls.groupby(["run", "status"], observed=True).size().unstack(fill_value=0)
+    errors = calls["status"].astype(str) == "api_error"
+    refused = errors & calls["error"].fillna("").astype(str).str.startswith(REJECTED)
+    status = calls["status"].astype(str).where(~refused, "rejected")
+    counts = calls.assign(status=status).groupby(["run", "status"], observed=True).size()
     live = {run.label: run.live for run in results.runs if run.live is not None}
     out: dict[str, str] = {}
-    for run, row in counts.iterrows():
+    for run, row in counts.unstack(fill_value=0).iterrows():
         failed = int(row.get("api_error", 0))
+        rejected = int(row.get("rejected", 0))
         unsent = int(row.get("missing", 0))
-        if str(run) in live and failed + unsent:
+        if str(run) in live and failed + rejected + unsent:
             out[str(run)] = (
-                f"still running (bpb run pid {live[str(run)]}): {_calls(failed + unsent)} not "
-                "answered yet; report again when it ends"
+                f"still running (bpb run pid {live[str(run)]}): "
+                f"{_calls(failed + rejected + unsent)} not answered yet; report again when it ends"
             )
             continue
         parts = [f"{_calls(failed)} failed on infrastructure"] if failed else []
         parts += [f"{_calls(unsent)} never sent"] if unsent else []
-        if parts:
-            out[str(run)] = f"incomplete: {' and '.join(parts)}, re-run to resume"
+        line = f"{' and '.join(parts)}, re-run to resume" if parts else ""
+        if rejected:
+            refusal = (
+                f"{_calls(rejected)} refused by the API (a 4xx: re-running sends the same "
+                "request; the error is in each answer file)"
+            )
+            line = f"{line}; {refusal}" if line else refusal
+        if line:
+            out[str(run)] = f"incomplete: {line}"
     return out
 
 

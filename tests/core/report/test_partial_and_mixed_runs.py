@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -149,6 +150,32 @@ def test_a_task_a_run_was_not_asked_is_not_called_too_incomplete(tmp_path: Path)
     assert [cells["q1only"][c] for c in ("q2", "q3", suite, "left out")] == ["–"] * 4
     assert [cells["stopped"][c] for c in ("q1", "q2", suite)] == ["left out"] * 3
     assert unasked(part, ["q1", "q2", suite]) == {"q1": [], "q2": ["q1only"], suite: ["q1only"]}
+
+
+def test_calls_the_api_refused_are_not_called_infrastructure_failures(tmp_path: Path) -> None:
+    # A 400 (say, a model that takes no images) was counted among the calls that "failed on
+    # infrastructure, re-run to resume": re-running sends the same request and fails again.
+    data = write_dataset(tmp_path / "data")
+    answers: dict[tuple[str, str], dict[str, Any] | None] = dict(all_answers(oracle_answer))
+    keys = sorted(answers)
+    for key in keys[:2]:
+        answers[key] = {"status": "api_error", "error": "RequestRejected: 400 image input"}
+    answers[keys[2]] = {"status": "api_error", "error": "ServerError: 503 try later"}
+    answers[keys[3]] = {"status": "missing"}
+    write_run(tmp_path / "runs" / "mixed", "litellm:mixed", data, answers)
+    for key in keys[2:4]:
+        answers[key] = all_answers(oracle_answer)[key]
+    write_run(tmp_path / "runs" / "refused", "litellm:refused", data, answers)
+    lines = build_report(tmp_path / "runs", n_boot=20).summary_json()["incomplete"]
+    refused = (
+        "2 calls refused by the API (a 4xx: re-running sends the same request; the error is "
+        "in each answer file)"
+    )
+    assert lines == {
+        "mixed": "incomplete: 1 call failed on infrastructure and 1 call never sent, re-run to "
+        f"resume; {refused}",
+        "refused": f"incomplete: {refused}",
+    }
 
 
 def test_a_run_with_no_answer_at_all_is_listed_not_dropped(tmp_path: Path) -> None:
