@@ -63,3 +63,27 @@ def test_bpb_report_on_logs_and_a_foreign_log(
     assert bad.returncode == 2
     assert bad.stderr.strip().endswith("not an Inspect log of a bpb task (inspect eval bpb/...)")
     assert len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_a_log_with_failed_calls_reads_as_api_errors(
+    small_dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A sample whose model call failed has an output with no choices; reading the log raised
+    IndexError (``ModelOutput.stop_reason``) instead of counting the calls as failed."""
+    import support.inspect_models  # noqa: F401 (registers bpbtest/down)
+
+    monkeypatch.setenv("INSPECT_DISPLAY", "none")
+    monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
+    (log,) = inspect_eval(
+        "bpb/q2",
+        model="bpbtest/down",
+        task_args={"data": str(small_dataset)},
+        log_dir=str(tmp_path / "logs"),
+        fail_on_error=False,
+        retry_on_error=0,
+    )
+    assert log.samples and all(sample.error is not None for sample in log.samples)
+    units = load_results([tmp_path / "logs"]).units
+    assert set(units["status"]) == {"api_error"}
+    assert len(units) == 6 * 4
+    assert not units["correct"].any()

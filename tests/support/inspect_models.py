@@ -1,6 +1,7 @@
 """Inspect AI model APIs for tests (Inspect's custom model API): ``bpbtest/truth`` answers every
 bpb prompt from the dataset's ground truth, ``bpbtest/example`` answers with the answer format's
-example that ends each prompt (a bad model). Importing this module registers both.
+example that ends each prompt (a bad model), ``bpbtest/down`` fails every call (Inspect records
+an errored sample with no output). Importing this module registers them.
 :class:`ExampleAdapter` gives ``bpb run`` the replies of ``bpbtest/example``."""
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ def example_answer(text: str) -> str:
 
 
 class BpbTestModel(ModelAPI):
-    """``truth`` answers right; ``example`` answers with the format's example."""
+    """``truth`` answers right; ``example`` answers with the format's example; ``down`` fails."""
 
     def __init__(
         self,
@@ -64,6 +65,8 @@ class BpbTestModel(ModelAPI):
         tool_choice: ToolChoice,
         config: GenerateConfig,
     ) -> ModelOutput:
+        if self.model_name == "down":
+            raise ConnectionError("bpbtest/down: the provider is down")
         text = prompt_text(input)
         reply = self.index.lookup(text)[1] if self.index else example_answer(text)
         return ModelOutput.from_content(model=self.model_name, content=reply)

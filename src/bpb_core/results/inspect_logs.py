@@ -130,7 +130,7 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
         status=status if status in ("ok", "parse_error") else "api_error",
         answer=json.loads(score.answer) if score is not None and score.answer else None,
         rule=extra.get("rule"),
-        finish_reason=str(sample.output.stop_reason) if sample.output else None,
+        finish_reason=_finish_reason(sample),
         attempts=1,
         usage=usage,
         latency=float(sample.total_time or 0.0),
@@ -138,6 +138,12 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
         input_mode=str(meta.get("input_mode") or "image"),
         cot=bool(meta.get("cot")),
     )
+
+
+def _finish_reason(sample: Any) -> str | None:
+    """The reply's stop reason; none when the call failed (an output with no choices)."""
+    choices = sample.output.choices if sample.output else None
+    return str(choices[0].stop_reason) if choices else None
 
 
 def _error(sample: Any) -> str | None:
