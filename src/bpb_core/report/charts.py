@@ -39,10 +39,8 @@ def names_of(frame: pd.DataFrame) -> list[str]:
 
 
 def figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, Any]:
-    """A constrained-layout figure with a grid of axes (Agg backend, nothing global)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
+    """A constrained-layout figure with a grid of axes. Nothing global: no pyplot, and the
+    process's backend is left alone (``savefig`` draws PNG with Agg whatever it is)."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=size, dpi=110, layout="constrained")
