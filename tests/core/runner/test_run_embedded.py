@@ -8,6 +8,7 @@ import contextlib
 import fcntl
 import json
 import os
+import signal
 from pathlib import Path
 
 from bpb_core.model_calls import ModelRequest, ModelResponse
@@ -85,3 +86,50 @@ def test_a_cancelled_run_stops_its_calls_and_resumes(
     done = run_eval(dataset, again, run_dir, options, registry=registry)
     assert done.stopped is None
     assert len(list(iter_answers(run_dir))) == 2 * 3 * 3
+
+
+def _host_handler(signum: int, frame: object) -> None:  # pragma: no cover (never delivered)
+    raise AssertionError("not called in these tests")
+
+
+def test_a_synchronous_run_puts_the_callers_signal_handlers_back(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """run_eval reset SIGINT to Python's default and SIGTERM to SIG_DFL when it returned,
+    dropping the handlers the calling program had set (a server's graceful shutdown)."""
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        signal.signal(signal.SIGINT, _host_handler)
+        signal.signal(signal.SIGTERM, _host_handler)
+        run_eval(
+            dataset, "baseline:oracle", tmp_path / "run", RunOptions(limit=1), registry=registry
+        )
+        assert signal.getsignal(signal.SIGINT) is _host_handler
+        assert signal.getsignal(signal.SIGTERM) is _host_handler
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+
+
+def test_a_run_awaited_in_the_callers_loop_leaves_its_signal_handlers(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """An async app's own SIGTERM handler on its loop was replaced during the run and removed
+    after it (SIGTERM then killed the app); the app's SIGINT handling went the same way."""
+    terms: list[str] = []
+
+    async def app() -> tuple[object, object, object, object]:
+        loop = asyncio.get_running_loop()
+        loop.add_signal_handler(signal.SIGTERM, terms.append, "app")
+        at_start = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+        try:
+            await run_eval_async(
+                dataset, "baseline:oracle", tmp_path / "run", RunOptions(limit=1), registry=registry
+            )
+            return (*at_start, signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT))
+        finally:
+            loop.remove_signal_handler(signal.SIGTERM)
+
+    term_before, int_before, term_after, int_after = asyncio.run(app())
+    assert term_after is term_before and term_after is not signal.SIG_DFL
+    assert int_after is int_before  # asyncio.run's own Ctrl-C handler, still in place
