@@ -18,12 +18,18 @@ from bpb_core.library.answers import (
     build_messages,
     score_answer,
 )
-from bpb_core.library.evaluation import EvalResult, evaluate, leaderboard, run_eval
+from bpb_core.library.evaluation import (
+    EvalResult,
+    evaluate,
+    evaluate_async,
+    leaderboard,
+    run_eval,
+    run_eval_async,
+)
 from bpb_core.library.hf_export import HfExport, export_hf
 from bpb_core.report.build import Report, build_report
 from bpb_core.results.frames import Results, load_frame, load_results
 from bpb_core.results.tables import summary
-from bpb_core.runner.run import run_eval_async
 from bpb_core.simulate import simulate_lines, simulate_paths
 
 __all__ = [
@@ -39,6 +45,7 @@ __all__ = [
     "build_messages",
     "build_report",
     "evaluate",
+    "evaluate_async",
     "export_hf",
     "generate_dataset",
     "leaderboard",

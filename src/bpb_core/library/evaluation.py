@@ -8,6 +8,7 @@ folder attached.
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -74,10 +75,30 @@ def run_eval(
         Per-task status counts, cost and tokens, and ``scores``, the scored units frame.
     """
     done = runner.run_eval(resolve_data(data), adapter, Path(run_dir), options, **kwargs)
-    results = load_results(done.run_dir, registry=kwargs.get("registry"))
+    return _scored(done, kwargs.get("registry"))
+
+
+def _scored(done: RunResult, registry: Any) -> EvalResult:
+    results = load_results(done.run_dir, registry=registry)
     return EvalResult(
         **{f.name: getattr(done, f.name) for f in dataclasses.fields(done)}, results=results
     )
+
+
+async def run_eval_async(
+    data: str | Path,
+    adapter: str | ModelAdapter,
+    run_dir: str | Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> EvalResult:
+    """:func:`run_eval` for callers inside an event loop (an async app): the calls run in the
+    caller's loop, which keeps serving meanwhile; cancelling the task stops the run (the calls
+    in flight are abandoned, the folder stays resumable). Arguments and result as
+    :func:`run_eval`."""
+    resolved = await asyncio.to_thread(resolve_data, data)
+    done = await runner.run_eval_async(resolved, adapter, Path(run_dir), options, **kwargs)
+    return await asyncio.to_thread(_scored, done, kwargs.get("registry"))
 
 
 def evaluate(
@@ -94,6 +115,20 @@ def evaluate(
     return [
         run_eval(data, adapter, Path(out) / runner.slug(_spec(adapter)), options, **kwargs)
         for adapter in adapters
+    ]
+
+
+async def evaluate_async(
+    data: str | Path,
+    adapters: Sequence[str | ModelAdapter],
+    out: str | Path,
+    options: RunOptions | None = None,
+    **kwargs: Any,
+) -> list[EvalResult]:
+    """:func:`evaluate` for callers inside an event loop (see :func:`run_eval_async`)."""
+    return [
+        await run_eval_async(data, one, Path(out) / runner.slug(_spec(one)), options, **kwargs)
+        for one in adapters
     ]
 
 

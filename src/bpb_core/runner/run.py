@@ -25,7 +25,6 @@ from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_fol
 from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
 from bpb_core.runner.history import read_history, recover_answers
-from bpb_core.runner.interrupt import owning_signals
 from bpb_core.runner.limits import RateLimiter, TokenBudget
 from bpb_core.runner.lock import run_lock
 from bpb_core.runner.manifest import finish_manifest, start_manifest
@@ -35,6 +34,7 @@ from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
 from bpb_core.runner.result import RunResult
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState
+from bpb_core.runner.sync import run_sync
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
@@ -242,7 +242,7 @@ def run_eval(
         Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.
         An authentication failure sets ``stopped="auth"``; the CLI turns it into exit code 2.
     """
-    return asyncio.run(owning_signals(run_eval_async(data, adapter, run_dir, options, **kwargs)))
+    return run_sync(lambda: run_eval_async(data, adapter, run_dir, options, **kwargs))
 
 
 def evaluate(

@@ -9,7 +9,11 @@ import fcntl
 import json
 import os
 import signal
+import threading
+import time
 from pathlib import Path
+
+import pytest
 
 from bpb_core.model_calls import ModelRequest, ModelResponse
 from bpb_core.registry import Registry
@@ -133,3 +137,79 @@ def test_a_run_awaited_in_the_callers_loop_leaves_its_signal_handlers(
     term_before, int_before, term_after, int_after = asyncio.run(app())
     assert term_after is term_before and term_after is not signal.SIG_DFL
     assert int_after is int_before  # asyncio.run's own Ctrl-C handler, still in place
+
+
+def test_run_eval_works_inside_a_running_event_loop(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """A notebook cell (or an async handler) calling run_eval got RuntimeError: asyncio.run()
+    cannot be called from a running event loop, and a 'never awaited' warning."""
+
+    async def cell() -> object:
+        return run_eval(dataset, "baseline:oracle", tmp_path / "run", registry=registry)
+
+    done = asyncio.run(cell())
+    assert done.statuses["q1"]["ok"] == 6  # type: ignore[attr-defined]
+    assert len(list(iter_answers(tmp_path / "run"))) == 2 * 3 * 3
+
+
+class ThreadGated:
+    """The oracle's answers, held until ``release`` is set; usable from any thread."""
+
+    name = "fake:gated"
+
+    def __init__(self, oracle: object) -> None:
+        self.oracle = oracle
+        self.started = 0
+        self.two_started = threading.Event()
+        self.release = threading.Event()
+
+    async def complete(self, request: ModelRequest) -> ModelResponse:
+        self.started += 1
+        if self.started >= 2:
+            self.two_started.set()
+        while not self.release.is_set():
+            await asyncio.sleep(0.01)
+        right: ModelResponse = await self.oracle.complete(request)  # type: ignore[attr-defined]
+        return right
+
+
+@pytest.mark.parametrize("host", ["notebook", "asyncio.run"])
+def test_an_interrupt_of_run_eval_in_a_running_loop_stops_the_run(
+    host: str, dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """Ctrl-C during run_eval called in a running loop: a notebook kernel's loop gets
+    KeyboardInterrupt, asyncio.run cancels its main task; either way the run (on its own loop
+    in a helper thread) is cancelled and has ended when the caller sees it."""
+    run_dir = tmp_path / "run"
+    adapter = ThreadGated(registry.adapter("baseline:oracle"))
+
+    def interrupt() -> None:
+        adapter.two_started.wait(10)
+        signal.pthread_kill(threading.main_thread().ident or 0, signal.SIGINT)  # Ctrl-C
+
+    async def cell() -> None:
+        run_eval(dataset, adapter, run_dir, RunOptions(concurrency=2), registry=registry)
+        await asyncio.sleep(0)  # where asyncio.run's cancellation reaches the caller
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Thread(target=interrupt).start()
+        with pytest.raises(KeyboardInterrupt):
+            if host == "asyncio.run":
+                asyncio.run(cell())
+            else:  # a kernel runs its loop itself: no handler of asyncio.run's
+                loop = asyncio.new_event_loop()
+                try:
+                    loop.run_until_complete(cell())
+                finally:
+                    loop.close()
+    finally:
+        signal.signal(signal.SIGINT, before)
+    at_interrupt = adapter.started
+    adapter.release.set()
+    time.sleep(0.2)
+    assert adapter.started == at_interrupt == 2
+    assert not [t for t in threading.enumerate() if t.name == "bpb-run"]
+    assert _lock_free(run_dir)
+    assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
