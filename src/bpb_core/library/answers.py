@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.runner.options import check_input_mode
 from bpb_core.scored_units import input_frame, object_origin, scored_units, unit_rows
 
 if TYPE_CHECKING:
@@ -104,9 +105,11 @@ def build_messages(
         registry: Where a task name is looked up; default: every installed plugin.
 
     Raises:
-        BadInput: The scene's files are missing or invalid (names the file).
+        BadInput: The scene's files are missing or invalid (names the file), or the input
+            mode is none of the three.
     """
     found = _task(task, registry)
+    check_input_mode(input_mode)
     image = None if input_mode == "state" else scene.image_bytes()
     return found.messages(scene.state, image, prompt_options(found, input_mode, cot))
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import get_args
 
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
@@ -86,6 +87,17 @@ def _number(option: str, value: float | None, *, zero: bool = False) -> None:
         raise BadInput(f"{option}: must be {need} finite number, got {value!r}")
 
 
+def check_input_mode(mode: object) -> None:
+    """Refuse an input mode no task knows (the command line offers only the known ones).
+
+    Raises:
+        BadInput: One line naming the modes.
+    """
+    modes = get_args(InputMode)
+    if mode not in modes:
+        raise BadInput(f"--input-mode: must be one of {', '.join(modes)}, got {mode!r}")
+
+
 def check_options(options: RunOptions) -> None:
     """Refuse options no run can use (library callers get the command line's checks).
 
@@ -110,6 +122,7 @@ def check_options(options: RunOptions) -> None:
     ):
         _number(option, value)
     _number("--temperature", options.temperature, zero=True)
+    check_input_mode(options.input_mode)
     if options.scenes is not None and not options.scenes:
         raise BadInput("--scenes: empty list")
     retry = options.retry

@@ -83,3 +83,17 @@ def test_expected_answer_scores_full_marks(small_dataset: Path, registry: Regist
         for task in ("q1", "q2", "q3"):
             right = json.dumps(registry.task(task).expected(scene.truth))
             assert score_answer(task, scene, right, registry=registry).score == 1.0
+
+
+def test_an_unknown_input_mode_is_refused(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """build_messages and run_eval took input_mode='video': the messages carried the image and
+    the run went through, recording 'video' in run.json (the command line offers only three)."""
+    scene = load_dataset(small_dataset)["h1_0000"]
+    with pytest.raises(BadInput, match=r"--input-mode: must be one of image, image\+state, state"):
+        build_messages("q1", scene, "video", registry=registry)  # type: ignore[arg-type]
+    with pytest.raises(BadInput, match="got 'video'"):
+        options = RunOptions(limit=1, input_mode="video")  # type: ignore[arg-type]
+        run_eval(small_dataset, "baseline:oracle", tmp_path / "run", options, registry=registry)
+    assert not (tmp_path / "run" / "run.json").exists()
