@@ -43,13 +43,24 @@ _REASONING_CAP = 8000  # characters of reasoning text kept per reply
 
 
 def _import_litellm() -> Any:
-    # Always the bundled price map: a run must never reach out for prices, whatever the shell says.
-    os.environ["LITELLM_LOCAL_MODEL_COST_MAP"] = "True"
-    litellm: Any = importlib.import_module("litellm")
+    # Always the bundled price map: a run must never reach out for prices, whatever the shell
+    # says. litellm reads the variable when it is imported, so it is set for the import only:
+    # the calling program's environment is left as it was.
+    name, before = "LITELLM_LOCAL_MODEL_COST_MAP", os.environ.get("LITELLM_LOCAL_MODEL_COST_MAP")
+    os.environ[name] = "True"
+    try:
+        litellm: Any = importlib.import_module("litellm")
+    finally:
+        if before is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = before
     litellm.suppress_debug_info = True
     litellm.set_verbose = False
     litellm.telemetry = False
-    logging.getLogger("LiteLLM").setLevel(logging.ERROR)  # bpb reports through its own channels
+    logger = logging.getLogger("LiteLLM")
+    if logger.level == logging.NOTSET:  # bpb reports through its own channels; a level the
+        logger.setLevel(logging.ERROR)  # calling program chose is its own
     wire.install(litellm)
     return litellm
 
