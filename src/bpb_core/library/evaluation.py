@@ -103,24 +103,32 @@ async def run_eval_async(
 
 def evaluate(
     data: str | Path,
-    adapters: Sequence[str | ModelAdapter],
+    adapters: Sequence[str | ModelAdapter] | str | ModelAdapter,
     out: str | Path,
     options: RunOptions | None = None,
     **kwargs: Any,
 ) -> list[EvalResult]:
     """Run several adapters one after the other, each into ``out/<slug(name)>/``.
 
-    An adapter stopped by an authentication failure does not stop the others.
+    ``adapters`` is a list of specs or adapter objects; one spec or object alone is a list of
+    one (a spec is never taken letter by letter). An adapter stopped by an authentication
+    failure does not stop the others.
     """
     return [
         run_eval(data, adapter, Path(out) / runner.slug(_spec(adapter)), options, **kwargs)
-        for adapter in adapters
+        for adapter in _listed(adapters)
     ]
+
+
+def _listed(adapters: Sequence[str | ModelAdapter] | str | ModelAdapter) -> list[Any]:
+    if isinstance(adapters, str) or not isinstance(adapters, Sequence):
+        return [adapters]
+    return list(adapters)
 
 
 async def evaluate_async(
     data: str | Path,
-    adapters: Sequence[str | ModelAdapter],
+    adapters: Sequence[str | ModelAdapter] | str | ModelAdapter,
     out: str | Path,
     options: RunOptions | None = None,
     **kwargs: Any,
@@ -128,7 +136,7 @@ async def evaluate_async(
     """:func:`evaluate` for callers inside an event loop (see :func:`run_eval_async`)."""
     return [
         await run_eval_async(data, one, Path(out) / runner.slug(_spec(one)), options, **kwargs)
-        for one in adapters
+        for one in _listed(adapters)
     ]
 
 

@@ -36,3 +36,14 @@ def test_run_eval_async_takes_str_paths_and_returns_scores(
     assert [r.run_dir.name for r in both] == ["baseline_oracle", "baseline_stasis"]
     assert list(leaderboard(both)["adapter"]) == ["baseline:oracle", "baseline:stasis"]
     assert {"run_eval_async", "evaluate_async"} <= set(bpb_core.__all__)
+
+
+def test_evaluate_takes_one_adapter_alone(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """evaluate(data, "baseline:oracle", out) read the spec letter by letter and failed with
+    "--adapter 'b': expected NAME:MODEL"."""
+    (one,) = bpb_core.evaluate(
+        str(dataset), "baseline:oracle", tmp_path / "runs", RunOptions(limit=1), registry=registry
+    )
+    assert one.run_dir.name == "baseline_oracle" and bool(one.scores["correct"].all())
