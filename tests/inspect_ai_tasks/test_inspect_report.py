@@ -87,3 +87,27 @@ def test_a_log_with_failed_calls_reads_as_api_errors(
     assert set(units["status"]) == {"api_error"}
     assert len(units) == 6 * 4
     assert not units["correct"].any()
+
+
+def test_logs_read_by_two_callers_at_once(logs: Path) -> None:
+    """Each reading emptied the logs' cache folder and rewrote it: a second reader at the same
+    time (two threads, two bpb report) hit FileNotFoundError in the folder being rebuilt."""
+    import threading
+
+    errors: list[BaseException] = []
+    boards: list[list[str]] = []
+
+    def read() -> None:
+        for _ in range(4):
+            try:
+                boards.append(sorted(leaderboard(load_results([logs]))["adapter"]))
+            except BaseException as exc:  # collected for the assertion
+                errors.append(exc)
+
+    readers = [threading.Thread(target=read) for _ in range(3)]
+    for reader in readers:
+        reader.start()
+    for reader in readers:
+        reader.join()
+    assert not errors
+    assert boards == [["inspect:bpbtest/example"]] * 12

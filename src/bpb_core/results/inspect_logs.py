@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
+import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -66,10 +67,26 @@ def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
         if meta is not None and log.samples:
             key = (log.eval.model, meta["bpb_dataset"], str(meta.get("bpb_input_mode")))
             groups.setdefault(key, []).append(log)
-    digest = hashlib.sha256("\n".join(sorted(str(p.resolve()) for p, _ in logs)).encode())
-    root = cache_root() / PREFIX / digest.hexdigest()[:16]
-    shutil.rmtree(root, ignore_errors=True)
-    return [_write_run(root, key, group) for key, group in sorted(groups.items())]
+    root = cache_root() / PREFIX / _digest([path for path, _ in logs])
+    if not root.is_dir():  # else: made from these very logs already, by this or another caller
+        root.parent.mkdir(parents=True, exist_ok=True)
+        building = Path(tempfile.mkdtemp(prefix=f".{root.name}.", dir=root.parent))
+        for key, group in sorted(groups.items()):
+            _write_run(building, key, group)
+        try:
+            building.rename(root)  # whole or not at all: a reader never sees a half-made folder
+        except OSError:  # another caller made it meanwhile, from the same logs
+            shutil.rmtree(building, ignore_errors=True)
+    return [root / _run_name(key) for key in sorted(groups)]
+
+
+def _digest(paths: list[Path]) -> str:
+    """Names the logs as they are now: their paths, sizes and modification times."""
+    lines = []
+    for path in paths:
+        stat = path.stat()
+        lines.append(f"{path.resolve()}\t{stat.st_size}\t{stat.st_mtime_ns}")
+    return hashlib.sha256("\n".join(sorted(lines)).encode()).hexdigest()[:16]
 
 
 def _read(path: Path) -> Any:
@@ -90,11 +107,16 @@ def _bpb(log: Any) -> dict[str, Any] | None:
     return meta if isinstance(meta, dict) and meta.get("bpb_dataset") else None
 
 
+def _run_name(key: tuple[str, str, str]) -> str:
+    model, _, mode = key
+    slug = "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{PREFIX}:{model}")
+    return slug if mode == "image" else f"{slug}_{mode}"
+
+
 def _write_run(root: Path, key: tuple[str, str, str], logs: list[Any]) -> Path:
-    model, data, mode = key
+    model, data, _ = key
     adapter = f"{PREFIX}:{model}"
-    slug = "".join(c if c.isalnum() or c in "-_." else "_" for c in adapter)
-    run_dir = root / (slug if mode == "image" else f"{slug}_{mode}")
+    run_dir = root / _run_name(key)
     tasks: dict[str, None] = {}
     for log in logs:  # oldest first: a later log's answer replaces an earlier one
         meta = log.eval.metadata
