@@ -171,12 +171,14 @@ def test_ctrl_c_stops_sending_finishes_writing_and_records_interrupted(
     dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
     run_dir = tmp_path / "run"
+    # what the process had before (Python's default, or SIG_IGN when started in the background)
+    before = signal.getsignal(signal.SIGINT)
     adapter = Counting(registry.adapter("baseline:oracle"), interrupt_at=4)
     result = _run(dataset, run_dir, registry, adapter)
     assert result.stopped == "interrupted" and adapter.calls == 4  # type: ignore[attr-defined]
     assert len(_records(run_dir)) == 4  # the call in flight at the signal was written
     assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
+    assert signal.getsignal(signal.SIGINT) is before  # handler restored
     # A second signal abandons the call in flight: not written, not logged, sent on resume.
     twice = Counting(registry.adapter("baseline:oracle"), interrupt_at=5, signals=2)
     result = _run(dataset, run_dir, registry, twice)
