@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -202,3 +203,13 @@ def non_finite(value: Any, path: str = "") -> tuple[str, float] | None:
         if found is not None:
             return found
     return None
+
+
+_LONE_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def valid_unicode(text: str) -> str:
+    """``text`` with every lone surrogate (``"\\udc80"`` in a reply's JSON, or undecodable bytes
+    read with ``surrogateescape``) replaced by U+FFFD: such a string has no UTF-8 form, so it
+    cannot be written to a file or a web page, nor read back by pydantic."""
+    return _LONE_SURROGATE.sub("\ufffd", text)

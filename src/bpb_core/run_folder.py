@@ -179,8 +179,12 @@ class AttemptLog:
                 self._file.flush()
 
     def append(self, entry: dict[str, Any]) -> None:
-        """Write one attempt and flush it to the operating system."""
-        self._file.write(json.dumps(entry, ensure_ascii=False).encode("utf-8") + b"\n")
+        """Write one attempt and flush it to the operating system.
+
+        A lone surrogate (a reply whose JSON carried ``"\\udc80"``) has no UTF-8 form: it is
+        written as its JSON escape, so the line stays valid UTF-8 and reads back the same."""
+        line = json.dumps(entry, ensure_ascii=False).encode("utf-8", "backslashreplace")
+        self._file.write(line + b"\n")
         self._file.flush()
 
     def close(self) -> None:

@@ -24,7 +24,7 @@ from bpb_core.errors import (
     blamed,
 )
 from bpb_core.interfaces import PromptOptions
-from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost
+from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.limits import sleep_unless
 from bpb_core.runner.progress import ProgressEvent
@@ -130,10 +130,18 @@ class PairCall:
         )
 
     def _checked(self, response: object) -> ModelResponse:
-        """The adapter's reply, if it is a :class:`ModelResponse` with text and usage."""
+        """The adapter's reply, if it is a :class:`ModelResponse` with text and usage; lone
+        surrogates in its strings (a reply's JSON may carry ``"\\udc80"``) become U+FFFD, so
+        the attempts log, the answer file and the pages can hold them."""
         if isinstance(response, ModelResponse):
             if isinstance(response.text, str) and isinstance(response.usage, Usage):
-                return response
+                return dataclasses.replace(
+                    response,
+                    text=valid_unicode(response.text),
+                    reasoning=_valid(response.reasoning),
+                    model_id=_valid(response.model_id),
+                    metadata=_valid(response.metadata),
+                )
             what = f"a ModelResponse with text {type(response.text).__name__} and usage "
             what += type(response.usage).__name__
         else:
@@ -271,3 +279,10 @@ class PairCall:
                 self.state.spec, self.task, "done", status=status, tokens=tokens, cost=record.cost
             )
         )
+
+
+def _valid(value: Any) -> Any:
+    """``value`` (a string, or a mapping of them) with lone surrogates replaced."""
+    if isinstance(value, dict):
+        return {k: _valid(v) for k, v in value.items()}
+    return valid_unicode(value) if isinstance(value, str) else value
