@@ -8,6 +8,8 @@ from typing import Any
 
 import jinja2
 
+from bpb_core.model_calls import valid_unicode
+
 
 @functools.cache
 def environment() -> jinja2.Environment:
@@ -22,10 +24,11 @@ def environment() -> jinja2.Environment:
 
 
 def render(name: str, **context: Any) -> str:
-    """Template ``name`` rendered with ``context``."""
-    return environment().get_template(name).render(**context)
+    """Template ``name`` rendered with ``context`` (lone surrogates, from a hand-edited log or
+    manifest, as U+FFFD: the page must encode to UTF-8)."""
+    return valid_unicode(environment().get_template(name).render(**context))
 
 
 def render_string(source: str, **context: Any) -> str:
     """A plugin's template source rendered with ``context`` (autoescaped like core's)."""
-    return environment().from_string(source).render(**context)
+    return valid_unicode(environment().from_string(source).render(**context))

@@ -54,6 +54,7 @@ class PairView:
     attempts: list[dict[str, Any]]
     units: pd.DataFrame
     verdict: str
+    prompt_note: str = ""
 
     @property
     def answer_json(self) -> str:
@@ -124,18 +125,32 @@ class Viewer:
         key = SceneKey(float(rows["horizon"].iloc[0]), int(rows["index"].iloc[0]))
         record = read_answer(key.dir(run.path) / f"{task}.json")
         attempts = self._attempts_of(run_id).get((scene_id, task), [])
-        prompts = self._prompts(run, key, task, record, attempts)
+        try:
+            prompts, note = self._prompts(run, key, task, record, attempts), ""
+        except QueryError as exc:  # the input image is gone: the rest of the page still shows
+            prompts, note = [], f"not rebuilt: {exc}"
         verdict = _pairs(rows)["verdict"].iloc[0]
         units = rows[["unit", "truth", "pred", "correct", "distance", "status"]]
-        return PairView(run, run_id, key, task, record, prompts, attempts, units, str(verdict))
+        return PairView(
+            run, run_id, key, task, record, prompts, attempts, units, str(verdict), note
+        )
 
     def image(self, run_id: int, scene_id: str) -> bytes:
-        """The input image the run's models were shown for ``scene_id``."""
+        """The input image the run's models were shown for ``scene_id``.
+
+        Raises:
+            QueryError: No such run or scene, or the dataset has no such image (generated
+                without images, or the file was moved).
+        """
         run, key = self._scene(run_id, scene_id)
         name = run.family.input_image if run.family is not None else None
         if name is None:
             raise QueryError(f"the {run.label} dataset has no images")
-        return (key.dir(run.dataset) / name).read_bytes()
+        path = key.dir(run.dataset) / name
+        try:
+            return path.read_bytes()
+        except OSError as exc:
+            raise QueryError(f"{path}: cannot read the input image: {exc.strerror}") from None
 
     def overlay(self, run_id: int, scene_id: str, task: str) -> bytes:
         """The scene drawn by its family with the task's truth and prediction marks."""
@@ -180,7 +195,7 @@ class Viewer:
         mode = record.input_mode if record else str(options.get("input_mode", "image"))
         cot = record.cot if record else component.default_cot
         image = None if mode == "state" else self.image(self.results.runs.index(run), key.scene_id)
-        levels = sorted({int(a.get("escalation") or 0) for a in attempts} or {0})
+        levels = sorted({_level(a.get("escalation")) for a in attempts} or {0})
         out = []
         for level in levels:
             prompt = PromptOptions(mode, cot, bool(options.get("force_numeric", False)), level)  # type: ignore[arg-type]
@@ -216,6 +231,14 @@ def _mask(frame: pd.DataFrame, name: str, value: str) -> pd.Series:
     if name == "stable":
         return frame["stable"].fillna(False).astype(bool) == (value == "stable")
     return frame[name].astype(str) == value
+
+
+def _level(value: object) -> int:
+    """An attempt's escalation level as logged; 0 for anything but a whole number >= 0 (a
+    hand-edited or foreign log)."""
+    if isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 1_000_000:
+        return value
+    return 0
 
 
 def _page(value: str) -> int:
