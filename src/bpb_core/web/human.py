@@ -205,6 +205,6 @@ class HumanSession:
 
 
 def _milliseconds(key: str, value: str) -> int:
-    if not value.isdigit() or int(value) > MAX_MS:
+    if not (value.isascii() and value.isdigit()) or int(value) > MAX_MS:
         raise FormError(f"{key}: expected whole milliseconds from 0 to {MAX_MS}")
     return int(value)

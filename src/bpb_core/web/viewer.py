@@ -242,6 +242,6 @@ def _level(value: object) -> int:
 
 
 def _page(value: str) -> int:
-    if not value.isdigit() or not 1 <= int(value) <= 1_000_000:
+    if not (value.isascii() and value.isdigit()) or not 1 <= int(value) <= 1_000_000:
         raise QueryError("page: expected a page number")
     return int(value)

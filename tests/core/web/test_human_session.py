@@ -67,6 +67,7 @@ def test_order_is_seeded_and_a_new_session_resumes(
         ({"q3.pos2": "a,b"}, "q3.pos2: expected &#39;x,y&#39; in metres"),
         ({"q3.pos2": None}, "q3.pos2: missing"),
         ({"ms.q1": "-4"}, "ms.q1: expected whole milliseconds"),
+        ({"ms.q1": "\u00b2"}, "ms.q1: expected whole milliseconds"),  # isdigit(), not int()
         ({"scene": "h9_0000"}, "scene: not the scene being asked"),
         ({"shown": "soon"}, "shown: expected the time"),
         ({"q2.TOP": "T" * 500}, "longer than 200 characters"),

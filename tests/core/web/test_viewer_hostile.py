@@ -44,3 +44,11 @@ def test_a_dataset_without_its_images_still_shows_its_pairs(runs: Path, registry
     image = client.get(f"/image/{MODEL}/h1_0000")
     assert image.status_code == 404 and "init.png" in image.text
     assert client.get(f"/overlay/{MODEL}/h1_0000/q1").status_code == 200
+
+
+def test_a_page_number_that_is_not_ascii_digits_is_a_400(runs: Path, registry: Registry) -> None:
+    client = _client(runs, registry)
+    for page in ("\u00b2", "\u0663", "1\u00b9"):  # str.isdigit() is true, int() fails or not
+        reply = client.get("/", params={"page": page})
+        assert reply.status_code == 400 and "page: expected a page number" in reply.text
+    assert client.get("/", params={"page": "1"}).status_code == 200
