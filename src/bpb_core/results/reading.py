@@ -31,6 +31,7 @@ from bpb_core.layout import (
     SceneKey,
     select_keys,
 )
+from bpb_core.model_calls import valid_unicode
 from bpb_core.run_folder import live_run, read_manifest as read_run_manifest
 from bpb_core.validated_files import describe_validation_error
 
@@ -149,8 +150,10 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     manifest = read_run_manifest(path)
     if manifest is None:
         raise BadInput(f"{path / RUN_MANIFEST}: no run manifest")
-    adapter = str(manifest.get("adapter") or manifest.get("spec") or path.name)
-    model = str(manifest.get("model_id") or manifest.get("model") or adapter)
+    # shown in tables, charts and pages: a lone surrogate (a "\udc80" escape in run.json, or a
+    # folder name that is not UTF-8) has no UTF-8 form and would fail them all
+    adapter = valid_unicode(str(manifest.get("adapter") or manifest.get("spec") or path.name))
+    model = valid_unicode(str(manifest.get("model_id") or manifest.get("model") or adapter))
     dataset = _dataset_path(manifest, path)
     _same_dataset(manifest, dataset, path)
     family = _family(dataset, registry)
@@ -159,7 +162,7 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
         raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
     keys = _expected_keys(manifest, dataset, path)
     names = tuple(str(t) for t in tasks)
-    label = label or path.name
+    label = valid_unicode(label or path.name)
     dropped = manifest.get("dropped_params") or []
     if dropped:  # the model did not get what the protocol asked (temperature 0 above all)
         label = f"{label} [dropped: {', '.join(map(str, dropped))}]"
