@@ -27,9 +27,16 @@ _BASELINE_HATCHES = ["//", "..", "xx", "\\\\"]
 _BASELINE_MARKERS = ["s", "^", "D", "v"]
 
 
+def literal(text: str) -> str:
+    """``text`` drawn as written: matplotlib reads text between two ``$`` as TeX math, so a run
+    or title such as ``a$\\frac{$`` stopped the report and ``$x$`` came out in italics; every
+    ``$`` is escaped."""
+    return text.replace("$", r"\$")
+
+
 def label(run: str, baseline: bool) -> str:
-    """Display name of a run; baselines are marked."""
-    return f"{run} [baseline]" if baseline else run
+    """Display name of a run in a chart (:func:`literal`); baselines are marked."""
+    return literal(f"{run} [baseline]" if baseline else run)
 
 
 def names_of(frame: pd.DataFrame) -> list[str]:
@@ -129,8 +136,8 @@ def leaderboards(
         not_asked = [run for run in missing if run in others]
         note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
         note += f"\nnot asked: {', '.join(not_asked)}" if not_asked else ""
-        ax.set_xlabel(xlabel + note, fontsize=8)
-        ax.set_title(titles.get(metric, metric), fontsize=10)
+        ax.set_xlabel(literal(xlabel + note), fontsize=8)
+        ax.set_title(literal(titles.get(metric, metric)), fontsize=10)
         ax.grid(axis="x", alpha=0.3)
     return png(fig)
 

@@ -36,3 +36,17 @@ def test_lone_surrogates_in_run_json_and_a_folder_name_are_shown_as_u_fffd(
     assert "baseline_stasis\ufffd" in page
     labels = [run.label for run in Viewer.load([runs], registry).results.runs]
     assert "baseline_stasis\ufffd" in labels
+
+
+def test_dollar_signs_in_run_names_and_titles_are_drawn_as_text(runs: Path, tmp_path: Path) -> None:
+    import pandas as pd
+
+    from bpb_core.report.charts import leaderboards
+
+    os.rename(runs / "litellm_model", runs / "price $\\frac{$ run")  # matplotlib math: invalid
+    done = bpb("report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10")
+    assert done.returncode == 0, done.stderr
+    assert "price $\\frac{$ run" in (tmp_path / "out" / "report.html").read_text()
+    board = pd.DataFrame({"run": ["a$", "b$^{$"], "baseline": [False, True], "m": [0.5, 0.2]})
+    png = leaderboards(board, ["m"], titles={"m": "a plugin's $\\frac{$ title"})
+    assert png.startswith(b"\x89PNG")
