@@ -10,12 +10,18 @@ import time
 
 from markupsafe import Markup
 from starlette.applications import Starlette
+from starlette.exceptions import HTTPException
 from starlette.requests import Request
 from starlette.responses import HTMLResponse, RedirectResponse, Response
 from starlette.routing import Route
 
-from bpb_core.web.human import FormError, HumanSession
+from bpb_core.web.human import MAX_FIELDS, MAX_VALUE, FormError, HumanSession
 from bpb_core.web.templating import render, render_string
+
+# A field's name and value as posted (percent-encoded: up to 12 bytes a character); the parser
+# stops reading past it, so a post cannot make the app hold more than MAX_FIELDS of these
+# (Starlette's defaults, 1000 fields of 1 MB, let any web page make it hold a gigabyte).
+MAX_FIELD_BYTES = 16 * MAX_VALUE + 1024
 
 
 def human_app(session: HumanSession) -> Starlette:
@@ -53,7 +59,12 @@ def human_app(session: HumanSession) -> Starlette:
         return HTMLResponse(html)
 
     async def answer(request: Request) -> Response:
-        form = await request.form(max_files=0, max_fields=1000)
+        try:
+            form = await request.form(
+                max_files=0, max_fields=MAX_FIELDS, max_part_size=MAX_FIELD_BYTES
+            )
+        except HTTPException as exc:  # too many or too long fields, a malformed body
+            return _bad(f"form: {exc.detail}")
         fields = {k: v for k, v in form.multi_items() if isinstance(v, str)}
         if len(fields) != len(form.multi_items()):
             return _bad("form: repeated or file fields")

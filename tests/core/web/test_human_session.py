@@ -3,6 +3,7 @@ message while nothing is stored."""
 
 from __future__ import annotations
 
+import asyncio
 import re
 import subprocess
 import time
@@ -131,3 +132,37 @@ def test_bad_command_lines_are_one_line_errors(
     human = run_bpb("human", "--data", str(tmp_path / "nodata"), "--out", str(tmp_path / "run"))
     assert human.returncode == 2 and "--data" in human.stderr
     assert len(human.stderr.strip().splitlines()) == 1
+
+
+def test_a_huge_post_is_refused_before_it_is_read_whole(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    """Any web page can post to the app: 100 fields of 900 kB (under Starlette's default limits)
+    must not be read into memory before being refused."""
+    app = human_app(_session(small_dataset, tmp_path, registry))
+    field = b"a" * 900_000
+    chunks = iter([b"f%d=" % i + field + b"&" for i in range(100)])
+    pulled = 0
+    sent: list[dict[str, object]] = []
+
+    async def receive() -> dict[str, object]:
+        nonlocal pulled
+        chunk = next(chunks, b"")
+        pulled += len(chunk)
+        return {"type": "http.request", "body": chunk, "more_body": bool(chunk)}
+
+    async def send(message: dict[str, object]) -> None:
+        sent.append(message)
+
+    scope = {
+        "type": "http", "method": "POST", "path": "/answer", "raw_path": b"/answer",
+        "query_string": b"", "root_path": "", "scheme": "http", "http_version": "1.1",
+        "headers": [(b"content-type", b"application/x-www-form-urlencoded")],
+        "server": ("127.0.0.1", 8765), "client": ("127.0.0.1", 50000),
+    }  # fmt: skip
+    asyncio.run(app(scope, receive, send))
+    start = next(m for m in sent if m["type"] == "http.response.start")
+    body = b"".join(m.get("body", b"") for m in sent if m["type"] == "http.response.body")
+    assert start["status"] == 400 and b"form: Field exceeded maximum size" in body
+    assert pulled <= 1_000_000  # the first chunk, not 90 MB
+    assert list(iter_answers(tmp_path)) == []
