@@ -8,6 +8,7 @@ from typing import Any
 from bpb_core.errors import BadInput
 
 HOST = "127.0.0.1"
+NAMES = (HOST, "localhost")  # the Host headers the apps answer
 
 
 def require_web() -> None:
@@ -19,8 +20,18 @@ def require_web() -> None:
         raise BadInput(f"the web apps need {', '.join(missing)}: pip install 'bpb[web]'")
 
 
+def loopback_only(app: Any) -> Any:
+    """``app`` answering only requests addressed to this machine by name (``Host`` 127.0.0.1 or
+    localhost, any port); others get a 400. Listening on loopback is not enough: a web page
+    whose own name is made to resolve to 127.0.0.1 (DNS rebinding) reaches the port, and as
+    the same origin it could read the pages and post answers."""
+    from starlette.middleware.trustedhost import TrustedHostMiddleware
+
+    return TrustedHostMiddleware(app, allowed_hosts=list(NAMES))
+
+
 def serve(app: Any, port: int) -> None:
-    """Run ``app`` on http://127.0.0.1:``port`` until interrupted."""
+    """Run ``app`` on http://127.0.0.1:``port`` until interrupted (:func:`loopback_only`)."""
     import uvicorn
 
-    uvicorn.run(app, host=HOST, port=port, log_level="warning", access_log=False)
+    uvicorn.run(loopback_only(app), host=HOST, port=port, log_level="warning", access_log=False)
