@@ -17,6 +17,7 @@ from PIL import Image
 from bpb_core.results import CALL_DTYPES, META_DTYPES
 from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
 from bpb_tasks.q3.scorer import COLUMNS as Q3_COLUMNS
+from support.web_server import chromium
 
 UNIT_DTYPES = {**META_DTYPES, **SCORER_INPUT, **Q3_COLUMNS, **SCORER_OUTPUT}
 
@@ -110,22 +111,13 @@ def test_html_is_self_contained(report_dir: Path) -> None:
         assert title in page  # every diagnostic of the tasks that ran has a section
 
 
-def _chromium() -> str | None:
-    found = shutil.which("chromium") or shutil.which("chromium-browser")
-    if found is None:
-        if os.environ.get("CI") == "true":
-            pytest.fail("chromium is required in CI (apt-get install chromium)")
-        pytest.skip("chromium not installed")
-    return found
-
-
 @pytest.mark.slow
 def test_html_renders_charts_and_gallery_in_headless_chromium(
     report_dir: Path, tmp_path: Path
 ) -> None:
-    chromium = _chromium()
+    browser = chromium()
     page = (report_dir / "out" / "report.html").as_uri()
-    common = [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
+    common = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
     dom = subprocess.run(
         [*common, "--dump-dom", page], capture_output=True, text=True, timeout=120
     ).stdout

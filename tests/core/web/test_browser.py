@@ -23,9 +23,8 @@ from bpb_core.web.viewer import Viewer
 from bpb_core.web.viewer_app import viewer_app
 from bpb_tasks.billiards.config import load_config
 from bpb_tasks.billiards.render_canvas import CanvasSpec
-from support.web_server import serving
+from support.web_server import chromium, serving
 
-CHROMIUM = "/usr/bin/chromium"
 sync_api = pytest.importorskip("playwright.sync_api")
 pytestmark = pytest.mark.slow
 
@@ -39,12 +38,9 @@ def runs_dir(small_dataset: Path, tmp_path: Path, registry: Registry) -> Path:
 
 @pytest.fixture
 def browser() -> Any:
-    if not Path(CHROMIUM).exists():
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"{CHROMIUM} is required in CI (apt-get install chromium)")
-        pytest.skip(f"{CHROMIUM} not installed")
+    executable = chromium()
     with sync_api.sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        browser = playwright.chromium.launch(executable_path=executable, args=["--no-sandbox"])
         yield browser
         browser.close()
 

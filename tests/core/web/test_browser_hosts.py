@@ -3,7 +3,6 @@ the app's port, but the app answers only requests addressed to 127.0.0.1 or loca
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -13,23 +12,19 @@ from bpb_core.registry import Registry
 from bpb_core.web.serve import loopback_only
 from bpb_core.web.viewer import Viewer
 from bpb_core.web.viewer_app import viewer_app
-from support.web_server import serving
+from support.web_server import chromium, serving
 
-CHROMIUM = "/usr/bin/chromium"
 sync_api = pytest.importorskip("playwright.sync_api")
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture
 def browser() -> Any:
-    if not Path(CHROMIUM).exists():
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"{CHROMIUM} is required in CI (apt-get install chromium)")
-        pytest.skip(f"{CHROMIUM} not installed")
+    executable = chromium()
     rules = "MAP rebound.example 127.0.0.1, MAP localhost 127.0.0.1"  # what rebinding does
     with sync_api.sync_playwright() as playwright:
         args = ["--no-sandbox", f"--host-resolver-rules={rules}"]
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=args)
+        browser = playwright.chromium.launch(executable_path=executable, args=args)
         yield browser
         browser.close()
 
