@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import sys
 from pathlib import Path
@@ -11,6 +12,7 @@ import pytest
 
 from bpb_core import AdapterInfo, hookimpl, lazy, make_registry
 from bpb_core.errors import PluginBug, PluginError, UnknownName
+from bpb_core.model_calls import Message, ModelRequest, TextPart
 from bpb_core.registry import PluginSource, PluginWarning
 
 GOOD_PLUGIN = """
@@ -29,7 +31,9 @@ class Shout:
         self.name = f"shout:{model}"
 
     async def complete(self, request):
-        raise NotImplementedError
+        from bpb_core import ModelResponse, Usage
+        text = " ".join(getattr(p, "text", "") for p in request.messages[-1].parts)
+        return ModelResponse(text=text.upper(), usage=Usage(0, 0))
 
 
 def make(model, options):
@@ -77,8 +81,12 @@ def test_load_is_lazy_until_the_component_is_used(
     monkeypatch.syspath_prepend(str(site))
     registry = make_registry()
     assert "shout_impl" not in sys.modules
-    assert registry.adapter("shout:loud").name == "shout:loud"
-    assert "shout_impl" in sys.modules
+    shout = registry.adapter("shout:loud")
+    assert shout.name == "shout:loud" and "shout_impl" in sys.modules
+    reply = asyncio.run(
+        shout.complete(ModelRequest((Message("user", (TextPart("hi there"),)),), "q1"))
+    )
+    assert reply.text == "HI THERE"
     for name in ("shout_hooks", "shout_impl", "shout_impl_loaded"):
         sys.modules.pop(name, None)
 
