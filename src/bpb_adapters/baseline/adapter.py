@@ -69,8 +69,32 @@ def _registry() -> Registry:
         return make_registry()
 
 
+class PluginLookup:
+    """Tasks, families and simulators looked up by name, in the registry that built the
+    adapter (:class:`bpb_core.capabilities.UsesRegistry`) or else the installed plugins, and
+    kept once built. A dataclass using it declares ``_registry`` and ``_components``."""
+
+    _registry: Registry | None
+    _components: dict[str, Any]
+
+    def use_registry(self, registry: Registry) -> None:
+        """Look tasks and families up in ``registry`` (the one that built this adapter)."""
+        self._registry = registry
+        self._components.clear()
+
+    def _plugins(self) -> Registry:
+        if self._registry is None:
+            self._registry = _registry()
+        return self._registry
+
+    def _component(self, key: str, build: Any) -> Any:
+        if key not in self._components:
+            self._components[key] = build(self._plugins())
+        return self._components[key]
+
+
 @dataclass
-class BaselineAdapter:
+class BaselineAdapter(PluginLookup):
     """Answers every request from a prediction of the request's scene, offline and instantly.
 
     Attributes:
@@ -83,22 +107,7 @@ class BaselineAdapter:
     model: str
     seed: int = 0
     _registry: Registry | None = field(default=None, repr=False)
-    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
-
-    def use_registry(self, registry: Registry) -> None:
-        """Look tasks and families up in ``registry`` (the one that built this adapter)."""
-        self._registry = registry
-        self._cache.clear()
-
-    def _plugins(self) -> Registry:
-        if self._registry is None:
-            self._registry = _registry()
-        return self._registry
-
-    def _component(self, key: str, build: Any) -> Any:
-        if key not in self._cache:
-            self._cache[key] = build(self._plugins())
-        return self._cache[key]
+    _components: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when ``family`` offers this prediction (every family has the oracle), else

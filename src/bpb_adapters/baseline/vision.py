@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from bpb_adapters.baseline.adapter import PluginLookup, expected_text
 from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import RequestRejected
 from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
@@ -59,7 +60,7 @@ def _inputs(request: ModelRequest) -> tuple[bytes | None, str]:
 
 
 @dataclass
-class VisionAdapter:
+class VisionAdapter(PluginLookup):
     """Reads the scene from the image, simulates it and answers (see the module docstring)."""
 
     name: str = "baseline:vision"
@@ -67,23 +68,6 @@ class VisionAdapter:
     _components: dict[str, Any] = field(default_factory=dict, repr=False)
     _seen: OrderedDict[str, tuple[Any, str | None]] = field(default_factory=OrderedDict, repr=False)
     _measured: OrderedDict[str, dict[str, Any]] = field(default_factory=OrderedDict, repr=False)
-
-    def use_registry(self, registry: Registry) -> None:
-        """Look tasks and families up in ``registry`` (the one that built this adapter)."""
-        self._registry = registry
-        self._components.clear()
-
-    def _plugins(self) -> Registry:
-        if self._registry is None:
-            from bpb_adapters.baseline.adapter import _registry
-
-            self._registry = _registry()
-        return self._registry
-
-    def _component(self, key: str, build: Any) -> Any:
-        if key not in self._components:
-            self._components[key] = build(self._plugins())
-        return self._components[key]
 
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when ``family`` can read its scenes back from their images."""
@@ -136,8 +120,6 @@ class VisionAdapter:
         truth = family.ground_truth(perceived, simulator, stability=False)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         measured = self._measure(family, image, prompt, perceived, request, simulator)
-        from bpb_adapters.baseline.adapter import expected_text
-
         return expected_text(self._plugins(), request.task, task, truth), measured
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
