@@ -135,16 +135,21 @@ def test_an_index_listing_a_scene_twice_or_not_utf8_is_refused(copy: Path) -> No
         load_dataset(copy)
 
 
+def _run_h1(data: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    """``bpb run`` of the stasis baseline on horizon 1 of ``data``."""
+    return subprocess.run(
+        [BPB, "run", "--data", str(data), "--adapter", "baseline:stasis", "--out",
+         str(tmp_path / "r"), "--horizons", "1"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+
+
 def test_a_run_refuses_a_truncated_input_image_instead_of_sending_it(
     copy: Path, tmp_path: Path
 ) -> None:
     image = copy / "h1" / "scene_0001" / "init.png"
     image.write_bytes(image.read_bytes()[: image.stat().st_size * 6 // 10])
-    done = subprocess.run(
-        [BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis", "--out",
-         str(tmp_path / "r"), "--horizons", "1"],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+    done = _run_h1(copy, tmp_path)
     assert done.returncode == 2, done.stderr
     last = done.stderr.strip().splitlines()[-1]
     assert last.startswith(f"error: {image}: not a readable image (OSError: Truncated File Read)")
@@ -214,11 +219,7 @@ def test_an_input_image_that_is_empty_or_not_what_its_name_says_is_refused(
 ) -> None:
     image = copy / "h1" / "scene_0001" / "init.png"
     change(image)
-    done = subprocess.run(
-        [BPB, "run", "--data", str(copy), "--adapter", "baseline:stasis", "--out",
-         str(tmp_path / "r"), "--horizons", "1"],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+    done = _run_h1(copy, tmp_path)
     assert done.returncode == 2, done.stderr
     last = done.stderr.strip().splitlines()[-1]
     assert last == (
