@@ -16,6 +16,7 @@ from starlette.responses import HTMLResponse, RedirectResponse, Response
 from starlette.routing import Route
 
 from bpb_core.web.human import MAX_FIELDS, MAX_VALUE, FormError, HumanSession
+from bpb_core.web.serve import loopback_only
 from bpb_core.web.templating import render, render_string
 
 # A field's name and value as posted (percent-encoded: up to 12 bytes a character); the parser
@@ -92,7 +93,8 @@ def human_app(session: HumanSession) -> Starlette:
             Route("/", index),
             Route("/answer", answer, methods=["POST"]),
             Route("/image/{scene_id}", image),
-        ]
+        ],
+        middleware=[loopback_only()],
     )
 
 

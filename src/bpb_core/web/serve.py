@@ -3,9 +3,12 @@ other machine may reach them."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from starlette.middleware import Middleware
 
 HOST = "127.0.0.1"
 NAMES = (HOST, "localhost")  # the Host headers the apps answer
@@ -20,18 +23,22 @@ def require_web() -> None:
         raise BadInput(f"the web apps need {', '.join(missing)}: pip install 'bpb[web]'")
 
 
-def loopback_only(app: Any) -> Any:
-    """``app`` answering only requests addressed to this machine by name (``Host`` 127.0.0.1 or
-    localhost, any port); others get a 400. Listening on loopback is not enough: a web page
-    whose own name is made to resolve to 127.0.0.1 (DNS rebinding) reaches the port, and as
-    the same origin it could read the pages and post answers."""
+def loopback_only() -> Middleware:
+    """The middleware every app is built with: it answers only requests addressed to this
+    machine by name (``Host`` 127.0.0.1 or localhost, any port); others get a 400. Listening on
+    loopback is not enough: a web page whose own name is made to resolve to 127.0.0.1 (DNS
+    rebinding) reaches the port, and as the same origin it could read the pages and post
+    answers. It is part of the app, not of :func:`serve`, so an app served some other way (a
+    library caller's own uvicorn) has it too."""
+    from starlette.middleware import Middleware
     from starlette.middleware.trustedhost import TrustedHostMiddleware
 
-    return TrustedHostMiddleware(app, allowed_hosts=list(NAMES))
+    return Middleware(TrustedHostMiddleware, allowed_hosts=list(NAMES))
 
 
 def serve(app: Any, port: int) -> None:
-    """Run ``app`` on http://127.0.0.1:``port`` until interrupted (:func:`loopback_only`)."""
+    """Run ``app`` (built with :func:`loopback_only`) on http://127.0.0.1:``port`` until
+    interrupted."""
     import uvicorn
 
-    uvicorn.run(loopback_only(app), host=HOST, port=port, log_level="warning", access_log=False)
+    uvicorn.run(app, host=HOST, port=port, log_level="warning", access_log=False)

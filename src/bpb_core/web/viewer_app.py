@@ -15,6 +15,7 @@ from starlette.responses import HTMLResponse, Response
 from starlette.routing import Route
 
 from bpb_core.errors import PluginBug
+from bpb_core.web.serve import loopback_only
 from bpb_core.web.templating import render
 from bpb_core.web.viewer import PAGE_SIZE, QueryError, Viewer
 
@@ -80,7 +81,8 @@ def viewer_app(viewer: Viewer) -> Starlette:
             Route("/pair/{run:int}/{scene_id}/{task}", pair),
             Route("/image/{run:int}/{scene_id}", image),
             Route("/overlay/{run:int}/{scene_id}/{task}", overlay),
-        ]
+        ],
+        middleware=[loopback_only()],
     )
 
 

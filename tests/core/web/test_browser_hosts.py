@@ -9,7 +9,6 @@ from typing import Any
 import pytest
 
 from bpb_core.registry import Registry
-from bpb_core.web.serve import loopback_only
 from bpb_core.web.viewer import Viewer
 from bpb_core.web.viewer_app import viewer_app
 from support.web_server import chromium, serving
@@ -32,7 +31,7 @@ def browser() -> Any:
 def test_a_rebound_name_gets_a_400_and_loopback_names_the_pages(
     runs: Path, registry: Registry, browser: Any
 ) -> None:
-    app = loopback_only(viewer_app(Viewer.load([runs], registry)))
+    app = viewer_app(Viewer.load([runs], registry))
     page = browser.new_page()
     with serving(app) as url:
         port = url.rsplit(":", 1)[1]
@@ -43,21 +42,3 @@ def test_a_rebound_name_gets_a_400_and_loopback_names_the_pages(
             shown = page.goto(f"http://{name}:{port}/")
             assert shown is not None and shown.status == 200
             assert page.locator("tr.pair").count() > 0
-
-
-def test_serve_wraps_the_app(monkeypatch: pytest.MonkeyPatch, runs: Path) -> None:
-    import uvicorn
-    from starlette.applications import Starlette
-    from starlette.responses import PlainTextResponse
-    from starlette.routing import Route
-    from starlette.testclient import TestClient
-
-    from bpb_core.web import serve as serving_module
-
-    seen: dict[str, Any] = {}
-    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw, app=app))
-    inner = Starlette(routes=[Route("/", lambda request: PlainTextResponse("ok"))])
-    serving_module.serve(inner, 8765)
-    assert seen["host"] == "127.0.0.1"
-    assert TestClient(seen["app"], base_url="http://evil.example:8765").get("/").status_code == 400
-    assert TestClient(seen["app"], base_url="http://localhost:8765").get("/").text == "ok"

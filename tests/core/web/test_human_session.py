@@ -20,6 +20,8 @@ from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession
 from bpb_core.web.human_app import human_app
 
+LOCAL = "http://127.0.0.1"  # the apps answer only requests addressed to loopback names
+
 
 def _session(data: Path, run: Path, registry: Registry, seed: int = 0) -> HumanSession:
     return HumanSession(data, run, "ann", registry, RunOptions(horizons=(1.0,)), seed)
@@ -41,7 +43,7 @@ def test_order_is_seeded_and_a_new_session_resumes(
     other = [_session(small_dataset, tmp_path / f"c{s}", registry, seed=s) for s in range(2, 6)]
     assert [r.scene_id for r in first.order] == [r.scene_id for r in again.order]
     assert any([r.scene_id for r in o.order] != [r.scene_id for r in first.order] for o in other)
-    client = TestClient(human_app(first))
+    client = TestClient(human_app(first), base_url=LOCAL)
     form = _valid_form(client) | {"shown": f"{time.time() - 2:.3f}", "ms.q2": "9000"}
     reply = client.post("/answer", data=form, follow_redirects=False)
     assert reply.status_code == 303
@@ -83,7 +85,7 @@ def test_a_bad_post_is_refused_with_its_field_and_stores_nothing(
     change: dict[str, str | None],
     message: str,
 ) -> None:
-    client = TestClient(human_app(_session(small_dataset, tmp_path, registry)))
+    client = TestClient(human_app(_session(small_dataset, tmp_path, registry)), base_url=LOCAL)
     form = _valid_form(client)
     for key, value in change.items():
         if value is None:
@@ -107,7 +109,7 @@ def test_the_closing_page_comes_when_every_scene_is_answered(
     small_dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
     session = _session(small_dataset, tmp_path, registry)
-    client = TestClient(human_app(session))
+    client = TestClient(human_app(session), base_url=LOCAL)
     for _ in session.order:
         assert client.post("/answer", data=_valid_form(client)).status_code == 200
     assert 'id="done"' in client.get("/").text and session.next_scene() is None
@@ -157,7 +159,10 @@ def test_a_huge_post_is_refused_before_it_is_read_whole(
     scope = {
         "type": "http", "method": "POST", "path": "/answer", "raw_path": b"/answer",
         "query_string": b"", "root_path": "", "scheme": "http", "http_version": "1.1",
-        "headers": [(b"content-type", b"application/x-www-form-urlencoded")],
+        "headers": [
+            (b"host", b"127.0.0.1:8765"),
+            (b"content-type", b"application/x-www-form-urlencoded"),
+        ],
         "server": ("127.0.0.1", 8765), "client": ("127.0.0.1", 50000),
     }  # fmt: skip
     asyncio.run(app(scope, receive, send))

@@ -16,7 +16,8 @@ MODEL = 2  # litellm_model, after baseline_oracle and baseline_stasis
 
 
 def _client(runs: Path, registry: Registry) -> TestClient:
-    return TestClient(viewer_app(Viewer.load([runs], registry)), raise_server_exceptions=False)
+    app = viewer_app(Viewer.load([runs], registry))
+    return TestClient(app, base_url="http://127.0.0.1", raise_server_exceptions=False)
 
 
 def test_a_hand_edited_attempts_log_is_shown_not_a_500(runs: Path, registry: Registry) -> None:
