@@ -27,16 +27,9 @@ _BASELINE_HATCHES = ["//", "..", "xx", "\\\\"]
 _BASELINE_MARKERS = ["s", "^", "D", "v"]
 
 
-def literal(text: str) -> str:
-    """``text`` drawn as written: matplotlib reads text between two ``$`` as TeX math, so a run
-    or title such as ``a$\\frac{$`` stopped the report and ``$x$`` came out in italics; every
-    ``$`` is escaped."""
-    return text.replace("$", r"\$")
-
-
 def label(run: str, baseline: bool) -> str:
-    """Display name of a run in a chart (:func:`literal`); baselines are marked."""
-    return literal(f"{run} [baseline]" if baseline else run)
+    """Display name of a run in a chart; baselines are marked."""
+    return f"{run} [baseline]" if baseline else run
 
 
 def names_of(frame: pd.DataFrame) -> list[str]:
@@ -45,21 +38,55 @@ def names_of(frame: pd.DataFrame) -> list[str]:
     return [label(str(run), bool(baseline)) for run, baseline in pairs]
 
 
-def figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, Any]:
+def figure(nrows: int, ncols: int, size: tuple[float, float], dpi: int = 110) -> tuple[Figure, Any]:
     """A constrained-layout figure with a grid of axes. Nothing global: no pyplot, and the
     process's backend is left alone (``savefig`` draws PNG with Agg whatever it is)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=size, dpi=110, layout="constrained")
+    fig = Figure(figsize=size, dpi=dpi, layout="constrained")
     axes = fig.subplots(nrows, ncols, squeeze=False)
     return fig, axes
 
 
 def png(fig: Figure) -> bytes:
-    """The figure as PNG bytes."""
+    """The figure as PNG bytes, its texts drawn as written (:func:`_as_written`)."""
+    _as_written(fig)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png")
     return buffer.getvalue()
+
+
+def _as_written(fig: Figure) -> None:
+    """Draw every text of ``fig`` as written. matplotlib reads text between two ``$`` as TeX
+    math, so a run or title such as ``a$\\frac{$`` stopped the report and ``$x$`` came out in
+    italics; names, titles and plugins' own texts are shown as they are. Math stays on for the
+    numbers tick formatters write (a log axis's ``$\\mathdefault{10^{-3}}$``), and it is set on
+    each text, not in ``rcParams``, which belong to the calling program."""
+    from matplotlib.text import Text
+
+    numbers = _formatted(fig)
+    for text in fig.findobj(Text):
+        if text not in numbers:
+            text.set_parse_math(False)
+
+
+def _formatted(fig: Figure) -> set[Any]:
+    """The texts of ``fig`` that matplotlib's number formatters write: offsets and tick labels,
+    except labels given as strings (``set_yticks(ys, names)`` makes a ``FuncFormatter``
+    returning them, ``set_ticklabels`` alone a ``FixedFormatter``)."""
+    from matplotlib.ticker import FixedFormatter, FuncFormatter
+
+    found: set[Any] = set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            found.add(axis.offsetText)
+            for ticks, formatter in (
+                (axis.get_major_ticks(), axis.get_major_formatter()),
+                (axis.get_minor_ticks(), axis.get_minor_formatter()),
+            ):
+                if not isinstance(formatter, (FixedFormatter, FuncFormatter)):
+                    found.update(t for tick in ticks for t in (tick.label1, tick.label2))
+    return found
 
 
 def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
@@ -136,8 +163,8 @@ def leaderboards(
         not_asked = [run for run in missing if run in others]
         note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
         note += f"\nnot asked: {', '.join(not_asked)}" if not_asked else ""
-        ax.set_xlabel(literal(xlabel + note), fontsize=8)
-        ax.set_title(literal(titles.get(metric, metric)), fontsize=10)
+        ax.set_xlabel(xlabel + note, fontsize=8)
+        ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)
     return png(fig)
 

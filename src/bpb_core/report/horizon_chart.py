@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from bpb_core.report.charts import figure, label, literal, png, run_styles
+from bpb_core.report.charts import figure, label, png, run_styles
 from bpb_core.results.completeness import level
 
 if TYPE_CHECKING:
@@ -65,7 +65,7 @@ def accuracy_by_horizon(
         ax.set_visible(False)
     for ax, (name, data) in zip(axes.flat, panels.items(), strict=False):
         _panel(ax, data, runs, horizons, styles, min_complete)
-        ax.set_title(literal(titles.get(name, name)), fontsize=9)
+        ax.set_title(titles.get(name, name), fontsize=9)
     fig.suptitle(f"Accuracy by horizon ({view})", fontsize=10)
     handles = [_handle(styles[r], label(r, _is_baseline(accuracy, r))) for r in runs]
     fig.legend(

@@ -12,7 +12,7 @@ from PIL import Image
 
 from bpb_core.bench import sim_report
 from bpb_core.bench.contestants import parse_contestant
-from bpb_core.bench.sim import bench_simulators
+from bpb_core.bench.sim import SimBench, SimRow, bench_simulators
 from bpb_core.errors import BadInput, UnknownName
 from bpb_core.hookspecs import hookimpl
 from bpb_core.registration import SceneFamilyInfo, SimulatorInfo
@@ -251,3 +251,18 @@ def test_parallel_simulate_lines_stop_at_a_bad_file_with_the_lines_before_it(
                 got.append(line)
         assert got == good[:bad]
         paths[bad].write_text(scenes[bad].model_dump_json())
+
+
+def test_the_speed_chart_draws_dollar_names_as_written(tmp_path: Path) -> None:
+    """Simulator specs and family names are the user's and the plugins' text: ``$`` in them
+    is no TeX formula (an invalid one stopped ``bpb bench sim`` at the plot)."""
+    row = {"ms_per_scene": 2.0, "max_error": 1e-6, "median_error": 1e-9, "counts": {}}
+    rows = [
+        SimRow("exact", **(row | {"max_error": 0.0}), reference=True),
+        SimRow("sim:mode=$\\frac{$", **row),
+        SimRow("other $x$", **(row | {"ms_per_scene": 20.0})),
+    ]
+    result = SimBench("fam $y$", 2, 0, "", "", (), rows)
+    sim_report.plot(result, tmp_path / "bench.png")
+    with Image.open(tmp_path / "bench.png") as image:
+        assert image.format == "PNG" and image.size[0] >= 1000
