@@ -11,12 +11,12 @@ import csv
 import hashlib
 import json
 import math
-import re
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.checksums import inside, parse_line, read_scene_model
 from bpb_core.dataset.hf_import import SIDE, resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.dataset.scene_entry import DatasetScene
@@ -89,11 +89,11 @@ class Dataset:
 
     def scene(self, key: SceneKey) -> Any:
         """The scene's ``init.json``, read with the family's scene model."""
-        return read_model(self.path(key, INIT), self.family.scene_model)
+        return read_scene_model(self.path(key, INIT), self.family.scene_model)
 
     def truth(self, key: SceneKey) -> Any:
         """The scene's ``final.json`` (ground truth), read with the family's truth model."""
-        return read_model(self.path(key, FINAL), self.family.truth_model)
+        return read_scene_model(self.path(key, FINAL), self.family.truth_model)
 
     def verify(self) -> list[str]:
         """What differs from the dataset as it was generated: files whose SHA-256 differs from
@@ -116,7 +116,7 @@ class Dataset:
             problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
         for name, digest in sorted(self.manifest.files.items()):
             target = self.root / name
-            if not _inside(name):
+            if not inside(name):
                 problems.append(f"{MANIFEST}: files: {name!r} is not a path inside the dataset")
             elif not target.is_file():
                 problems.append(f"{name}: missing")
@@ -131,12 +131,13 @@ class Dataset:
                 f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}"
             ) from None
         for number, line in enumerate(lines, 1):
-            digest, _, rel = line.partition("  ")
-            if not (_SHA256.fullmatch(digest) and _inside(rel)):
+            entry = parse_line(line)
+            if entry is None:
                 problems.append(
                     f"{CHECKSUMS}: line {number}: not '<sha256>  <path inside the dataset>'"
                 )
                 continue
+            digest, rel = entry
             if carried is not None and PurePosixPath(rel).name not in carried:
                 continue
             target = self.root / rel
@@ -158,15 +159,6 @@ class Dataset:
             )
         image = self.family.input_image if self.manifest.images else None
         return {INIT, FINAL} | ({image} if image else set())
-
-
-_SHA256 = re.compile(r"[0-9a-f]{64}")
-
-
-def _inside(rel: str) -> bool:
-    """Whether ``rel`` names a file inside the dataset (relative, no ``..``, not empty)."""
-    path = PurePosixPath(rel)
-    return bool(rel) and not path.is_absolute() and ".." not in path.parts and "\\" not in rel
 
 
 def dataset_keys(root: Path) -> list[SceneKey]:

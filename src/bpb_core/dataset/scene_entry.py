@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.checksums import check_recorded, read_scene_model
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INIT, SceneKey
-from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -51,14 +51,14 @@ class DatasetScene:
     def state(self) -> Any:
         """The initial state: ``init.json`` read with the family's scene model."""
         if INIT not in self._cache:
-            self._cache[INIT] = read_model(self.folder / INIT, self.family.scene_model)
+            self._cache[INIT] = read_scene_model(self.folder / INIT, self.family.scene_model)
         return self._cache[INIT]
 
     @property
     def truth(self) -> Any:
         """The ground truth: ``final.json`` read with the family's truth model."""
         if FINAL not in self._cache:
-            self._cache[FINAL] = read_model(self.folder / FINAL, self.family.truth_model)
+            self._cache[FINAL] = read_scene_model(self.folder / FINAL, self.family.truth_model)
         return self._cache[FINAL]
 
     @property
@@ -92,10 +92,11 @@ class DatasetScene:
         return self.folder / name
 
     def image_bytes(self, kind: str = INPUT) -> bytes:
-        """The bytes of :meth:`image_path`, checked to be a whole image (:func:`check_image`).
+        """The bytes of :meth:`image_path`, checked to be a whole image (:func:`check_image`)
+        and the generated one (:func:`~bpb_core.dataset.checksums.check_recorded`).
 
         Raises:
-            BadInput: No such kind, or the file is missing, truncated or damaged.
+            BadInput: No such kind, or the file is missing, truncated, damaged or changed.
         """
         path = self.image_path(kind)
         try:
@@ -103,6 +104,7 @@ class DatasetScene:
         except OSError as exc:
             raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
         check_image(path, data)
+        check_recorded(path, data)
         return data
 
 

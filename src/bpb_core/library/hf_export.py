@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.checksums import read_scene_file
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset
@@ -218,8 +219,8 @@ def _row(
         "stable": scene.stable,
         "stability": None if stability is None else stability.model_dump_json(),
         "metadata": json.dumps(cells),
-        "scene": (scene.folder / INIT).read_bytes().decode("utf-8"),
-        "truth": (scene.folder / FINAL).read_bytes().decode("utf-8"),
+        "scene": read_scene_file(scene.folder / INIT).decode("utf-8"),
+        "truth": read_scene_file(scene.folder / FINAL).decode("utf-8"),
     }
 
 

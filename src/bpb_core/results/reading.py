@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
+from bpb_core.dataset.checksums import check_recorded
 from bpb_core.dataset.reader import dataset_family, dataset_keys
 from bpb_core.errors import BadInput
 from bpb_core.layout import (
@@ -239,15 +240,19 @@ def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any)
     immutable once written).
 
     Raises:
-        BadInput: A file is missing or invalid (names the scene folder).
+        BadInput: A file is missing or invalid (names the scene folder), or changed after the
+            dataset was generated (names the file).
     """
     folder = key.dir(dataset)
     try:
-        scene = scene_model.model_validate_json((folder / INIT).read_bytes())
-        truth = truth_model.model_validate_json((folder / FINAL).read_bytes())
+        scene_bytes, truth_bytes = (folder / INIT).read_bytes(), (folder / FINAL).read_bytes()
+        scene = scene_model.model_validate_json(scene_bytes)
+        truth = truth_model.model_validate_json(truth_bytes)
     except OSError as exc:
         raise BadInput(f"{folder}: cannot read ground truth: {exc}") from None
     except ValidationError as exc:
         problem = describe_validation_error(exc)
         raise BadInput(f"{folder}: invalid scene or ground truth: {problem}") from None
+    check_recorded(folder / INIT, scene_bytes)
+    check_recorded(folder / FINAL, truth_bytes)
     return scene, truth

@@ -12,11 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.checksums import check_recorded, read_scene_model
 from bpb_core.dataset.reader import dataset_keys, manifest_data
 from bpb_core.dataset.scene_entry import check_image
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
-from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -38,15 +38,17 @@ class SceneRef:
         """Read and validate ``init.json`` with the family's scene model.
 
         Raises:
-            BadInput: The file is missing or invalid (names the file and the field).
+            BadInput: The file is missing, invalid (names the file and the field) or changed
+                after generation (:mod:`bpb_core.dataset.checksums`).
         """
-        return read_model(self.folder / INIT, self.family.scene_model)
+        return read_scene_model(self.folder / INIT, self.family.scene_model)
 
     def image(self) -> bytes:
         """The bytes of the family's input image.
 
         Raises:
-            BadInput: The image is missing (image input modes need it), truncated or damaged.
+            BadInput: The image is missing (image input modes need it), truncated, damaged or
+                changed after generation.
         """
         name = self.family.input_image
         if name is None:
@@ -60,6 +62,7 @@ class SceneRef:
         except OSError:
             raise BadInput(f"{path}: missing; use --input-mode state for text-only runs") from None
         check_image(path, data)
+        check_recorded(path, data)
         return data
 
 

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from PIL import Image
 
 from bpb_core.dataset import load_dataset
 from bpb_core.errors import BadInput
@@ -260,3 +261,64 @@ def test_verify_reads_no_file_outside_the_dataset_and_names_bad_checksum_lines(
         f"checksums.sha256: line {n + 1}: not '<sha256>  <path inside the dataset>'",
         f"checksums.sha256: line {n + 2}: not '<sha256>  <path inside the dataset>'",
     ]
+
+
+def edit_label(path: Path) -> None:
+    """Change one answer of ``path`` (a valid file still: only its checksum can tell)."""
+    text = path.read_text()
+    edited = text.replace('"answer": "T"', '"answer": "F"', 1)
+    path.write_text(edited if edited != text else text.replace('"answer": "F"', '"answer": "T"', 1))
+
+
+CHANGED = "changed after the dataset was generated (its hash differs from"
+
+
+def test_a_report_refuses_ground_truth_edited_after_the_run_instead_of_scoring_on_it(
+    copy: Path, tmp_path: Path
+) -> None:
+    # An edited final.json that still validated was scored as if it were the dataset's truth.
+    assert _run_h1(copy, tmp_path).returncode == 0
+    final = copy / "h1" / "scene_0000" / "final.json"
+    edit_label(final)
+    done = subprocess.run(
+        [BPB, "report", str(tmp_path / "r")], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 2, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"error: {final}: {CHANGED}"), done.stderr
+
+
+def test_a_run_export_and_library_refuse_an_edited_scene_file(copy: Path, tmp_path: Path) -> None:
+    scene = copy / "h1" / "scene_0001" / "init.json"
+    scene.write_text(scene.read_text() + "\n")
+    done = _run_h1(copy, tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert f"{scene}: {CHANGED}" in " ".join(done.stderr.split()), done.stderr
+    assert not list((tmp_path / "r").rglob("scene_0001/*.json")), "the edited scene was not asked"
+    export = subprocess.run(
+        [BPB, "export", str(copy), "--out", str(tmp_path / "hf"), "--tasks", "q1"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert export.returncode == 2, export.stderr
+    assert CHANGED in " ".join(export.stderr.split())
+    with pytest.raises(BadInput, match="changed after the dataset was generated"):
+        _ = load_dataset(copy)["h1_0001"].state
+    image = copy / "h1" / "scene_0002" / "init.png"
+    with Image.open(image) as picture:  # a whole, valid PNG with one pixel changed
+        edited = picture.copy()
+    edited.putpixel((0, 0), (edited.getpixel((0, 0)) + 1) % 256)  # type: ignore[operator]
+    edited.save(image)
+    with pytest.raises(BadInput, match=f"{image}: changed after"):
+        load_dataset(copy)["h1_0002"].image_bytes()
+
+
+def test_edited_files_are_used_once_checksums_are_removed(copy: Path, tmp_path: Path) -> None:
+    # The way out the message names: a hand-edited dataset without checksums.sha256 is read
+    # unchecked, like a folder of hand-made scenes.
+    edit_label(copy / "h1" / "scene_0000" / "final.json")
+    (copy / "checksums.sha256").unlink()
+    assert _run_h1(copy, tmp_path).returncode == 0
+    done = subprocess.run(
+        [BPB, "report", str(tmp_path / "r")], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
