@@ -32,6 +32,7 @@ from bpb_core.results.tables import (
 )
 from bpb_core.results.uncertainty import all_pairs, bootstrap_ci
 from bpb_core.results.usage import usage
+from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, Scorer
@@ -102,9 +103,10 @@ def report_parts(
         scorers = {task: registry.scorer_for(task) for task in part.tasks}
         infos = registry.entries("diagnostic")
         origins = {d.name: infos[d.name].origin for d in diagnostics if d.name in infos}
+        scored_by = {task: registry.scorer_entry(task).origin for task in scorers}
         tables = report_tables(
             part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness,
-            scorers=scorers, origins=origins,
+            scorers=scorers, origins=origins, scorer_origins=scored_by,
         )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
         notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
@@ -138,6 +140,7 @@ def report_tables(
     completeness: Completeness | None = None,
     scorers: Mapping[str, Scorer] | None = None,
     origins: Mapping[str, str] | None = None,
+    scorer_origins: Mapping[str, str] | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Every table of a report, derived from ``results`` (nothing is written or printed).
 
@@ -146,7 +149,8 @@ def report_tables(
     short); bootstrap intervals are blanked where the leaderboard is; paired comparisons use
     the scenes both runs answered. A scorer that :class:`~bpb_core.capabilities.ReportsMetrics`
     adds the table ``<task>_metrics``. ``origins`` names who supplied each diagnostic, for
-    the :class:`~bpb_core.errors.PluginBug` raised when one fails or returns no DataFrame.
+    the :class:`~bpb_core.errors.PluginBug` raised when one fails or returns no DataFrame;
+    ``scorer_origins`` names who supplied each task's scorer, for its ``task_metrics``.
     """
     rule = completeness or Completeness()
     units, calls, suites = results.units, results.calls, results.suites
@@ -175,7 +179,10 @@ def report_tables(
         tables[diagnostic.name] = _with_completeness(_table(diagnostic, origin, results), done)
     for task, scorer in (scorers or {}).items():
         if isinstance(scorer, ReportsMetrics):
-            table = task_metrics(units, task, scorer, tables["leaderboard_answered"], rule)
+            origin = (scorer_origins or {}).get(task) or object_origin(scorer)
+            table = task_metrics(
+                units, task, scorer, tables["leaderboard_answered"], rule, origin=origin
+            )
             tables[f"{task}_metrics"] = _with_completeness(table, done)
     return tables
 
@@ -186,16 +193,39 @@ def task_metrics(
     scorer: ReportsMetrics,
     board: pd.DataFrame,
     rule: Completeness,
+    *,
+    origin: str = "",
 ) -> pd.DataFrame:
     """A scorer's metrics on the task's answered units, blanked (NaN) for runs whose task the
-    leaderboard left out."""
+    leaderboard left out.
+
+    Raises:
+        PluginBug: ``task_metrics`` raised or returned no DataFrame with the run columns and
+            one column per metric, naming ``origin`` (who supplied the scorer).
+    """
     answered = units[(units["task"] == task) & ~units["status"].isin(UNANSWERED)]
-    table = scorer.task_metrics(answered)
+    table = _metrics(scorer, origin or object_origin(scorer), answered)
     if not rule.include_incomplete:
         short = board.set_index("run")["short"].astype(str)
         left_out = [task in short.get(str(run), "").split(", ") for run in table["run"]]
         table.loc[left_out, list(scorer.metric_notes)] = np.nan
     return table
+
+
+def _metrics(scorer: ReportsMetrics, origin: str, answered: pd.DataFrame) -> pd.DataFrame:
+    what = f"scorer {getattr(scorer, 'name', type(scorer).__name__)!r}: task_metrics()"
+    with blamed(origin, what):
+        table = scorer.task_metrics(answered)
+    wanted = [*RUN_COLUMNS, *scorer.metric_notes]
+    if isinstance(table, pd.DataFrame) and set(wanted) <= set(table.columns):
+        return table
+    got = type(table).__name__
+    if isinstance(table, pd.DataFrame):
+        got = f"a DataFrame with columns {list(table.columns)}"
+    raise PluginBug(
+        f"{origin}: {what} returned {got}; expected a DataFrame with the columns "
+        f"{', '.join(wanted)}"
+    )
 
 
 def _with_completeness(table: pd.DataFrame, done: pd.Series) -> pd.DataFrame:

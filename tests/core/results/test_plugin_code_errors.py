@@ -3,7 +3,9 @@ naming the plugin (not an internal error from deep inside pandas).
 
 The same checks guard every caller of a scorer: load_results and bpb report, the library's
 score_answer and mark, bpb bench score, and bpb view (the gallery's explain and overlay too);
-before, the last ones called the scorer unchecked."""
+before, the last ones called the scorer unchecked. A report's task_metrics (a scorer that
+ReportsMetrics) was unchecked too: a list or a frame without the metric columns came out as an
+internal TypeError or KeyError."""
 
 from __future__ import annotations
 
@@ -92,6 +94,18 @@ class FlawedScorer:
         if FLAW["now"] == "overlay_raise":
             raise RuntimeError("overlay exploded")
 
+    metric_notes: ClassVar[dict[str, str]] = {"n_share": "the share of n right"}
+
+    def task_metrics(self, units: pd.DataFrame) -> Any:
+        if FLAW["now"] == "metrics_raise":
+            raise RuntimeError("metrics exploded")
+        if FLAW["now"] == "metrics_type":
+            return [0.5]
+        runs = units[["run", "adapter", "model", "baseline"]].drop_duplicates()
+        if FLAW["now"] == "metrics_columns":
+            return runs
+        return runs.assign(n_share=0.5)
+
 
 class FlawedDiagnostic:
     name = "brk_diag"
@@ -172,6 +186,28 @@ def test_a_flawed_diagnostic_is_named(answered: tuple[Any, Path], flaw: str, sai
     with pytest.raises(PluginBug) as info:
         report_parts(results, registry, n_boot=10)
     assert str(info.value) == f"{ORIGIN}: {said}"
+
+
+@pytest.mark.parametrize(
+    ("flaw", "said"),
+    [
+        ("metrics_raise", "task_metrics() raised RuntimeError: metrics exploded"),
+        ("metrics_type", "task_metrics() returned list; expected a DataFrame with the columns "
+         "run, adapter, model, baseline, n_share"),
+        ("metrics_columns", "task_metrics() returned a DataFrame with columns ['run', 'adapter', "
+         "'model', 'baseline']; expected a DataFrame with the columns run, adapter, model, "
+         "baseline, n_share"),
+    ],
+)  # fmt: skip
+def test_a_flawed_task_metrics_is_named(answered: tuple[Any, Path], flaw: str, said: str) -> None:
+    registry, run = answered
+    results = load_results([run], registry=registry)
+    good = report_parts(results, registry, n_boot=10)[0].tables["brk_metrics"]
+    assert good["n_share"].eq(0.5).all()
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        report_parts(results, registry, n_boot=10)
+    assert str(info.value) == f"{ORIGIN}: scorer 'brk': {said}"
 
 
 SCORER_FLAWS = [
