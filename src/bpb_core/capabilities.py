@@ -32,6 +32,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from bpb_core.errors import PluginBug, blamed
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -102,6 +104,27 @@ class Predicting(Protocol):
     def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
         """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
         ...
+
+
+def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: random.Random) -> Any:
+    """``family.predict(name, scene, rng)``, checked: an instance of the family's
+    ``truth_model``, since what takes it next (a task's ``expected``) would fail on anything
+    else and be blamed for it.
+
+    Raises:
+        PluginBug: The family raised or returned something else, naming ``origin`` (who
+            supplied it) and the family.
+    """
+    what = f"scene family {getattr(family, 'name', type(family).__name__)!r}: predict({name!r})"
+    with blamed(origin, what):
+        truth = family.predict(name, scene, rng)
+    model = getattr(family, "truth_model", None)
+    if not isinstance(model, type) or isinstance(truth, model):
+        return truth
+    raise PluginBug(
+        f"{origin}: {what} returned {type(truth).__name__}; expected {model.__name__} "
+        "(the family's truth_model)"
+    )
 
 
 @runtime_checkable

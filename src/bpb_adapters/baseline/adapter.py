@@ -17,7 +17,7 @@ import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Perceiving, Predicting
+from bpb_core.capabilities import Perceiving, Predicting, prediction
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
@@ -134,8 +134,7 @@ class BaselineAdapter(PluginLookup):
         if why is not None:
             raise RequestRejected(f"{self.name}: {why}")
         assert isinstance(family, Predicting)
-        with blamed(origin, f"scene family {name!r}: predict({self.model!r})"):
-            return family.predict(self.model, request.scene, rng)
+        return prediction(family, origin, self.model, request.scene, rng)
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the scene in ``request`` (baselines never read the prompt)."""

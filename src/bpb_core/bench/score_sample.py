@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from bpb_core.capabilities import Predicting
+from bpb_core.capabilities import Predicting, prediction
 from bpb_core.errors import BadInput, blamed
 from bpb_core.scored_units import UnitRow, input_frame, scored_units, unit_rows
 
@@ -121,10 +121,11 @@ def sample_units(
     dataset = load_dataset(data, registry=registry)
     objects = {name: registry.task(name) for name in tasks}
     cases: dict[str, list[Case]] = {name: [] for name in tasks}
+    predictor_origin = registry.origin("scene_family", family)
     for entry in dataset:
         key, scene, truth = entry.key, entry.state, entry.truth
         rng = random.Random(f"bench-score:{seed}:{key.horizon!r}:{key.index}")
-        outcomes = _outcomes(dataset.family, scene, truth, rng)
+        outcomes = _outcomes(dataset.family, predictor_origin, scene, truth, rng)
         for name, task in objects.items():
             origin = registry.origin("task", name)
             cases[name] += _answers(task, origin, outcomes, truth, scene, rng)
@@ -136,11 +137,11 @@ def sample_units(
     return samples
 
 
-def _outcomes(family: Any, scene: Any, truth: Any, rng: random.Random) -> list[Any]:
+def _outcomes(family: Any, origin: str, scene: Any, truth: Any, rng: random.Random) -> list[Any]:
     """The truth, each predictor's guess and the truth again (to be corrupted)."""
     guesses = []
     if isinstance(family, Predicting):
-        guesses = [family.predict(name, scene, rng) for name in family.predictors]
+        guesses = [prediction(family, origin, name, scene, rng) for name in family.predictors]
     return [truth, *guesses, truth]
 
 

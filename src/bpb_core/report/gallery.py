@@ -12,15 +12,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from bpb_core.capabilities import DrawsOverlay, ExplainsErrors, Picturing
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.layout import SceneKey
+from bpb_core.picture import ScenePicture
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.tables import scene_scores
+from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Scorer
@@ -135,13 +137,26 @@ def drawing(
     if not isinstance(run.family, Picturing):
         return b""
     scene, _ = run.truth(key)
-    picture = run.family.picture(run.dataset, key.dir(run.dataset), scene)
+    picture = _picture(run.family, run, key, scene)
     for task, task_rows in rows.items():
         scorer = scorers[task]
         if isinstance(scorer, DrawsOverlay):
             with blamed(_origin(origins, task), f"scorer {_name(scorer)!r}: overlay()"):
                 scorer.overlay(picture, task_rows)
     return picture.png()
+
+
+def _picture(family: Picturing, run: RunFolder, key: SceneKey, scene: Any) -> ScenePicture:
+    """The run's family's ``picture``, checked: a :class:`~bpb_core.picture.ScenePicture`."""
+    origin = run.family_origin or object_origin(family)
+    what = f"scene family {_name(family)!r}: picture()"
+    with blamed(origin, what):
+        picture = family.picture(run.dataset, key.dir(run.dataset), scene)
+    if isinstance(picture, ScenePicture):
+        return picture
+    raise PluginBug(
+        f"{origin}: {what} returned {type(picture).__name__}; expected bpb_core.ScenePicture"
+    )
 
 
 def _origin(origins: Mapping[str, str] | None, task: str) -> str:

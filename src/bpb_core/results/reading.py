@@ -34,6 +34,7 @@ from bpb_core.layout import (
 )
 from bpb_core.model_calls import valid_unicode
 from bpb_core.run_folder import live_run, read_manifest as read_run_manifest
+from bpb_core.scored_units import object_origin
 from bpb_core.validated_files import describe_validation_error
 
 if TYPE_CHECKING:
@@ -62,6 +63,8 @@ class RunFolder:
     epochs: int = 1
     live: str | None = field(default=None, compare=False)
     """The pid of a ``bpb run`` still running in the folder when it was read, else ``None``."""
+    family_origin: str = field(default="", compare=False, repr=False)
+    """Who supplied :attr:`family` (``Registered.origin``), for one-line plugin errors."""
 
     @property
     def baseline(self) -> bool:
@@ -157,7 +160,7 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     model = valid_unicode(str(manifest.get("model_id") or manifest.get("model") or adapter))
     dataset = _dataset_path(manifest, path)
     _same_dataset(manifest, dataset, path)
-    family = _family(dataset, registry)
+    family, family_origin = _family(dataset, registry)
     tasks = _option(manifest, "tasks")
     if not tasks:
         raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
@@ -170,8 +173,9 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     epochs = _option(manifest, "epochs")
     epochs = epochs if isinstance(epochs, int) and epochs >= 1 else 1
     return RunFolder(
-        path, label, adapter, model, names, dataset, keys, manifest, family, epochs, live_run(path)
-    )
+        path, label, adapter, model, names, dataset, keys, manifest, family, epochs,
+        live_run(path), family_origin,
+    )  # fmt: skip
 
 
 def _same_dataset(manifest: dict[str, Any], dataset: Path, run_path: Path) -> None:
@@ -190,8 +194,14 @@ def _same_dataset(manifest: dict[str, Any], dataset: Path, run_path: Path) -> No
         )
 
 
-def _family(dataset: Path, registry: Registry | None) -> SceneFamily:
-    return dataset_family(None, dataset, registry)
+def _family(dataset: Path, registry: Registry | None) -> tuple[SceneFamily, str]:
+    """The dataset's scene family and who supplied it."""
+    from bpb_core.registry import make_registry
+
+    registry = registry if registry is not None else make_registry()
+    family = dataset_family(None, dataset, registry)
+    entry = registry.entries("scene_family").get(family.name)
+    return family, entry.origin if entry is not None else object_origin(family)
 
 
 def _option(manifest: dict[str, Any], name: str) -> Any:

@@ -1,0 +1,132 @@
+"""A scene family's predict() or picture() that raises, or returns the wrong type, is one
+PluginBug naming the family's plugin (exit 3 in the CLI), wherever bpb calls it.
+
+Before, bpb bench score called predict() unchecked (a raise came out as a bare RuntimeError), and
+a prediction of the wrong type, in bench score and in the baseline adapter, was blamed on the
+task whose expected() choked on it; the failure gallery of bpb report and bpb view called
+picture() unchecked (a RuntimeError, or "AttributeError: 'bytes' object has no attribute
+'png'")."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import support.flawed_family
+from bpb_adapters.baseline.adapter import BaselineAdapter
+from bpb_core import ModelResponse, Usage
+from bpb_core.bench.score_sample import sample_units
+from bpb_core.dataset import generate_dataset
+from bpb_core.errors import PluginBug
+from bpb_core.registry import PluginSource, Registry, make_registry
+from bpb_core.report.build import build_report
+from bpb_core.runner import RunOptions, run_eval
+from bpb_core.web.viewer import Viewer
+
+ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
+FAMILY = "scene family 'flawed'"
+PREDICT_FLAWS = [
+    ("predict_raise", "predict('stasis') raised RuntimeError: predict exploded"),
+    ("predict_type", "predict('stasis') returned dict; expected FinalState (the family's "
+     "truth_model)"),
+]  # fmt: skip
+PICTURE_FLAWS = [
+    ("picture_raise", "picture() raised RuntimeError: picture exploded"),
+    ("picture_type", "picture() returned bytes; expected bpb_core.ScenePicture"),
+]
+
+
+def _registry() -> Registry:
+    source = PluginSource("flawed", "bpb-flawed", "1.2", "flawed_family")
+    return make_registry([(support.flawed_family, source)])
+
+
+@pytest.fixture(scope="module")
+def flawed_data(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two scenes of the ``flawed`` family, with images."""
+    out = tmp_path_factory.mktemp("flawed") / "data"
+    return generate_dataset(out, 2, (1.0,), 0, family="flawed", workers=1, registry=_registry())
+
+
+class WrongBalls:
+    """Always a wrong count, so every scene is in the failure gallery."""
+
+    name = "wrong:balls"
+
+    async def complete(self, request: Any) -> ModelResponse:
+        return ModelResponse('{"balls": 99}', Usage(), None, 0.0, "wrong")
+
+
+@pytest.fixture(scope="module")
+def wrong_run(flawed_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    run = tmp_path_factory.mktemp("flawed") / "wrong"
+    options = RunOptions(tasks=("balls",), limit=1)
+    run_eval(flawed_data, WrongBalls(), run, options, registry=_registry())
+    return run
+
+
+@pytest.mark.parametrize(("flaw", "said"), PREDICT_FLAWS)
+def test_bench_score_names_a_flawed_predict(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, flaw: str, said: str
+) -> None:
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        sample_units(_registry(), "flawed", ["balls"], tmp_path / "data", per_horizon=1)
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+@pytest.mark.parametrize(("flaw", "said"), PREDICT_FLAWS)
+def test_the_baseline_names_a_flawed_predict(
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path, tmp_path: Path, flaw: str, said: str
+) -> None:
+    registry = _registry()
+    adapter = BaselineAdapter("baseline:stasis", "stasis", _registry=registry)
+    options = RunOptions(tasks=("balls",), limit=1, concurrency=1)
+    good = run_eval(flawed_data, adapter, tmp_path / "good", options, registry=registry)
+    assert good.statuses["balls"]["ok"] == 1
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        run_eval(flawed_data, adapter, tmp_path / "run", options, registry=registry)
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+@pytest.mark.parametrize(("flaw", "said"), PICTURE_FLAWS)
+def test_the_gallery_names_a_flawed_picture(
+    monkeypatch: pytest.MonkeyPatch, wrong_run: Path, tmp_path: Path, flaw: str, said: str
+) -> None:
+    built = build_report([wrong_run], tmp_path / "good", registry=_registry(), n_boot=10)
+    assert "data:image/png;base64," in built.files["html"].read_text()  # the scene was drawn
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        build_report([wrong_run], tmp_path / "report", registry=_registry(), n_boot=10)
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+@pytest.mark.parametrize(("flaw", "said"), PICTURE_FLAWS)
+def test_bpb_view_names_a_flawed_picture(
+    monkeypatch: pytest.MonkeyPatch, wrong_run: Path, flaw: str, said: str
+) -> None:
+    viewer = Viewer.load([wrong_run], _registry())
+    scene_id = json.loads(next(wrong_run.rglob("balls.json")).read_text())["scene_id"]
+    assert viewer.overlay(0, scene_id, "balls").startswith(b"\x89PNG")
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        viewer.overlay(0, scene_id, "balls")
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+def test_bpb_report_is_one_line_naming_the_family_plugin_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, wrong_run: Path, tmp_path: Path
+) -> None:
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    monkeypatch.setenv("BPB_TEST_FLAW", "picture_raise")
+    done = run_bpb("report", str(wrong_run), "--out", str(tmp_path / "report"), "--bootstrap", "10")
+    assert done.returncode == 3
+    assert done.stderr.strip().splitlines() == [
+        f"error: {ORIGIN}: {FAMILY}: picture() raised RuntimeError: picture exploded "
+        "(set BPB_DEBUG=1 for a traceback)"
+    ]

@@ -1,0 +1,98 @@
+"""A third-party plugin whose scene family breaks its contract on demand: the billiards family
+renamed ``flawed``, with one task and scorer about it.
+
+``BPB_TEST_FLAW`` (read at each call, so a test sets it in its own environment or that of a
+``bpb`` subprocess) picks the flaw: ``predict_raise``, ``predict_type`` (a dict, not the
+family's truth model), ``picture_raise``, ``picture_type`` (PNG bytes, not a ScenePicture).
+The module is self-contained: tests install its source as a real distribution.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+from pathlib import Path
+from typing import Any, ClassVar
+
+import pandas as pd
+
+from bpb_core import ParseFailure, SceneFamilyInfo, ScorerInfo, TaskInfo, UnitRow, hookimpl
+from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.questions.question import BilliardsQuestion
+
+
+def _flaw() -> str:
+    return os.environ.get("BPB_TEST_FLAW", "")
+
+
+class FlawedFamily(BilliardsFamily):
+    name = "flawed"
+
+    def load_config(self, source: Any) -> Any:
+        return super().load_config(source).model_copy(update={"family": self.name})
+
+    def predict(self, name: str, scene: Any, rng: random.Random) -> Any:
+        if _flaw() == "predict_raise":
+            raise RuntimeError("predict exploded")
+        if _flaw() == "predict_type":
+            return {"balls": []}
+        return super().predict(name, scene, rng)
+
+    def picture(self, dataset: Path, folder: Path, scene: Any) -> Any:
+        if _flaw() == "picture_raise":
+            raise RuntimeError("picture exploded")
+        if _flaw() == "picture_type":
+            return b"\x89PNG"
+        return super().picture(dataset, folder, scene)
+
+
+class BallsTask(BilliardsQuestion):
+    """How many balls are left: its expected answer reads the truth, as a real task's does."""
+
+    name: ClassVar[str] = "balls"
+    default_cot: ClassVar[bool] = False
+    title: ClassVar[str] = "Balls"
+
+    def example(self, scene: Any) -> str:
+        return '{"balls": 7}'
+
+    def question(self, scene: Any, options: Any) -> str:
+        return f"How many balls are left?\n{self.example(scene)}"
+
+    def validate(self, value: Any, scene: Any) -> dict[str, Any]:
+        if not isinstance(value, dict) or not isinstance(value.get("balls"), int):
+            raise ParseFailure("need an integer balls")
+        return {"balls": value["balls"]}
+
+    def expected(self, truth: Any) -> dict[str, Any]:
+        return {"balls": len(truth.predictions)}
+
+
+class BallsScorer:
+    name = "balls"
+    task = "balls"
+    scene_rule = "mean"
+    columns: ClassVar[dict[str, str]] = {}
+
+    def units(self, answer: Any, truth: Any, scene: Any) -> list[UnitRow]:
+        said = None if answer is None else str(answer["balls"])
+        return [UnitRow("balls", str(len(truth.predictions)), said)]
+
+    def score(self, units: pd.DataFrame) -> pd.DataFrame:
+        same = units["pred"] == units["truth"]
+        return pd.DataFrame({"correct": same, "distance": float("nan")}, index=units.index)
+
+
+@hookimpl
+def bpb_scene_families() -> list[SceneFamilyInfo]:
+    return [SceneFamilyInfo("flawed", lambda: FlawedFamily, "Billiards with flaws on demand")]
+
+
+@hookimpl
+def bpb_eval_tasks() -> list[TaskInfo]:
+    return [TaskInfo("balls", lambda: BallsTask, family="flawed")]
+
+
+@hookimpl
+def bpb_scorers() -> list[ScorerInfo]:
+    return [ScorerInfo("balls", lambda: BallsScorer, task="balls")]
