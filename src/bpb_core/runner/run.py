@@ -35,6 +35,7 @@ from bpb_core.runner.result import RunResult
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState
 from bpb_core.runner.sync import run_sync
+from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
@@ -149,7 +150,7 @@ async def _session(
         run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
     )
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
-    state.origins = _origins(registry, spec, asked.tasks)
+    state.origins = _origins(registry, spec, model, asked.tasks)
     state.config_hash, state.history = manifest["config_hash"], history
     try:
         done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
@@ -165,9 +166,13 @@ async def _session(
     return _result(state, refs, done)
 
 
-def _origins(registry: Registry, spec: str, tasks: dict[str, Task]) -> dict[str, str]:
-    """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
+def _origins(
+    registry: Registry, spec: str, model: ModelAdapter, tasks: dict[str, Task]
+) -> dict[str, str]:
+    """Who supplied each task and the adapter (``spec``), for one-line plugin errors: an
+    adapter object no plugin registers is blamed on its module (its name follows anyway)."""
     found = {name: registry.origin("task", name) for name in tasks}
+    found[spec] = object_origin(model)
     try:
         adapter = split_spec(spec)[0]
     except BadInput:  # an adapter object's own name ("buggy"), not a NAME:MODEL spec

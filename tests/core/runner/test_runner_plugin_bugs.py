@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 import pytest
 
-from bpb_core import AdapterInfo, TaskInfo, hookimpl
+from bpb_core import AdapterInfo, TaskInfo, hookimpl, run_eval as library_run_eval
 from bpb_core.errors import BadInput, PluginBug
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.runner import RunOptions, run_eval
@@ -163,3 +163,22 @@ def test_an_adapter_object_whose_complete_raises_stops_the_run(
     options = RunOptions(tasks=("q2",), limit=1)
     with pytest.raises(PluginBug, match=r"adapter 'raising:x': complete\(\) raised KeyError"):
         run_eval(dataset, RaisingAdapter(), tmp_path / "run", options, registry=registry)
+
+
+class MyWords(WordsAdapter):
+    name = "mine:x"  # no plugin registers "mine"
+
+
+@pytest.mark.parametrize(("made", "said"), [
+    (MyWords(), "adapter 'mine:x': complete() returned str; expected a bpb_core.ModelResponse "
+     "(text a str, usage a bpb_core.Usage)"),
+    (RaisingAdapter(), "adapter 'raising:x': complete() raised KeyError: 'oops'"),
+])  # fmt: skip
+def test_the_library_names_an_unregistered_adapter_object_once_by_its_module(
+    dataset: Path, tmp_path: Path, made: Any, said: str
+) -> None:
+    # before: "'mine:x': adapter 'mine:x': ..." (the name twice, and no hint where it lives)
+    options = RunOptions(tasks=("q2",), limit=1)
+    with pytest.raises(PluginBug) as info:
+        library_run_eval(dataset, made, tmp_path / "run", options, registry=make_registry())
+    assert str(info.value) == f"module {__name__!r}: {said}"
