@@ -111,3 +111,67 @@ def test_logs_read_by_two_callers_at_once(logs: Path) -> None:
         reader.join()
     assert not errors
     assert boards == [["inspect:bpbtest/example"]] * 12
+
+
+HOLDER = """
+import sys
+from pathlib import Path
+from bpb_core.registry import make_registry
+from bpb_core.web.viewer import Viewer
+
+viewer = Viewer.load([Path(sys.argv[1])], make_registry())
+print(viewer.results.runs[0].path, flush=True)
+sys.stdin.readline()  # meanwhile another process reads a newer state of the logs
+answers = list(viewer.results.runs[0].path.rglob("q1.json"))
+print(len(answers), sum(len(p.read_text()) > 0 for p in answers), flush=True)
+"""
+
+
+def _cached(cache: Path) -> list[str]:
+    return sorted(p.name for p in (cache / "inspect").iterdir() if not p.name.startswith("."))
+
+
+def test_each_new_log_replaces_the_cache_folder_unless_another_process_holds_it(
+    small_dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each reading of a log folder that had gained a log left one more cache folder (named by
+    the logs' state), so evaluations in a row accumulated them. A newer state now replaces the
+    older ones, except a folder another process still reads (bpb view, say): it stays until that
+    process lets go, and goes at the next reading."""
+    import subprocess
+    import sys
+
+    import support.inspect_models  # noqa: F401 (registers bpbtest/example)
+
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("INSPECT_DISPLAY", "none")
+    monkeypatch.setenv("BPB_CACHE_DIR", str(cache))
+    out = tmp_path / "logs"
+
+    def evaluate(name: str) -> None:
+        inspect_eval(
+            name, model="bpbtest/example", task_args={"data": str(small_dataset)}, log_dir=str(out)
+        )
+
+    evaluate("bpb/q1")
+    assert sorted(load_results([out]).tasks) == ["q1"]
+    first = _cached(cache)
+    assert len(first) == 1
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(out)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert holder.stdout is not None and holder.stdin is not None
+    held = Path(holder.stdout.readline().strip())
+    assert held.parent.name == first[0]
+    evaluate("bpb/q2")
+    assert sorted(load_results([out]).tasks) == ["q1", "q2"]
+    assert len(_cached(cache)) == 2 and first[0] in _cached(cache)  # still read by the holder
+    reading, _ = holder.communicate("\n", timeout=120)
+    assert holder.returncode == 0
+    assert reading.split() == ["6", "6"]  # every answer file still there for the holder
+    assert sorted(load_results([out]).tasks) == ["q1", "q2"]
+    assert len(_cached(cache)) == 1 and first[0] not in _cached(cache)
+    evaluate("bpb/q1")  # a third evaluation in a row: still one folder
+    load_results([out])
+    assert len(_cached(cache)) == 1

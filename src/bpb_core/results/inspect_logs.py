@@ -5,8 +5,9 @@ A log of a bpb task records in its task metadata the dataset (``bpb_dataset``, i
 horizons and limit asked) and, per sample, the scene, the task and bpb's own score (the parsed
 answer and its status). :func:`with_inspect_runs` turns every such log among the paths given to
 ``bpb report`` / :func:`~bpb_core.results.frames.load_results` into a run folder in the cache
-(``$BPB_CACHE_DIR/inspect/...``): the logs of one model on one dataset and input mode become one
-run (the newest log wins for a task asked twice), whose answer files are scored like any run's.
+(``$BPB_CACHE_DIR/inspect/...``, see :mod:`bpb_core.results.inspect_cache`): the logs of one
+model on one dataset and input mode become one run (the newest log wins for a task asked
+twice), whose answer files are scored like any run's.
 Reading logs needs ``inspect_ai`` (``pip install 'bpb[inspect]'``), imported only when a log
 is given.
 """
@@ -15,19 +16,16 @@ from __future__ import annotations
 
 import hashlib
 import json
-import shutil
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from bpb_core.dataset.hf_import import cache_root
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST, SceneKey
+from bpb_core.results.inspect_cache import PREFIX, cache_folder
 from bpb_core.run_folder import AnswerRecord, UsageRecord, write_answer, write_manifest
 
 LOG_SUFFIXES = (".eval", ".json")
-PREFIX = "inspect"
 
 
 def with_inspect_runs(items: Iterable[Path | str]) -> list[Path]:
@@ -67,26 +65,32 @@ def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
         if meta is not None and log.samples:
             key = (log.eval.model, meta["bpb_dataset"], str(meta.get("bpb_input_mode")))
             groups.setdefault(key, []).append(log)
-    root = cache_root() / PREFIX / _digest([path for path, _ in logs])
-    if not root.is_dir():  # else: made from these very logs already, by this or another caller
-        root.parent.mkdir(parents=True, exist_ok=True)
-        building = Path(tempfile.mkdtemp(prefix=f".{root.name}.", dir=root.parent))
+    paths = [path for path, _ in logs]
+
+    def build(folder: Path) -> None:
         for key, group in sorted(groups.items()):
-            _write_run(building, key, group)
-        try:
-            building.rename(root)  # whole or not at all: a reader never sees a half-made folder
-        except OSError:  # another caller made it meanwhile, from the same logs
-            shutil.rmtree(building, ignore_errors=True)
+            _write_run(folder, key, group)
+
+    root = cache_folder(_digest(_folders(paths)), _digest(_states(paths)), build)
     return [root / _run_name(key) for key in sorted(groups)]
 
 
-def _digest(paths: list[Path]) -> str:
-    """Names the logs as they are now: their paths, sizes and modification times."""
+def _folders(paths: list[Path]) -> list[str]:
+    """Which logs: the folders holding them (a new log there replaces the cache folder)."""
+    return sorted({str(path.resolve().parent) for path in paths})
+
+
+def _states(paths: list[Path]) -> list[str]:
+    """The logs as they are now: their paths, sizes and modification times."""
     lines = []
     for path in paths:
         stat = path.stat()
         lines.append(f"{path.resolve()}\t{stat.st_size}\t{stat.st_mtime_ns}")
-    return hashlib.sha256("\n".join(sorted(lines)).encode()).hexdigest()[:16]
+    return sorted(lines)
+
+
+def _digest(lines: list[str]) -> str:
+    return hashlib.sha256("\n".join(lines).encode()).hexdigest()[:16]
 
 
 def _read(path: Path) -> Any:
