@@ -40,6 +40,8 @@ from bpb_core.scored_units import object_origin
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
     from bpb_core.registry import Registry
+    from bpb_core.run_folder import AnswerRecord
+    from bpb_core.runner.history import History
 
 
 def slug(spec: str) -> str:
@@ -111,11 +113,30 @@ async def run_eval_async(
     progress: Progress | None = None,
     spec: str | None = None,
 ) -> RunResult:
-    """Async form of :func:`run_eval` (for callers already inside an event loop)."""
+    """Async form of :func:`run_eval` (for callers already inside an event loop). The set-up
+    (the registry and the adapter built, the dataset and the run folder read) runs in a worker
+    thread, so the caller's loop keeps serving its other tasks meanwhile."""
+    progress = progress or NoProgress()
+    setup = (data, adapter, run_dir, options, registry, adapter_options, spec)
+    asked, model, name, plugins = await asyncio.to_thread(_prepare, *setup)
+    with run_lock(run_dir):
+        return await _session(asked, data, model, name, run_dir, plugins, progress)
+
+
+def _prepare(
+    data: Path,
+    adapter: str | ModelAdapter,
+    run_dir: Path,
+    options: RunOptions | None,
+    registry: Registry | None,
+    adapter_options: AdapterOptions | None,
+    spec: str | None,
+) -> tuple[Asking, ModelAdapter, str, Registry]:
+    """What a run asks, its adapter (built and checked), the run's name and the registry; the
+    run folder made."""
     from bpb_core.registry import make_registry
 
     registry = registry or make_registry()
-    progress = progress or NoProgress()
     asked = asking(data, options or RunOptions(), registry)
     model = _adapter(registry, adapter, adapter_options, asked.options)
     if spec is None:
@@ -126,8 +147,7 @@ async def run_eval_async(
     if why is not None:
         raise BadInput(f"--adapter {spec}: {why}")
     make_run_folder(run_dir)
-    with run_lock(run_dir):
-        return await _session(asked, data, model, spec, run_dir, registry, progress)
+    return asked, model, spec, registry
 
 
 async def _session(
@@ -141,21 +161,15 @@ async def _session(
 ) -> RunResult:
     """One session on a locked run folder: guard, recover, send the rest, record the end."""
     options, refs = asked.options, asked.scenes
-    epochs = range(1, options.epochs + 1)
-    pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
-    history = read_history(run_dir, spec, pairs)
-    ids = [ref.scene_id for ref in refs]
-    held = [record for _, record in iter_answers(run_dir)]  # read once: guard and plan
-    manifest = start_manifest(
-        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
-    )
+    opened = await asyncio.to_thread(_opening, asked, data, model, spec, run_dir, registry)
+    history, held, manifest = opened
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
     state.origins = _origins(registry, spec, model, asked.tasks)
     state.config_hash, state.history = manifest["config_hash"], history
     try:
         done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
         plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
-        done |= recover_answers(run_dir, history, plan, state)
+        done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
         plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
         _announce(state, refs, plan, done)
         await drive(state, plan)
@@ -164,6 +178,22 @@ async def _session(
         state.log.close()
         finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)
+
+
+def _opening(
+    asked: Asking, data: Path, model: ModelAdapter, spec: str, run_dir: Path, registry: Registry
+) -> tuple[History, list[AnswerRecord], dict[str, Any]]:
+    """The run folder read (its attempts log and answers) and ``run.json`` written."""
+    options, refs = asked.options, asked.scenes
+    epochs = range(1, options.epochs + 1)
+    pairs = ((r.scene_id, t, e) for r in refs for t in options.tasks for e in epochs)
+    history = read_history(run_dir, spec, pairs)
+    ids = [ref.scene_id for ref in refs]
+    held = [record for _, record in iter_answers(run_dir)]  # read once: guard and plan
+    manifest = start_manifest(
+        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
+    )
+    return history, held, manifest
 
 
 def _origins(
