@@ -75,9 +75,16 @@ class Q3Task(BilliardsQuestion):
     title: ClassVar[str] = "Final positions"
 
     def example(self, scene: Scene) -> str:
+        return self._example(scene, pocketed=True)
+
+    def example_for(self, scene: Scene, options: PromptOptions) -> str:
+        """With ``force_numeric`` no ball of the example is null: the prompt forbids it."""
+        return self._example(scene, pocketed=not options.force_numeric)
+
+    def _example(self, scene: Scene, pocketed: bool) -> str:
         ids = sorted(b.id for b in scene.balls)
         items: list[dict[str, Any]] = [{"id": i, "pos": [1.2345, 0.5]} for i in ids]
-        if len(items) > 1:
+        if pocketed and len(items) > 1:
             items[-1]["pos"] = None
         return json.dumps({"predictions": items})
 
@@ -95,7 +102,7 @@ class Q3Task(BilliardsQuestion):
             )
         else:
             text += ", or null for a ball that was pocketed"
-        return f"{text}. Answer as JSON:\n{self.example(scene)}"
+        return f"{text}. Answer as JSON:\n{self.example_for(scene, options)}"
 
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         return validate_q3(value, scene)

@@ -37,6 +37,11 @@ class BilliardsQuestion(ABC):
     def example(self, scene: Scene) -> str:
         """A JSON example of the answer format for this scene."""
 
+    def example_for(self, scene: Scene, options: PromptOptions) -> str:
+        """The example this prompt shows (default :meth:`example`; a task whose format depends
+        on the options, such as q3 with ``force_numeric``, overrides it)."""
+        return self.example(scene)
+
     @abstractmethod
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
         """Check a decoded JSON value; return it normalised or raise ParseFailure."""
@@ -59,7 +64,7 @@ class BilliardsQuestion(ABC):
             [
                 common_prompt(scene, options),
                 f"Task {self.name.upper()}: {self.question(scene, options)}",
-                reply_instruction(options, self.example(scene)),
+                reply_instruction(options, self.example_for(scene, options)),
             ]
         )
 

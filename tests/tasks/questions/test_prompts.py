@@ -77,6 +77,18 @@ def test_cot_default_and_force_numeric_wording() -> None:
     assert "could not be read" in escalated and "Reply with the JSON object only" in escalated
 
 
+@pytest.mark.parametrize("escalation", [0, 2])
+def test_force_numeric_examples_show_no_null(escalation: int) -> None:
+    """--force-numeric asks for numbers for every ball: the JSON examples the model is told to
+    copy (the question's and the exact shape of the last re-ask) must not show a null one."""
+    q3 = TASKS["q3"]
+    options = PromptOptions("state", force_numeric=True, escalation=escalation)
+    forced = _text(q3.messages(SCENE, None, options))
+    assert "never null" in forced and '"pos": null' not in forced
+    plain = _text(q3.messages(SCENE, None, PromptOptions("state", escalation=escalation)))
+    assert '"pos": null' in plain  # without the flag the example shows the pocketed form
+
+
 @dataclass
 class Recorder:
     """An adapter that records every prompt and answers nothing useful."""
