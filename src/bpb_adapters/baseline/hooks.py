@@ -13,7 +13,7 @@ def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "baseline",
         lazy("bpb_adapters.baseline.adapter:make_adapter"),
-        "Offline reference answers, no network: stasis, straight, random, oracle",
+        "Offline reference answers: stasis, straight, random, oracle; vision on request",
         models=("stasis", "straight", "random", "oracle"),
         offline=True,
         catalog=lazy("bpb_adapters.baseline.hooks:on_request"),
