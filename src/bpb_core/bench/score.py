@@ -120,8 +120,8 @@ class LoadTiming:
 def bench_load(run_dirs: list[str]) -> LoadTiming:
     """Time :func:`bpb_core.results.load_results` on ``run_dirs``: cold (ground truth not yet
     cached in this process) and warm (a second read)."""
+    from bpb_core.dataset.scene_entry import read_truth
     from bpb_core.results import load_results
-    from bpb_core.results.reading import read_truth
 
     read_truth.cache_clear()
     started = time.perf_counter()

@@ -8,6 +8,7 @@ and names every image file of the scene, so embedding code never spells a file n
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -141,3 +142,28 @@ def check_image(path: Path, data: bytes) -> None:
             f"{path}: not a readable image ({why}); the dataset is damaged: "
             "load_dataset(...).verify() lists what changed"
         )
+
+
+def read_scene_files(folder: Path, scene_model: Any, truth_model: Any) -> tuple[Any, Any]:
+    """The scene (``init.json``) and ground truth (``final.json``) of the scene ``folder``,
+    read with the family's models, uncached: ``bpb run`` checks them this way before its first
+    call, so a damaged ``final.json`` stops a run before it costs anything.
+
+    Raises:
+        BadInput: A file is missing or invalid (names the file and the field), or changed after
+            generation (:mod:`bpb_core.dataset.checksums`).
+    """
+    return read_scene_model(folder / INIT, scene_model), read_scene_model(
+        folder / FINAL, truth_model
+    )
+
+
+@lru_cache(maxsize=65536)
+def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any) -> tuple[Any, Any]:
+    """:func:`read_scene_files` of scene ``key`` of ``dataset``, cached for scoring (datasets
+    are immutable once written).
+
+    Raises:
+        BadInput: A file is missing or invalid (names the file and the field).
+    """
+    return read_scene_files(key.dir(dataset), scene_model, truth_model)

@@ -15,18 +15,13 @@ import json
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pydantic import ValidationError
-
-from bpb_core.dataset.checksums import check_recorded
 from bpb_core.dataset.reader import dataset_family, dataset_keys
+from bpb_core.dataset.scene_entry import read_truth
 from bpb_core.errors import BadInput
 from bpb_core.layout import (
-    FINAL,
-    INIT,
     MANIFEST,
     RUN_MANIFEST,
     SceneKey,
@@ -35,7 +30,6 @@ from bpb_core.layout import (
 from bpb_core.model_calls import valid_unicode
 from bpb_core.run_folder import live_run, read_manifest as read_run_manifest
 from bpb_core.scored_units import object_origin
-from bpb_core.validated_files import describe_validation_error
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -242,27 +236,3 @@ def _expected_keys(manifest: dict[str, Any], dataset: Path, run_path: Path) -> t
             )
         keys = [key for key in keys if key.scene_id in wanted]
     return tuple(keys)
-
-
-@lru_cache(maxsize=65536)
-def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any) -> tuple[Any, Any]:
-    """The scene and its ground truth, read with the family's models (cached; datasets are
-    immutable once written).
-
-    Raises:
-        BadInput: A file is missing or invalid (names the scene folder), or changed after the
-            dataset was generated (names the file).
-    """
-    folder = key.dir(dataset)
-    try:
-        scene_bytes, truth_bytes = (folder / INIT).read_bytes(), (folder / FINAL).read_bytes()
-        scene = scene_model.model_validate_json(scene_bytes)
-        truth = truth_model.model_validate_json(truth_bytes)
-    except OSError as exc:
-        raise BadInput(f"{folder}: cannot read ground truth: {exc}") from None
-    except ValidationError as exc:
-        problem = describe_validation_error(exc)
-        raise BadInput(f"{folder}: invalid scene or ground truth: {problem}") from None
-    check_recorded(folder / INIT, scene_bytes)
-    check_recorded(folder / FINAL, truth_bytes)
-    return scene, truth

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput
 from bpb_core.runner.options import RunOptions, check_options
-from bpb_core.runner.scenes import SceneRef, select_scenes
+from bpb_core.runner.scenes import SceneRef, check_truth, select_scenes
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Task
@@ -52,7 +52,8 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     """Resolve what a run on ``data`` with ``options`` asks.
 
     Raises:
-        BadInput: A bad option, not a dataset, an unknown task, or a task of another family.
+        BadInput: A bad option, not a dataset, an unknown task, a task of another family, or a
+            selected scene whose ``init.json`` or ``final.json`` is missing or invalid.
     """
     check_options(options)
     family = data_family(data, registry)
@@ -68,6 +69,7 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     resolved = dataclasses.replace(options, tasks=tuple(names))
     tasks = {name: registry.task(name) for name in names}
     scenes = _chosen(select_scenes(data, family, options.horizons, options.limit), options)
+    check_truth(scenes)
     simulator = family.simulator_name(dataset_config(data, family))
     return Asking(family, resolved, tasks, scenes, simulator)
 

@@ -1,7 +1,8 @@
 """The scenes a run asks about, read lazily from a dataset folder.
 
-Only ``init.json`` (and the family's input image, for image input) is read: the runner never
-looks at ground truth. Scenes stream one at a time so a large dataset costs no memory up front.
+The runner asks about ``init.json`` (and the family's input image, for image input) and never
+hands ground truth to an adapter; it only reads each selected scene's ground truth once before
+the first call (:func:`check_truth`), so a run that could not be scored sends nothing.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.checksums import check_recorded, read_scene_model
 from bpb_core.dataset.reader import dataset_keys, manifest_data
-from bpb_core.dataset.scene_entry import check_image
+from bpb_core.dataset.scene_entry import check_image, read_scene_files
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 
@@ -84,6 +85,17 @@ def select_scenes(
     if not keys:
         raise BadInput(f"{data}: --data: no scenes (h*/scene_*/init.json) match the selection")
     return [SceneRef(key, key.dir(data), family) for key in keys]
+
+
+def check_truth(refs: Sequence[SceneRef]) -> None:
+    """Read the scene and ground truth of every scene in ``refs`` as scoring (``bpb report``)
+    will, so a damaged ``final.json`` stops the run up front instead of after every call.
+
+    Raises:
+        BadInput: A scene's ``init.json`` or ``final.json`` is missing or invalid (names it).
+    """
+    for ref in refs:
+        read_scene_files(ref.folder, ref.family.scene_model, ref.family.truth_model)
 
 
 def dataset_hash(data: Path) -> str:

@@ -136,11 +136,11 @@ def test_an_index_listing_a_scene_twice_or_not_utf8_is_refused(copy: Path) -> No
         load_dataset(copy)
 
 
-def _run_h1(data: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
-    """``bpb run`` of the stasis baseline on horizon 1 of ``data``."""
+def _run_h1(data: Path, tmp_path: Path, out: str = "r") -> subprocess.CompletedProcess[str]:
+    """``bpb run`` of the stasis baseline on horizon 1 of ``data`` into ``tmp_path/out``."""
     return subprocess.run(
         [BPB, "run", "--data", str(data), "--adapter", "baseline:stasis", "--out",
-         str(tmp_path / "r"), "--horizons", "1"],
+         str(tmp_path / out), "--horizons", "1"],
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
 
@@ -322,3 +322,34 @@ def test_edited_files_are_used_once_checksums_are_removed(copy: Path, tmp_path: 
         [BPB, "report", str(tmp_path / "r")], capture_output=True, text=True, timeout=120
     )
     assert done.returncode == 0, done.stderr
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize(
+    ("content", "problem"),
+    [
+        ("", "Invalid JSON: EOF while parsing a value at line 1 column 0"),
+        ("{not json", "Invalid JSON: key must be a string at line 1 column 2"),
+        ('{"scene_id": 3}', "scene_id: Input should be a valid string"),
+    ],
+    ids=["emptied", "not json", "wrong schema"],
+)
+def test_a_run_on_a_damaged_ground_truth_exits_2_before_any_call(
+    copy: Path, tmp_path: Path, content: str, problem: str
+) -> None:
+    # bpb run sent every call, then only warned "could not score the run" at the end.
+    first = _run_h1(copy, tmp_path)
+    assert first.returncode == 0, first.stderr
+    before = _files(tmp_path / "r")
+    final = copy / "h1" / "scene_0001" / "final.json"
+    final.write_text(content)
+    for out in ("r", "fresh"):  # an earlier run's folder, and a new one
+        done = _run_h1(copy, tmp_path, out)
+        assert done.returncode == 2, done.stderr
+        [line] = done.stderr.strip().splitlines()
+        assert line.startswith(f"error: {final}: {problem}")
+    assert _files(tmp_path / "r") == before
+    assert not (tmp_path / "fresh").exists()

@@ -36,15 +36,19 @@ def test_corrupt_scene_names_file_and_field_and_keeps_finished_answers(
 ) -> None:
     data = tmp_path / "data"
     shutil.copytree(dataset, data)
+    options = RunOptions(concurrency=1)
+    run_eval(data, "baseline:oracle", tmp_path / "run", options, registry=registry)
+    answered = completed(tmp_path / "run")
     path = data / "h3/scene_0002/init.json"
     scene = json.loads(path.read_text())
     scene["balls"][1]["pos"] = [5.0, 0.5]
     path.write_text(json.dumps(scene))
-    with pytest.raises(BadInput, match=r"h3/scene_0002/init.json: balls"):
-        run_eval(
-            data, "baseline:oracle", tmp_path / "run", RunOptions(concurrency=1), registry=registry
-        )
-    assert len(completed(tmp_path / "run")) >= 3  # scenes before the bad one stay answered
+    for run in ("run", "fresh"):  # refused before any call: scoring could not read the scene
+        with pytest.raises(BadInput, match=r"h3/scene_0002/init.json: balls"):
+            run_eval(data, "baseline:oracle", tmp_path / run, options, registry=registry)
+    assert completed(tmp_path / "run") == answered  # the earlier answers stay
+    assert len(answered) == 18
+    assert not (tmp_path / "fresh").exists()
 
 
 def test_unknown_task_and_bad_concurrency(
