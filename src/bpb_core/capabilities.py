@@ -10,7 +10,8 @@ without when it is missing.
   (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents`
   (its cost per event and against scaled scenes).
 - An offline adapter: :class:`KnowsFamilies` (which families it can answer), :class:`UsesRegistry`
-  (it looks up tasks and families itself, in the registry that built it).
+  (it looks up tasks and families itself, in the registry that built it), :class:`NeedsSimulator`
+  (it runs the dataset's simulator).
 - An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
   :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
   :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
@@ -231,6 +232,17 @@ class KnowsFamilies(Protocol):
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when it can answer questions about ``family``'s scenes, else why not (one
         line, e.g. what it could answer instead)."""
+        ...
+
+
+@runtime_checkable
+class NeedsSimulator(Protocol):
+    """An offline adapter that runs the simulator the dataset names (``request.simulator``), as
+    ``baseline:oracle`` does: ``bpb run`` refuses it before the first call when that simulator
+    is not installed, and leaves it out of its default adapters. Adapters without it run on."""
+
+    def needs_simulator(self) -> bool:
+        """Whether its answers come from running the dataset's simulator."""
         ...
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput, BpbError
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
@@ -174,12 +175,8 @@ def prepare(
     if simulator is None:
         family, config, manifest = _made_with(files, reg)
         simulator = family.simulator_name(config)
-        if manifest is not None and simulator not in reg.names("simulator"):
-            known = ", ".join(reg.names("simulator")) or "none"
-            raise BadInput(
-                f"{manifest}: config: names simulator {simulator!r}, which is not installed "
-                f"(installed: {known}); or choose one with --simulator"
-            )
+        if manifest is not None:
+            check_simulator(manifest, simulator, reg, "; or choose one with --simulator")
     if isinstance(simulator, str):
         name = reg.simulator_info(simulator).family or reg.default_family()
         return Prepared(reg.simulator(simulator, **dict(options or {})), reg.scene_family(name))

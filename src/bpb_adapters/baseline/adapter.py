@@ -119,6 +119,10 @@ class BaselineAdapter(PluginLookup):
         known = ", ".join(f"baseline:{name}" for name in offered)
         return f"the {family.name} scene family offers no such prediction; known: {known}"
 
+    def needs_simulator(self) -> bool:
+        """Only the oracle runs the dataset's simulator; the predictions do not."""
+        return self.model == ORACLE
+
     def _predict(self, request: ModelRequest, rng: random.Random) -> Any:
         name = str(request.family)
         family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))

@@ -75,6 +75,10 @@ class VisionAdapter(PluginLookup):
             return None
         return f"the {family.name} scene family cannot read scenes from images"
 
+    def needs_simulator(self) -> bool:
+        """It runs the dataset's simulator on the scene it reads."""
+        return True
+
     def _perceive(self, family: Perceiving, image: bytes, prompt: str) -> tuple[Any, str | None]:
         def read() -> tuple[Any, str | None]:
             try:

@@ -89,16 +89,29 @@ def _adapter_options(
 
 
 def _offline_adapters(registry: Registry, data: Path) -> list[str]:
-    """Every model of every offline adapter that can answer the dataset's scene family."""
+    """Every model of every offline adapter that can answer the dataset's scene family (and
+    whose simulator, if it runs one, is installed)."""
+    from rich.markup import escape
+
     from bpb_core.capabilities import KnowsFamilies
+    from bpb_core.cli.console import stderr
     from bpb_core.runner.asking import data_family
+    from bpb_core.runner.run import check_simulator_for
 
     family = data_family(data, registry)
     chosen = []
     for spec in registry.offline_specs():
         adapter = registry.adapter(spec)
-        if not isinstance(adapter, KnowsFamilies) or adapter.cannot_answer(family) is None:
-            chosen.append(spec)
+        if isinstance(adapter, KnowsFamilies) and adapter.cannot_answer(family) is not None:
+            continue
+        try:
+            check_simulator_for(data, spec, adapter, registry)
+        except BadInput as exc:  # e.g. the oracle, on a dataset whose simulator is gone
+            stderr().print(
+                f"[yellow]note:[/] left out: {escape(str(exc))}", highlight=False, soft_wrap=True
+            )
+            continue
+        chosen.append(spec)
     if not chosen:
         raise BadInput(f"--adapter: none given and no offline adapter answers {family.name} scenes")
     return chosen
@@ -295,6 +308,10 @@ def run(**kw: Any) -> None:
 
         show_dry_run(data, out, ready, options, registry)
         return
+    from bpb_core.runner.run import check_simulator_for
+
+    for item in ready:  # before any adapter's first call
+        check_simulator_for(data, item.name, item.adapter, registry)
     results = _run_all(data, out, ready, options, registry)
     raise click.exceptions.Exit(_finish(results, registry))
 

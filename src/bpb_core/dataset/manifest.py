@@ -14,12 +14,34 @@ import io
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from bpb_core.errors import BadInput
+
+if TYPE_CHECKING:
+    from bpb_core.registry import Registry
+
 FORMAT = "bpb-dataset/1"
 CHECKSUMS = "checksums.sha256"
+
+
+def check_simulator(manifest: Path, name: str, registry: Registry, hint: str = "") -> None:
+    """Refuse a simulator ``name`` that the dataset's ``manifest`` config names but that is not
+    installed (a dataset made with a simulator plugin since uninstalled).
+
+    Raises:
+        BadInput: One line naming the manifest, its config, the simulator and the installed
+            ones, then ``hint``.
+    """
+    known = registry.names("simulator")
+    if name not in known:
+        raise BadInput(
+            f"{manifest}: config: names simulator {name!r}, which is not installed "
+            f"(installed: {', '.join(known) or 'none'}){hint}"
+        )
 
 
 class HorizonSummary(BaseModel):

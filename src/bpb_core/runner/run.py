@@ -18,11 +18,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import KnowsFamilies, Preflighting
+from bpb_core.capabilities import KnowsFamilies, NeedsSimulator, Preflighting
+from bpb_core.dataset.manifest import check_simulator
+from bpb_core.dataset.reader import dataset_config
 from bpb_core.errors import BadInput
+from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.asking import Asking, asking
+from bpb_core.runner.asking import Asking, asking, data_family
 from bpb_core.runner.drive import drive
 from bpb_core.runner.history import read_history, recover_answers
 from bpb_core.runner.limits import RateLimiter, TokenBudget
@@ -74,6 +77,22 @@ def check_adapter(spec: str, adapter: ModelAdapter) -> None:
     problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
     if problem:
         raise BadInput(f"--adapter {spec}: {problem}")
+
+
+def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: Registry) -> None:
+    """Refuse ``adapter`` when it runs the dataset's simulator (:class:`NeedsSimulator`, e.g.
+    ``baseline:oracle``) and ``data``'s manifest names one that is not installed: its every
+    call would fail. An adapter that does not run it (a model's, ``baseline:stasis``) runs on.
+
+    Raises:
+        BadInput: One line naming ``dataset.json``, the simulator and the installed ones.
+    """
+    if not (isinstance(adapter, NeedsSimulator) and adapter.needs_simulator()):
+        return
+    if (data / MANIFEST).is_file():  # without one, the family's default simulator (built in)
+        family = data_family(data, registry)
+        name = family.simulator_name(dataset_config(data, family))
+        check_simulator(data / MANIFEST, name, registry, f"; {spec} runs it")
 
 
 def _state(
@@ -146,6 +165,7 @@ def _prepare(
     why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
     if why is not None:
         raise BadInput(f"--adapter {spec}: {why}")
+    check_simulator_for(data, spec, model, registry)
     make_run_folder(run_dir)
     return asked, model, spec, registry
 

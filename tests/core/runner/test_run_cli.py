@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -182,3 +183,35 @@ def test_default_run_is_the_baseline_leaderboard(dataset: Path, tmp_path: Path) 
     assert manifest["options"]["cot"] == {"q1": True, "q2": False, "q3": False}
     changed = _bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--input-mode", "state")
     assert changed.returncode == 2 and "input_mode" in changed.stderr
+
+
+def _gone_simulator(dataset: Path, tmp_path: Path) -> Path:
+    """A copy of ``dataset`` whose dataset.json names a simulator that is not installed."""
+    data = Path(shutil.copytree(dataset, tmp_path / "data"))
+    manifest = json.loads((data / "dataset.json").read_text())
+    manifest["config"] = {"simulator": "uninstalled-sim"}
+    (data / "dataset.json").write_text(json.dumps(manifest))
+    return data
+
+
+def test_a_dataset_naming_an_uninstalled_simulator_refuses_the_oracle_only(
+    dataset: Path, tmp_path: Path
+) -> None:
+    # The oracle run started anyway (its folder made, the stasis run before it done) and failed
+    # at its first call, on the missing simulator.
+    data, out = _gone_simulator(dataset, tmp_path), tmp_path / "out"
+    refused = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis",
+                   "--adapter", "baseline:oracle", "--out", str(out))  # fmt: skip
+    assert refused.returncode == 2, refused.stderr
+    assert refused.stderr.strip().splitlines() == [
+        f"error: {data}/dataset.json: config: names simulator 'uninstalled-sim', which is not "
+        "installed (installed: analytic, pymunk); baseline:oracle runs it"
+    ]
+    assert not out.exists()  # before any adapter's first call
+    stasis = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out))
+    assert stasis.returncode == 0, stasis.stderr  # it needs no simulator
+    default = _bpb("run", "--data", str(data), "--out", str(tmp_path / "default"))
+    assert default.returncode == 0, default.stderr
+    assert "note: left out: " in default.stderr and "baseline:oracle runs it" in default.stderr
+    assert (tmp_path / "default" / "baseline_stasis" / "scores.csv").exists()
+    assert not (tmp_path / "default" / "baseline_oracle").exists()

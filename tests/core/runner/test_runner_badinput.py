@@ -58,3 +58,21 @@ def test_unknown_task_and_bad_concurrency(
         run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(tasks=("q4",)), registry=registry)
     with pytest.raises(BadInput, match="--concurrency"):
         run_eval(dataset, "baseline:stasis", tmp_path, RunOptions(concurrency=0), registry=registry)
+
+
+def test_the_oracle_refuses_a_dataset_whose_simulator_is_not_installed(
+    dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    data = tmp_path / "data"
+    shutil.copytree(dataset, data)
+    manifest = json.loads((data / "dataset.json").read_text())
+    (data / "dataset.json").write_text(json.dumps({**manifest, "config": {"simulator": "gone"}}))
+    with pytest.raises(BadInput) as caught:
+        run_eval(data, "baseline:oracle", tmp_path / "oracle", registry=registry)
+    assert str(caught.value) == (
+        f"{data}/dataset.json: config: names simulator 'gone', which is not installed "
+        "(installed: analytic, pymunk); baseline:oracle runs it"
+    )
+    assert not (tmp_path / "oracle").exists()
+    result = run_eval(data, "baseline:stasis", tmp_path / "stasis", registry=registry)
+    assert sum(c["ok"] for c in result.statuses.values()) == 18
