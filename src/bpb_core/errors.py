@@ -33,6 +33,22 @@ class UnknownName(BadInput):
         super().__init__(f"unknown {kind} {name!r}; known {kind}s: {listed}")
 
 
+class UnknownScene(BadInput, KeyError):
+    """``dataset[scene_id]`` for an id the dataset's selection does not hold. A ``KeyError``
+    (so ``except KeyError`` works) whose message names the folder, the id and how to list ids."""
+
+    def __init__(self, root: object, scene_id: object, example: str | None) -> None:
+        self.scene_id = scene_id
+        like = f" (ids look like {example})" if example else " (it holds no scene)"
+        super().__init__(
+            f"{root}: no scene {scene_id!r} in the dataset's selection{like}; list them with "
+            "[scene.scene_id for scene in dataset]"
+        )
+
+    def __str__(self) -> str:  # KeyError's would show the message in quotes
+        return str(self.args[0])
+
+
 class PluginError(BpbError):
     """The plugin set is inconsistent (two plugins claim one name, a misspelt hook, a hook
     returning something other than its records)."""

@@ -20,7 +20,7 @@ from bpb_core.dataset.checksums import inside, parse_line, read_scene_model
 from bpb_core.dataset.hf_import import SIDE, resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
 from bpb_core.dataset.scene_entry import DatasetScene
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.validated_files import read_model, validate_mapping
@@ -73,12 +73,13 @@ class Dataset:
         """The scene with id ``scene_id`` (``h3_0007``).
 
         Raises:
-            KeyError: No scene of the selection has that id.
+            UnknownScene: A ``KeyError`` (and a ``BadInput``): no scene of the selection has
+                that id; names the folder and the id and says how to list ids.
         """
         for key in self.keys:
             if key.scene_id == scene_id:
                 return DatasetScene(key, key.dir(self.root), self.family)
-        raise KeyError(f"{self.root}: no scene {scene_id!r} in the selection")
+        raise UnknownScene(self.root, scene_id, self.keys[0].scene_id if self.keys else None)
 
     def __contains__(self, scene_id: object) -> bool:
         return any(key.scene_id == scene_id for key in self.keys)

@@ -116,6 +116,23 @@ def test_reader_iterates_filters_and_limits(small_dataset: Path) -> None:
     assert picked.dataset_hash == data.dataset_hash
 
 
+def test_an_unknown_scene_id_is_a_key_error_naming_the_folder_and_how_to_list_ids(
+    small_dataset: Path,
+) -> None:
+    # dataset["zzz"] raised a bare KeyError whose message came out in quotes with no way on.
+    import bpb_core
+
+    picked = bpb_core.load_dataset(small_dataset, horizons=[3])
+    with pytest.raises(KeyError) as caught:
+        picked["zzz"]
+    assert isinstance(caught.value, BadInput)
+    assert str(caught.value) == (
+        f"{small_dataset}: no scene 'zzz' in the dataset's selection (ids look like h3_0000); "
+        "list them with [scene.scene_id for scene in dataset]"
+    )
+    assert [scene.scene_id for scene in picked] == ["h3_0000", "h3_0001", "h3_0002"]
+
+
 def test_reader_rejects_corrupt_files_naming_them(small_dataset: Path, tmp_path: Path) -> None:
     copy = tmp_path / "copy"
     for rel, data in tree(small_dataset).items():
