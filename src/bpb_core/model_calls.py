@@ -143,15 +143,20 @@ class AdapterOptions:
     label: str | None = None
 
 
-def split_spec(spec: str) -> tuple[str, str]:
+def split_spec(spec: str, flag: str = "--adapter") -> tuple[str, str]:
     """Split an adapter spec ``name:model`` at the first colon.
+
+    Args:
+        spec: The spec.
+        flag: What the caller called it, for the message: ``--adapter`` on the command line,
+            the parameter's name (``adapter``, ``adapters``) in the library.
 
     Raises:
         BadInput: The spec has no name or no model part.
     """
     name, sep, model = spec.partition(":")
     if not sep or not name or not model:
-        raise BadInput(f"--adapter {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
+        raise BadInput(f"{flag} {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
     return name, model
 
 

@@ -199,17 +199,22 @@ class Registry:
                 return entry
         raise BadInput(f"task {task!r}: no installed scorer scores it")
 
-    def adapter(self, spec: str, options: AdapterOptions | None = None) -> ModelAdapter:
+    def adapter(
+        self, spec: str, options: AdapterOptions | None = None, *, flag: str = "--adapter"
+    ) -> ModelAdapter:
         """Build the adapter for a ``name:model`` spec (split at the first colon).
 
+        ``flag`` names the spec in a message about it (``--adapter``, or a library parameter).
+
         Raises:
+            BadInput: ``spec`` is not ``NAME:MODEL`` or names no installed adapter.
             PluginBug: The factory raised, or returned something without an async
                 ``complete(request)``, naming the plugin.
         """
         from bpb_core.capabilities import UsesRegistry
         from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 
-        name, model = split_spec(spec)
+        name, model = split_spec(spec, flag)
         factory = self.load("adapter", name)
         with blamed(self.origin("adapter", name), f"the adapter factory for {spec!r}"):
             made = factory(model, options if options is not None else AdapterOptions())

@@ -343,6 +343,7 @@ def _run_all(
                     registry=registry,
                     progress=display,
                     spec=item.name,
+                    flag="--adapter",
                 )
             )
             if results[-1].stopped == "interrupted":  # Ctrl-C / SIGTERM stops every adapter

@@ -114,6 +114,7 @@ def evaluate(
     one (a spec is never taken letter by letter). An adapter stopped by an authentication
     failure does not stop the others.
     """
+    kwargs.setdefault("flag", "adapters")  # messages name the caller's parameter
     return [
         run_eval(data, adapter, Path(out) / runner.slug(_spec(adapter)), options, **kwargs)
         for adapter in _listed(adapters)
@@ -134,6 +135,7 @@ async def evaluate_async(
     **kwargs: Any,
 ) -> list[EvalResult]:
     """:func:`evaluate` for callers inside an event loop (see :func:`run_eval_async`)."""
+    kwargs.setdefault("flag", "adapters")
     return [
         await run_eval_async(data, one, Path(out) / runner.slug(_spec(one)), options, **kwargs)
         for one in _listed(adapters)

@@ -61,10 +61,11 @@ def run_name(spec: str, adapter: ModelAdapter) -> str:
     return name if isinstance(name, str) and name.startswith(spec) else spec
 
 
-def check_adapter(spec: str, adapter: ModelAdapter) -> None:
+def check_adapter(spec: str, adapter: ModelAdapter, flag: str = "--adapter") -> None:
     """Raise :class:`BadInput` when ``adapter`` cannot make a call (it has no async
     ``complete``: an object passed in by the caller, since the registry checks the ones its
-    plugins build) or says before any call that no call can succeed.
+    plugins build) or says before any call that no call can succeed. ``flag`` names where the
+    adapter was given: ``--adapter``, or a library parameter (``adapter``, ``adapters``).
 
     Raises:
         BadInput: One line: what to fix (a missing key, an unknown provider, a module).
@@ -76,7 +77,7 @@ def check_adapter(spec: str, adapter: ModelAdapter) -> None:
         )
     problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
     if problem:
-        raise BadInput(f"--adapter {spec}: {problem}")
+        raise BadInput(f"{flag} {spec}: {problem}")
 
 
 def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: Registry) -> None:
@@ -131,12 +132,13 @@ async def run_eval_async(
     adapter_options: AdapterOptions | None = None,
     progress: Progress | None = None,
     spec: str | None = None,
+    flag: str = "adapter",
 ) -> RunResult:
     """Async form of :func:`run_eval` (for callers already inside an event loop). The set-up
     (the registry and the adapter built, the dataset and the run folder read) runs in a worker
     thread, so the caller's loop keeps serving its other tasks meanwhile."""
     progress = progress or NoProgress()
-    setup = (data, adapter, run_dir, options, registry, adapter_options, spec)
+    setup = (data, adapter, run_dir, options, registry, adapter_options, spec, flag)
     asked, model, name, plugins = await asyncio.to_thread(_prepare, *setup)
     with run_lock(run_dir):
         return await _session(asked, data, model, name, run_dir, plugins, progress)
@@ -150,21 +152,22 @@ def _prepare(
     registry: Registry | None,
     adapter_options: AdapterOptions | None,
     spec: str | None,
+    flag: str,
 ) -> tuple[Asking, ModelAdapter, str, Registry]:
-    """What a run asks, its adapter (built and checked), the run's name and the registry; the
-    run folder made."""
+    """What a run asks, its adapter (built and checked; errors name it after ``flag``), the
+    run's name and the registry; the run folder made."""
     from bpb_core.registry import make_registry
 
     registry = registry or make_registry()
     asked = asking(data, options or RunOptions(), registry)
-    model = _adapter(registry, adapter, adapter_options, asked.options)
+    model = _adapter(registry, adapter, adapter_options, asked.options, flag)
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
-    check_adapter(spec, model)
+    check_adapter(spec, model, flag)
     why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
     if why is not None:
-        raise BadInput(f"--adapter {spec}: {why}")
+        raise BadInput(f"{flag} {spec}: {why}")
     check_simulator_for(data, spec, model, registry)
     make_run_folder(run_dir)
     return asked, model, spec, registry
@@ -237,10 +240,12 @@ def _adapter(
     adapter: str | ModelAdapter,
     options: AdapterOptions | None,
     run: RunOptions,
+    flag: str,
 ) -> ModelAdapter:
     if not isinstance(adapter, str):
         return adapter
-    built: ModelAdapter = registry.adapter(adapter, options or AdapterOptions(seed=run.seed))
+    made = options or AdapterOptions(seed=run.seed)
+    built: ModelAdapter = registry.adapter(adapter, made, flag=flag)
     return built
 
 
@@ -291,7 +296,8 @@ def run_eval(
         run_dir: The run folder (created; resumed when it holds an earlier run).
         options: Run options.
         **kwargs: ``registry``, ``adapter_options``, ``progress``, ``spec`` (the run's name
-            when ``adapter`` is an object).
+            when ``adapter`` is an object), ``flag`` (what messages call the adapter:
+            ``adapter`` by default, ``--adapter`` from the command line).
 
     Returns:
         Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.
@@ -311,4 +317,5 @@ def evaluate(
 
     An adapter stopped by an authentication failure does not stop the others.
     """
+    kwargs.setdefault("flag", "adapters")
     return [run_eval(data, spec, out / slug(spec), options, **kwargs) for spec in adapters]

@@ -76,3 +76,49 @@ def test_the_oracle_refuses_a_dataset_whose_simulator_is_not_installed(
     assert not (tmp_path / "oracle").exists()
     result = run_eval(data, "baseline:stasis", tmp_path / "stasis", registry=registry)
     assert sum(c["ok"] for c in result.statuses.values()) == 18
+
+
+SPEC_PROBLEMS = [
+    ("nocolon", "'nocolon': expected NAME:MODEL, e.g. baseline:stasis"),
+    ("baseline:nosuch", "baseline:nosuch: the billiards scene family offers no such prediction"),
+    ("litellm:openai/gpt-5", "litellm:openai/gpt-5: openai/gpt-5: environment variable "
+     "OPENAI_API_KEY is not set"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("spec", "problem"), SPEC_PROBLEMS, ids=["spec", "family", "preflight"])
+def test_a_bad_adapter_is_named_by_the_callers_own_parameter_or_flag(
+    dataset: Path,
+    tmp_path: Path,
+    registry: Registry,
+    monkeypatch: pytest.MonkeyPatch,
+    spec: str,
+    problem: str,
+) -> None:
+    # The library said "--adapter ..." to callers who passed adapter= or adapters=.
+    import asyncio
+    import subprocess
+    import sys
+
+    import bpb_core
+
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+    out, kw = tmp_path / "out", {"registry": registry}
+    calls = {
+        "adapter": lambda: bpb_core.run_eval(dataset, spec, out, **kw),
+        "adapters": lambda: bpb_core.evaluate(dataset, [spec], out, **kw),
+    }
+    for name, call in calls.items():
+        with pytest.raises(BadInput) as caught:
+            call()
+        assert str(caught.value).startswith(f"{name} {problem}")
+    with pytest.raises(BadInput) as caught:
+        asyncio.run(bpb_core.evaluate_async(dataset, spec, out, **kw))
+    assert str(caught.value).startswith(f"adapters {problem}")
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    args = ["run", "--data", str(dataset), "--adapter", spec, "--out", str(out)]
+    done = subprocess.run([bpb, *args], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    [line] = done.stderr.strip().splitlines()
+    assert line.startswith(f"error: --adapter {problem}")
+    assert not out.exists()
