@@ -116,9 +116,35 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
         PluginBug: The family raised or returned something else, naming ``origin`` (who
             supplied it) and the family.
     """
-    what = f"scene family {getattr(family, 'name', type(family).__name__)!r}: predict({name!r})"
+    what = f"{_family(family)}: predict({name!r})"
     with blamed(origin, what):
         truth = family.predict(name, scene, rng)
+    return _checked_truth(family, origin, what, truth)
+
+
+def simulated_truth(
+    family: SceneFamily, origin: str, scene: Any, simulator: Simulator, *, stability: bool = False
+) -> Any:
+    """``family.ground_truth(scene, simulator, stability=...)``, checked as :func:`prediction`
+    is (``baseline:oracle`` and ``baseline:vision`` answer from it).
+
+    Raises:
+        PluginBug: The family raised or returned something other than its ``truth_model``,
+            naming ``origin`` and the family.
+    """
+    what = f"{_family(family)}: ground_truth()"
+    with blamed(origin, what):
+        truth = family.ground_truth(scene, simulator, stability=stability)
+    return _checked_truth(family, origin, what, truth)
+
+
+def _family(family: object) -> str:
+    return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
+
+
+def _checked_truth(family: object, origin: str, what: str, truth: Any) -> Any:
+    """``truth`` if it is an instance of the family's ``truth_model`` (what takes it next, a
+    task's ``expected``, would fail on anything else and be blamed for it)."""
     model = getattr(family, "truth_model", None)
     if not isinstance(model, type) or isinstance(truth, model):
         return truth

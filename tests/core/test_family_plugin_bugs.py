@@ -1,11 +1,15 @@
 """A scene family's predict() or picture() that raises, or returns the wrong type, is one
-PluginBug naming the family's plugin (exit 3 in the CLI), wherever bpb calls it.
+PluginBug naming the family's plugin (exit 3 in the CLI), wherever bpb calls it; so are its
+ground_truth() as baseline:oracle and baseline:vision use it and the perceive() and
+perception_error() of baseline:vision.
 
 Before, bpb bench score called predict() unchecked (a raise came out as a bare RuntimeError), and
 a prediction of the wrong type, in bench score and in the baseline adapter, was blamed on the
 task whose expected() choked on it; the failure gallery of bpb report and bpb view called
 picture() unchecked (a RuntimeError, or "AttributeError: 'bytes' object has no attribute
-'png'")."""
+'png'"). The oracle's ground_truth() of the wrong type was blamed on the task's expected(), and
+baseline:vision blamed each of those flaws on itself (adapter 'baseline:vision': complete()
+raised ...)."""
 
 from __future__ import annotations
 
@@ -90,6 +94,35 @@ def test_the_baseline_names_a_flawed_predict(
     monkeypatch.setenv("BPB_TEST_FLAW", flaw)
     with pytest.raises(PluginBug) as info:
         run_eval(flawed_data, adapter, tmp_path / "run", options, registry=registry)
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+TRUTH_TYPE = "ground_truth() returned dict; expected FinalState (the family's truth_model)"
+
+
+@pytest.mark.parametrize(
+    ("model", "flaw", "said"),
+    [
+        ("oracle", "truth_type", TRUTH_TYPE),
+        ("vision", "truth_type", TRUTH_TYPE),
+        ("vision", "perceive_raise", "perceive() raised RuntimeError: perceive exploded"),
+        ("vision", "perception_error_type", "perception_error() returned list; expected a dict "
+         "of named values"),
+    ],
+)  # fmt: skip
+def test_the_oracle_and_vision_name_a_flawed_family(
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path, tmp_path: Path, model: str, flaw: str,
+    said: str,
+) -> None:  # fmt: skip
+    registry = _registry()
+    adapter = registry.adapter(f"baseline:{model}")
+    options = RunOptions(tasks=("balls",), limit=1, concurrency=1)
+    good = run_eval(flawed_data, adapter, tmp_path / "good", options, registry=registry)
+    assert good.statuses["balls"]["ok"] == 1
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        run_eval(flawed_data, registry.adapter(f"baseline:{model}"), tmp_path / "run", options,
+                 registry=registry)  # fmt: skip
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
 
 

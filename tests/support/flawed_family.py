@@ -3,7 +3,9 @@ renamed ``flawed``, with one task and scorer about it.
 
 ``BPB_TEST_FLAW`` (read at each call, so a test sets it in its own environment or that of a
 ``bpb`` subprocess) picks the flaw: ``predict_raise``, ``predict_type`` (a dict, not the
-family's truth model), ``picture_raise``, ``picture_type`` (PNG bytes, not a ScenePicture).
+family's truth model), ``truth_type`` (the same from ``ground_truth``), ``picture_raise``,
+``picture_type`` (PNG bytes, not a ScenePicture), ``perceive_raise`` (a RuntimeError, not the
+ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict).
 The module is self-contained: tests install its source as a real distribution.
 """
 
@@ -37,6 +39,23 @@ class FlawedFamily(BilliardsFamily):
         if _flaw() == "predict_type":
             return {"balls": []}
         return super().predict(name, scene, rng)
+
+    def ground_truth(
+        self, scene: Any, simulator: Any, horizon: float | None = None, *, stability: bool
+    ) -> Any:
+        if _flaw() == "truth_type":
+            return {"balls": []}
+        return super().ground_truth(scene, simulator, horizon, stability=stability)
+
+    def perceive(self, image: bytes, prompt: str) -> Any:
+        if _flaw() == "perceive_raise":
+            raise RuntimeError("perceive exploded")
+        return super().perceive(image, prompt)
+
+    def perception_error(self, perceived: Any, scene: Any) -> Any:
+        if _flaw() == "perception_error_type":
+            return [0.5]
+        return super().perception_error(perceived, scene)
 
     def picture(self, dataset: Path, folder: Path, scene: Any) -> Any:
         if _flaw() == "picture_raise":

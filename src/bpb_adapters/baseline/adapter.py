@@ -17,7 +17,7 @@ import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Perceiving, Predicting, prediction
+from bpb_core.capabilities import Perceiving, Predicting, prediction, simulated_truth
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
@@ -132,8 +132,7 @@ class BaselineAdapter(PluginLookup):
             simulator: Simulator = self._component(
                 f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
             )
-            with blamed(origin, f"scene family {name!r}: ground_truth()"):
-                return family.ground_truth(request.scene, simulator, stability=False)
+            return simulated_truth(family, origin, request.scene, simulator)
         why = self.cannot_answer(family)
         if why is not None:
             raise RequestRejected(f"{self.name}: {why}")

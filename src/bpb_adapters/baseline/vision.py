@@ -21,13 +21,13 @@ from __future__ import annotations
 import hashlib
 import time
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from bpb_adapters.baseline.adapter import PluginLookup, expected_text
-from bpb_core.capabilities import BoundsPerception, Perceiving
-from bpb_core.errors import RequestRejected
+from bpb_core.capabilities import BoundsPerception, Perceiving, simulated_truth
+from bpb_core.errors import PluginBug, RequestRejected, blamed
 from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
 
 if TYPE_CHECKING:
@@ -50,6 +50,20 @@ def _cached(cache: OrderedDict[str, T], key: str, build: Callable[[], T]) -> T:
         if len(cache) > CACHE_SIZE:
             cache.popitem(last=False)
     return cache[key]
+
+
+def _name(family: object) -> str:
+    return str(getattr(family, "name", type(family).__name__))
+
+
+def _named_values(origin: str, what: str, values: object) -> dict[str, Any]:
+    """``values`` as a dict, if it is a mapping of names (the reply's metadata, where anything
+    else would fail far from its cause, blamed on the adapter)."""
+    if isinstance(values, Mapping) and all(isinstance(key, str) for key in values):
+        return dict(values)
+    raise PluginBug(
+        f"{origin}: {what} returned {type(values).__name__}; expected a dict of named values"
+    )
 
 
 def _inputs(request: ModelRequest) -> tuple[bytes | None, str]:
@@ -79,27 +93,35 @@ class VisionAdapter(PluginLookup):
         """It runs the dataset's simulator on the scene it reads."""
         return True
 
-    def _perceive(self, family: Perceiving, image: bytes, prompt: str) -> tuple[Any, str | None]:
+    def _perceive(
+        self, family: Perceiving, origin: str, image: bytes, prompt: str
+    ) -> tuple[Any, str | None]:
         def read() -> tuple[Any, str | None]:
-            try:
-                return family.perceive(image, prompt), None
-            except ValueError as exc:
-                return None, str(exc) or type(exc).__name__
+            with blamed(origin, f"scene family {_name(family)!r}: perceive()"):
+                try:
+                    return family.perceive(image, prompt), None
+                except ValueError as exc:  # what it raises on purpose: this image is unreadable
+                    return None, str(exc) or type(exc).__name__
 
         return _cached(self._seen, _key(image, prompt), read)
 
     def _measure(
-        self, family: Perceiving, image: bytes, prompt: str, seen: Any, request: ModelRequest,
-        simulator: Simulator,
+        self, family: Perceiving, origin: str, image: bytes, prompt: str, seen: Any,
+        request: ModelRequest, simulator: Simulator,
     ) -> dict[str, Any]:  # fmt: skip
         """The perception error and the image's ceiling, once per image (the tasks of a scene
         share them); nothing without the true scene."""
         scene = request.scene  # the truth: only to measure
 
         def measure() -> dict[str, Any]:
-            found: dict[str, Any] = dict(family.perception_error(seen, scene))
+            what = f"scene family {_name(family)!r}: perception_error()"
+            with blamed(origin, what):
+                found = _named_values(origin, what, family.perception_error(seen, scene))
             if isinstance(family, BoundsPerception):
-                found |= family.perception_ceiling(image, prompt, scene, simulator)
+                what = f"scene family {_name(family)!r}: perception_ceiling()"
+                with blamed(origin, what):
+                    ceiling = family.perception_ceiling(image, prompt, scene, simulator)
+                found |= _named_values(origin, what, ceiling)
             return found
 
         if scene is None:
@@ -114,16 +136,17 @@ class VisionAdapter(PluginLookup):
         if image is None:
             missing = "no image in the request (input mode state)"
             return f"unknown: {missing}", {"perception_failed": missing}
-        perceived, reason = self._perceive(family, image, prompt)
+        origin = self._plugins().origin("scene_family", str(request.family))
+        perceived, reason = self._perceive(family, origin, image, prompt)
         if reason is not None:
             return f"unknown: the image could not be read: {reason}", {"perception_failed": reason}
         simulator_name = request.simulator or family.simulator_name(family.load_config(None))
         simulator: Simulator = self._component(
             f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
         )
-        truth = family.ground_truth(perceived, simulator, stability=False)
+        truth = simulated_truth(family, origin, perceived, simulator)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
-        measured = self._measure(family, image, prompt, perceived, request, simulator)
+        measured = self._measure(family, origin, image, prompt, perceived, request, simulator)
         return expected_text(self._plugins(), request.task, task, truth), measured
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
