@@ -109,7 +109,11 @@ def report_parts(
             scorers=scorers, origins=origins, scorer_origins=scored_by,
         )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
-        notes = {t: s.metric_notes for t, s in scorers.items() if isinstance(s, ReportsMetrics)}
+        notes: dict[str, Mapping[str, str]] = {
+            task: _notes(scorer, scored_by[task])
+            for task, scorer in scorers.items()
+            if isinstance(scorer, ReportsMetrics)
+        }
         looks = {d.name: _tasks_of(infos.get(d.name)) for d in diagnostics}
         parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks, origins))
     return tuple(parts)
@@ -201,7 +205,8 @@ def task_metrics(
 
     Raises:
         PluginBug: ``task_metrics`` raised or returned no DataFrame with the run columns and
-            one column per metric, naming ``origin`` (who supplied the scorer).
+            one column per metric, or ``metric_notes`` is no dict of strings, naming ``origin``
+            (who supplied the scorer).
     """
     answered = units[(units["task"] == task) & ~units["status"].isin(UNANSWERED)]
     table = _metrics(scorer, origin or object_origin(scorer), answered)
@@ -212,11 +217,27 @@ def task_metrics(
     return table
 
 
+def _notes(scorer: ReportsMetrics, origin: str) -> dict[str, str]:
+    """The scorer's ``metric_notes``, if it maps each metric column to its line (what reads it
+    next, the report's pages and tables, would fail on anything else far from its cause)."""
+    notes = scorer.metric_notes
+    if isinstance(notes, Mapping) and all(
+        isinstance(name, str) and isinstance(note, str) for name, note in notes.items()
+    ):
+        return dict(notes)
+    shown = repr(notes) if len(repr(notes)) <= 60 else type(notes).__name__
+    raise PluginBug(
+        f"{origin}: scorer {getattr(scorer, 'name', type(scorer).__name__)!r}: metric_notes is "
+        f"{shown}; expected a dict of metric column (str) -> one line (str)"
+    )
+
+
 def _metrics(scorer: ReportsMetrics, origin: str, answered: pd.DataFrame) -> pd.DataFrame:
     what = f"scorer {getattr(scorer, 'name', type(scorer).__name__)!r}: task_metrics()"
+    notes = _notes(scorer, origin)
     with blamed(origin, what):
         table = scorer.task_metrics(answered)
-    wanted = [*RUN_COLUMNS, *scorer.metric_notes]
+    wanted = [*RUN_COLUMNS, *notes]
     if isinstance(table, pd.DataFrame) and set(wanted) <= set(table.columns):
         return table
     got = type(table).__name__

@@ -5,7 +5,8 @@ The same checks guard every caller of a scorer: load_results and bpb report, the
 score_answer and mark, bpb bench score, and bpb view (the gallery's explain and overlay too);
 before, the last ones called the scorer unchecked. A report's task_metrics (a scorer that
 ReportsMetrics) was unchecked too: a list or a frame without the metric columns came out as an
-internal TypeError or KeyError."""
+internal TypeError or KeyError; so was its metric_notes (a list, or notes that are not strings,
+failed deep in the report's exports or pages)."""
 
 from __future__ import annotations
 
@@ -94,7 +95,13 @@ class FlawedScorer:
         if FLAW["now"] == "overlay_raise":
             raise RuntimeError("overlay exploded")
 
-    metric_notes: ClassVar[dict[str, str]] = {"n_share": "the share of n right"}
+    @property
+    def metric_notes(self) -> Any:
+        if FLAW["now"] == "notes_type":
+            return ["n_share"]
+        if FLAW["now"] == "notes_values":
+            return {"n_share": 0.5}
+        return {"n_share": "the share of n right"}
 
     def task_metrics(self, units: pd.DataFrame) -> Any:
         if FLAW["now"] == "metrics_raise":
@@ -208,6 +215,28 @@ def test_a_flawed_task_metrics_is_named(answered: tuple[Any, Path], flaw: str, s
     with pytest.raises(PluginBug) as info:
         report_parts(results, registry, n_boot=10)
     assert str(info.value) == f"{ORIGIN}: scorer 'brk': {said}"
+
+
+@pytest.mark.parametrize(
+    ("flaw", "said"),
+    [
+        ("notes_type", "metric_notes is ['n_share']; expected a dict of metric column (str) -> "
+         "one line (str)"),
+        ("notes_values", "metric_notes is {'n_share': 0.5}; expected a dict of metric column "
+         "(str) -> one line (str)"),
+    ],
+)  # fmt: skip
+def test_a_report_names_flawed_metric_notes(
+    answered: tuple[Any, Path], tmp_path: Path, flaw: str, said: str
+) -> None:
+    registry, run = answered
+    good = build_report([run], tmp_path / "good", registry=registry, n_boot=10)
+    assert "the share of n right" in good.files["html"].read_text()
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        build_report([run], tmp_path / "report", registry=registry, n_boot=10)
+    assert str(info.value) == f"{ORIGIN}: scorer 'brk': {said}"
+    assert not (tmp_path / "report").exists()
 
 
 SCORER_FLAWS = [
