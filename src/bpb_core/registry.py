@@ -176,8 +176,15 @@ class Registry:
         raise BadInput(f"--family: no single default scene family; choose one of: {known}")
 
     def scorer(self, name: str) -> Scorer:
-        """A fresh instance of the scorer ``name``."""
+        """A fresh instance of the scorer ``name``.
+
+        Raises:
+            PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
+        """
+        from bpb_core.scored_units import check_scorer
+
         scorer: Scorer = self.build("scorer", name)
+        check_scorer(scorer, self.origin("scorer", name))
         return scorer
 
     def scorer_for(self, task: str) -> Scorer:

@@ -70,6 +70,36 @@ def entries(answer: Mapping[str, Any] | None, key: str) -> list[Mapping[str, Any
     return [item for item in items if isinstance(item, Mapping)]
 
 
+SCENE_RULES = ("mean", "all")
+
+
+def check_scorer(scorer: Any, origin: str) -> None:
+    """Raise unless the scorer's ``scene_rule`` is one of :data:`SCENE_RULES` and its
+    ``columns`` map column names to dtypes: any other rule would be scored as ``mean``
+    without a word, wrong columns fail deep in pandas.
+
+    Raises:
+        PluginBug: Naming ``origin`` (who supplied the scorer) and the attribute.
+    """
+    from bpb_core.errors import PluginBug
+
+    name = getattr(scorer, "name", type(scorer).__name__)
+    rule = getattr(scorer, "scene_rule", None)
+    if rule not in SCENE_RULES:
+        raise PluginBug(
+            f"{origin}: scorer {name!r}: scene_rule is {rule!r}; expected 'mean' or 'all'"
+        )
+    columns = getattr(scorer, "columns", None)
+    if not isinstance(columns, Mapping) or not all(
+        isinstance(column, str) and isinstance(dtype, str) for column, dtype in columns.items()
+    ):
+        shown = repr(columns) if len(repr(columns)) <= 60 else type(columns).__name__
+        raise PluginBug(
+            f"{origin}: scorer {name!r}: columns is {shown}; expected a dict of column name "
+            "(str) -> pandas dtype (str)"
+        )
+
+
 def unit_rows(scorer: Any, origin: str, answer: Any, truth: Any, scene: Any) -> list[UnitRow]:
     """``scorer.units(answer, truth, scene)``, checked: a list of :class:`UnitRow` with one
     value per declared column.

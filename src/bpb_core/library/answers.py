@@ -13,7 +13,13 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.runner.options import check_input_mode
-from bpb_core.scored_units import input_frame, object_origin, scored_units, unit_rows
+from bpb_core.scored_units import (
+    check_scorer,
+    input_frame,
+    object_origin,
+    scored_units,
+    unit_rows,
+)
 
 if TYPE_CHECKING:
     from bpb_core.dataset.scene_entry import DatasetScene
@@ -165,10 +171,12 @@ def mark(
             the scorer's module).
 
     Raises:
-        PluginBug: The scorer's ``units`` or ``score`` raised or returned the wrong type, in
-            one line naming ``origin``, as ``load_results`` and ``bpb report`` say it.
+        PluginBug: The scorer's ``units`` or ``score`` raised or returned the wrong type, or
+            its ``scene_rule`` or ``columns`` is unusable, in one line naming ``origin``, as
+            ``load_results`` and ``bpb report`` say it.
     """
     who = origin if origin is not None else object_origin(scorer)
+    check_scorer(scorer, who)
     rows = unit_rows(scorer, who, answer, scene.truth, scene.state)
     scored = scored_units(scorer, who, input_frame(scorer, [(status, rows)]))
     return tuple(

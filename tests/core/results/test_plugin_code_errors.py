@@ -68,8 +68,14 @@ class CountTask(BilliardsQuestion):
 class FlawedScorer:
     name = "brk"
     task = "brk"
-    scene_rule = "mean"
-    columns: ClassVar[dict[str, str]] = {}
+
+    @property
+    def scene_rule(self) -> str:
+        return "All" if FLAW["now"] == "rule_typo" else "mean"
+
+    @property
+    def columns(self) -> Any:
+        return ["n"] if FLAW["now"] == "columns_type" else {}
 
     def units(self, answer: Any, truth: Any, scene: Any) -> Any:
         if FLAW["now"] == "units_raise":
@@ -244,6 +250,31 @@ SCORER_FLAWS = [
     ("units_type", "scorer 'brk': units() returned {'n': 1}; expected a list of bpb_core."),
     ("score_type", "scorer 'brk': score() returned Series; expected a DataFrame with the "),
 ]
+ATTRIBUTE_FLAWS = [
+    ("rule_typo", "scorer 'brk': scene_rule is 'All'; expected 'mean' or 'all'"),
+    ("columns_type", "scorer 'brk': columns is ['n']; expected a dict of column name (str) -> "
+     "pandas dtype (str)"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("flaw", "said"), ATTRIBUTE_FLAWS)
+def test_a_scorer_with_an_unusable_scene_rule_or_columns_is_named(
+    answered: tuple[Any, Path], small_dataset: Path, flaw: str, said: str
+) -> None:
+    """A scene_rule other than mean or all was scored as mean without a word (a typo'd "All"
+    gave a wrong score); columns that are not a dict failed deep in pandas."""
+    registry, run = answered
+    scene = load_dataset(small_dataset, registry=registry)["h1_0000"]
+    FLAW["now"] = flaw
+    with pytest.raises(PluginBug) as info:
+        load_results([run], registry=registry)
+    assert str(info.value) == f"{ORIGIN}: {said}"
+    with pytest.raises(PluginBug) as info:
+        score_answer("brk", scene, '{"n": 0}', registry=registry)
+    assert str(info.value) == f"{ORIGIN}: {said}"
+    with pytest.raises(PluginBug) as info:
+        mark(FlawedScorer(), {"n": 0}, "ok", scene)
+    assert str(info.value) == f"module {__name__!r}: {said}"
 
 
 @pytest.mark.parametrize(("flaw", "said"), SCORER_FLAWS)
