@@ -34,11 +34,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from bpb_core.errors import PluginBug, blamed
+from bpb_core.interfaces import ParsedAnswer, PromptOptions
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
+    from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator, Task
     from bpb_core.model_calls import Message
     from bpb_core.picture import ScenePicture
     from bpb_core.registry import Registry
@@ -136,6 +137,30 @@ def simulated_truth(
     with blamed(origin, what):
         truth = family.ground_truth(scene, simulator, stability=stability)
     return _checked_truth(family, origin, what, truth)
+
+
+def parsed_answer(
+    task: Task, origin: str, text: str, scene: Any, options: PromptOptions
+) -> ParsedAnswer:
+    """``task.parse(text, scene, options)``, checked: a :class:`ParsedAnswer` holding a dict
+    (the answer file and the scorer take its ``value``). A :class:`ParseFailure` passes
+    through: it is how a task says the reply holds no answer.
+
+    Raises:
+        PluginBug: The task raised anything else or returned something else, naming
+            ``origin`` (who supplied it) and the task.
+    """
+    what = f"task {getattr(task, 'name', type(task).__name__)!r}: parse()"
+    with blamed(origin, what):
+        parsed = task.parse(text, scene, options)
+    if isinstance(parsed, ParsedAnswer) and isinstance(parsed.value, dict):
+        return parsed
+    got = type(parsed).__name__
+    if isinstance(parsed, ParsedAnswer):
+        got = f"a ParsedAnswer whose value is {type(parsed.value).__name__}"
+    raise PluginBug(
+        f"{origin}: {what} returned {got}; expected a bpb_core.ParsedAnswer with a dict value"
+    )
 
 
 def _family(family: object) -> str:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import parsed_answer
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.runner.options import check_input_mode
@@ -146,7 +147,8 @@ def score_answer(
     found = _task(task, registry)
     options = prompt_options(found, "image", cot)
     try:
-        parsed = found.parse(reply_text, scene.state, options)
+        origin = registry.origin("task", task) if isinstance(task, str) else object_origin(found)
+        parsed = parsed_answer(found, origin, reply_text, scene.state, options)
         status, answer, rule, error = "ok", parsed.value, parsed.rule, None
     except ParseFailure as exc:
         status, answer, rule, error = "parse_error", None, None, str(exc)

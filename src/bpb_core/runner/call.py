@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bpb_core.capabilities import PublishesSchema
+from bpb_core.capabilities import PublishesSchema, parsed_answer
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -42,7 +42,10 @@ class _Parsed:
 
 def _parse(call: PairCall, response: ModelResponse, prompt: PromptOptions) -> _Parsed:
     try:
-        parsed = call.state.tasks[call.task].parse(response.text, call.scene, prompt)
+        task = call.state.tasks[call.task]
+        parsed = parsed_answer(
+            task, call.state.origin(call.task), response.text, call.scene, prompt
+        )
     except ParseFailure as failure:
         reason = str(failure)
         if response.finish_reason == "length":

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import AnswersInBrowser
+from bpb_core.capabilities import AnswersInBrowser, parsed_answer
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
@@ -167,7 +167,8 @@ class HumanSession:
                 raise FormError(f"{name}.{exc}") from None
             try:
                 options = self._prompt_options(name)
-                parsed = self.tasks[name].parse(json.dumps(answer), scene, options)
+                origin = self.registry.origin("task", name)
+                parsed = parsed_answer(self.tasks[name], origin, json.dumps(answer), scene, options)
             except ParseFailure as exc:
                 raise FormError(f"{name}: {exc}") from None
             out[name] = (dict(parsed.value), parsed.rule, times[name])

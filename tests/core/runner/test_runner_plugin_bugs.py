@@ -6,7 +6,9 @@ was an internal AttributeError.
 An adapter that cannot make a call at all (its factory returns None, it has no complete(), its
 complete() is not async) is refused before the first call; before, every call was recorded as
 an API error and the summary said "failed on infrastructure, re-run to resume". An adapter
-whose complete() raises something other than a bpb model error stops the run the same way."""
+whose complete() raises something other than a bpb model error stops the run the same way, and
+so does a task whose parse() raises anything but a ParseFailure or returns no ParsedAnswer (in
+score_answer too)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,16 @@ from typing import Any, ClassVar
 
 import pytest
 
-from bpb_core import AdapterInfo, TaskInfo, hookimpl, run_eval as library_run_eval
+from bpb_core import (
+    AdapterInfo,
+    ModelResponse,
+    TaskInfo,
+    Usage,
+    hookimpl,
+    load_dataset,
+    run_eval as library_run_eval,
+    score_answer,
+)
 from bpb_core.errors import BadInput, PluginBug
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.runner import RunOptions, run_eval
@@ -40,6 +51,28 @@ class ExplodingTask(BilliardsQuestion):
 
     def expected(self, truth: Any) -> dict[str, Any]:
         return {"n": 0}
+
+
+class BadParseTask(ExplodingTask):
+    """Its parse() raises or returns a bare dict, as FLAW says."""
+
+    name: ClassVar[str] = "badparse"
+    flaw: ClassVar[str] = ""
+
+    def question(self, scene: Any, options: Any) -> str:
+        return f"Say n.\n{self.example(scene)}"
+
+    def parse(self, text: str, scene: Any, options: Any) -> Any:
+        if self.flaw == "raise":
+            raise RuntimeError("parse exploded")
+        return {"n": 0}
+
+
+class ReplyAdapter:
+    name = "reply:x"
+
+    async def complete(self, request: Any) -> Any:
+        return ModelResponse('{"n": 0}', Usage(), None, 0.0, "reply")
 
 
 class WordsAdapter:
@@ -74,7 +107,10 @@ def _factory(made: Any) -> Any:
 class Faulty:
     @hookimpl
     def bpb_eval_tasks(self) -> list[TaskInfo]:
-        return [TaskInfo("boom", lambda: ExplodingTask, family="billiards")]
+        return [
+            TaskInfo("boom", lambda: ExplodingTask, family="billiards"),
+            TaskInfo("badparse", lambda: BadParseTask, family="billiards"),
+        ]
 
     @hookimpl
     def bpb_model_adapters(self) -> list[AdapterInfo]:
@@ -84,6 +120,7 @@ class Faulty:
             AdapterInfo("nocall", _factory(NoComplete())),
             AdapterInfo("sync", _factory(SyncComplete())),
             AdapterInfo("raising", _factory(RaisingAdapter())),
+            AdapterInfo("reply", _factory(ReplyAdapter())),
         ]
 
 
@@ -103,6 +140,31 @@ def test_a_task_whose_messages_raise_stops_the_run_naming_it(
         f"{ORIGIN}: task 'boom': messages() raised RuntimeError: question exploded"
     )
     assert not list((tmp_path / "run").glob("h*/*/boom.json"))  # nothing recorded as answered
+
+
+@pytest.mark.parametrize(
+    ("flaw", "said"),
+    [
+        ("raise", "parse() raised RuntimeError: parse exploded"),
+        ("type", "parse() returned dict; expected a bpb_core.ParsedAnswer with a dict value"),
+    ],
+)
+def test_a_task_whose_parse_raises_or_returns_no_parsed_answer_stops_the_run_naming_it(
+    monkeypatch: pytest.MonkeyPatch, registry: Any, dataset: Path, small_dataset: Path,
+    tmp_path: Path, flaw: str, said: str,
+) -> None:  # fmt: skip
+    """Before, the exception (or "'dict' object has no attribute 'rule'") left the run as an
+    internal error with a traceback, naming no plugin."""
+    monkeypatch.setattr(BadParseTask, "flaw", flaw)
+    options = RunOptions(tasks=("badparse",), limit=1)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, "reply:x", tmp_path / "run", options, registry=registry)
+    assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
+    assert not list((tmp_path / "run").glob("h*/*/badparse.json"))
+    scene = load_dataset(small_dataset, registry=registry)["h1_0000"]
+    with pytest.raises(PluginBug) as info:
+        score_answer("badparse", scene, '{"n": 0}', registry=registry)
+    assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
 
 
 def test_an_adapter_returning_a_string_stops_the_run_naming_it(
