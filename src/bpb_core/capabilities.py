@@ -139,6 +139,30 @@ def simulated_truth(
     return _checked_truth(family, origin, what, truth)
 
 
+def prompt_messages(
+    task: Task, origin: str, scene: Any, image: bytes | None, options: PromptOptions
+) -> tuple[Message, ...]:
+    """``task.messages(scene, image, options)``, checked: a sequence of
+    :class:`~bpb_core.model_calls.Message` (an adapter that choked on anything else would be
+    blamed for it).
+
+    Raises:
+        PluginBug: The task raised or returned something else, naming ``origin`` (who
+            supplied it) and the task.
+    """
+    from bpb_core.model_calls import Message
+
+    what = f"task {getattr(task, 'name', type(task).__name__)!r}: messages()"
+    with blamed(origin, what):
+        messages = task.messages(scene, image, options)
+    if isinstance(messages, tuple | list) and all(isinstance(m, Message) for m in messages):
+        return tuple(messages)
+    got = type(messages).__name__
+    if isinstance(messages, tuple | list):
+        got = f"a {got} of {', '.join(sorted({type(m).__name__ for m in messages}))}"
+    raise PluginBug(f"{origin}: {what} returned {got}; expected a tuple of bpb_core.Message")
+
+
 def parsed_answer(
     task: Task, origin: str, text: str, scene: Any, options: PromptOptions
 ) -> ParsedAnswer:

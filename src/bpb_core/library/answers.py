@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import parsed_answer
+from bpb_core.capabilities import parsed_answer, prompt_messages
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.runner.options import check_input_mode
@@ -88,6 +88,13 @@ def _task(task: str | Task, registry: Registry | None) -> Task:
     return found
 
 
+def _origin(task: str | Task, found: Task, registry: Registry | None) -> str:
+    """Who supplied the task: its plugin when named, else the object's module."""
+    if isinstance(task, str) and registry is not None:
+        return registry.origin("task", task)
+    return object_origin(found)
+
+
 def prompt_options(task: Task, input_mode: InputMode, cot: bool | None) -> PromptOptions:
     """The options ``bpb run`` uses by default: the task's chain-of-thought default."""
     return PromptOptions(input_mode=input_mode, cot=task.default_cot if cot is None else cot)
@@ -115,10 +122,15 @@ def build_messages(
         BadInput: The scene's files are missing or invalid (names the file), or the input
             mode is none of the three.
     """
+    from bpb_core.registry import make_registry
+
+    if isinstance(task, str):
+        registry = registry or make_registry()
     found = _task(task, registry)
     check_input_mode(input_mode)
     image = None if input_mode == "state" else scene.image_bytes()
-    return found.messages(scene.state, image, prompt_options(found, input_mode, cot))
+    options = prompt_options(found, input_mode, cot)
+    return prompt_messages(found, _origin(task, found, registry), scene.state, image, options)
 
 
 def score_answer(
@@ -147,8 +159,9 @@ def score_answer(
     found = _task(task, registry)
     options = prompt_options(found, "image", cot)
     try:
-        origin = registry.origin("task", task) if isinstance(task, str) else object_origin(found)
-        parsed = parsed_answer(found, origin, reply_text, scene.state, options)
+        parsed = parsed_answer(
+            found, _origin(task, found, registry), reply_text, scene.state, options
+        )
         status, answer, rule, error = "ok", parsed.value, parsed.rule, None
     except ParseFailure as exc:
         status, answer, rule, error = "parse_error", None, None, str(exc)

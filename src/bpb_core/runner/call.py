@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bpb_core.capabilities import PublishesSchema, parsed_answer
+from bpb_core.capabilities import PublishesSchema, parsed_answer, prompt_messages
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -116,8 +116,8 @@ class PairCall:
         return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
-        with blamed(self.state.origin(self.task), f"task {self.task!r}: messages()"):
-            messages = self.state.tasks[self.task].messages(self.scene, self.image, prompt)
+        task, origin = self.state.tasks[self.task], self.state.origin(self.task)
+        messages = prompt_messages(task, origin, self.scene, self.image, prompt)
         options = self.state.options
         return ModelRequest(
             messages,

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.capabilities import Estimating
+from bpb_core.capabilities import Estimating, prompt_messages
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
 from bpb_core.run_folder import completed_epochs
@@ -89,7 +89,7 @@ def dry_run(
                 continue
             cot = options.cot.get(name, task.default_cot)
             prompt = PromptOptions(options.input_mode, cot, options.force_numeric)
-            messages = task.messages(scene, image, prompt)
+            messages = prompt_messages(task, registry.origin("task", name), scene, image, prompt)
             if isinstance(adapter, Estimating):
                 plan.add(name, *adapter.estimate(messages))
                 continue

@@ -11,6 +11,7 @@ import hashlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bpb_core.capabilities import prompt_messages
 from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.reader import dataset_family
 from bpb_core.dataset.scene_entry import check_image
@@ -82,7 +83,9 @@ def preview_messages(
         except OSError:
             raise BadInput(f"{path}: missing") from None
         check_image(path, image)
-    return registry.task(task).messages(value, image, options)
+    return prompt_messages(
+        registry.task(task), registry.origin("task", task), value, image, options
+    )
 
 
 def describe_image(part: ImagePart) -> str:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import AnswersInBrowser, parsed_answer
+from bpb_core.capabilities import AnswersInBrowser, parsed_answer, prompt_messages
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
@@ -103,7 +103,8 @@ class HumanSession:
         scene, image = ref.load(), ref.image()
         prompts, forms = {}, {}
         for name, task in self.tasks.items():
-            messages = task.messages(scene, image, self._prompt_options(name))
+            origin = self.registry.origin("task", name)
+            messages = prompt_messages(task, origin, scene, image, self._prompt_options(name))
             prompts[name] = "\n".join(
                 p.text for m in messages for p in m.parts if isinstance(p, TextPart)
             )

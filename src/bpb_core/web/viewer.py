@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.errors import blamed
+from bpb_core.capabilities import prompt_messages
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import SceneKey
 from bpb_core.model_calls import TextPart
@@ -199,8 +199,8 @@ class Viewer:
         out = []
         for level in levels:
             prompt = PromptOptions(mode, cot, bool(options.get("force_numeric", False)), level)  # type: ignore[arg-type]
-            with blamed(self.registry.origin("task", task), f"task {task!r}: messages()"):
-                messages = component.messages(scene, image, prompt)
+            origin = self.registry.origin("task", task)
+            messages = prompt_messages(component, origin, scene, image, prompt)
             text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
             out.append((level, text))
         return out

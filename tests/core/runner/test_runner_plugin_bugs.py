@@ -7,8 +7,8 @@ An adapter that cannot make a call at all (its factory returns None, it has no c
 complete() is not async) is refused before the first call; before, every call was recorded as
 an API error and the summary said "failed on infrastructure, re-run to resume". An adapter
 whose complete() raises something other than a bpb model error stops the run the same way, and
-so does a task whose parse() raises anything but a ParseFailure or returns no ParsedAnswer (in
-score_answer too)."""
+so does a task whose messages() return no messages (not blamed on the adapter), or whose
+parse() raises anything but a ParseFailure or returns no ParsedAnswer (in score_answer too)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from bpb_core import (
     ModelResponse,
     TaskInfo,
     Usage,
+    build_messages,
     hookimpl,
     load_dataset,
     run_eval as library_run_eval,
@@ -61,6 +62,11 @@ class BadParseTask(ExplodingTask):
 
     def question(self, scene: Any, options: Any) -> str:
         return f"Say n.\n{self.example(scene)}"
+
+    def messages(self, scene: Any, image: bytes | None, options: Any) -> Any:
+        if self.flaw == "messages_type":
+            return "Say n."
+        return super().messages(scene, image, options)
 
     def parse(self, text: str, scene: Any, options: Any) -> Any:
         if self.flaw == "raise":
@@ -165,6 +171,27 @@ def test_a_task_whose_parse_raises_or_returns_no_parsed_answer_stops_the_run_nam
     with pytest.raises(PluginBug) as info:
         score_answer("badparse", scene, '{"n": 0}', registry=registry)
     assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
+
+
+def test_a_task_whose_messages_are_no_messages_is_named_not_the_adapter(
+    monkeypatch: pytest.MonkeyPatch, registry: Any, dataset: Path, small_dataset: Path,
+    tmp_path: Path,
+) -> None:  # fmt: skip
+    """Before, the run blamed the adapter that choked on them ("adapter 'baseline:vision':
+    complete() raised AttributeError: 'str' object has no attribute 'parts'") and
+    build_messages handed the string back."""
+    monkeypatch.setattr(BadParseTask, "flaw", "messages_type")
+    said = (
+        f"{ORIGIN}: task 'badparse': messages() returned str; expected a tuple of bpb_core.Message"
+    )
+    options = RunOptions(tasks=("badparse",), limit=1)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, "baseline:vision", tmp_path / "run", options, registry=registry)
+    assert str(info.value) == said
+    scene = load_dataset(small_dataset, registry=registry)["h1_0000"]
+    with pytest.raises(PluginBug) as info:
+        build_messages("badparse", scene, registry=registry)
+    assert str(info.value) == said
 
 
 def test_an_adapter_returning_a_string_stops_the_run_naming_it(
