@@ -250,14 +250,31 @@ class Registry:
         return [r.info for r in self.entries("suite").values() if isinstance(r.info, SuiteInfo)]
 
     def diagnostics_for(self, tasks: Iterable[str]) -> list[Diagnostic]:
-        """Fresh instances of the diagnostics that look at any of ``tasks``, sorted by name."""
+        """Fresh instances of the diagnostics that look at any of ``tasks``, sorted by name.
+
+        Raises:
+            PluginBug: One's ``percent`` or ``terminal`` is not a tuple of column names (a
+                string would be read letter by letter), naming the plugin.
+        """
         wanted = set(tasks)
         found: list[Diagnostic] = []
         for entry in self.entries("diagnostic").values():
             info = entry.info
             if isinstance(info, DiagnosticInfo) and wanted & set(info.tasks):
-                found.append(self.build("diagnostic", info.name))
+                made = self.build("diagnostic", info.name)
+                _check_columns(made, entry.origin, info.name)
+                found.append(made)
         return found
+
+
+def _check_columns(diagnostic: object, origin: str, name: str) -> None:
+    for attribute in ("percent", "terminal"):
+        value = getattr(diagnostic, attribute, None)
+        if not isinstance(value, tuple | list) or not all(isinstance(c, str) for c in value):
+            raise PluginBug(
+                f"{origin}: diagnostic {name!r}: {attribute} is {value!r}; expected a tuple of "
+                "column names (str)"
+            )
 
 
 def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[object, PluginSource]]:

@@ -123,8 +123,11 @@ class FlawedScorer:
 class FlawedDiagnostic:
     name = "brk_diag"
     title = "Broken diagnostic"
-    percent = ()
     terminal = ()
+
+    @property
+    def percent(self) -> Any:
+        return "n_share" if FLAW["now"] == "percent_str" else ()
 
     def table(self, results: Any) -> Any:
         if FLAW["now"] == "table_raise":
@@ -190,8 +193,11 @@ def test_a_flawed_scorer_is_named(answered: tuple[Any, Path], flaw: str, said: s
     [
         ("table_raise", "diagnostic 'brk_diag': table() raised RuntimeError: table exploded"),
         ("table_type", "diagnostic 'brk_diag': table() returned list; expected a pandas DataFrame"),
+        # before: read letter by letter, so no column showed as a percentage, without a word
+        ("percent_str", "diagnostic 'brk_diag': percent is 'n_share'; expected a tuple of "
+         "column names (str)"),
     ],
-)
+)  # fmt: skip
 def test_a_flawed_diagnostic_is_named(answered: tuple[Any, Path], flaw: str, said: str) -> None:
     registry, run = answered
     results = load_results([run], registry=registry)
