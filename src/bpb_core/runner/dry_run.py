@@ -20,6 +20,7 @@ from bpb_core.model_calls import TextPart
 from bpb_core.run_folder import completed_epochs
 from bpb_core.runner.asking import asking
 from bpb_core.runner.options import RunOptions
+from bpb_core.runner.scenes import check_images
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Task
@@ -79,6 +80,7 @@ def dry_run(
     plan = DryRun()
     asked = asking(data, options, registry)
     options, tasks = asked.options, asked.tasks
+    check_images(data, asked.scenes, options.input_mode)
     done = completed_epochs(run_dir) if run_dir.exists() else set()
     for ref in asked.scenes:
         scene = ref.load()

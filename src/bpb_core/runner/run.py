@@ -35,7 +35,7 @@ from bpb_core.runner.options import RunOptions
 from bpb_core.runner.order import Pair, call_order
 from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
 from bpb_core.runner.result import RunResult
-from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.scenes import SceneRef, check_images
 from bpb_core.runner.state import RunState
 from bpb_core.runner.sync import run_sync
 from bpb_core.scored_units import object_origin
@@ -160,6 +160,7 @@ def _prepare(
 
     registry = registry or make_registry()
     asked = asking(data, options or RunOptions(), registry)
+    check_images(data, asked.scenes, asked.options.input_mode)
     model = _adapter(registry, adapter, adapter_options, asked.options, flag)
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)

@@ -98,6 +98,36 @@ def check_truth(refs: Sequence[SceneRef]) -> None:
         read_scene_files(ref.folder, ref.family.scene_model, ref.family.truth_model)
 
 
+def check_images(data: Path, refs: Sequence[SceneRef], input_mode: str) -> None:
+    """Refuse image input (any ``input_mode`` but ``state``) on a dataset without the family's
+    input images, before the run folder is made: one generated with ``--no-images`` (its
+    manifest's ``images`` is false), of a family that renders none, or missing a selected
+    scene's image. Only whether each file is there is checked here; each image is read and
+    checked when it is sent.
+
+    Raises:
+        BadInput: One line naming the dataset (or the missing file) and ``--input-mode state``.
+    """
+    if input_mode == "state":
+        return
+    recorded = manifest_data(data)
+    if recorded is not None and recorded.get("images") is False:
+        raise BadInput(
+            f"{data}: generated with --no-images ({MANIFEST}: images: false), so it has no "
+            "images to show; use --input-mode state"
+        )
+    for ref in refs:
+        name = ref.family.input_image
+        if name is None:
+            raise BadInput(
+                f"{data}: the {ref.family.name} scene family has no images; use --input-mode state"
+            )
+        if not (ref.folder / name).is_file():
+            raise BadInput(
+                f"{ref.folder / name}: missing; use --input-mode state for text-only runs"
+            )
+
+
 def dataset_hash(data: Path) -> str:
     """A hash identifying the dataset: the manifest's own when it records one, else a digest of
     ``dataset.json`` (or, without a manifest, of every ``init.json``).

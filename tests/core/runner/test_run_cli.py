@@ -13,7 +13,10 @@ from pathlib import Path
 
 import pytest
 
+from bpb_core.errors import BadInput
+from bpb_core.registry import Registry
 from bpb_core.run_folder import iter_answers
+from bpb_core.runner import run_eval
 from support.fake_openai import fake_server
 
 BPB = str(Path(sys.executable).parent / "bpb")
@@ -215,3 +218,31 @@ def test_a_dataset_naming_an_uninstalled_simulator_refuses_the_oracle_only(
     assert "note: left out: " in default.stderr and "baseline:oracle runs it" in default.stderr
     assert (tmp_path / "default" / "baseline_stasis" / "scores.csv").exists()
     assert not (tmp_path / "default" / "baseline_oracle").exists()
+
+
+def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the_run_folder(
+    tmp_path: Path, registry: Registry
+) -> None:
+    # bpb run made the run folder (run.json, attempts.jsonl, run.lock), then failed on the
+    # first scene's "init.png: missing".
+    data, out = tmp_path / "bare", tmp_path / "out"
+    made = _bpb("generate", "--out", str(data), "--per-horizon", "2", "--horizons", "1",
+                "--no-images", "--workers", "1")  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    line = (
+        f"{data}: generated with --no-images (dataset.json: images: false), so it has no "
+        "images to show; use --input-mode state"
+    )
+    for extra in ([], ["--dry-run"], ["--input-mode", "image+state"]):
+        refused = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis",
+                       "--out", str(out), *extra)  # fmt: skip
+        assert refused.returncode == 2, refused.stderr
+        assert refused.stderr.strip().splitlines() == [f"error: {line}"]
+        assert not out.exists()
+    with pytest.raises(BadInput) as refusal:
+        run_eval(data, "baseline:stasis", out, registry=registry)
+    assert str(refusal.value) == line
+    assert not out.exists()
+    state = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out),
+                 "--input-mode", "state")  # fmt: skip
+    assert state.returncode == 0, state.stderr

@@ -25,6 +25,7 @@ def test_missing_image_names_the_file_and_state_mode_needs_none(
         run_eval(
             data, "baseline:stasis", tmp_path / "a", RunOptions(concurrency=1), registry=registry
         )
+    assert not (tmp_path / "a").exists()  # refused before the run folder is made
     result = run_eval(
         data, "baseline:stasis", tmp_path / "b", RunOptions(input_mode="state"), registry=registry
     )
