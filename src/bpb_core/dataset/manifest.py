@@ -12,7 +12,7 @@ import csv
 import hashlib
 import io
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -93,8 +93,17 @@ class DatasetManifest(BaseModel):
 
     def sealed(self) -> DatasetManifest:
         """A copy with ``dataset_hash`` computed from everything else."""
-        body = self.model_copy(update={"dataset_hash": ""}).to_json()
-        return self.model_copy(update={"dataset_hash": hashlib.sha256(body.encode()).hexdigest()})
+        digest = content_hash(self.model_dump(mode="json"))
+        return self.model_copy(update={"dataset_hash": digest})
+
+
+def content_hash(fields: Mapping[str, Any]) -> str:
+    """The ``dataset_hash`` of a manifest holding ``fields``: the SHA-256 of its canonical JSON
+    (as :meth:`DatasetManifest.to_json` writes it) with ``dataset_hash`` empty. Given the fields
+    of a ``dataset.json`` as read, it gives the hash the bpb that wrote the file recorded, even
+    one whose manifest lacked fields added since (``physics``)."""
+    body = json.dumps({**fields, "dataset_hash": ""}, indent=2, sort_keys=True) + "\n"
+    return hashlib.sha256(body.encode()).hexdigest()
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput
 from bpb_core.runner.options import RunOptions, check_options
-from bpb_core.runner.scenes import SceneRef, check_truth, select_scenes
+from bpb_core.runner.scenes import SceneRef, check_manifest, check_truth, select_scenes
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Task
@@ -52,8 +52,9 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     """Resolve what a run on ``data`` with ``options`` asks.
 
     Raises:
-        BadInput: A bad option, not a dataset, an unknown task, a task of another family, or a
-            selected scene whose ``init.json`` or ``final.json`` is missing or invalid.
+        BadInput: A bad option, not a dataset, a ``dataset.json`` edited after generation, an
+            unknown task, a task of another family, or a selected scene whose ``init.json`` or
+            ``final.json`` is missing or invalid.
     """
     check_options(options)
     family = data_family(data, registry)
@@ -71,6 +72,7 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     scenes = _chosen(select_scenes(data, family, options.horizons, options.limit), options)
     check_truth(scenes)
     simulator = family.simulator_name(dataset_config(data, family))
+    check_manifest(data)  # after the checks that name a field, which say more
     return Asking(family, resolved, tasks, scenes, simulator)
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.checksums import check_recorded, read_scene_model
+from bpb_core.dataset.manifest import content_hash
 from bpb_core.dataset.reader import dataset_keys, manifest_data
 from bpb_core.dataset.scene_entry import check_image, read_scene_files
 from bpb_core.errors import BadInput
@@ -126,6 +127,28 @@ def check_images(data: Path, refs: Sequence[SceneRef], input_mode: str) -> None:
             raise BadInput(
                 f"{ref.folder / name}: missing; use --input-mode state for text-only runs"
             )
+
+
+def check_manifest(data: Path) -> None:
+    """Refuse a ``dataset.json`` edited after ``bpb generate`` wrote it: its ``dataset_hash``,
+    which runs record to identify the dataset, no longer matches its content, so two different
+    datasets would look the same. The hash is recomputed from the file's own fields
+    (:func:`~bpb_core.dataset.manifest.content_hash`), so a manifest written by an earlier bpb
+    still matches; one without a hash, or hand-made (no ``format``), is not checked.
+
+    Raises:
+        BadInput: One line naming ``dataset.json``.
+    """
+    recorded = manifest_data(data)
+    if recorded is None or "format" not in recorded:
+        return
+    value = recorded.get("dataset_hash")
+    if isinstance(value, str) and value and content_hash(recorded) != value:
+        raise BadInput(
+            f"{data / MANIFEST}: edited after the dataset was generated: its dataset_hash "
+            f"{value[:12]} no longer matches its content, and runs record that hash to "
+            "identify the dataset; restore the file or generate the dataset again"
+        )
 
 
 def dataset_hash(data: Path) -> str:

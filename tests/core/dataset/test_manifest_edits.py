@@ -4,6 +4,7 @@ naming the file and the field, exit 2, with nothing asked or printed."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 import subprocess
@@ -117,3 +118,55 @@ def test_simulate_names_a_simulator_the_manifest_names_but_is_not_installed(
     ok = subprocess.run([BPB, "simulate", str(copy), "--simulator", "analytic"],
                         capture_output=True, text=True, timeout=120)  # fmt: skip
     assert ok.returncode == 0 and len(ok.stdout.splitlines()) == 6
+
+
+def _run_q1(data: Path, out: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [BPB, "run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out),
+         "--tasks", "q1", "--limit", "1"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+
+
+def test_a_manifest_edited_after_generation_is_refused_before_the_run_folder(
+    copy: Path, tmp_path: Path
+) -> None:
+    # An edit that keeps every field valid (here the seed) was run, and run.json recorded the
+    # manifest's stale dataset_hash: two different datasets looked the same in the results.
+    manifest = copy / "dataset.json"
+    recorded = json.loads(manifest.read_text())["dataset_hash"]
+    edit(lambda m: m.update(seed=m["seed"] + 1))(manifest)
+    out = tmp_path / "runs"
+    done = _run_q1(copy, out)
+    assert done.returncode == 2, done.stderr
+    assert done.stdout == ""
+    assert done.stderr.strip().splitlines() == [
+        f"error: {manifest}: edited after the dataset was generated: its dataset_hash "
+        f"{recorded[:12]} no longer matches its content, and runs record that hash to identify "
+        "the dataset; restore the file or generate the dataset again"
+    ]
+    assert not out.exists()
+
+
+def _earlier_bpb(manifest: dict[str, Any]) -> None:
+    """As a bpb from before the top-level ``physics`` field wrote it: the hash covers only the
+    fields that bpb wrote (SHA-256 of the canonical JSON with ``dataset_hash`` empty)."""
+    del manifest["physics"]
+    body = json.dumps({**manifest, "dataset_hash": ""}, indent=2, sort_keys=True) + "\n"
+    manifest["dataset_hash"] = hashlib.sha256(body.encode()).hexdigest()
+
+
+@pytest.mark.parametrize(
+    "change",
+    [_earlier_bpb, lambda m: m.pop("dataset_hash")],
+    ids=["written by an earlier bpb", "without a hash"],
+)
+def test_a_manifest_of_an_earlier_bpb_or_without_a_hash_still_runs(
+    copy: Path, tmp_path: Path, change: Callable[[dict[str, Any]], object]
+) -> None:
+    edit(change)(copy / "dataset.json")
+    done = _run_q1(copy, tmp_path / "runs")
+    assert done.returncode == 0, done.stderr
+    manifest = json.loads((copy / "dataset.json").read_text())
+    run = json.loads((tmp_path / "runs" / "baseline_stasis" / "run.json").read_text())
+    assert run["dataset_hash"] == manifest.get("dataset_hash", run["dataset_hash"])
