@@ -120,10 +120,10 @@ class LoadTiming:
 def bench_load(run_dirs: list[str]) -> LoadTiming:
     """Time :func:`bpb_core.results.load_results` on ``run_dirs``: cold (ground truth not yet
     cached in this process) and warm (a second read)."""
-    from bpb_core.dataset.scene_entry import read_truth
+    from bpb_core.dataset.scene_entry import clear_truth_cache
     from bpb_core.results import load_results
 
-    read_truth.cache_clear()
+    clear_truth_cache()
     started = time.perf_counter()
     results = load_results(run_dirs)
     cold = time.perf_counter() - started

@@ -158,12 +158,38 @@ def read_scene_files(folder: Path, scene_model: Any, truth_model: Any) -> tuple[
     )
 
 
-@lru_cache(maxsize=65536)
 def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any) -> tuple[Any, Any]:
-    """:func:`read_scene_files` of scene ``key`` of ``dataset``, cached for scoring (datasets
-    are immutable once written).
+    """:func:`read_scene_files` of scene ``key`` of ``dataset``, cached for scoring. The cache
+    is keyed on both files' identity (modification time, size, inode), so a long-lived process
+    (``bpb view``, a notebook) reads a scene again once its files change, and gets the new
+    content or the checksum refusal, never the ground truth it read before.
 
     Raises:
-        BadInput: A file is missing or invalid (names the file and the field).
+        BadInput: A file is missing or invalid (names the file and the field), or changed after
+            generation.
     """
-    return read_scene_files(key.dir(dataset), scene_model, truth_model)
+    folder = key.dir(dataset)
+    identity = (_identity(folder / INIT), _identity(folder / FINAL))
+    return _read_truth(folder, scene_model, truth_model, identity)
+
+
+def clear_truth_cache() -> None:
+    """Forget every scene :func:`read_truth` has read (to time a cold read)."""
+    _read_truth.cache_clear()
+
+
+def _identity(path: Path) -> tuple[int, int, int] | None:
+    """``(st_mtime_ns, st_size, st_ino)`` of ``path`` (``None``: it cannot be read, and the
+    read names why)."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return None
+    return stat.st_mtime_ns, stat.st_size, stat.st_ino
+
+
+@lru_cache(maxsize=65536)
+def _read_truth(
+    folder: Path, scene_model: Any, truth_model: Any, identity: tuple[object, object]
+) -> tuple[Any, Any]:
+    return read_scene_files(folder, scene_model, truth_model)

@@ -82,7 +82,7 @@ class RunFolder:
         return str(self.manifest.get("dataset_hash") or self.dataset)
 
     def truth(self, key: SceneKey) -> tuple[Any, Any]:
-        """The scene and its ground truth (cached; datasets are immutable once written)."""
+        """The scene and its ground truth (cached until its files change)."""
         assert self.family is not None, "read_run resolves the family"
         models: tuple[Any, Any] = (self.family.scene_model, self.family.truth_model)
         return read_truth(self.dataset, key, *models)

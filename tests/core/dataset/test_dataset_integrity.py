@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -17,6 +18,7 @@ from PIL import Image
 
 from bpb_core.dataset import load_dataset
 from bpb_core.errors import BadInput
+from bpb_core.results import load_results
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -353,3 +355,24 @@ def test_a_run_on_a_damaged_ground_truth_exits_2_before_any_call(
         assert line.startswith(f"error: {final}: {problem}")
     assert _files(tmp_path / "r") == before
     assert not (tmp_path / "fresh").exists()
+
+
+def test_a_long_lived_process_reads_ground_truth_again_once_it_changes(
+    copy: Path, tmp_path: Path
+) -> None:
+    # read_truth's cache kept the first ground truth read for the life of the process, so a
+    # notebook or bpb view went on scoring on it after final.json changed (or was refused).
+    assert _run_h1(copy, tmp_path).returncode == 0
+
+    def truths() -> list[object]:
+        units = load_results(tmp_path / "r").units
+        return units.loc[units["scene_id"] == "h1_0000", "truth"].tolist()
+
+    before = truths()
+    assert truths() == before  # a second read (from the cache) is the same
+    final = copy / "h1" / "scene_0000" / "final.json"
+    edit_label(final)
+    with pytest.raises(BadInput, match=f"{final}: {re.escape(CHANGED)}"):
+        truths()
+    (copy / "checksums.sha256").unlink()  # edited files are then used unchecked
+    assert truths() != before
