@@ -4,7 +4,7 @@
 ``data/`` and the manifest, index and checksums verbatim under ``bpb/``. :func:`resolve_data`
 turns such a folder into a dataset folder that every reader understands: it unpacks each scene's
 ``init.json``, ``final.json`` and input image, byte for byte, into a cache folder named by the
-export's content (``$BPB_CACHE_DIR``, default ``~/.cache/bpb``, then ``hf/<digest>``), once.
+export's content (``hf/<digest>`` of :func:`cache_root`), once.
 """
 
 from __future__ import annotations
