@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.checksums import inside, parse_line, read_scene_model
 from bpb_core.dataset.hf_import import SIDE, resolve_data
-from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest
+from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest, content_hash
 from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
@@ -113,7 +113,8 @@ class Dataset:
         """
         carried = self._exported_names()
         problems = []
-        if self.manifest.sealed().dataset_hash != self.manifest.dataset_hash:
+        # the file's own fields, as the bpb that wrote it hashed them (not the model's defaults)
+        if content_hash(manifest_data(self.root) or {}) != self.manifest.dataset_hash:
             problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
         for name, digest in sorted(self.manifest.files.items()):
             target = self.root / name

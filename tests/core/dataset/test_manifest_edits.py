@@ -15,6 +15,8 @@ from typing import Any
 
 import pytest
 
+from bpb_core.dataset import load_dataset
+
 BPB = str(Path(sys.executable).with_name("bpb"))
 
 
@@ -170,3 +172,14 @@ def test_a_manifest_of_an_earlier_bpb_or_without_a_hash_still_runs(
     manifest = json.loads((copy / "dataset.json").read_text())
     run = json.loads((tmp_path / "runs" / "baseline_stasis" / "run.json").read_text())
     assert run["dataset_hash"] == manifest.get("dataset_hash", run["dataset_hash"])
+
+
+def test_verify_accepts_a_manifest_an_earlier_bpb_wrote_and_names_an_edit(copy: Path) -> None:
+    # verify() hashed the manifest through the model, which fills in fields added since
+    # (physics: {}), so an untouched dataset of an earlier bpb read "dataset_hash does not match".
+    edit(_earlier_bpb)(copy / "dataset.json")
+    assert load_dataset(copy).verify() == []
+    edit(lambda m: m.update(seed=m["seed"] + 1))(copy / "dataset.json")
+    assert load_dataset(copy).verify() == [
+        "dataset.json: dataset_hash does not match the manifest's content"
+    ]
