@@ -124,10 +124,17 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
 
 
 def simulated_truth(
-    family: SceneFamily, origin: str, scene: Any, simulator: Simulator, *, stability: bool = False
+    family: SceneFamily,
+    origin: str,
+    scene: Any,
+    simulator: Simulator,
+    *,
+    horizon: float | None = None,
+    stability: bool = False,
 ) -> Any:
-    """``family.ground_truth(scene, simulator, stability=...)``, checked as :func:`prediction`
-    is (``baseline:oracle`` and ``baseline:vision`` answer from it).
+    """``family.ground_truth(scene, simulator, horizon, stability=...)``, checked as
+    :func:`prediction` is (``bpb simulate``, ``baseline:oracle`` and ``baseline:vision`` answer
+    from it).
 
     Raises:
         PluginBug: The family raised or returned something other than its ``truth_model``,
@@ -135,7 +142,7 @@ def simulated_truth(
     """
     what = f"{_family(family)}: ground_truth()"
     with blamed(origin, what):
-        truth = family.ground_truth(scene, simulator, stability=stability)
+        truth = family.ground_truth(scene, simulator, horizon, stability=stability)
     return _checked_truth(family, origin, what, truth)
 
 

@@ -22,11 +22,12 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config, dataset_family
-from bpb_core.errors import BadInput, BpbError
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
+    from bpb_core.capabilities import WritesTruthLines
     from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
     from bpb_core.registry import Registry
 
@@ -141,17 +142,32 @@ def simulate_scene(
     horizon: float | None = None,
     *,
     stability: bool = False,
+    origin: str | None = None,
 ) -> GroundTruth:
-    """Ground truth of ``scene`` at ``horizon`` (default: the scene's own) from ``simulator``."""
-    return family.ground_truth(scene, simulator, horizon, stability=stability)
+    """Ground truth of ``scene`` at ``horizon`` (default: the scene's own) from ``simulator``.
+
+    Raises:
+        PluginBug: The family raised or returned something other than its ``truth_model``,
+            naming ``origin`` (who supplied it; default: its module).
+    """
+    from bpb_core.capabilities import simulated_truth
+    from bpb_core.scored_units import object_origin
+
+    who = origin if origin is not None else object_origin(family)
+    truth: GroundTruth = simulated_truth(
+        family, who, scene, simulator, horizon=horizon, stability=stability
+    )
+    return truth
 
 
 @dataclass(frozen=True)
 class Prepared:
-    """A simulator with its family, resolved once for many scenes."""
+    """A simulator with its family, resolved once for many scenes, and who supplied the family
+    (``Registered.origin``), for one-line plugin errors."""
 
     simulator: Simulator
     family: SceneFamily
+    origin: str
 
 
 def prepare(
@@ -179,8 +195,10 @@ def prepare(
             check_simulator(manifest, simulator, reg, "; or choose one with --simulator")
     if isinstance(simulator, str):
         name = reg.simulator_info(simulator).family or reg.default_family()
-        return Prepared(reg.simulator(simulator, **dict(options or {})), reg.scene_family(name))
-    return Prepared(simulator, reg.scene_family(reg.default_family()))
+        made = reg.simulator(simulator, **dict(options or {}))
+        return Prepared(made, reg.scene_family(name), reg.origin("scene_family", name))
+    name = reg.default_family()
+    return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
 
 
 def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any, Path | None]:
@@ -222,7 +240,9 @@ def simulate_paths(
     for path in files:
         scene = read_model(path, job.family.scene_model, _special_data(str(path)))
         with _naming(path):
-            truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+            truth = simulate_scene(
+                scene, job.simulator, job.family, horizon, stability=stability, origin=job.origin
+            )
         yield truth
 
 
@@ -297,12 +317,43 @@ def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:
         with _collector_paused():
             texts = _read_all(files)
             try:
-                fast = job.family.truth_lines(texts, job.simulator, horizon) if texts else []
+                fast = _truth_lines(job, job.family, texts, horizon) if texts else []
+            except PluginBug:
+                raise
             except BpbError:  # e.g. an event cap overrun: the ordinary path below names the file
                 fast = None
         if fast is not None:
             return _fill(files, fast, texts)
     return _fill(files, [], texts)
+
+
+def _truth_lines(
+    job: Prepared, family: WritesTruthLines, texts: Sequence[bytes], horizon: float | None
+) -> list[str | None] | None:
+    """The family's ``truth_lines`` of ``texts``, checked: ``None``, or a list with one line
+    (``str``) or ``None`` per text, since each line is paired with its file by position.
+
+    Raises:
+        PluginBug: The family raised or returned something else, naming its plugin.
+    """
+    what = f"scene family {job.family.name!r}: truth_lines()"
+    with blamed(job.origin, what):
+        lines = family.truth_lines(texts, job.simulator, horizon)
+    if lines is None:
+        return None
+    if not isinstance(lines, list) or len(lines) != len(texts):
+        got = f"a list of {len(lines)}" if isinstance(lines, list) else type(lines).__name__
+        raise PluginBug(
+            f"{job.origin}: {what} returned {got} for {len(texts)} scene files; expected a list "
+            "with one line or None per file"
+        )
+    wrong = next((line for line in lines if line is not None and not isinstance(line, str)), None)
+    if wrong is not None:
+        raise PluginBug(
+            f"{job.origin}: {what} returned a list holding {type(wrong).__name__}; expected a "
+            "JSON line (str) or None per file"
+        )
+    return lines
 
 
 @contextlib.contextmanager
@@ -413,16 +464,20 @@ def _line(name: str, data: bytes | None = None) -> str:
         data = _special_data(name)
     scene = read_model(path, job.family.scene_model, data)
     with _naming(path):
-        truth = simulate_scene(scene, job.simulator, job.family, horizon, stability=stability)
+        truth = simulate_scene(
+            scene, job.simulator, job.family, horizon, stability=stability, origin=job.origin
+        )
     return truth.model_dump_json()
 
 
 @contextlib.contextmanager
 def _naming(path: Path) -> Iterator[None]:
     """Turn a simulator's own error on a scene (an event cap overrun, a step budget) into bad
-    input naming the scene file."""
+    input naming the scene file (a plugin's bug stays one, naming the plugin)."""
     try:
         yield
+    except PluginBug:
+        raise
     except BadInput as exc:
         if str(path) in str(exc):
             raise

@@ -9,7 +9,9 @@ task whose expected() choked on it; the failure gallery of bpb report and bpb vi
 picture() unchecked (a RuntimeError, or "AttributeError: 'bytes' object has no attribute
 'png'"). The oracle's ground_truth() of the wrong type was blamed on the task's expected(), and
 baseline:vision blamed each of those flaws on itself (adapter 'baseline:vision': complete()
-raised ...)."""
+raised ...). bpb simulate paired the lines of a truth_lines() one line short with the wrong scene
+files (exit 0), and turned a ground_truth() of the wrong type into bad input or an
+AttributeError."""
 
 from __future__ import annotations
 
@@ -28,6 +30,7 @@ from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, Registry, make_registry
 from bpb_core.report.build import build_report
 from bpb_core.runner import RunOptions, run_eval
+from bpb_core.simulate import simulate_lines, simulate_paths
 from bpb_core.web.viewer import Viewer
 
 ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
@@ -126,6 +129,41 @@ def test_the_oracle_and_vision_name_a_flawed_family(
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
 
 
+SIMULATE_FLAWS = [
+    ("truth_lines_short", False, "truth_lines() returned a list of 1 for 2 scene files; "
+     "expected a list with one line or None per file"),
+    ("truth_lines_type", False, "truth_lines() returned a list holding bytes; expected a JSON "
+     "line (str) or None per file"),
+    ("truth_type", True, TRUTH_TYPE),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("flaw", "stability", "said"), SIMULATE_FLAWS)
+def test_bpb_simulate_names_a_flawed_family(
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path, flaw: str, stability: bool, said: str
+) -> None:
+    # the batch path (truth_lines) and the ordinary one (ground_truth, taken for --stability)
+    def lines() -> list[str]:
+        return list(simulate_lines([flawed_data], simulator="flawed-analytic", workers=1,
+                                   stability=stability, registry=_registry()))  # fmt: skip
+
+    ids = [json.loads(line)["scene_id"] for line in lines()]
+    assert len(set(ids)) == 2  # one line per scene, in order
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        lines()
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+def test_simulate_paths_names_a_flawed_ground_truth(
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path
+) -> None:
+    monkeypatch.setenv("BPB_TEST_FLAW", "truth_type")
+    with pytest.raises(PluginBug) as info:
+        list(simulate_paths([flawed_data], simulator="flawed-analytic", registry=_registry()))
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {TRUTH_TYPE}"
+
+
 @pytest.mark.parametrize(("flaw", "said"), PICTURE_FLAWS)
 def test_the_gallery_names_a_flawed_picture(
     monkeypatch: pytest.MonkeyPatch, wrong_run: Path, tmp_path: Path, flaw: str, said: str
@@ -149,6 +187,20 @@ def test_bpb_view_names_a_flawed_picture(
     with pytest.raises(PluginBug) as info:
         viewer.overlay(0, scene_id, "balls")
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
+
+
+def test_bpb_simulate_is_one_line_naming_the_family_plugin_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path
+) -> None:
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    monkeypatch.setenv("BPB_TEST_FLAW", "truth_lines_short")
+    done = run_bpb("simulate", str(flawed_data), "--simulator", "flawed-analytic")
+    assert done.returncode == 3
+    assert done.stdout == ""  # no line paired with the wrong scene file
+    assert done.stderr.strip().splitlines() == [
+        f"error: {ORIGIN}: {FAMILY}: {SIMULATE_FLAWS[0][2]} (set BPB_DEBUG=1 for a traceback)"
+    ]
 
 
 def test_bpb_report_is_one_line_naming_the_family_plugin_and_exit_3(

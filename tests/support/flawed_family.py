@@ -5,7 +5,10 @@ renamed ``flawed``, with one task and scorer about it.
 ``bpb`` subprocess) picks the flaw: ``predict_raise``, ``predict_type`` (a dict, not the
 family's truth model), ``truth_type`` (the same from ``ground_truth``), ``picture_raise``,
 ``picture_type`` (PNG bytes, not a ScenePicture), ``perceive_raise`` (a RuntimeError, not the
-ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict).
+ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict),
+``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
+line would pair with the next file), ``truth_lines_type`` (bytes lines, not str). Its simulator
+``flawed-analytic`` is the analytic one, for this family's scenes.
 The module is self-contained: tests install its source as a real distribution.
 """
 
@@ -13,12 +16,21 @@ from __future__ import annotations
 
 import os
 import random
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, ClassVar
 
 import pandas as pd
 
-from bpb_core import ParseFailure, SceneFamilyInfo, ScorerInfo, TaskInfo, UnitRow, hookimpl
+from bpb_core import (
+    ParseFailure,
+    SceneFamilyInfo,
+    ScorerInfo,
+    SimulatorInfo,
+    TaskInfo,
+    UnitRow,
+    hookimpl,
+)
 from bpb_tasks.billiards.family import BilliardsFamily
 from bpb_tasks.questions.question import BilliardsQuestion
 
@@ -46,6 +58,14 @@ class FlawedFamily(BilliardsFamily):
         if _flaw() == "truth_type":
             return {"balls": []}
         return super().ground_truth(scene, simulator, horizon, stability=stability)
+
+    def truth_lines(self, texts: Sequence[bytes], simulator: Any, horizon: float | None) -> Any:
+        if not _flaw().startswith("truth_lines"):
+            return super().truth_lines(texts, simulator, horizon)
+        scenes = [self.scene_model.model_validate_json(text) for text in texts]
+        truths = [self.ground_truth(s, simulator, horizon, stability=False) for s in scenes]
+        lines = [truth.model_dump_json() for truth in truths]
+        return lines[1:] if _flaw() == "truth_lines_short" else [line.encode() for line in lines]
 
     def perceive(self, image: bytes, prompt: str) -> Any:
         if _flaw() == "perceive_raise":
@@ -105,6 +125,14 @@ class BallsScorer:
 @hookimpl
 def bpb_scene_families() -> list[SceneFamilyInfo]:
     return [SceneFamilyInfo("flawed", lambda: FlawedFamily, "Billiards with flaws on demand")]
+
+
+@hookimpl
+def bpb_simulators() -> list[SimulatorInfo]:
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+    info = SimulatorInfo("flawed-analytic", lambda: AnalyticSimulator, "Analytic", family="flawed")
+    return [info]
 
 
 @hookimpl
