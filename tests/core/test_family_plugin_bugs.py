@@ -29,6 +29,7 @@ from bpb_core.dataset import generate_dataset
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, Registry, make_registry
 from bpb_core.report.build import build_report
+from bpb_core.results import load_results
 from bpb_core.runner import RunOptions, run_eval
 from bpb_core.simulate import simulate_lines, simulate_paths
 from bpb_core.web.viewer import Viewer
@@ -162,6 +163,19 @@ def test_simulate_paths_names_a_flawed_ground_truth(
     with pytest.raises(PluginBug) as info:
         list(simulate_paths([flawed_data], simulator="flawed-analytic", registry=_registry()))
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {TRUTH_TYPE}"
+
+
+def test_results_name_unstable_reasons_that_are_not_a_list(
+    monkeypatch: pytest.MonkeyPatch, wrong_run: Path
+) -> None:
+    # a str was joined letter by letter ("q,1"), miscounting the report's stable exclusions
+    assert len(load_results([wrong_run], registry=_registry()).units) == 1
+    monkeypatch.setenv("BPB_TEST_FLAW", "unstable_reasons_type")
+    with pytest.raises(PluginBug) as info:
+        load_results([wrong_run], registry=_registry())
+    assert str(info.value) == (
+        f"{ORIGIN}: {FAMILY}: the ground truth's unstable_reasons is str; expected a list of str"
+    )
 
 
 @pytest.mark.parametrize(("flaw", "said"), PICTURE_FLAWS)

@@ -7,8 +7,9 @@ family's truth model), ``truth_type`` (the same from ``ground_truth``), ``pictur
 ``picture_type`` (PNG bytes, not a ScenePicture), ``perceive_raise`` (a RuntimeError, not the
 ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict),
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
-line would pair with the next file), ``truth_lines_type`` (bytes lines, not str). Its simulator
-``flawed-analytic`` is the analytic one, for this family's scenes.
+line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
+``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str).
+Its simulator ``flawed-analytic`` is the analytic one, for this family's scenes.
 The module is self-contained: tests install its source as a real distribution.
 """
 
@@ -32,6 +33,7 @@ from bpb_core import (
     hookimpl,
 )
 from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.question import BilliardsQuestion
 
 
@@ -39,8 +41,18 @@ def _flaw() -> str:
     return os.environ.get("BPB_TEST_FLAW", "")
 
 
+class ReasonsAsText(FinalState):
+    @property
+    def unstable_reasons(self) -> Any:
+        return "q1"  # a str, not a list of them
+
+
 class FlawedFamily(BilliardsFamily):
     name = "flawed"
+
+    @property  # type: ignore[misc]
+    def truth_model(self) -> Any:
+        return ReasonsAsText if _flaw() == "unstable_reasons_type" else FinalState
 
     def load_config(self, source: Any) -> Any:
         return super().load_config(source).model_copy(update={"family": self.name})

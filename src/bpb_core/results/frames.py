@@ -24,11 +24,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, PluginBug, blamed
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
-from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT, UnitRow, scored_units, unit_rows
+from bpb_core.scored_units import (
+    SCORER_INPUT,
+    SCORER_OUTPUT,
+    UnitRow,
+    object_origin,
+    scored_units,
+    unit_rows,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -138,10 +145,24 @@ def load_frame(
     return load_results(run_dirs, registry=registry).units
 
 
-def _reasons(truth: object) -> str:
+def _reasons(truth: object, run: RunFolder) -> str:
+    """The ground truth's ``unstable_reasons``, comma-separated, checked: a list of strings (a
+    string would be joined letter by letter and miscount the report's stable exclusions).
+
+    Raises:
+        PluginBug: The ground truth raised or held something else, naming the family's plugin.
+    """
     from bpb_core.capabilities import ExplainsInstability
 
-    return ",".join(truth.unstable_reasons) if isinstance(truth, ExplainsInstability) else ""
+    if not isinstance(truth, ExplainsInstability):
+        return ""
+    origin = run.family_origin or object_origin(run.family)
+    what = f"scene family {getattr(run.family, 'name', '?')!r}: the ground truth's unstable_reasons"
+    with blamed(origin, what):
+        reasons = truth.unstable_reasons
+    if isinstance(reasons, list | tuple) and all(isinstance(r, str) for r in reasons):
+        return ",".join(reasons)
+    raise PluginBug(f"{origin}: {what} is {type(reasons).__name__}; expected a list of str")
 
 
 def _extra_columns(scorers: Iterable[Scorer]) -> dict[str, str]:
@@ -202,7 +223,7 @@ def _read_one(
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
         meta |= {"scene_id": key.scene_id, "stable": truth.stable}
-        meta["unstable_reasons"] = _reasons(truth)
+        meta["unstable_reasons"] = _reasons(truth, run)
         for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
             meta["epoch"] = epoch
             record = read_answer(answer_path(run.path, key, task, epoch))
