@@ -194,6 +194,24 @@ def parsed_answer(
     )
 
 
+def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
+    """``task.answer_schema()``, checked: a dict (an adapter that choked on anything else, with
+    ``--structured-output``, would be blamed for it).
+
+    Raises:
+        PluginBug: The task raised or returned something else, naming ``origin`` (who
+            supplied it) and the task.
+    """
+    what = f"task {getattr(task, 'name', type(task).__name__)!r}: answer_schema()"
+    with blamed(origin, what):
+        schema = task.answer_schema()
+    if isinstance(schema, dict):
+        return schema
+    raise PluginBug(
+        f"{origin}: {what} returned {type(schema).__name__}; expected a dict (a JSON Schema)"
+    )
+
+
 def _family(family: object) -> str:
     return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
 

@@ -215,10 +215,11 @@ def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict
 
     Raises:
         BadInput: The task publishes no schema.
+        PluginBug: Its ``answer_schema()`` raised or returned no dict, naming the task's plugin.
     """
-    from bpb_core.capabilities import PublishesSchema
+    from bpb_core.capabilities import PublishesSchema, published_schema
 
     found = _task(task, registry)
     if not isinstance(found, PublishesSchema):
         raise BadInput(f"task {found.name!r}: publishes no answer schema")
-    return found.answer_schema()
+    return published_schema(found, _origin(task, found, registry))

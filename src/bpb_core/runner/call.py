@@ -14,7 +14,12 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bpb_core.capabilities import PublishesSchema, parsed_answer, prompt_messages
+from bpb_core.capabilities import (
+    PublishesSchema,
+    parsed_answer,
+    prompt_messages,
+    published_schema,
+)
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -158,7 +163,7 @@ class PairCall:
     def _schema(self) -> dict[str, Any] | None:
         task = self.state.tasks[self.task]
         if self.state.options.structured_output and isinstance(task, PublishesSchema):
-            return task.answer_schema()
+            return published_schema(task, self.state.origin(self.task))
         return None
 
     async def _log(self, **fields: Any) -> None:

@@ -8,10 +8,12 @@ complete() is not async) is refused before the first call; before, every call wa
 an API error and the summary said "failed on infrastructure, re-run to resume". An adapter
 whose complete() raises something other than a bpb model error stops the run the same way, and
 so does a task whose messages() return no messages (not blamed on the adapter), or whose
-parse() raises anything but a ParseFailure or returns no ParsedAnswer (in score_answer too)."""
+parse() raises anything but a ParseFailure or returns no ParsedAnswer (in score_answer too), or
+whose answer_schema() raises or returns no dict with --structured-output (in answer_schema too)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -22,6 +24,7 @@ from bpb_core import (
     ModelResponse,
     TaskInfo,
     Usage,
+    answer_schema,
     build_messages,
     hookimpl,
     load_dataset,
@@ -55,7 +58,8 @@ class ExplodingTask(BilliardsQuestion):
 
 
 class BadParseTask(ExplodingTask):
-    """Its parse() raises or returns a bare dict, as FLAW says."""
+    """Its parse() raises or returns a bare dict, its messages() a str, its answer_schema()
+    raises or returns the schema's JSON text, as ``flaw`` says."""
 
     name: ClassVar[str] = "badparse"
     flaw: ClassVar[str] = ""
@@ -71,7 +75,15 @@ class BadParseTask(ExplodingTask):
     def parse(self, text: str, scene: Any, options: Any) -> Any:
         if self.flaw == "raise":
             raise RuntimeError("parse exploded")
-        return {"n": 0}
+        if self.flaw == "type":
+            return {"n": 0}
+        return super().parse(text, scene, options)
+
+    def answer_schema(self) -> Any:
+        if self.flaw == "schema_raise":
+            raise RuntimeError("schema exploded")
+        schema = {"type": "object", "properties": {"n": {"type": "integer"}}}
+        return json.dumps(schema) if self.flaw == "schema_type" else schema
 
 
 class ReplyAdapter:
@@ -79,6 +91,16 @@ class ReplyAdapter:
 
     async def complete(self, request: Any) -> Any:
         return ModelResponse('{"n": 0}', Usage(), None, 0.0, "reply")
+
+
+class SchemaAdapter:
+    """Sends the task's schema on, as a provider's adapter does with --structured-output."""
+
+    name = "schema:x"
+
+    async def complete(self, request: Any) -> Any:
+        assert request.response_schema.get("type") == "object"
+        return ModelResponse('{"n": 0}', Usage(), None, 0.0, "schema")
 
 
 class WordsAdapter:
@@ -127,6 +149,7 @@ class Faulty:
             AdapterInfo("sync", _factory(SyncComplete())),
             AdapterInfo("raising", _factory(RaisingAdapter())),
             AdapterInfo("reply", _factory(ReplyAdapter())),
+            AdapterInfo("schema", _factory(SchemaAdapter())),
         ]
 
 
@@ -192,6 +215,33 @@ def test_a_task_whose_messages_are_no_messages_is_named_not_the_adapter(
     with pytest.raises(PluginBug) as info:
         build_messages("badparse", scene, registry=registry)
     assert str(info.value) == said
+
+
+@pytest.mark.parametrize(
+    ("flaw", "said"),
+    [
+        ("schema_raise", "answer_schema() raised RuntimeError: schema exploded"),
+        ("schema_type", "answer_schema() returned str; expected a dict (a JSON Schema)"),
+    ],
+)
+def test_a_task_whose_answer_schema_is_no_dict_is_named_not_the_adapter(
+    monkeypatch: pytest.MonkeyPatch, registry: Any, dataset: Path, tmp_path: Path, flaw: str,
+    said: str,
+) -> None:  # fmt: skip
+    """Before, with --structured-output the adapter that choked on the schema was blamed
+    ("adapter 'schema:x': complete() raised AttributeError"), and a raise left the run as an
+    internal error naming no plugin."""
+    options = RunOptions(tasks=("badparse",), limit=1, structured_output=True)
+    good = run_eval(dataset, "schema:x", tmp_path / "good", options, registry=registry)
+    assert {status for status, n in good.statuses["badparse"].items() if n} == {"ok"}
+    monkeypatch.setattr(BadParseTask, "flaw", flaw)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, "schema:x", tmp_path / "run", options, registry=registry)
+    assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
+    assert not list((tmp_path / "run").glob("h*/*/badparse.json"))
+    with pytest.raises(PluginBug) as info:
+        answer_schema("badparse", registry=registry)
+    assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
 
 
 def test_an_adapter_returning_a_string_stops_the_run_naming_it(
