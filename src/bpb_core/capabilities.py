@@ -378,6 +378,33 @@ class Describing(Protocol):
         ...
 
 
+def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
+    """The adapter's :meth:`Describing.settings` as run.json stores them (``None`` without
+    them), checked: a dict that JSON can hold (a tuple comes back a list, as a resume reads it).
+
+    Raises:
+        PluginBug: ``settings()`` raised or returned something else, naming ``origin`` (who
+            supplied the adapter).
+    """
+    if not isinstance(adapter, Describing):
+        return None
+    import json
+
+    what = f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}: settings()"
+    with blamed(origin, what):
+        settings = adapter.settings()
+    try:
+        if not isinstance(settings, dict):
+            raise TypeError(f"a {type(settings).__name__}, not a dict")
+        stored: dict[str, Any] = json.loads(json.dumps(settings, allow_nan=False))
+    except (TypeError, ValueError) as exc:
+        raise PluginBug(
+            f"{origin}: {what} returned settings run.json cannot hold ({exc}); expected a dict "
+            "of JSON values"
+        ) from exc
+    return stored
+
+
 @runtime_checkable
 class Pricing(Protocol):
     """An adapter that knows before any call whether its replies will carry a cost."""

@@ -20,7 +20,6 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Describing
 from bpb_core.errors import BadInput
 from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
 from bpb_core.run_folder import AnswerRecord, iter_answers, read_manifest, write_manifest
@@ -168,13 +167,14 @@ def start_manifest(
     options: RunOptions,
     registry: Registry,
     scenes: int,
-    adapter: object = None,
+    settings: dict[str, Any] | None = None,
     logged: set[str] | None = None,
     scene_ids: list[str] | None = None,
     held: Iterable[AnswerRecord] | None = None,
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
+    ``settings``: the adapter's, checked (:func:`~bpb_core.capabilities.described_settings`).
     ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
     they alone guard the resume. ``scene_ids`` lists the scenes asked when ``--scenes`` or
     ``--sample`` chose them (the results expect answers for these only); ``held``: the answer
@@ -187,7 +187,7 @@ def start_manifest(
     manifest: dict[str, Any] = {
         "adapter": spec,
         "model_id": None,
-        "adapter_settings": adapter.settings() if isinstance(adapter, Describing) else None,
+        "adapter_settings": settings,
         "tasks": list(options.tasks),
         "options": _options(options, registry),
         "dataset": str(data.resolve()),

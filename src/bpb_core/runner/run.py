@@ -18,7 +18,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import KnowsFamilies, NeedsSimulator, Preflighting
+from bpb_core.capabilities import (
+    KnowsFamilies,
+    NeedsSimulator,
+    Preflighting,
+    described_settings,
+)
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config
 from bpb_core.errors import BadInput
@@ -139,9 +144,9 @@ async def run_eval_async(
     thread, so the caller's loop keeps serving its other tasks meanwhile."""
     progress = progress or NoProgress()
     setup = (data, adapter, run_dir, options, registry, adapter_options, spec, flag)
-    asked, model, name, plugins = await asyncio.to_thread(_prepare, *setup)
+    asked, model, name, plugins, settings = await asyncio.to_thread(_prepare, *setup)
     with run_lock(run_dir):
-        return await _session(asked, data, model, name, run_dir, plugins, progress)
+        return await _session(asked, data, model, name, run_dir, plugins, progress, settings)
 
 
 def _prepare(
@@ -153,9 +158,9 @@ def _prepare(
     adapter_options: AdapterOptions | None,
     spec: str | None,
     flag: str,
-) -> tuple[Asking, ModelAdapter, str, Registry]:
+) -> tuple[Asking, ModelAdapter, str, Registry, dict[str, Any] | None]:
     """What a run asks, its adapter (built and checked; errors name it after ``flag``), the
-    run's name and the registry; the run folder made."""
+    run's name, the registry and the adapter's settings (checked); the run folder made."""
     from bpb_core.registry import make_registry
 
     registry = registry or make_registry()
@@ -170,8 +175,9 @@ def _prepare(
     if why is not None:
         raise BadInput(f"{flag} {spec}: {why}")
     check_simulator_for(data, spec, model, registry)
+    settings = described_settings(model, _origins(registry, spec, model, {})[spec])
     make_run_folder(run_dir)
-    return asked, model, spec, registry
+    return asked, model, spec, registry, settings
 
 
 async def _session(
@@ -182,10 +188,12 @@ async def _session(
     run_dir: Path,
     registry: Registry,
     progress: Progress,
+    settings: dict[str, Any] | None,
 ) -> RunResult:
     """One session on a locked run folder: guard, recover, send the rest, record the end."""
     options, refs = asked.options, asked.scenes
-    opened = await asyncio.to_thread(_opening, asked, data, model, spec, run_dir, registry)
+    setup = (asked, data, spec, run_dir, registry, settings)
+    opened = await asyncio.to_thread(_opening, *setup)
     history, held, manifest = opened
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
     state.origins = _origins(registry, spec, model, asked.tasks)
@@ -205,7 +213,12 @@ async def _session(
 
 
 def _opening(
-    asked: Asking, data: Path, model: ModelAdapter, spec: str, run_dir: Path, registry: Registry
+    asked: Asking,
+    data: Path,
+    spec: str,
+    run_dir: Path,
+    registry: Registry,
+    settings: dict[str, Any] | None,
 ) -> tuple[History, list[AnswerRecord], dict[str, Any]]:
     """The run folder read (its attempts log and answers) and ``run.json`` written."""
     options, refs = asked.options, asked.scenes
@@ -215,7 +228,7 @@ def _opening(
     ids = [ref.scene_id for ref in refs]
     held = [record for _, record in iter_answers(run_dir)]  # read once: guard and plan
     manifest = start_manifest(
-        run_dir, spec, data, options, registry, len(refs), model, history.configs, ids, held
+        run_dir, spec, data, options, registry, len(refs), settings, history.configs, ids, held
     )
     return history, held, manifest
 

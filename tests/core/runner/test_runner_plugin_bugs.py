@@ -9,7 +9,8 @@ an API error and the summary said "failed on infrastructure, re-run to resume". 
 whose complete() raises something other than a bpb model error stops the run the same way, and
 so does a task whose messages() return no messages (not blamed on the adapter), or whose
 parse() raises anything but a ParseFailure or returns no ParsedAnswer (in score_answer too), or
-whose answer_schema() raises or returns no dict with --structured-output (in answer_schema too)."""
+whose answer_schema() raises or returns no dict with --structured-output (in answer_schema too).
+An adapter whose settings() JSON cannot hold is named before the run folder is made."""
 
 from __future__ import annotations
 
@@ -103,6 +104,15 @@ class SchemaAdapter:
         return ModelResponse('{"n": 0}', Usage(), None, 0.0, "schema")
 
 
+class SetSettings(ReplyAdapter):
+    """Its settings hold a set, which JSON (and so run.json) cannot."""
+
+    name = "settings:x"
+
+    def settings(self) -> Any:
+        return {"stop": {"END"}}
+
+
 class WordsAdapter:
     name = "words:x"
 
@@ -150,6 +160,7 @@ class Faulty:
             AdapterInfo("raising", _factory(RaisingAdapter())),
             AdapterInfo("reply", _factory(ReplyAdapter())),
             AdapterInfo("schema", _factory(SchemaAdapter())),
+            AdapterInfo("settings", _factory(SetSettings())),
         ]
 
 
@@ -242,6 +253,21 @@ def test_a_task_whose_answer_schema_is_no_dict_is_named_not_the_adapter(
     with pytest.raises(PluginBug) as info:
         answer_schema("badparse", registry=registry)
     assert str(info.value) == f"{ORIGIN}: task 'badparse': {said}"
+
+
+def test_adapter_settings_json_cannot_hold_are_named_before_the_run_folder_is_made(
+    registry: Any, dataset: Path, tmp_path: Path
+) -> None:
+    """Before, writing run.json raised "TypeError: Object of type set is not JSON serializable"
+    (naming no plugin) and left a run folder without a run.json."""
+    options = RunOptions(tasks=("q2",), limit=1)
+    with pytest.raises(PluginBug) as info:
+        run_eval(dataset, "settings:x", tmp_path / "run", options, registry=registry)
+    assert str(info.value) == (
+        f"{ORIGIN}: adapter 'settings:x': settings() returned settings run.json cannot hold "
+        "(Object of type set is not JSON serializable); expected a dict of JSON values"
+    )
+    assert not (tmp_path / "run").exists()
 
 
 def test_an_adapter_returning_a_string_stops_the_run_naming_it(
