@@ -33,13 +33,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from bpb_core.errors import PluginBug, blamed
-from bpb_core.interfaces import ParsedAnswer, PromptOptions
-
 if TYPE_CHECKING:
     import pandas as pd
 
-    from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator, Task
+    from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
     from bpb_core.model_calls import Message
     from bpb_core.picture import ScenePicture
     from bpb_core.registry import Registry
@@ -106,126 +103,6 @@ class Predicting(Protocol):
     def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
         """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
         ...
-
-
-def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: random.Random) -> Any:
-    """``family.predict(name, scene, rng)``, checked: an instance of the family's
-    ``truth_model``, since what takes it next (a task's ``expected``) would fail on anything
-    else and be blamed for it.
-
-    Raises:
-        PluginBug: The family raised or returned something else, naming ``origin`` (who
-            supplied it) and the family.
-    """
-    what = f"{_family(family)}: predict({name!r})"
-    with blamed(origin, what):
-        truth = family.predict(name, scene, rng)
-    return _checked_truth(family, origin, what, truth)
-
-
-def simulated_truth(
-    family: SceneFamily,
-    origin: str,
-    scene: Any,
-    simulator: Simulator,
-    *,
-    horizon: float | None = None,
-    stability: bool = False,
-) -> Any:
-    """``family.ground_truth(scene, simulator, horizon, stability=...)``, checked as
-    :func:`prediction` is (``bpb simulate``, ``baseline:oracle`` and ``baseline:vision`` answer
-    from it).
-
-    Raises:
-        PluginBug: The family raised or returned something other than its ``truth_model``,
-            naming ``origin`` and the family.
-    """
-    what = f"{_family(family)}: ground_truth()"
-    with blamed(origin, what):
-        truth = family.ground_truth(scene, simulator, horizon, stability=stability)
-    return _checked_truth(family, origin, what, truth)
-
-
-def prompt_messages(
-    task: Task, origin: str, scene: Any, image: bytes | None, options: PromptOptions
-) -> tuple[Message, ...]:
-    """``task.messages(scene, image, options)``, checked: a sequence of
-    :class:`~bpb_core.model_calls.Message` (an adapter that choked on anything else would be
-    blamed for it).
-
-    Raises:
-        PluginBug: The task raised or returned something else, naming ``origin`` (who
-            supplied it) and the task.
-    """
-    from bpb_core.model_calls import Message
-
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: messages()"
-    with blamed(origin, what):
-        messages = task.messages(scene, image, options)
-    if isinstance(messages, tuple | list) and all(isinstance(m, Message) for m in messages):
-        return tuple(messages)
-    got = type(messages).__name__
-    if isinstance(messages, tuple | list):
-        got = f"a {got} of {', '.join(sorted({type(m).__name__ for m in messages}))}"
-    raise PluginBug(f"{origin}: {what} returned {got}; expected a tuple of bpb_core.Message")
-
-
-def parsed_answer(
-    task: Task, origin: str, text: str, scene: Any, options: PromptOptions
-) -> ParsedAnswer:
-    """``task.parse(text, scene, options)``, checked: a :class:`ParsedAnswer` holding a dict
-    (the answer file and the scorer take its ``value``). A :class:`ParseFailure` passes
-    through: it is how a task says the reply holds no answer.
-
-    Raises:
-        PluginBug: The task raised anything else or returned something else, naming
-            ``origin`` (who supplied it) and the task.
-    """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: parse()"
-    with blamed(origin, what):
-        parsed = task.parse(text, scene, options)
-    if isinstance(parsed, ParsedAnswer) and isinstance(parsed.value, dict):
-        return parsed
-    got = type(parsed).__name__
-    if isinstance(parsed, ParsedAnswer):
-        got = f"a ParsedAnswer whose value is {type(parsed.value).__name__}"
-    raise PluginBug(
-        f"{origin}: {what} returned {got}; expected a bpb_core.ParsedAnswer with a dict value"
-    )
-
-
-def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
-    """``task.answer_schema()``, checked: a dict (an adapter that choked on anything else, with
-    ``--structured-output``, would be blamed for it).
-
-    Raises:
-        PluginBug: The task raised or returned something else, naming ``origin`` (who
-            supplied it) and the task.
-    """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: answer_schema()"
-    with blamed(origin, what):
-        schema = task.answer_schema()
-    if isinstance(schema, dict):
-        return schema
-    raise PluginBug(
-        f"{origin}: {what} returned {type(schema).__name__}; expected a dict (a JSON Schema)"
-    )
-
-
-def _family(family: object) -> str:
-    return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
-
-
-def _checked_truth(family: object, origin: str, what: str, truth: Any) -> Any:
-    """``truth`` if it is an instance of the family's ``truth_model`` (what takes it next, a
-    task's ``expected``, would fail on anything else and be blamed for it)."""
-    model = getattr(family, "truth_model", None)
-    if not isinstance(model, type) or isinstance(truth, model):
-        return truth
-    raise PluginBug(
-        f"{origin}: {what} returned {type(truth).__name__}; expected {model.__name__} "
-        "(the family's truth_model)"
-    )
 
 
 @runtime_checkable
@@ -376,33 +253,6 @@ class Describing(Protocol):
     def settings(self) -> dict[str, Any]:
         """JSON-ready settings that shape the answers (never a secret)."""
         ...
-
-
-def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
-    """The adapter's :meth:`Describing.settings` as run.json stores them (``None`` without
-    them), checked: a dict that JSON can hold (a tuple comes back a list, as a resume reads it).
-
-    Raises:
-        PluginBug: ``settings()`` raised or returned something else, naming ``origin`` (who
-            supplied the adapter).
-    """
-    if not isinstance(adapter, Describing):
-        return None
-    import json
-
-    what = f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}: settings()"
-    with blamed(origin, what):
-        settings = adapter.settings()
-    try:
-        if not isinstance(settings, dict):
-            raise TypeError(f"a {type(settings).__name__}, not a dict")
-        stored: dict[str, Any] = json.loads(json.dumps(settings, allow_nan=False))
-    except (TypeError, ValueError) as exc:
-        raise PluginBug(
-            f"{origin}: {what} returned settings run.json cannot hold ({exc}); expected a dict "
-            "of JSON values"
-        ) from exc
-    return stored
 
 
 @runtime_checkable

@@ -150,7 +150,7 @@ def simulate_scene(
         PluginBug: The family raised or returned something other than its ``truth_model``,
             naming ``origin`` (who supplied it; default: its module).
     """
-    from bpb_core.capabilities import simulated_truth
+    from bpb_core.plugin_calls import simulated_truth
     from bpb_core.scored_units import object_origin
 
     who = origin if origin is not None else object_origin(family)

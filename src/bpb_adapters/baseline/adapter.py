@@ -17,10 +17,11 @@ import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Perceiving, Predicting, prediction, simulated_truth
+from bpb_core.capabilities import Perceiving, Predicting
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
+from bpb_core.plugin_calls import prediction, simulated_truth
 
 if TYPE_CHECKING:
     from bpb_adapters.baseline.vision import VisionAdapter

@@ -26,9 +26,10 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from bpb_adapters.baseline.adapter import PluginLookup, expected_text
-from bpb_core.capabilities import BoundsPerception, Perceiving, simulated_truth
+from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import PluginBug, RequestRejected, blamed
 from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
+from bpb_core.plugin_calls import simulated_truth
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Simulator, Task

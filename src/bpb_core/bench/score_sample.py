@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from bpb_core.capabilities import Predicting, prediction
+from bpb_core.capabilities import Predicting
 from bpb_core.errors import BadInput, blamed
+from bpb_core.plugin_calls import prediction
 from bpb_core.scored_units import UnitRow, input_frame, scored_units, unit_rows
 
 if TYPE_CHECKING:

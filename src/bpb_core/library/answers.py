@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import parsed_answer, prompt_messages
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
+from bpb_core.plugin_calls import parsed_answer, prompt_messages
 from bpb_core.runner.options import check_input_mode
 from bpb_core.scored_units import (
     check_scorer,
@@ -217,7 +217,8 @@ def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict
         BadInput: The task publishes no schema.
         PluginBug: Its ``answer_schema()`` raised or returned no dict, naming the task's plugin.
     """
-    from bpb_core.capabilities import PublishesSchema, published_schema
+    from bpb_core.capabilities import PublishesSchema
+    from bpb_core.plugin_calls import published_schema
 
     found = _task(task, registry)
     if not isinstance(found, PublishesSchema):

@@ -14,12 +14,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bpb_core.capabilities import (
-    PublishesSchema,
-    parsed_answer,
-    prompt_messages,
-    published_schema,
-)
+from bpb_core.capabilities import PublishesSchema
 from bpb_core.errors import (
     AuthenticationFailed,
     ModelError,
@@ -30,6 +25,7 @@ from bpb_core.errors import (
 )
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
+from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.limits import sleep_unless
 from bpb_core.runner.progress import ProgressEvent

@@ -14,9 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.capabilities import Estimating, prompt_messages
+from bpb_core.capabilities import Estimating
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
+from bpb_core.plugin_calls import prompt_messages
 from bpb_core.run_folder import completed_epochs
 from bpb_core.runner.asking import asking
 from bpb_core.runner.options import RunOptions

@@ -174,7 +174,7 @@ def start_manifest(
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
-    ``settings``: the adapter's, checked (:func:`~bpb_core.capabilities.described_settings`).
+    ``settings``: the adapter's, checked (:func:`~bpb_core.plugin_calls.described_settings`).
     ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
     they alone guard the resume. ``scene_ids`` lists the scenes asked when ``--scenes`` or
     ``--sample`` chose them (the results expect answers for these only); ``held``: the answer

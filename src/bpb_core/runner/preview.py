@@ -11,7 +11,6 @@ import hashlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.capabilities import prompt_messages
 from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.reader import dataset_family
 from bpb_core.dataset.scene_entry import check_image
@@ -19,6 +18,7 @@ from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import INIT, MANIFEST
 from bpb_core.model_calls import ImagePart, Message
+from bpb_core.plugin_calls import prompt_messages
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:

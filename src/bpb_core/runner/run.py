@@ -18,17 +18,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import (
-    KnowsFamilies,
-    NeedsSimulator,
-    Preflighting,
-    described_settings,
-)
+from bpb_core.capabilities import KnowsFamilies, NeedsSimulator, Preflighting
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config
 from bpb_core.errors import BadInput
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
+from bpb_core.plugin_calls import described_settings
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
 from bpb_core.runner.asking import Asking, asking, data_family
 from bpb_core.runner.drive import drive

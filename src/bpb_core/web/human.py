@@ -19,10 +19,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import AnswersInBrowser, parsed_answer, prompt_messages
+from bpb_core.capabilities import AnswersInBrowser
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
+from bpb_core.plugin_calls import parsed_answer, prompt_messages
 from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
 from bpb_core.runner.asking import asking
 from bpb_core.runner.manifest import start_manifest

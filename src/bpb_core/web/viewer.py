@@ -20,10 +20,10 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.capabilities import prompt_messages
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import SceneKey
 from bpb_core.model_calls import TextPart
+from bpb_core.plugin_calls import prompt_messages
 from bpb_core.report.gallery import drawing
 from bpb_core.results.frames import Results, load_results
 from bpb_core.run_folder import AnswerRecord, read_answer, read_attempts
