@@ -64,6 +64,9 @@ def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:
         ("[defaults]\ntimeout = 3", "no [[adapter]]"),
         ('[adapters]\nspec = "x"', "unknown table 'adapters'"),
         ("[[adapter]\n", "not a readable TOML"),
+        ('adapter = ["litellm:x"]', "adapter 1: expected an [[adapter]] table, got 'litellm:x'"),
+        ('adapter = [{spec = "litellm:x"}, 3]', "adapter 2: expected an [[adapter]] table"),
+        ('defaults = 3\n[[adapter]]\nspec = "litellm:x"', "defaults: expected a [defaults]"),
         ('[[adapter]]\nspec = "litellm:x"\napi_base = 3', "adapter 1.api_base: expected a string"),
         ('[defaults]\nlabel = true\n[[adapter]]\nspec = "litellm:x"', "defaults.label: expected"),
         (
@@ -90,6 +93,23 @@ def test_bad_run_files_name_the_field(tmp_path: Path, text: str, field: str) -> 
     with pytest.raises(BadInput, match=r"bad\.toml") as caught:
         read_run_file(path, AdapterOptions(), {})
     assert field in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_a_run_file_entry_that_is_not_a_table_is_one_line_exit_2(
+    run_bpb: RunBpb, dataset: Path, tmp_path: Path
+) -> None:
+    config = tmp_path / "sweep.toml"
+    for text, field in [
+        ('adapter = ["baseline:stasis"]', "adapter 1: expected an [[adapter]] table"),
+        ('defaults = 3\n[[adapter]]\nspec = "baseline:stasis"', "defaults: expected a"),
+    ]:
+        config.write_text(text)
+        done = run_bpb("run", "--data", str(dataset), "--out", str(tmp_path / "runs"),
+                       "--config", str(config))  # fmt: skip
+        assert done.returncode == 2, done.stderr
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"error: {config}: {field}"), lines
+        assert not (tmp_path / "runs").exists()
 
 
 def test_model_args_parse_json_values_and_nest_dotted_keys() -> None:

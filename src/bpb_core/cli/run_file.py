@@ -186,12 +186,18 @@ def read_run_file(
     if unknown:
         raise BadInput(f"{path}: unknown table {unknown[0]!r}; expected [defaults], [[adapter]]")
     defaults = data.get("defaults", {})
+    if not isinstance(defaults, dict):
+        raise BadInput(f"{path}: defaults: expected a [defaults] table, got {defaults!r}")
     _check(f"{path}: defaults", defaults, spec_required=False)
     adapters = data.get("adapter")
     if not isinstance(adapters, list) or not adapters:
         raise BadInput(f"{path}: no [[adapter]] entries")
     plans = []
     for number, table in enumerate(adapters, 1):
+        if not isinstance(table, dict):
+            raise BadInput(
+                f"{path}: adapter {number}: expected an [[adapter]] table, got {table!r}"
+            )
         merged = {**defaults, **table}
         _check(f"{path}: adapter {number}", merged, spec_required=True)
         plans.append(_plan(merged, base, cli_args))
