@@ -130,6 +130,23 @@ def check_writable_folder(path: Path, option: str = "--out") -> None:
         return
 
 
+def check_writable_file(path: Path, option: str) -> None:
+    """Check that ``path`` is, or can be created as, a file this process can write (before any
+    work whose result would then be lost).
+
+    Raises:
+        BadInput: ``path`` is a folder or a file that cannot be written, or its folder cannot be
+            (one line naming the path and ``option``).
+    """
+    from bpb_core.errors import BadInput
+
+    if path.is_dir():
+        raise BadInput(f"{path}: {option}: a folder, expected a file path")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise BadInput(f"{path}: {option}: not writable")
+    check_writable_folder(path.parent, option)
+
+
 def make_folder(path: Path, option: str = "--out") -> None:
     """Create the folder ``path`` (and its parents) after :func:`check_writable_folder`.
 

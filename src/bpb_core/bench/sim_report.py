@@ -154,12 +154,29 @@ def _simulate_text(result: SimBench) -> str:
     )
 
 
+def check_section_file(path: Path) -> None:
+    """Check before the benchmark that :func:`update_section` can read and write ``path``.
+
+    Raises:
+        BadInput: ``path`` is a folder, unwritable, or a file that is not UTF-8 text.
+    """
+    from bpb_core.errors import BadInput
+    from bpb_core.layout import check_writable_file
+
+    check_writable_file(path, "--markdown")
+    if path.exists():
+        try:
+            path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise BadInput(f"{path}: --markdown: not a readable UTF-8 text file ({exc})") from None
+
+
 def update_section(path: Path, section: str) -> None:
     """Replace the generated part of the section starting with :data:`HEADING` in ``path`` (or
     append the section). The generated part ends with the :data:`END` line; notes written below
     it, up to the next ``## `` heading, are kept. A section without that line (written before it
     existed) is replaced whole."""
-    text = path.read_text() if path.exists() else "# Benchmarks\n"
+    text = path.read_text(encoding="utf-8") if path.exists() else "# Benchmarks\n"
     start = text.find(HEADING)
     if start < 0:
         text = text.rstrip("\n") + "\n\n" + section
@@ -171,7 +188,7 @@ def update_section(path: Path, section: str) -> None:
         else:
             rest = "" if end < 0 else text[end + 1 :]
         text = text[:start] + section + ("\n" + rest if rest else "")
-    path.write_text(text)
+    path.write_text(text, encoding="utf-8")
 
 
 def plot(result: SimBench, path: Path) -> None:

@@ -216,6 +216,30 @@ def test_bench_sim_command_writes_table_plot_and_docs(
     assert "| pymunk:dt=0.01 |" in text and "`bpb simulate` with `analytic` over 20" in text
 
 
+def test_bench_sim_refuses_outputs_it_cannot_write_before_simulating(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    folder, in_the_way = tmp_path / "img", tmp_path / "notes.txt"
+    folder.mkdir()
+    in_the_way.write_text("a file")
+    latin1 = tmp_path / "benchmarks.md"
+    latin1.write_bytes(b"# Benchmarks\n\ncaf\xe9\n")
+    cases = [
+        (("--plot", folder), f"error: {folder}: --plot: a folder"),
+        (("--plot", in_the_way / "bench.png"), f"error: {in_the_way}: --plot: not a folder"),
+        (("--markdown", folder), f"error: {folder}: --markdown: a folder"),
+        (("--markdown", latin1), f"error: {latin1}: --markdown: not a readable UTF-8"),
+    ]
+    for option, message in cases:
+        done = bench("sim", "--scenes", "1", "--simulate-scenes", "0", "--contestant",
+                     "analytic", *option)  # fmt: skip
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1, done.stderr
+        assert lines[0].startswith(message) and done.stdout == ""  # refused before the bench
+    assert latin1.read_bytes() == b"# Benchmarks\n\ncaf\xe9\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["benchmarks.md", "img", "notes.txt"]
+
+
 def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -> None:
     done = bench("sim", "--scenes", "1", "--contestant", "pymunk:dt")
     assert done.returncode == 2 and "--contestants: 'pymunk:dt'" in done.stderr

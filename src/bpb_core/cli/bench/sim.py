@@ -75,6 +75,12 @@ def bench_sim(
     from bpb_core.bench.sim import bench_simulators, with_simulate_timing
     from bpb_core.cli.console import load_registry, stderr
 
+    if plot is not None:  # before the bench: a path that cannot be written would lose it
+        from bpb_core.layout import check_writable_file
+
+        check_writable_file(plot, "--plot")
+    if markdown is not None:
+        sim_report.check_section_file(markdown)
     registry = load_registry()
     with Progress(console=stderr(), transient=True) as bar:
         task = bar.add_task("simulating", total=scenes)
