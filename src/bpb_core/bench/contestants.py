@@ -28,8 +28,9 @@ class Contestant:
     options: dict[str, Any]
 
 
-def parse_contestant(spec: str) -> Contestant:
-    """Parse ``name`` or ``name:key=value,...``; values become int, float or str.
+def parse_contestant(spec: str, flag: str = "--contestant") -> Contestant:
+    """Parse ``name`` or ``name:key=value,...``; values become int, float or str. ``flag``
+    names where the spec was given (``--contestant``, ``--reference``, ``--scaling``...).
 
     Raises:
         BadInput: An option is not ``key=value``.
@@ -39,7 +40,7 @@ def parse_contestant(spec: str) -> Contestant:
     for item in filter(None, (part.strip() for part in rest.split(","))):
         key, eq, value = item.partition("=")
         if not eq or not key.strip() or not name:
-            raise BadInput(f"--contestants: {spec!r}: expected name or name:key=value,...")
+            raise BadInput(f"{flag} {spec!r}: expected name or name:key=value,...")
         options[key.strip()] = _value(value.strip())
     return Contestant(spec.strip(), name, options)
 
@@ -66,9 +67,9 @@ def comparing_family(registry: Registry, name: str) -> Comparing:
 
 
 def build_simulators(
-    registry: Registry, family: str, entries: list[Contestant]
+    registry: Registry, family: str, entries: list[Contestant], flag: str = "--contestant"
 ) -> dict[str, Simulator]:
-    """The simulators of ``entries`` by spec, in order.
+    """The simulators of ``entries`` by spec, in order (``flag`` as in :func:`parse_contestant`).
 
     Raises:
         BadInput: A simulator is unknown, simulates another family's scenes or does not take
@@ -78,9 +79,7 @@ def build_simulators(
     for entry in entries:
         simulates = registry.simulator_info(entry.name).family
         if simulates and simulates != family:
-            raise BadInput(
-                f"--contestants: {entry.spec}: simulates {simulates} scenes, not {family} ones"
-            )
+            raise BadInput(f"{flag} {entry.spec}: simulates {simulates} scenes, not {family} ones")
         sims[entry.spec] = registry.simulator(entry.name, **entry.options)
     return sims
 

@@ -146,11 +146,14 @@ def bench_simulators(
 
     if scenes < 1:
         raise BadInput(f"--scenes: must be at least 1, got {scenes}")
+    if reference_scenes is not None and reference_scenes < 1:
+        raise BadInput(f"--reference-scenes: must be at least 1, got {reference_scenes}")
     reg = registry if registry is not None else make_registry()
     name = family or reg.default_family()
     maker = comparing_family(reg, name)
-    ref = parse_contestant(reference or maker.bench_reference)
+    ref = parse_contestant(reference or maker.bench_reference, "--reference")
     others = [parse_contestant(s) for s in (contestants or maker.bench_contestants)]
+    build_simulators(reg, name, [ref], "--reference")
     sims = build_simulators(reg, name, [ref, *(c for c in others if c.spec != ref.spec)])
     sample = maker.bench_scenes(scenes, seed)
     compared = min(len(sample), reference_scenes or len(sample))
@@ -260,6 +263,16 @@ def _scene_files(family: Comparing, count: int, seed: int, folder: Path) -> list
     return paths
 
 
+def check_simulate_with(registry: Registry, family: str, simulators: Sequence[str]) -> None:
+    """Check the ``--simulate-with`` specs before any timing.
+
+    Raises:
+        BadInput: A spec is malformed, unknown, of another family or has a bad option.
+    """
+    specs = [parse_contestant(s, "--simulate-with") for s in simulators]
+    build_simulators(registry, family, specs, "--simulate-with")
+
+
 def with_simulate_timing(
     result: SimBench,
     count: int,
@@ -273,6 +286,7 @@ def with_simulate_timing(
     reg = registry if registry is not None else make_registry()
     family = comparing_family(reg, result.family)
     names = [simulators] if isinstance(simulators, str) else list(simulators)
+    check_simulate_with(reg, result.family, names)
     figures: dict[str, float] = {}
     for name in names:
         found = time_simulate(family, name, count, registry=reg)

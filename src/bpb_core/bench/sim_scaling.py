@@ -19,6 +19,7 @@ from bpb_core.capabilities import CountsEvents
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
+    from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
 
 DEFAULT_FACTORS = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
@@ -34,7 +35,7 @@ def with_scaling(
     """``result`` with scaling rows for ``contestants`` on its first ``scenes`` scenes.
 
     Raises:
-        BadInput: The family does not count events.
+        BadInput: See :func:`scaling_simulators`.
     """
     from dataclasses import replace
 
@@ -42,10 +43,9 @@ def with_scaling(
     from bpb_core.registry import make_registry
 
     reg = registry if registry is not None else make_registry()
+    sims = scaling_simulators(reg, result.family, contestants, scenes)
     family = comparing_family(reg, result.family)
-    if not isinstance(family, CountsEvents):
-        raise BadInput(f"--scaling: scene family {result.family!r} does not count events")
-    sims = build_simulators(reg, result.family, [parse_contestant(c) for c in contestants])
+    assert isinstance(family, CountsEvents), "checked by scaling_simulators"
     sample = family.bench_scenes(scenes, result.seed)
     seconds = {(f, label): 0.0 for f in factors for label in sims}
     events = dict.fromkeys(seconds, 0)
@@ -61,3 +61,20 @@ def with_scaling(
         for f, label in seconds
     ]
     return replace(result, scaling=rows)
+
+
+def scaling_simulators(
+    registry: Registry, family: str, contestants: Sequence[str], scenes: int
+) -> dict[str, Simulator]:
+    """The simulators of ``--scaling``, checked (the CLI calls this before the
+    benchmark, so a bad spec does not wait for it).
+
+    Raises:
+        BadInput: Fewer than one scene, a family that does not count events, or a bad spec.
+    """
+    if scenes < 1:
+        raise BadInput(f"--scaling-scenes: must be at least 1, got {scenes}")
+    if not isinstance(comparing_family(registry, family), CountsEvents):
+        raise BadInput(f"--scaling: scene family {family!r} does not count events")
+    specs = [parse_contestant(c, "--scaling") for c in contestants]
+    return build_simulators(registry, family, specs, "--scaling")

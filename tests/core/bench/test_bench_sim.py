@@ -242,7 +242,32 @@ def test_bench_sim_refuses_outputs_it_cannot_write_before_simulating(
 
 def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -> None:
     done = bench("sim", "--scenes", "1", "--contestant", "pymunk:dt")
-    assert done.returncode == 2 and "--contestants: 'pymunk:dt'" in done.stderr
+    assert done.returncode == 2 and "--contestant 'pymunk:dt'" in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (("--reference-scenes", "-2"), "--reference-scenes: must be at least 1, got -2"),
+        (("--reference-scenes", "0"), "--reference-scenes: must be at least 1, got 0"),
+        (("--reference", "analytic:precision"), "--reference 'analytic:precision': expected"),
+        (("--scaling", "analytic", "--scaling-scenes", "0"), "--scaling-scenes: must be at"),
+        (("--scaling", "nosuch"), "unknown simulator 'nosuch'"),
+        (("--scaling", "pymunk:dt"), "--scaling 'pymunk:dt': expected name"),
+        (("--simulate-scenes", "3", "--simulate-with", "nosuch"), "unknown simulator 'nosuch'"),
+        (("--simulate-scenes", "3", "--simulate-with", "pymunk:dt=-1"), "--dt: must be"),
+        (("--simulate-scenes", "-1"), "--simulate-scenes: must be at least 0"),
+    ],
+)
+def test_bench_sim_refuses_a_bad_option_of_any_step_before_simulating(
+    bench: Callable[..., Any], option: tuple[str, ...], message: str
+) -> None:
+    # 100,000 scenes would take many minutes: refused at once, the comparison never ran
+    args = ("sim", "--scenes", "100000", "--contestant", "analytic", "--simulate-scenes", "0")
+    done = bench(*args, *option, timeout=60)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
+    assert done.stdout == ""
 
 
 def test_parallel_simulate_lines_keep_input_order(tmp_path: Path) -> None:

@@ -9,6 +9,7 @@ import click
 
 if TYPE_CHECKING:
     from bpb_core.bench.sim import SimBench
+    from bpb_core.registry import Registry
 
 
 @click.command("sim")
@@ -82,6 +83,7 @@ def bench_sim(
     if markdown is not None:
         sim_report.check_section_file(markdown)
     registry = load_registry()
+    _check_options(registry, family, scaling, scaling_scenes, simulate_scenes, simulate_with)
     with Progress(console=stderr(), transient=True) as bar:
         task = bar.add_task("simulating", total=scenes)
         result = bench_simulators(
@@ -108,6 +110,29 @@ def bench_sim(
     if markdown is not None:
         rel = None if plot is None else _relative(plot, markdown.parent)
         sim_report.update_section(markdown, sim_report.markdown(result, rel))
+
+
+def _check_options(
+    registry: Registry,
+    family: str | None,
+    scaling: tuple[str, ...],
+    scaling_scenes: int,
+    simulate_scenes: int,
+    simulate_with: tuple[str, ...],
+) -> None:
+    """Refuse bad options of the steps after the comparison before it runs."""
+    from bpb_core.bench.sim import check_simulate_with
+    from bpb_core.errors import BadInput
+
+    name = family or registry.default_family()
+    if scaling:
+        from bpb_core.bench.sim_scaling import scaling_simulators
+
+        scaling_simulators(registry, name, scaling, scaling_scenes)
+    if simulate_scenes < 0:
+        raise BadInput(f"--simulate-scenes: must be at least 0 (0 skips), got {simulate_scenes}")
+    if simulate_scenes and simulate_with:
+        check_simulate_with(registry, name, simulate_with)
 
 
 def _show(result: SimBench) -> None:
