@@ -42,6 +42,8 @@ class Phase:
     rate: float
     peak_rss_mb: float
     exit_code: int
+    error: str = ""
+    """The last line a failed client wrote to stderr (empty when it succeeded)."""
 
 
 class _Server:
@@ -67,13 +69,17 @@ class _Server:
         self.process.wait()
 
 
-def _child(args: list[str]) -> tuple[int, float]:
-    """Run a child process; return its exit code and peak RSS in MB."""
+def _child(args: list[str]) -> tuple[int, float, str]:
+    """Run a child process; return its exit code, peak RSS in MB and, when it failed, the last
+    line of its stderr (kept in a file: an unread pipe would block a chatty child)."""
     env = {**os.environ, "OPENAI_API_KEY": _DUMMY_KEY}
-    process = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(process.pid, 0)
-    process.returncode = os.waitstatus_to_exitcode(status)
-    return process.returncode, usage.ru_maxrss / 1024
+    with tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace") as err:
+        process = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(process.pid, 0)
+        process.returncode = os.waitstatus_to_exitcode(status)
+        err.seek(0)
+        lines = [line.strip() for line in err if line.strip()] if process.returncode else []
+    return process.returncode, usage.ru_maxrss / 1024, lines[-1] if lines else ""
 
 
 def bench_dataset(
@@ -131,11 +137,11 @@ def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> 
 
 def _measure(server: _Server, name: str, args: list[str], latency: float) -> Phase:
     server.phase(name)
-    code, rss = _child(args)
+    code, rss, error = _child(args)
     info = server.stats()["phases"].get(name, {"count": 0, "first": 0.0, "last": 0.0})
     span = info["last"] - info["first"] + latency
     rate = info["count"] / span if span > 0 else 0.0
-    return Phase(name, info["count"], span, rate, rss, code)
+    return Phase(name, info["count"], span, rate, rss, code, error)
 
 
 def _combine(name: str, phases: list[Phase]) -> Phase:
@@ -148,6 +154,7 @@ def _combine(name: str, phases: list[Phase]) -> Phase:
         requests / seconds if seconds > 0 else 0.0,
         max(p.peak_rss_mb for p in phases),
         max((p.exit_code for p in phases), key=abs),
+        next((p.error for p in phases if p.exit_code), ""),
     )
 
 
@@ -203,6 +210,7 @@ def bench_memory(data: Path, scenes_per_horizon: int, concurrency: int = 64) -> 
                 phase.rate,
                 phase.peak_rss_mb,
                 phase.exit_code,
+                phase.error,
             )
     finally:
         server.close()

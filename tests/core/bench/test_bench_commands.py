@@ -92,3 +92,21 @@ def test_bench_run_counts_every_request_of_both_clients(
     for client in ("bare litellm loop", "bpb run"):  # the memory run has no latency to wait
         assert float(done.row(client)[2]) <= 80.0, client  # the server's delay bounds the rate
     assert (tmp_path / "bench-run-data-1" / "dataset.json").is_file()  # kept for reuse
+
+
+def test_bench_run_shows_no_figures_for_a_client_that_failed(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    from bpb_core.dataset import generate_dataset
+
+    data = generate_dataset(tmp_path / "bench-run-data-1", 1, [1, 2, 3, 4, 5], seed=0)
+    (data / "h2" / "scene_0000" / "init.png").write_bytes(b"not a png")  # bpb run stops here
+    args = ["--concurrency", "4", "--latency", "0.01", "--throughput-scenes", "1"]
+    done = bench("run", *args, "--memory-scenes", "0", "--rounds", "1", "--work", tmp_path)
+    assert done.returncode == 1, done.stderr + done.stdout
+    requests, *figures, code = done.row("bpb run")
+    assert int(requests) >= 0 and code == "2"
+    assert figures == ["–"] * 5  # no seconds, rate, shares or memory of a failed run
+    assert float(done.row("bare litellm loop")[2]) > 0  # the bare loop reads one scene only
+    said = " ".join(done.stderr.split())  # rich wraps long lines
+    assert re.search(r"bpb run failed \(exit 2\): error: .*init\.png", said)

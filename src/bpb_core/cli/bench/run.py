@@ -79,20 +79,30 @@ def bench_run(
     table.add_row("ideal", "", "", f"{ideal:.1f}", "100.0", "", "", "")
     phases = [bare, ours]
     for phase in phases:
-        _add(table, phase, ideal, bare.rate)
+        _add(table, phase, ideal, bare)
     if memory_scenes:
         phases.append(bench_memory(data, memory_scenes, concurrency))
         _add(table, phases[-1], None, None)
     stdout().print(table)
-    if any(phase.exit_code for phase in phases):
+    failed = [phase for phase in phases if phase.exit_code]
+    for phase in failed:
+        stderr().print(f"{phase.name} failed (exit {phase.exit_code}): {phase.error or '?'}")
+    if failed:
         raise click.exceptions.Exit(1)  # a client failed: its figures do not count
 
 
-def _add(table: Table, phase: Phase, ideal: float | None, bare: float | None) -> None:
+def _add(table: Table, phase: Phase, ideal: float | None, bare: Phase | None) -> None:
+    """One client's row; a failed client's timings are not figures (shown as "–"), nor is a
+    share of a failed bare loop."""
+    if phase.exit_code:
+        table.add_row(phase.name, str(phase.requests), *["–"] * 5, str(phase.exit_code))
+        return
+
     def share(of: float | None) -> str:
         return f"{100 * phase.rate / of:.1f}" if of else ""
 
+    base = None if bare is None else ("–" if bare.exit_code else share(bare.rate))
     table.add_row(
         phase.name, str(phase.requests), f"{phase.seconds:.2f}", f"{phase.rate:.1f}",
-        share(ideal), share(bare), f"{phase.peak_rss_mb:.0f}", str(phase.exit_code),
+        share(ideal), base or "", f"{phase.peak_rss_mb:.0f}", str(phase.exit_code),
     )  # fmt: skip
