@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bpb_core.bench.run_bare import input_mode
+from bpb_core.bench.run_bare import CALL_TIMEOUT, input_mode
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
 
@@ -129,7 +129,7 @@ def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> 
         "--limit",
         str(limit),
         "--timeout",
-        "60",
+        str(CALL_TIMEOUT),
         "--input-mode",
         input_mode(data),
     ]

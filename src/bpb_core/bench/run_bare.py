@@ -19,6 +19,10 @@ from typing import Any
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.model_calls import ImagePart, Message, TextPart
 
+CALL_TIMEOUT = 60
+"""Seconds either client of ``bpb bench run`` waits for one reply: the server's latency must
+stay below it."""
+
 
 def input_mode(data: Path) -> InputMode:
     """``image`` when the dataset's scene family has images, else ``state``."""
@@ -78,7 +82,7 @@ async def bare_loop(api_base: str, n: int, concurrency: int, data: Path) -> int:
                 messages=bodies[i % len(bodies)],
                 api_base=api_base,
                 temperature=0.0,
-                timeout=60,
+                timeout=CALL_TIMEOUT,
                 max_retries=0,
             )
             ok += 1

@@ -110,3 +110,21 @@ def test_bench_run_shows_no_figures_for_a_client_that_failed(
     assert float(done.row("bare litellm loop")[2]) > 0  # the bare loop reads one scene only
     said = " ".join(done.stderr.split())  # rich wraps long lines
     assert re.search(r"bpb run failed \(exit 2\): error: .*init\.png", said)
+
+
+def test_bench_run_refuses_a_latency_no_call_outlives_and_a_work_path_under_a_file(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    in_the_way = tmp_path / "notes.txt"
+    in_the_way.write_text("a file")
+    cases = [
+        (("--latency", "inf"), "error: --latency: must be at least 0 and below the clients' 60"),
+        (("--latency", "60"), "error: --latency: must be at least 0 and below"),
+        (("--work", in_the_way / "w"), f"error: {in_the_way}: --work: not a folder"),
+    ]
+    for option, message in cases:  # refused at once: inf used to wait for ever
+        done = bench("run", "--memory-scenes", "0", "--work", tmp_path / "w", *option, timeout=60)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1, done.stderr
+        assert lines[0].startswith(message), lines
+    assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]  # nothing generated

@@ -59,11 +59,17 @@ def bench_run(
 
     from bpb_core.bench import machine_description, today
     from bpb_core.bench.run import bench_dataset, bench_memory, bench_throughput
+    from bpb_core.bench.run_bare import CALL_TIMEOUT
     from bpb_core.cli.console import stderr, stdout
     from bpb_core.errors import BadInput
+    from bpb_core.layout import check_writable_folder
 
-    if not latency >= 0:
-        raise BadInput(f"--latency: must be at least 0, got {latency:g}")
+    if not 0 <= latency < CALL_TIMEOUT:  # at or above it every call times out; nan too
+        raise BadInput(
+            f"--latency: must be at least 0 and below the clients' {CALL_TIMEOUT} s call "
+            f"timeout, got {latency:g}"
+        )
+    check_writable_folder(work, "--work")
 
     def generating(data: Path, scenes: int) -> None:
         stderr().print(f"generating {scenes} scenes with images in {data} ...")
