@@ -95,6 +95,19 @@ def test_bench_score_command_prints_a_row_per_task_and_method(bench: Callable[..
         assert float(row[5].replace(",", "")) > 0
 
 
+def test_bench_score_refuses_a_bad_runs_folder_before_scoring(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    for folder, message in [(tmp_path / "nosuch", "no such run folder"), (empty, "holds none")]:
+        done = bench("score", "--per-horizon", "1", "--runs", folder)  # 1M rows x 5: minutes
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1, done.stderr
+        assert lines[0].startswith(f"error: {folder}: ") and message in lines[0]
+        assert done.stdout == ""  # no scoring table: refused first
+
+
 def test_bench_score_covers_a_third_party_family(tmp_path: Path, bench: Callable[..., Any]) -> None:
     tiny = install_tiny(tmp_path / "site")
     done = bench("score", "--rows", "2000", "--repeats", "1", "--per-horizon", "2", env=tiny.env)

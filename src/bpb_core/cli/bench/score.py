@@ -28,6 +28,10 @@ def bench_score(rows: int, repeats: int, per_horizon: int, run_dirs: tuple[str, 
     if rows < 1 or repeats < 1 or per_horizon < 1:
         raise BadInput("--rows/--repeats/--per-horizon: must be at least 1")
     registry = load_registry()
+    if run_dirs:  # a bad folder is refused now, not after the scoring benchmark
+        from bpb_core.results.reading import find_runs
+
+        find_runs(list(run_dirs), registry)
     with stderr().status("scoring") as status:
         timings = bench_score(
             rows, repeats=repeats, per_horizon=per_horizon, registry=registry,
