@@ -54,12 +54,13 @@ class GenerateTiming:
 
 @dataclass(frozen=True)
 class MemoryUse:
-    """Peak resident set sizes (MiB) of one ``generate_dataset`` call in a fresh process."""
+    """Peak resident set sizes (MiB) of one ``generate_dataset`` call in a fresh process
+    (``worker_mib`` is None with one worker: the scenes are made in the process itself)."""
 
     scenes: int
     seconds: float
     parent_mib: float
-    worker_mib: float
+    worker_mib: float | None
 
 
 def _encode_share(args: tuple[list[bytes], int, bool, int]) -> int:
@@ -172,5 +173,5 @@ def measure_memory(per_horizon: int, workers: int | None = None) -> MemoryUse:
         scenes=5 * per_horizon,
         seconds=data["seconds"],
         parent_mib=data["parent_kib"] / 1024,
-        worker_mib=data["worker_kib"] / 1024,
+        worker_mib=data["worker_kib"] / 1024 if n_workers > 1 else None,
     )

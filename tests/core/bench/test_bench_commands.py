@@ -70,6 +70,16 @@ def test_bench_generate_times_each_variant(bench: Callable[..., Any], registry: 
     assert float(with_images) > float(done.row("bpb generate --no-images")[0])
 
 
+def test_bench_generate_memory_states_no_worker_peak_without_workers(
+    bench: Callable[..., Any],
+) -> None:
+    done = bench("generate", "--per-horizon", "1", "--workers", "1", "--memory", "1")
+    assert done.returncode == 0, done.stderr
+    seconds, parent, worker = done.row("5")
+    assert float(seconds) > 0 and float(parent) > 10
+    assert worker == "–"  # one worker makes the scenes in the parent: no worker to measure
+
+
 def test_bench_generate_rejects_bad_sizes(bench: Callable[..., Any]) -> None:
     done = bench("generate", "--per-horizon", "0")
     assert done.returncode == 2 and "--per-horizon" in done.stderr

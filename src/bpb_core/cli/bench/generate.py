@@ -47,7 +47,6 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
         mem = Table("scenes", "seconds", "parent peak MiB", "largest worker MiB", title="Memory")
         for scenes in sizes:
             m = measure_memory(scenes, workers)
-            mem.add_row(
-                str(m.scenes), f"{m.seconds:.1f}", f"{m.parent_mib:.1f}", f"{m.worker_mib:.1f}"
-            )
+            worker = "–" if m.worker_mib is None else f"{m.worker_mib:.1f}"  # none with 1
+            mem.add_row(str(m.scenes), f"{m.seconds:.1f}", f"{m.parent_mib:.1f}", worker)
         stdout().print(mem)
