@@ -11,6 +11,7 @@ sums of its disagreement counts. :mod:`bpb_core.bench.sim_report` turns it into 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import statistics
 import tempfile
@@ -46,16 +47,22 @@ Progress = Callable[[int, int], None]
 class SimRow:
     """One contestant's figures over the benchmark scenes (``counts`` in column order; errors
     and counts over the scenes the reference ran; ``us_per_event`` when the family counts
-    events, ``batch_ms`` per scene of the simulator's batch call when it has one)."""
+    events, ``batch_ms`` per scene of the simulator's batch call when it has one).
+
+    A scene on which the contestant raised, or whose comparison gave a non-finite error, is
+    ``failed`` (``first_error`` says why) and counts in no figure: with every scene failed,
+    the time is None, and with none compared the errors are None and ``counts`` is empty."""
 
     name: str
-    ms_per_scene: float
-    max_error: float
-    median_error: float
+    ms_per_scene: float | None
+    max_error: float | None
+    median_error: float | None
     counts: dict[str, float]
     reference: bool = False
     us_per_event: float | None = None
     batch_ms: float | None = None
+    failed: int = 0
+    first_error: str = ""
 
 
 @dataclass(frozen=True)
@@ -101,6 +108,8 @@ class _Tally:
     errors: list[float] = field(default_factory=list)
     counts: dict[str, float] = field(default_factory=dict)
     batch_ms: float | None = None
+    failed: int = 0
+    first_error: str = ""
 
     def add(self, seconds: float, measures: dict[str, float] | None, events: int) -> None:
         self.seconds += seconds
@@ -113,12 +122,19 @@ class _Tally:
             if key != ERROR:
                 self.counts[key] = self.counts.get(key, 0.0) + value
 
+    def fail(self, why: str) -> None:
+        self.failed += 1
+        self.first_error = self.first_error or why
+
     def row(self, name: str, reference: bool, count_events: bool) -> SimRow:
-        ms = 1000 * self.seconds / self.runs
-        mid = statistics.median(self.errors)
+        ms = 1000 * self.seconds / self.runs if self.runs else None
+        high = max(self.errors) if self.errors else None
+        mid = statistics.median(self.errors) if self.errors else None
         per_event = 1e6 * self.seconds / self.events if count_events and self.events else None
-        counts = dict(self.counts)
-        return SimRow(name, ms, max(self.errors), mid, counts, reference, per_event, self.batch_ms)
+        return SimRow(
+            name, ms, high, mid, dict(self.counts), reference, per_event, self.batch_ms,
+            self.failed, self.first_error,
+        )  # fmt: skip
 
 
 def bench_simulators(
@@ -161,7 +177,7 @@ def bench_simulators(
     _time_batches(sims, sample, tallies)
     counting = isinstance(maker, CountsEvents)
     rows = [t.row(label, label == ref.spec, counting) for label, t in tallies.items()]
-    columns = tuple(rows[0].counts)
+    columns = tuple(next((r.counts for r in rows if r.counts), {}))
     description, measures = maker.bench_description, maker.bench_measures
     return SimBench(
         name, len(sample), seed, description, measures, columns, rows, compared=compared
@@ -176,23 +192,32 @@ def _run_all(
     compared: int,
 ) -> dict[str, _Tally]:
     """Each scene through every simulator in turn, the first one's outcome the reference (run
-    on the first ``compared`` scenes only)."""
+    on the first ``compared`` scenes only). A run that raises, or whose error is not finite,
+    is a failed scene of that simulator; a scene the reference failed is compared by none."""
     tallies = {label: _Tally() for label in sims}
     counter = family.events if isinstance(family, CountsEvents) else None
     for sim in sims.values():  # warm-up: imports, caches, compiled code loaded
-        sim.run(sample[0])
+        with contextlib.suppress(Exception):  # a failing simulator is counted below
+            sim.run(sample[0])
     reference = next(iter(sims))
     for index, scene in enumerate(sample):
         truth = None
         for label, sim in sims.items():
             if label == reference and index >= compared:
                 continue
-            outcome, seconds = timed_run(sim, scene)
-            truth = outcome if truth is None and index < compared else truth
-            measures = None if truth is None else family.compare(outcome, truth, scene)
+            try:
+                outcome, seconds = timed_run(sim, scene)
+                truth = outcome if label == reference else truth
+                measures = None if truth is None else family.compare(outcome, truth, scene)
+                events = counter(outcome) if counter is not None else 0
+            except Exception as exc:  # a plugin's own failure on this scene
+                tallies[label].fail(f"{type(exc).__name__}: {exc}")
+                continue
             if measures is not None and ERROR not in measures:
                 raise PluginError(f"scene family: compare() returned no {ERROR!r}")
-            events = counter(outcome) if counter is not None else 0
+            if measures is not None and not math.isfinite(measures[ERROR]):
+                tallies[label].fail(f"{ERROR} {measures[ERROR]!r}")
+                continue
             tallies[label].add(seconds, measures, events)
         if progress is not None:
             progress(index + 1, len(sample))
@@ -205,10 +230,13 @@ def _time_batches(
     """Per-scene milliseconds of each batch-capable simulator's one call on all scenes (after
     a warm-up call on the first scene)."""
     for label, sim in sims.items():
-        if isinstance(sim, RunsMany):
-            sim.run_many(sample[:1])
-            started = time.perf_counter()
-            sim.run_many(sample)
+        if isinstance(sim, RunsMany) and not tallies[label].failed:
+            try:
+                sim.run_many(sample[:1])
+                started = time.perf_counter()
+                sim.run_many(sample)
+            except Exception:  # no batch figure ("–"); the one-scene figures stand
+                continue
             tallies[label].batch_ms = 1000 * (time.perf_counter() - started) / len(sample)
 
 

@@ -6,6 +6,7 @@ description of the scenes and the meaning of the measures are the scene family's
 
 from __future__ import annotations
 
+import math
 import textwrap
 from pathlib import Path
 
@@ -19,6 +20,16 @@ WIDTH = 100
 def count_text(value: float) -> str:
     """A summed disagreement count: ``3`` when whole, else three significant digits."""
     return str(int(value)) if float(value).is_integer() else f"{value:.3g}"
+
+
+def count_cell(row: SimRow, column: str) -> str:
+    """``row``'s summed count of ``column``, or "–" when it compared no scene."""
+    return count_text(row.counts[column]) if column in row.counts else "–"
+
+
+def figure(value: float | None, spec: str = ".3g") -> str:
+    """A figure in ``spec``, or "–" where there is none (every scene failed)."""
+    return "–" if value is None else format(value, spec)
 
 
 def row_name(row: SimRow) -> str:
@@ -69,19 +80,16 @@ def _table(result: SimBench) -> list[str]:
     batch = any(r.batch_ms is not None for r in result.rows)
     head = ["simulator", "ms/scene"]
     head += ["µs/event"] * per_event + ["batch ms/scene"] * batch
-    head += ["max error", "median error", *result.columns]
+    failed = any(r.failed for r in result.rows)
+    head += ["max error", "median error", *result.columns] + ["failed scenes"] * failed
     lines = ["| " + " | ".join(head) + " |", "| --- |" + " ---: |" * (len(head) - 1)]
     for row in result.rows:
-        cells = [row_name(row), f"{row.ms_per_scene:.3g}"]
-        cells += [_maybe(row.us_per_event)] * per_event + [_maybe(row.batch_ms)] * batch
-        cells += [f"{row.max_error:.2e}", f"{row.median_error:.2e}"]
-        cells += [count_text(row.counts[c]) for c in result.columns]
+        cells = [row_name(row), figure(row.ms_per_scene)]
+        cells += [figure(row.us_per_event)] * per_event + [figure(row.batch_ms)] * batch
+        cells += [figure(row.max_error, ".2e"), figure(row.median_error, ".2e")]
+        cells += [count_cell(row, c) for c in result.columns] + [str(row.failed)] * failed
         lines.append("| " + " | ".join(cells) + " |")
     return lines
-
-
-def _maybe(value: float | None) -> str:
-    return "–" if value is None else f"{value:.3g}"
 
 
 def _scaling(result: SimBench) -> list[str]:
@@ -111,26 +119,36 @@ def _reading(result: SimBench) -> str:
     """Plain-language reading of the table, computed from it."""
     reference = next((r for r in result.rows if r.reference), None)
     others = sorted(
-        (r for r in result.rows if not r.reference), key=lambda r: (r.max_error, r.ms_per_scene)
+        (r for r in result.rows if not r.reference and _whole(r)),
+        key=lambda r: (_num(r.max_error), _num(r.ms_per_scene)),
     )
-    if reference is None or not others:
+    if reference is None or reference.ms_per_scene is None or not others:
         return ""
     best = others[0]
     text = (
         f"Reading: `{best.name}` comes closest to the reference (max error "
         f"{best.max_error:.1e}, {count_text(sum(best.counts.values()))} disagreements in all) at "
         f"{best.ms_per_scene:.3g} ms per scene, "
-        f"{_speed(best.ms_per_scene, reference.ms_per_scene)} the reference."
+        f"{_speed(_num(best.ms_per_scene), reference.ms_per_scene)} the reference."
     )
     if len(others) > 1:
-        runner = min(others[1:], key=lambda r: (r.median_error, r.ms_per_scene))
+        runner = min(others[1:], key=lambda r: (_num(r.median_error), _num(r.ms_per_scene)))
         text += (
             f" The most accurate of the others, `{runner.name}`, is "
-            f"{_speed(runner.ms_per_scene, best.ms_per_scene)} `{best.name}`, "
+            f"{_speed(_num(runner.ms_per_scene), _num(best.ms_per_scene))} `{best.name}`, "
             f"with median error {runner.median_error:.1e}, max error {runner.max_error:.1e} "
             f"and {count_text(sum(runner.counts.values()))} disagreements."
         )
     return text
+
+
+def _whole(row: SimRow) -> bool:
+    """Every scene ran and was compared: a row the reading may rank."""
+    return not row.failed and None not in (row.ms_per_scene, row.max_error, row.median_error)
+
+
+def _num(value: float | None) -> float:
+    return math.inf if value is None else value
 
 
 def _speed(ms: float, other_ms: float) -> str:
@@ -201,6 +219,8 @@ def plot(result: SimBench, path: Path) -> None:
     fig, axes = figure(1, 1, (8, 5), dpi=150)
     ax = axes[0, 0]
     for row in (r for r in result.rows if not r.reference):
+        if row.ms_per_scene is None or row.max_error is None or row.median_error is None:
+            continue  # every scene failed or none compared: no point to draw
         x = row.ms_per_scene
         high, mid = max(row.max_error, floor), max(row.median_error, floor)
         ax.plot([x, x], [mid, high], color="0.6", lw=1)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -141,6 +142,28 @@ def test_any_comparing_family_is_benchmarked_with_its_own_columns(tmp_path: Path
     assert "| stepper:dt=0.3 |" in text and "| past |" in text and "points moving" in text
 
 
+def test_a_non_finite_error_is_a_failed_scene_not_a_figure() -> None:
+    class NanOnce(Exact):
+        name = "nan-once"
+
+        def run(self, scene: Mover, horizon: float | None = None) -> float:
+            return math.nan if scene.scene_id == "s2" else super().run(scene, horizon)
+
+    class NanPlugin(LinePlugin):
+        @hookimpl
+        def bpb_simulators(self) -> list[SimulatorInfo]:
+            return [
+                SimulatorInfo("exact", lambda: Exact, "closed form", family="line"),
+                SimulatorInfo("nan-once", lambda: NanOnce, "nan on s2", family="line"),
+            ]
+
+    registry = make_registry([NanPlugin()], entry_points=False)
+    _, row = bench_simulators(5, 0, ("nan-once",), registry=registry).rows
+    # max() of a list holding nan depends on where the nan is; the scene is failed instead
+    assert (row.failed, row.max_error, row.median_error) == (1, 0.0, 0.0)
+    assert row.first_error == "error nan"
+
+
 def test_a_family_that_cannot_compare_is_bad_input() -> None:
     class Plain:
         name = "plain"
@@ -238,6 +261,50 @@ def test_bench_sim_refuses_outputs_it_cannot_write_before_simulating(
         assert lines[0].startswith(message) and done.stdout == ""  # refused before the bench
     assert latin1.read_bytes() == b"# Benchmarks\n\ncaf\xe9\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["benchmarks.md", "img", "notes.txt"]
+
+
+DIVERGING = """
+from bpb_core.hookspecs import hookimpl
+from bpb_core.registration import SimulatorInfo
+
+
+class Diverging:
+    name = "diverging"
+
+    def run(self, scene, horizon=None):
+        raise FloatingPointError("step size underflow")
+
+
+@hookimpl
+def bpb_simulators():
+    return [SimulatorInfo("diverging", lambda: Diverging, "always fails", family="billiards")]
+"""
+
+
+def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    import os
+
+    from support.plugin_dist import install_fake_dist
+
+    site = tmp_path / "site"
+    install_fake_dist(site, "bpb-diverging", "1.0", {"bpb_diverging": DIVERGING},
+                      {"diverging": "bpb_diverging"})  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), os.environ["PYTHONPATH"]])}
+    plot, doc = tmp_path / "sim.png", tmp_path / "benchmarks.md"
+    args = ["sim", "--scenes", "3", "--simulate-scenes", "0", "--contestant", "analytic"]
+    args += ["--contestant", "diverging", "--plot", plot, "--markdown", doc]
+    done = bench(*args, env=env)
+    assert done.returncode == 1, done.stderr
+    assert done.row("diverging") == ["–", "–", "–", "–", "–", "–", "–", "3"]
+    assert done.row("analytic")[-1] == "0" and float(done.row("analytic")[0]) > 0
+    said = " ".join(done.stderr.split())
+    assert "warning: diverging: failed on 3 scene(s)" in said and "step size underflow" in said
+    text = doc.read_text()
+    assert "| diverging | – | – | – | – | – | – | – | – | – | 3 |" in text
+    assert "`diverging`" not in text.split("Reading:")[1]  # nothing read from its figures
+    assert plot.stat().st_size > 0
 
 
 def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -> None:

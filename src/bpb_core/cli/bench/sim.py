@@ -69,7 +69,9 @@ def bench_sim(
     plot: Path | None,
     markdown: Path | None,
 ) -> None:
-    """Time simulators of one scene family on the same scenes and compare with a reference."""
+    """Time simulators of one scene family on the same scenes and compare with a reference.
+
+    Exits 1 when a simulator failed on a scene (left out of its figures)."""
     from rich.progress import Progress
 
     from bpb_core.bench import sim_report
@@ -110,6 +112,8 @@ def bench_sim(
     if markdown is not None:
         rel = None if plot is None else _relative(plot, markdown.parent)
         sim_report.update_section(markdown, sim_report.markdown(result, rel))
+    if any(row.failed for row in result.rows):
+        raise click.exceptions.Exit(1)  # figures written; a contestant failed on some scenes
 
 
 def _check_options(
@@ -138,19 +142,28 @@ def _check_options(
 def _show(result: SimBench) -> None:
     from rich.table import Table
 
-    from bpb_core.bench.sim_report import count_text, row_name
-    from bpb_core.cli.console import stdout
+    from bpb_core.bench.sim_report import count_cell, figure, row_name
+    from bpb_core.cli.console import stderr, stdout
 
     title = f"bpb bench sim: {result.scenes} {result.family} scenes, {result.machine}, {result.day}"
     table = Table(title=title)
-    for column in ("simulator", "ms/scene", "max error", "median error", *result.columns):
+    failed = ["failed"] if any(row.failed for row in result.rows) else []
+    for column in ("simulator", "ms/scene", "max error", "median error", *result.columns, *failed):
         first = column == "simulator"
         table.add_column(column, justify="left" if first else "right", no_wrap=first)
     for row in result.rows:
-        cells = [f"{row.ms_per_scene:.3g}", f"{row.max_error:.1e}", f"{row.median_error:.1e}"]
-        counts = [count_text(row.counts[c]) for c in result.columns]
-        table.add_row(row_name(row), *cells, *counts)
+        cells = [figure(row.ms_per_scene), figure(row.max_error, ".1e")]
+        cells += [figure(row.median_error, ".1e")]
+        cells += [count_cell(row, c) for c in result.columns] + [str(row.failed)] * len(failed)
+        table.add_row(row_name(row), *cells)
     stdout().print(table)
+    for row in result.rows:
+        if row.failed:
+            stderr().print(
+                f"warning: {row.name}: failed on {row.failed} scene(s), left out of its "
+                f"figures; first: {row.first_error}",
+                markup=False,
+            )
     for row in result.rows:
         if row.us_per_event is not None or row.batch_ms is not None:
             batch = "–" if row.batch_ms is None else f"{row.batch_ms:.3g}"
