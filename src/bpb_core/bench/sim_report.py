@@ -11,6 +11,7 @@ import textwrap
 from pathlib import Path
 
 from bpb_core.bench.sim import SimBench, SimRow
+from bpb_core.run_folder import write_bytes_atomic
 
 HEADING = "## Simulators (`bpb bench sim`)"
 END = "<!-- end of the bpb bench sim output: what follows in this section is kept -->"
@@ -206,7 +207,7 @@ def update_section(path: Path, section: str) -> None:
         else:
             rest = "" if end < 0 else text[end + 1 :]
         text = text[:start] + section + ("\n" + rest if rest else "")
-    path.write_text(text, encoding="utf-8")
+    write_bytes_atomic(path, text.encode("utf-8"))  # a reader never sees the file half-written
 
 
 def plot(result: SimBench, path: Path) -> None:
@@ -235,5 +236,4 @@ def plot(result: SimBench, path: Path) -> None:
     ax.set_title(f"{result.family} simulators: speed against error ({result.scenes} scenes)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="lower right", title="dot = max error over scenes", title_fontsize=7)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_bytes(png(fig))
+    write_bytes_atomic(path, png(fig))

@@ -214,6 +214,27 @@ def test_notes_below_the_generated_part_survive_a_rerun(tmp_path: Path, registry
     assert text.endswith("## Runner\n\nkeep me\n")
 
 
+def test_a_reader_never_sees_benchmarks_md_half_written(tmp_path: Path, registry: Registry) -> None:
+    import subprocess
+    import sys
+
+    doc = tmp_path / "benchmarks.md"
+    section = sim_report.markdown(bench_simulators(1, 0, ("analytic",), registry=registry), None)
+    doc.write_text("# Benchmarks\n\n" + section + "\nkeep me\n\n## Runner\n\nkeep me too\n")
+    writer = subprocess.Popen(  # another bench updating the same file, over and over
+        [sys.executable, "-c", "import sys; from pathlib import Path\n"
+         "from bpb_core.bench.sim_report import update_section\n"
+         "for _ in range(400): update_section(Path(sys.argv[1]), sys.argv[2])",
+         str(doc), section]
+    )  # fmt: skip
+    try:
+        while writer.poll() is None:
+            assert doc.read_text().endswith("keep me\n\n## Runner\n\nkeep me too\n")
+    finally:
+        writer.wait()
+    assert writer.returncode == 0 and doc.read_text().count(sim_report.HEADING) == 1
+
+
 def test_bench_sim_command_writes_table_plot_and_docs(
     tmp_path: Path, bench: Callable[..., Any]
 ) -> None:
