@@ -112,6 +112,22 @@ def test_a_run_file_entry_that_is_not_a_table_is_one_line_exit_2(
         assert not (tmp_path / "runs").exists()
 
 
+def test_an_adapter_without_option_sets_labelled_twice_is_told_to_be_given_once(
+    run_bpb: RunBpb, dataset: Path, tmp_path: Path
+) -> None:
+    config = tmp_path / "sweep.toml"
+    config.write_text(
+        '[defaults]\nspec = "baseline:stasis"\n[[adapter]]\nlabel = "a"\n[[adapter]]\nlabel = "b"\n'
+    )
+    done = run_bpb("run", "--data", str(dataset), "--out", str(tmp_path / "runs"),
+                   "--config", str(config))  # fmt: skip
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "given twice; this adapter does not name its runs by label" in lines[0]
+    assert "add a label" not in lines[0]  # both have one: that advice could not help
+    assert not (tmp_path / "runs").exists()
+
+
 def test_model_args_parse_json_values_and_nest_dotted_keys() -> None:
     items = ["reasoning_effort=high", "max_tokens=16000", "thinking.budget_tokens=8000",
              "thinking.type=enabled", 'stop=["END"]', "extra_headers.x-a=1"]  # fmt: skip

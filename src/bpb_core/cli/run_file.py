@@ -240,6 +240,12 @@ def prepare(registry: Any, plans: list[AdapterPlan], *, check: bool = True) -> l
     names = [p.name for p in ready]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
+        labels = {p.plan.options.label for p in ready if p.name == twice[0]}
+        if len(labels) > 1:  # labelled apart, yet one name: the adapter has no option sets
+            raise BadInput(
+                f"--adapter {twice[0]}: given twice; this adapter does not name its runs by "
+                "label (it has no option sets), so both would write one run folder: give it once"
+            )
         raise BadInput(f"--adapter {twice[0]}: given twice with the same options; add a label")
     return ready
 
