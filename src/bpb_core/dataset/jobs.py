@@ -18,6 +18,7 @@ from bpb_core.dataset.worker import (
     Job,
     WorkerSetup,
     calibrate_job,
+    init_pool_worker,
     init_worker,
     remove_scene,
     run_job,
@@ -107,7 +108,7 @@ def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
     host_froze = gc.get_freeze_count() > 0
     gc.freeze()
     try:
-        return Pool(n_workers, initializer=init_worker, initargs=(setup,))
+        return Pool(n_workers, initializer=init_pool_worker, initargs=(setup,))
     finally:
         if not host_froze:
             gc.unfreeze()

@@ -8,6 +8,7 @@ in-process for ``workers=1``). Each call writes one scene folder and returns a s
 from __future__ import annotations
 
 import shutil
+import signal
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -68,6 +69,14 @@ def init_worker(setup: WorkerSetup) -> None:
     _SETUP = setup
     _STATE["family"] = setup.family_cls()
     _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
+
+
+def init_pool_worker(setup: WorkerSetup) -> None:
+    """Initializer of a pool process: :func:`init_worker`, and SIGINT ignored. Ctrl-C in a
+    terminal reaches the whole process group and the parent stops the pool; a worker dying of
+    it mid-scene printed a traceback, and its scene was never answered (the parent waited)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    init_worker(setup)
 
 
 def _ready() -> tuple[WorkerSetup, SceneFamily, Simulator]:

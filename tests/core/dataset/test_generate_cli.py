@@ -119,3 +119,26 @@ def test_stable_only_that_finds_too_few_stable_scenes_exits_2_and_writes_nothing
     assert done.stderr.strip().count("\n") == 0
     assert "--stable-only: horizon 3 s: only 0 of" in done.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["shaky.json"]
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="lists children through /proc")
+def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> None:
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "ds"
+    args = [BPB, "generate", "--out", str(out), "--per-horizon", "30", "--workers", "2"]
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    children = Path(f"/proc/{process.pid}/task/{process.pid}/children")
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(children.read_text().split()) < 2:
+        time.sleep(0.05)
+    for pid in children.read_text().split():  # what a terminal's Ctrl-C sends them
+        os.kill(int(pid), signal.SIGINT)
+    try:
+        _, stderr = process.communicate(timeout=120)  # a worker killed mid-scene hung it
+    finally:
+        process.kill()  # no-op when it ended; else do not leave it and its pool behind
+    assert process.returncode == 0 and "Traceback" not in stderr, stderr
+    assert json.loads((out / "dataset.json").read_text())["scenes"] == 150
