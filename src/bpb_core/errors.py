@@ -30,7 +30,8 @@ class UnknownName(BadInput):
         self.name = name
         self.known = sorted(known)
         listed = ", ".join(self.known) or "none installed"
-        super().__init__(f"unknown {kind} {name!r}; known {kind}s: {listed}")
+        plural = f"{kind[:-1]}ies" if kind.endswith("y") else f"{kind}s"  # scene families
+        super().__init__(f"unknown {kind} {name!r}; known {plural}: {listed}")
 
 
 class UnknownScene(BadInput, KeyError):

@@ -328,6 +328,13 @@ def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
     assert plot.stat().st_size > 0
 
 
+def test_an_unknown_family_lists_the_known_scene_families(bench: Callable[..., Any]) -> None:
+    done = bench("sim", "--scenes", "1", "--family", "snooker")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("error: unknown scene family 'snooker'; known scene families: ")
+
+
 def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -> None:
     done = bench("sim", "--scenes", "1", "--contestant", "pymunk:dt")
     assert done.returncode == 2 and "--contestant 'pymunk:dt'" in done.stderr
