@@ -75,7 +75,12 @@ def _child(args: list[str]) -> tuple[int, float, str]:
     env = {**os.environ, "OPENAI_API_KEY": _DUMMY_KEY}
     with tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace") as err:
         process = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=err)
-        _, status, usage = os.wait4(process.pid, 0)
+        try:
+            _, status, usage = os.wait4(process.pid, 0)
+        except BaseException:  # interrupted: the client must not outlive the bench
+            process.kill()
+            process.wait()
+            raise
         process.returncode = os.waitstatus_to_exitcode(status)
         err.seek(0)
         lines = [line.strip() for line in err if line.strip()] if process.returncode else []

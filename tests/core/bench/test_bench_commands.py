@@ -3,12 +3,15 @@ at tiny sizes."""
 
 from __future__ import annotations
 
+import contextlib
 import re
 import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 from bpb_core.registry import Registry
 
@@ -138,3 +141,34 @@ def test_bench_run_refuses_a_latency_no_call_outlives_and_a_work_path_under_a_fi
         assert done.returncode == 2 and len(lines) == 1, done.stderr
         assert lines[0].startswith(message), lines
     assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]  # nothing generated
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="lists children through /proc")
+def test_a_terminated_bench_run_stops_its_fake_server_and_client(tmp_path: Path) -> None:
+    import os
+    import signal
+    import time
+
+    from bpb_core.dataset import generate_dataset
+
+    generate_dataset(tmp_path / "bench-run-data-1", 1, [1, 2, 3, 4, 5], seed=0)
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    args = [bpb, "bench", "run", "--latency", "5", "--throughput-scenes", "1"]
+    args += ["--memory-scenes", "0", "--rounds", "1", "--work", str(tmp_path)]
+    process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    listing = Path(f"/proc/{process.pid}/task/{process.pid}/children")
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(listing.read_text().split()) < 2:
+        time.sleep(0.05)
+    children = [int(pid) for pid in listing.read_text().split()]  # the server, the bare loop
+    assert len(children) == 2
+    process.send_signal(signal.SIGTERM)  # a kill or a cancelled CI job, not a terminal's Ctrl-C
+    try:
+        assert process.wait(timeout=30) == 128 + signal.SIGTERM
+        time.sleep(0.5)
+        alive = [pid for pid in children if Path(f"/proc/{pid}").exists()]
+        assert alive == [], "left running after the bench ended"  # the server ran for ever
+    finally:
+        for pid in children:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -70,6 +71,9 @@ def bench_run(
             f"timeout, got {latency:g}"
         )
     check_writable_folder(work, "--work")
+    # SIGTERM (a kill, a cancelled CI job) unwinds like Ctrl-C, so the fake server and the
+    # client being measured are stopped instead of being left running
+    signal.signal(signal.SIGTERM, _terminated)
 
     def generating(data: Path, scenes: int) -> None:
         stderr().print(f"generating {scenes} scenes with images in {data} ...")
@@ -95,6 +99,10 @@ def bench_run(
         stderr().print(f"{phase.name} failed (exit {phase.exit_code}): {phase.error or '?'}")
     if failed:
         raise click.exceptions.Exit(1)  # a client failed: its figures do not count
+
+
+def _terminated(signum: int, frame: object) -> None:
+    raise SystemExit(128 + signum)
 
 
 def _add(table: Table, phase: Phase, ideal: float | None, bare: Phase | None) -> None:
