@@ -64,6 +64,11 @@ def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:
         ("[defaults]\ntimeout = 3", "no [[adapter]]"),
         ('[adapters]\nspec = "x"', "unknown table 'adapters'"),
         ("[[adapter]\n", "not a readable TOML"),
+        (
+            '[[adapter]]\nspec = "litellm:x"\nheaders = {"x-team" = {a = 1}}',
+            "adapter 1.headers.x-team: expected a string, got {'a': 1}",
+        ),
+        ('[defaults]\nheaders = {x = true}\n[[adapter]]\nspec = "litellm:x"', "headers.x"),
         ('adapter = ["litellm:x"]', "adapter 1: expected an [[adapter]] table, got 'litellm:x'"),
         ('adapter = [{spec = "litellm:x"}, 3]', "adapter 2: expected an [[adapter]] table"),
         ('defaults = 3\n[[adapter]]\nspec = "litellm:x"', "defaults: expected a [defaults]"),

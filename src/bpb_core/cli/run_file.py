@@ -115,6 +115,9 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
     for key in ("args", "headers", "price"):
         if key in table and not isinstance(table[key], dict):
             raise BadInput(f"{where}.{key}: expected a table")
+    for name, value in table.get("headers", {}).items():  # else sent as "{'a': 1}"
+        if not isinstance(value, (str, int, float)) or isinstance(value, bool):
+            raise BadInput(f"{where}.headers.{name}: expected a string, got {value!r}")
     if "price" in table:
         check_price(f"{where}.price", table["price"])
     bad = non_finite(table.get("args"), f"{where}.args")
