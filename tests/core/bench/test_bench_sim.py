@@ -312,7 +312,9 @@ def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
     site = tmp_path / "site"
     install_fake_dist(site, "bpb-diverging", "1.0", {"bpb_diverging": DIVERGING},
                       {"diverging": "bpb_diverging"})  # fmt: skip
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), os.environ["PYTHONPATH"]])}
+    # site first; a PYTHONPATH already set (a git worktree's src) stays after it
+    path = os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")]))
+    env = {**os.environ, "PYTHONPATH": path}
     plot, doc = tmp_path / "sim.png", tmp_path / "benchmarks.md"
     args = ["sim", "--scenes", "3", "--simulate-scenes", "0", "--contestant", "analytic"]
     args += ["--contestant", "diverging", "--plot", plot, "--markdown", doc]
