@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.interfaces import Scorer
+    from bpb_core.layout import SceneKey
     from bpb_core.registry import Registry
 
 META_DTYPES: dict[str, str] = {
@@ -226,7 +227,7 @@ def _read_one(
         meta["unstable_reasons"] = _reasons(truth, run)
         for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
             meta["epoch"] = epoch
-            record = read_answer(answer_path(run.path, key, task, epoch))
+            record = _placed(run, key, task, epoch)
             status = "missing" if record is None else record.status
             answer = None if record is None else record.answer
             scorer = scorers[task]
@@ -240,6 +241,30 @@ def _read_one(
             units.extend("distance", [float("nan")] * len(rows))
             units.pad()
             _add_call(calls, {**meta, "task": task}, status, record)
+
+
+def _placed(run: RunFolder, key: SceneKey, task: str, epoch: int) -> AnswerRecord | None:
+    """The answer file of (scene, task, epoch), checked to say it is that answer: a file copied
+    in from another scene, task, epoch or run would be scored against this scene's truth.
+
+    Raises:
+        BadInput: The file names another scene, task, epoch or adapter (names the file).
+    """
+    path = answer_path(run.path, key, task, epoch)
+    record = read_answer(path)
+    if record is None:
+        return None
+    wanted: dict[str, object] = {"scene_id": key.scene_id, "task": task, "epoch": epoch}
+    if isinstance(run.manifest.get("adapter"), str):
+        wanted["adapter"] = run.adapter  # as read: a lone surrogate as U+FFFD
+    for name, value in wanted.items():
+        if getattr(record, name) != value:
+            raise BadInput(
+                f"{path}: {name} is {getattr(record, name)!r}, but a file here holds the answer of "
+                f"{key.scene_id}, task {task}, epoch {epoch} by {run.adapter} (copied in from "
+                "another scene, task or run?)"
+            )
+    return record
 
 
 def _add_call(

@@ -205,3 +205,28 @@ def test_a_report_without_baselines_says_the_floors_are_missing(tmp_path: Path) 
     build_report(tmp_path / "runs", tmp_path / "out", n_boot=20, gallery_size=0)
     page = (tmp_path / "out" / "report.html").read_text()
     assert "No baseline ran on this dataset" in page and "--adapter baseline:stasis" in page
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("scene_id", "h1_0000"), ("task", "q1"), ("epoch", 3), ("adapter", "baseline:stasis")],
+)
+def test_an_answer_file_copied_in_from_elsewhere_is_refused_not_scored(
+    runs: Path, field: str, value: object
+) -> None:
+    # An answer file copied from another scene (or task, epoch, run) was scored against the
+    # truth of the scene whose folder it sat in: the oracle read 87.5% on q3, without a word.
+    target = runs / "baseline_oracle" / "h1" / "scene_0001" / "q3.json"
+    record = json.loads(target.read_text())
+    target.write_text(json.dumps(record | {field: value}))
+    done = subprocess.run(
+        [str(Path(sys.executable).with_name("bpb")), "report", str(runs), "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.strip().splitlines() == [
+        f"error: {target}: {field} is {value!r}, but a file here holds the answer of h1_0001, "
+        "task q3, epoch 1 by baseline:oracle (copied in from another scene, task or run?)"
+    ]

@@ -27,6 +27,9 @@ def test_lone_surrogates_in_run_json_and_a_folder_name_are_shown_as_u_fffd(
     manifest = json.loads(manifest_path.read_text())
     manifest |= {"adapter": "litellm:m\udc80", "model_id": "m\ud800<b>"}
     manifest_path.write_text(json.dumps(manifest))  # ASCII, with "\udc80" escapes
+    for answer in (runs / "litellm_model").glob("h*/scene_*/*.json"):  # the run's adapter, as
+        record = json.loads(answer.read_text())  # read (an answer file cannot hold a surrogate)
+        answer.write_text(json.dumps(record | {"adapter": "litellm:m\ufffd"}))
     odd = os.fsdecode(os.fsencode(runs / "baseline_stasis") + b"\xff")  # not UTF-8
     os.rename(runs / "baseline_stasis", odd)
     done = bpb("report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10")
