@@ -146,7 +146,12 @@ def _print_tables(built: Report) -> None:
 def _print_part(part: ReportPart, built: Report) -> None:
     from rich.markup import escape
 
-    from bpb_core.report.sections import different_scenes_note, headline_cells, horizon_cells
+    from bpb_core.report.sections import (
+        different_conditions_note,
+        different_scenes_note,
+        headline_cells,
+        horizon_cells,
+    )
     from bpb_core.results.completeness import incomplete_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
@@ -154,8 +159,9 @@ def _print_part(part: ReportPart, built: Report) -> None:
     console.print(_cell_table(title, *headline_cells(part, rule)))
     for run, line in incomplete_lines(part.results).items():
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
-    if different := different_scenes_note(part):
-        console.print(f"[yellow]{escape(different)}[/]", highlight=False)
+    for different in (different_scenes_note(part), different_conditions_note(part)):
+        if different:
+            console.print(f"[yellow]{escape(different)}[/]", highlight=False)
     if not part.results.units["baseline"].any():
         console.print(
             "[yellow]no baseline ran on this dataset: add the floors with bpb run --adapter "

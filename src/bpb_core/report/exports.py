@@ -15,7 +15,13 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.report.html import Cell, plain
-from bpb_core.report.sections import Rows, different_scenes_note, headline_cells, horizon_cells
+from bpb_core.report.sections import (
+    Rows,
+    different_conditions_note,
+    different_scenes_note,
+    headline_cells,
+    horizon_cells,
+)
 from bpb_core.results.completeness import completeness_records, incomplete_lines
 from bpb_core.results.tables import summary_records
 
@@ -136,6 +142,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "completeness": completeness_records(tables["accuracy"], rule.min_complete),
         "incomplete": incomplete_lines(results),
         "different_scenes": different_scenes_note(part),
+        "different_conditions": different_conditions_note(part),
         "usage": records(tables["usage"]),
         "pairs": records(tables["pairs"]),
         "metrics": {t: records(tables[f"{t}_metrics"]) for t in part.metric_notes},

@@ -136,9 +136,9 @@ def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
             f"bpb run --data {part.path} --adapter baseline:stasis --adapter baseline:straight "
             "(offline, free), then report again."
         )
-    different = different_scenes_note(part)
-    if different:
-        note += Markup("<p class='warn'>{}</p>").format(different)
+    for different in (different_scenes_note(part), different_conditions_note(part)):
+        if different:
+            note += Markup("<p class='warn'>{}</p>").format(different)
     return note
 
 
@@ -153,6 +153,40 @@ def different_scenes_note(part: ReportPart) -> str | None:
         f"({', '.join(str(e) for e in expected)} scene-task calls): their scores "
         "are means over different scenes; compare them in the paired comparisons."
     )
+
+
+def different_conditions_note(part: ReportPart) -> str | None:
+    """The warning that the runs were asked under different conditions (input mode, chain of
+    thought per task, as their answer files record), so one leaderboard ranks different
+    questions; ``None`` when they agree. Shown in the terminal, JSON and HTML alike."""
+    calls = part.results.calls
+    calls = calls[calls["status"] != "missing"]  # a call never made records no condition
+    found = [_condition("input mode", calls, "input_mode", {})]
+    for task, asked in calls.groupby("task", observed=True):
+        found.append(_condition(f"chain of thought on {task}", asked, "cot", COT))
+    found = [text for text in found if text]
+    if not found:
+        return None
+    return (
+        f"The runs were asked under different conditions ({'; '.join(found)}): a gap between "
+        "them may come from the conditions, not the models; rank only runs asked alike."
+    )
+
+
+COT = {"True": "on", "False": "off"}
+
+
+def _condition(name: str, calls: pd.DataFrame, column: str, words: dict[str, str]) -> str:
+    """``name: image (a, b), state (c)`` when the runs' ``column`` differs, else ``""``."""
+    by_run = calls.groupby("run", observed=True)[column].agg(
+        lambda values: ", ".join(sorted({words.get(str(v), str(v)) for v in values.dropna()}))
+    )
+    runs: dict[str, list[str]] = {}
+    for run, value in by_run.items():
+        runs.setdefault(str(value) or "?", []).append(str(run))
+    if len(runs) < 2:
+        return ""
+    return f"{name}: " + ", ".join(f"{v} ({', '.join(r)})" for v, r in sorted(runs.items()))
 
 
 def incomplete_notes(part: ReportPart) -> Markup:

@@ -4,6 +4,7 @@ never one leaderboard over two datasets."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -230,3 +231,41 @@ def test_an_answer_file_copied_in_from_elsewhere_is_refused_not_scored(
         f"error: {target}: {field} is {value!r}, but a file here holds the answer of h1_0001, "
         "task q3, epoch 1 by baseline:oracle (copied in from another scene, task or run?)"
     ]
+
+
+def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
+    tmp_path: Path,
+) -> None:
+    # A run on the scene's state and one without chain of thought were ranked beside image runs
+    # in one leaderboard, with nothing in the terminal, the HTML or --json to say so.
+    data = write_dataset(tmp_path / "data")
+    runs = tmp_path / "runs"
+    answers = all_answers(oracle_answer)
+    write_run(runs / "image", "litellm:m", data, answers)
+    write_run(runs / "image_too", "litellm:n", data, answers)
+    state = {key: value | {"input_mode": "state"} for key, value in answers.items() if value}
+    write_run(runs / "state", "litellm:m", data, state)
+    no_cot = {key: value | {"cot": False} for key, value in answers.items() if value}
+    write_run(runs / "no_cot", "litellm:m", data, no_cot)
+    expected = (
+        "The runs were asked under different conditions (input mode: image (image, image_too, "
+        "no_cot), state (state); chain of thought on q1: off (no_cot), on (image, image_too, "
+        "state); chain of thought on q2: off (no_cot), on (image, image_too, state)): a gap "
+        "between them may come from the conditions, not the models; rank only runs asked alike."
+    )
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    env = {**os.environ, "COLUMNS": "1000"}
+    shown = subprocess.run(
+        [bpb, "report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10"],
+        capture_output=True, text=True, check=True, env=env,
+    ).stdout  # fmt: skip
+    assert expected in shown.splitlines()
+    assert expected in (tmp_path / "out" / "report.html").read_text()
+    summary = json.loads(
+        subprocess.run([bpb, "report", str(runs), "--json"], capture_output=True, check=True).stdout
+    )
+    assert summary["different_conditions"] == expected
+    write_run(tmp_path / "alike" / "a", "litellm:m", data, answers)
+    write_run(tmp_path / "alike" / "b", "litellm:n", data, answers)
+    alike = build_report(tmp_path / "alike", n_boot=10).summary_json()
+    assert alike["different_conditions"] is None
