@@ -143,15 +143,22 @@ def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
 
 
 def different_scenes_note(part: ReportPart) -> str | None:
-    """The warning that the runs were asked different numbers of scenes (so their scores are
-    means over different scenes), or ``None``; shown in the terminal, JSON and HTML alike."""
-    expected = sorted(set(part.tables["leaderboard"]["expected"].tolist()))
-    if len(expected) < 2:
+    """The warning that the runs were asked different scenes of a task they share (so their
+    scores are means over different scenes), or ``None``; shown in the terminal, JSON and HTML
+    alike. Epochs ask the same scenes again and a task one run was not asked is its own '–'."""
+    asked = part.results.units[["run", "task", "scene_id"]].drop_duplicates()
+    asked = asked.astype(str)
+    scenes = asked.groupby(["task", "run"])["scene_id"].agg(frozenset)
+    if all(group.nunique() < 2 for _, group in scenes.groupby(level="task")):
         return None
+    counts = sorted(set(asked.groupby("run").size().tolist()))
+    if len(counts) > 1:
+        told = f"different numbers of scenes ({', '.join(map(str, counts))} scene-task calls)"
+    else:
+        told = f"different scenes ({counts[0]} scene-task calls each, not the same ones)"
     return (
-        "The runs were asked different numbers of scenes "
-        f"({', '.join(str(e) for e in expected)} scene-task calls): their scores "
-        "are means over different scenes; compare them in the paired comparisons."
+        f"The runs were asked {told}: their scores are means over different scenes; compare "
+        "them in the paired comparisons."
     )
 
 

@@ -212,6 +212,35 @@ def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
     assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
 
 
+def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
+    tmp_path: Path, dataset: Path
+) -> None:
+    # Two runs asked as many scenes but not the same ones (--scenes, --sample) were ranked with
+    # no warning, while a run asked the same scenes twice (--epochs 2) was warned about as
+    # asked "different numbers of scenes (12, 24 ...)".
+    runs = tmp_path / "runs"
+    for name, more in (("a", ["--scenes", "h1_0000"]), ("b", ["--scenes", "h1_0001"])):
+        out = str(runs / name)
+        ran = bpb(
+            "run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", out, *more
+        )
+        assert ran.returncode == 0, ran.stderr
+    summary = json.loads(bpb("report", str(runs / "a"), str(runs / "b"), "--json").stdout)
+    assert summary["different_scenes"] == (
+        "The runs were asked different scenes (3 scene-task calls each, not the same ones): "
+        "their scores are means over different scenes; compare them in the paired comparisons."
+    )
+    again = tmp_path / "again"
+    for name, more in (("once", []), ("twice", ["--epochs", "2"])):
+        out = str(again / name)
+        ran = bpb(
+            "run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", out, *more
+        )
+        assert ran.returncode == 0, ran.stderr
+    both = bpb("report", str(again / "once"), str(again / "twice"), "--json")
+    assert json.loads(both.stdout)["different_scenes"] is None
+
+
 def test_a_run_given_twice_is_counted_once_and_said_so(report_dir: Path, tmp_path: Path) -> None:
     # Given under other paths (or inside a folder also given), a run's calls, tokens, cost and
     # units were summed two or three times and its bootstrap intervals narrowed.
