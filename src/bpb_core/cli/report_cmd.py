@@ -152,12 +152,13 @@ def _print_part(part: ReportPart, built: Report) -> None:
         headline_cells,
         horizon_cells,
     )
-    from bpb_core.results.completeness import incomplete_lines
+    from bpb_core.results.completeness import incomplete_lines, unparsed_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
     console.print(_cell_table(title, *headline_cells(part, rule)))
-    for run, line in incomplete_lines(part.results).items():
+    warned = [*incomplete_lines(part.results).items(), *unparsed_lines(part.results).items()]
+    for run, line in warned:
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
     for different in (different_scenes_note(part), different_conditions_note(part)):
         if different:

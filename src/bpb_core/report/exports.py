@@ -22,7 +22,11 @@ from bpb_core.report.sections import (
     headline_cells,
     horizon_cells,
 )
-from bpb_core.results.completeness import completeness_records, incomplete_lines
+from bpb_core.results.completeness import (
+    completeness_records,
+    incomplete_lines,
+    unparsed_lines,
+)
 from bpb_core.results.tables import summary_records
 
 if TYPE_CHECKING:
@@ -141,6 +145,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "by_horizon": records(by_horizon),
         "completeness": completeness_records(tables["accuracy"], rule.min_complete),
         "incomplete": incomplete_lines(results),
+        "unparsed": unparsed_lines(results),
         "different_scenes": different_scenes_note(part),
         "different_conditions": different_conditions_note(part),
         "usage": records(tables["usage"]),

@@ -16,7 +16,7 @@ from markupsafe import Markup
 
 from bpb_core.report import html
 from bpb_core.report.html import Cell
-from bpb_core.results.completeness import incomplete_lines, level, worst_cells
+from bpb_core.results.completeness import incomplete_lines, level, unparsed_lines, worst_cells
 
 if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
@@ -197,8 +197,10 @@ def _condition(name: str, calls: pd.DataFrame, column: str, words: dict[str, str
 
 
 def incomplete_notes(part: ReportPart) -> Markup:
-    """One warning line per run with calls that failed on infrastructure or were never sent."""
+    """One warning line per run with calls that failed on infrastructure or were never sent,
+    and one per run with tasks mostly answered in a form its parser could not read."""
     lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results).items()]
+    lines += [f"{run}: {text}" for run, text in unparsed_lines(part.results).items()]
     return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
 
 

@@ -121,5 +121,29 @@ def incomplete_lines(results: Results) -> dict[str, str]:
     return out
 
 
+UNPARSED_SHARE = 0.5
+"""The share of a task's answers that parse errors must reach for the report to say so."""
+
+
+def unparsed_lines(results: Results) -> dict[str, str]:
+    """Per run with a task where at least :data:`UNPARSED_SHARE` of the answers are parse
+    errors, what to say: such a score (parse errors count as wrong) tells how the run answered,
+    not what it knows, and a run whose every answer failed to parse still reads complete."""
+    calls = results.calls[results.calls["status"].isin(["ok", "parse_error"])]
+    failed = calls["status"].astype(str) == "parse_error"
+    grouped = calls.assign(failed=failed).groupby(["run", "task"], observed=True)["failed"]
+    counts = grouped.agg(["sum", "size"]).reset_index()
+    out: dict[str, str] = {}
+    for run, task, bad, size in counts[["run", "task", "sum", "size"]].itertuples(index=False):
+        if bad and bad >= UNPARSED_SHARE * size:
+            told = f"{task} {int(bad)} of {int(size)}"
+            out[str(run)] = f"{out[str(run)]}, {told}" if str(run) in out else told
+    return {
+        run: f"answers that could not be parsed ({told}) are scored wrong: those scores say "
+        "how the run answered, not what it knows; see the failure gallery"
+        for run, told in out.items()
+    }
+
+
 def _calls(count: int) -> str:
     return f"{count} call" if count == 1 else f"{count} calls"

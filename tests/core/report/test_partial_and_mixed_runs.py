@@ -269,3 +269,31 @@ def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
     write_run(tmp_path / "alike" / "b", "litellm:n", data, answers)
     alike = build_report(tmp_path / "alike", n_boot=10).summary_json()
     assert alike["different_conditions"] is None
+
+
+def test_a_run_whose_answers_could_not_be_parsed_is_said_so(tmp_path: Path) -> None:
+    # A run whose every answer was a parse error read complete 100%, 0.0% on every task with a
+    # 0.0%-0.0% interval, below stasis, and nothing said the scores came from unreadable replies.
+    data = write_dataset(tmp_path / "data")
+    runs = tmp_path / "runs"
+    answers = all_answers(oracle_answer)
+    unreadable = {"status": "parse_error", "answer": None, "error": "no JSON"}
+    write_run(runs / "unread", "litellm:m", data, {key: unreadable for key in answers})
+    one = dict(answers) | {next(iter(answers)): unreadable}
+    write_run(runs / "one_bad", "litellm:n", data, one)  # 1 of 4 answers: no line
+    line = (
+        "unread: answers that could not be parsed (q1 4 of 4, q2 4 of 4, q3 4 of 4) are scored "
+        "wrong: those scores say how the run answered, not what it knows; see the failure gallery"
+    )
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    env = {**os.environ, "COLUMNS": "1000"}
+    shown = subprocess.run(
+        [bpb, "report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10"],
+        capture_output=True, text=True, check=True, env=env,
+    ).stdout  # fmt: skip
+    assert line in shown.splitlines() and "one_bad:" not in shown
+    assert line in (tmp_path / "out" / "report.html").read_text()
+    summary = json.loads(
+        subprocess.run([bpb, "report", str(runs), "--json"], capture_output=True, check=True).stdout
+    )
+    assert summary["unparsed"] == {"unread": line.removeprefix("unread: ")}
