@@ -115,7 +115,33 @@ def find_runs(
         found.extend(inner)
     found = _once(found)
     labels = _labels(found)
-    return [read_run(path, label, registry) for path, label in zip(found, labels, strict=True)]
+    runs = [read_run(path, label, registry) for path, label in zip(found, labels, strict=True)]
+    return _not_copies(runs)
+
+
+def _not_copies(runs: list[RunFolder]) -> list[RunFolder]:
+    """Each run once, though copied to another folder: a run folder whose ``run.json`` is the
+    same as an earlier one's, down to when it started and finished, is a copy of it (bpb never
+    writes two such), and is left out with one :class:`DuplicateRunWarning`; ranked as a second
+    run, it would look like a second model agreeing with the first. Hand-made manifests (no
+    ``started``) are never taken for copies."""
+    first: dict[str, RunFolder] = {}
+    kept: list[RunFolder] = []
+    for run in runs:
+        if "started" not in run.manifest:
+            kept.append(run)
+            continue
+        same = first.setdefault(json.dumps(run.manifest, sort_keys=True), run)
+        if same is run:
+            kept.append(run)
+            continue
+        warnings.warn(
+            f"{run.path}: a copy of the run in {same.path} (the same run.json, started "
+            f"{run.manifest['started']}); counted once",
+            DuplicateRunWarning,
+            stacklevel=3,
+        )
+    return kept
 
 
 def _once(found: list[Path]) -> list[Path]:

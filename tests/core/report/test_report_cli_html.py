@@ -241,6 +241,30 @@ def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
     assert json.loads(both.stdout)["different_scenes"] is None
 
 
+def test_a_run_folder_copied_under_another_name_is_counted_once_and_said_so(
+    tmp_path: Path, dataset: Path
+) -> None:
+    # A run folder copied under another name was ranked as a second run with the very same
+    # scores, as if a second model agreed with the first.
+    runs = tmp_path / "runs"
+    ran = bpb("run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", str(runs))
+    assert ran.returncode == 0, ran.stderr
+    shutil.copytree(runs / "baseline_stasis", runs / "stasis_copy")
+    ran = bpb("run", "--data", str(dataset), "--adapter", "baseline:oracle", "--out", str(runs))
+    assert ran.returncode == 0, ran.stderr
+    done = bpb("report", str(runs), "--json")
+    assert done.returncode == 0, done.stderr
+    assert [row["run"] for row in json.loads(done.stdout)["leaderboard"]] == [
+        "baseline_oracle",
+        "baseline_stasis",
+    ]
+    started = json.loads((runs / "baseline_stasis" / "run.json").read_text())["started"]
+    assert done.stderr.strip() == (
+        f"warning: {runs / 'stasis_copy'}: a copy of the run in {runs / 'baseline_stasis'} "
+        f"(the same run.json, started {started}); counted once"
+    )
+
+
 def test_a_run_given_twice_is_counted_once_and_said_so(report_dir: Path, tmp_path: Path) -> None:
     # Given under other paths (or inside a folder also given), a run's calls, tokens, cost and
     # units were summed two or three times and its bootstrap intervals narrowed.
