@@ -245,15 +245,19 @@ def _read_one(
 
 def _placed(run: RunFolder, key: SceneKey, task: str, epoch: int) -> AnswerRecord | None:
     """The answer file of (scene, task, epoch), checked to say it is that answer: a file copied
-    in from another scene, task, epoch or run would be scored against this scene's truth.
+    in from another scene, task, epoch or run would be scored against this scene's truth, and
+    an ``ok`` without an answer (bpb writes none) would be scored wrong as if answered.
 
     Raises:
-        BadInput: The file names another scene, task, epoch or adapter (names the file).
+        BadInput: The file names another scene, task, epoch or adapter, or says ``ok`` with no
+            answer (names the file).
     """
     path = answer_path(run.path, key, task, epoch)
     record = read_answer(path)
     if record is None:
         return None
+    if record.status == "ok" and record.answer is None:
+        raise BadInput(f"{path}: status is 'ok' but answer is null: an ok answer file holds one")
     wanted: dict[str, object] = {"scene_id": key.scene_id, "task": task, "epoch": epoch}
     if isinstance(run.manifest.get("adapter"), str):
         wanted["adapter"] = run.adapter  # as read: a lone surrogate as U+FFFD

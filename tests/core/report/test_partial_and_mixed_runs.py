@@ -297,3 +297,20 @@ def test_a_run_whose_answers_could_not_be_parsed_is_said_so(tmp_path: Path) -> N
         subprocess.run([bpb, "report", str(runs), "--json"], capture_output=True, check=True).stdout
     )
     assert summary["unparsed"] == {"unread": line.removeprefix("unread: ")}
+
+
+def test_an_ok_answer_file_without_an_answer_is_refused_not_scored_wrong(runs: Path) -> None:
+    # A file saying ok with answer null (bpb writes an ok with its parsed answer) was scored
+    # wrong as if answered: the oracle read 0% on q1 at complete 100%, with no word.
+    target = runs / "baseline_oracle" / "h2" / "scene_0001" / "q1.json"
+    target.write_text(json.dumps(json.loads(target.read_text()) | {"answer": None}))
+    done = subprocess.run(
+        [str(Path(sys.executable).with_name("bpb")), "report", str(runs), "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.strip().splitlines() == [
+        f"error: {target}: status is 'ok' but answer is null: an ok answer file holds one"
+    ]
