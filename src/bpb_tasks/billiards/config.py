@@ -57,7 +57,11 @@ class ImageConfig(_Strict):
     compress_level: int = Field(1, ge=0, le=9)
 
 
-MAX_IMAGE_SIDE = 20_000  # pixels of table per image side; beyond, one PNG needs gigabytes
+MAX_IMAGE_SIDE = 20_000  # pixels of table per image side
+# Pixels of a whole canvas (margins included): drawing one takes about 20 bytes a pixel, so this
+# is about half a gigabyte per worker (the default canvas is 1.1 million, px_per_m 3000 on the
+# default table 19.6 million).
+MAX_IMAGE_PIXELS = 25_000_000
 
 
 class CalibrationConfig(_Strict):
@@ -130,8 +134,17 @@ class DatasetConfig(_Strict):
             if pixels > MAX_IMAGE_SIDE:
                 raise ValueError(
                     f"table.{side}: {metres:g} m at image.px_per_m {self.image.px_per_m:g} makes "
-                    f"a {pixels:,.0f} px image side (at most {MAX_IMAGE_SIDE:,})"
+                    f"a {_count(pixels)} px image side (at most {MAX_IMAGE_SIDE:,})"
                 )
+        im = self.image
+        wide = im.margin_left + round(self.table.width * im.px_per_m) + im.margin_right
+        high = im.margin_top + round(self.table.height * im.px_per_m) + im.margin_bottom
+        if wide * high > MAX_IMAGE_PIXELS:
+            raise ValueError(
+                f"image: the table at px_per_m {im.px_per_m:g} plus the margins makes a "
+                f"{_count(wide)} x {_count(high)} px image (at most {MAX_IMAGE_PIXELS:,} pixels); "
+                "lower image.px_per_m, the margins or the table size"
+            )
         return self
 
     def speed_range(self, horizon: float) -> SpeedRange:
@@ -186,6 +199,10 @@ def load_config(path: str | Path | None) -> DatasetConfig:
     if not isinstance(data, dict):
         raise BadInput(f"{path}: (top level): expected an object of config fields")
     return config_from_mapping(data, str(path))
+
+
+def _count(pixels: float) -> str:
+    return f"{pixels:,.0f}" if pixels < 1e12 else f"{pixels:.3g}"
 
 
 def _format(path: Path) -> str:

@@ -24,6 +24,13 @@ CONFIGS = [
      "speed_ranges.1.high: Input should be less than or equal to 100"),
     ("table.toml", "[table]\nwidth = 100\n", "table.width: 100 m at image.px_per_m 600 makes"),
     ("mug.toml", "[physics]\nmu = 1e308\n", "physics: mu*g = 1e+308 * 9.8 overflows"),
+    ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
+     "a 6e+302 px image side (at most 20,000)"),
+    # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
+    ("area.toml", "[table]\nwidth = 6.6\nheight = 6\n[image]\npx_per_m = 3000\n",
+     "image: the table at px_per_m 3000 plus the margins makes a 19,964 x 18,180 px image"),
+    ("margin.json", '{"image": {"margin_left": 100000}}',
+     "image: the table at px_per_m 600 plus the margins makes a 101,248 x 780 px image"),
 ]  # fmt: skip
 
 
