@@ -10,12 +10,13 @@ scenes at each horizon have a cue-ball collision.
 from __future__ import annotations
 
 import json
+import math
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import validate_mapping
@@ -126,6 +127,23 @@ class DatasetConfig(_Strict):
     stability_delta: float = Field(1e-4, gt=0)
     stability_samples: int = Field(64, ge=1, le=100_000)
     calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
+
+    @field_validator("speed_ranges")
+    @classmethod
+    def _horizon_keys(cls, ranges: dict[str, SpeedRange]) -> dict[str, SpeedRange]:
+        # Keys are looked up as horizon_key(horizon): "1.0" or "1e0" would never match "1".
+        out: dict[str, SpeedRange] = {}
+        for key, value in ranges.items():
+            try:
+                seconds = float(key)
+            except ValueError:
+                seconds = math.nan
+            if not 0 < seconds < math.inf:
+                raise ValueError(f"key {key!r} is not a horizon in seconds (a positive number)")
+            if horizon_key(seconds) in out:
+                raise ValueError(f"key {key!r} repeats horizon {horizon_key(seconds)}")
+            out[horizon_key(seconds)] = value
+        return out
 
     @model_validator(mode="after")
     def _image_fits(self) -> DatasetConfig:

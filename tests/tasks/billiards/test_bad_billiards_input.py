@@ -24,6 +24,13 @@ CONFIGS = [
      "speed_ranges.1.high: Input should be less than or equal to 100"),
     ("table.toml", "[table]\nwidth = 100\n", "table.width: 100 m at image.px_per_m 600 makes"),
     ("mug.toml", "[physics]\nmu = 1e308\n", "physics: mu*g = 1e+308 * 9.8 overflows"),
+    ("key.json", '{"speed_ranges": {"abc": {"low": 1, "high": 2}}}',
+     "speed_ranges: key 'abc' is not a horizon in seconds (a positive number)"),
+    ("key0.toml", '[speed_ranges."0"]\nlow = 1\nhigh = 2\n',
+     "speed_ranges: key '0' is not a horizon in seconds"),
+    ("keys.toml", '[speed_ranges."1"]\nlow = 1\nhigh = 2\n'
+     '[speed_ranges."1.0"]\nlow = 1\nhigh = 3\n',
+     "speed_ranges: key '1.0' repeats horizon 1"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene

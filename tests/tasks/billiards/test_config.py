@@ -65,3 +65,14 @@ def test_a_horizon_without_a_speed_range_says_how_to_fix_it() -> None:
         BadInput, match=r"speed_ranges: no cue-speed range for horizon 7 s.*--calibrate"
     ):
         DatasetConfig().speed_range(7.0)
+
+
+def test_speed_range_keys_are_read_as_horizons(tmp_path: Path) -> None:
+    """``"2.5"``, ``"1.0"`` and ``"3e0"`` all name a horizon; lookups go by the number."""
+    (tmp_path / "c.toml").write_text(
+        '[speed_ranges."1.0"]\nlow = 1\nhigh = 2\n[speed_ranges."3e0"]\nlow = 0.5\nhigh = 1\n'
+    )
+    cfg = load_config(tmp_path / "c.toml")
+    assert cfg.speed_range(1.0).high == 2 and cfg.speed_range(3.0).high == 1
+    assert list(cfg.speed_ranges) == ["1", "3"]
+    assert load_config(None).speed_ranges == DEFAULT_SPEED_RANGES
