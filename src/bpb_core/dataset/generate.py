@@ -12,7 +12,8 @@ import math
 import os
 import shutil
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,7 +30,7 @@ from bpb_core.dataset.jobs import (
 from bpb_core.dataset.manifest import DatasetManifest
 from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, UnknownName
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
@@ -85,47 +86,49 @@ def generate_dataset(
     Raises:
         BadInput: Bad arguments or config (the message names the file or field).
     """
-    registry = registry if registry is not None else _registry()
-    name = family or registry.default_family()
-    maker = registry.scene_family(name)
-    cfg = _config(maker, config)
-    hs = _check_args(per_horizon, horizons)
-    if calibrate and not isinstance(maker, Calibrating):
-        raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
-    if not calibrate:
-        maker.check_config(cfg, hs)  # fail before touching the disk
-    progress = progress or NoProgress()
-    target = Path(out)
-    _check_target(target, overwrite)
-    with partial_folder(target, "bpb generate") as partial:
-        try:
-            n_workers = max(1, workers or os.cpu_count() or 1)
-            setup = worker_setup(registry, name, partial, seed, cfg, images)
-            calibration = None
-            if isinstance(maker, Calibrating) and calibrate:
-                with make_pool(n_workers, setup) as pool:
-                    results = run_calibration(pool, hs, progress)
-                cfg, calibration = maker.apply_calibration(cfg, results)
-                setup = replace(setup, config=cfg)
-            tallies = (
-                {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
-            )
-            writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+    with _naming_file(config):
+        registry = registry if registry is not None else _registry()
+        name = family or registry.default_family()
+        maker = registry.scene_family(name)
+        cfg = _config(maker, config)
+        _check_simulator(registry, maker, cfg)
+        hs = _check_args(per_horizon, horizons)
+        if calibrate and not isinstance(maker, Calibrating):
+            raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
+        if not calibrate:
+            maker.check_config(cfg, hs)  # fail before touching the disk
+        progress = progress or NoProgress()
+        target = Path(out)
+        _check_target(target, overwrite)
+        with partial_folder(target, "bpb generate") as partial:
             try:
-                run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
-                _write_stats(maker, setup, writer, progress)
-            finally:
-                writer.close()
-            writer.write_manifest(
-                _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
-            )
-        except BadInput:  # the message says what to change; a half-built folder is of no use
-            shutil.rmtree(partial, ignore_errors=True)
-            raise
-        if target.exists():
-            shutil.rmtree(target)
-        partial.rename(target)
-    return target
+                n_workers = max(1, workers or os.cpu_count() or 1)
+                setup = worker_setup(registry, name, partial, seed, cfg, images)
+                calibration = None
+                if isinstance(maker, Calibrating) and calibrate:
+                    with make_pool(n_workers, setup) as pool:
+                        results = run_calibration(pool, hs, progress)
+                    cfg, calibration = maker.apply_calibration(cfg, results)
+                    setup = replace(setup, config=cfg)
+                tallies = (
+                    {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
+                )
+                writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+                try:
+                    run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
+                    _write_stats(maker, setup, writer, progress)
+                finally:
+                    writer.close()
+                writer.write_manifest(
+                    _manifest(maker, setup, writer, hs, per_horizon, stable_only, calibration)
+                )
+            except BadInput:  # the message says what to change; a half-built folder is of no use
+                shutil.rmtree(partial, ignore_errors=True)
+                raise
+            if target.exists():
+                shutil.rmtree(target)
+            partial.rename(target)
+        return target
 
 
 def _registry() -> Registry:
@@ -142,6 +145,25 @@ def _config(family: SceneFamily, config: Any) -> Any:
     if named != family.name:
         raise BadInput(f"config: family: {named!r}, but the scene family is {family.name!r}")
     return cfg
+
+
+@contextmanager
+def _naming_file(config: Any) -> Iterator[None]:
+    """A config error ("config: balls: ...") names the config's file when it came from one."""
+    try:
+        yield
+    except BadInput as exc:
+        text = str(exc)
+        if isinstance(config, str | Path) and text.startswith("config: "):
+            raise BadInput(f"{config}: {text.removeprefix('config: ')}") from None
+        raise
+
+
+def _check_simulator(registry: Registry, family: SceneFamily, cfg: Any) -> None:
+    try:
+        registry.get("simulator", family.simulator_name(cfg))
+    except UnknownName as exc:  # before any worker starts, naming the field
+        raise BadInput(f"config: simulator: {exc}") from None
 
 
 def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:

@@ -70,7 +70,7 @@ def test_a_config_that_cannot_be_sampled_exits_2(tmp_path: Path) -> None:
     done = bpb("generate", "--out", str(tmp_path / "ds"), "--config", str(config),
                "--per-horizon", "1", "--horizons", "1", "--no-images")  # fmt: skip
     assert done.returncode == 2
-    assert "config: balls: could not place ball" in done.stderr
+    assert f"{config}: balls: could not place ball" in done.stderr
     assert done.stderr.strip().count("\n") == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["crowded.json"]  # no half-built folder
 

@@ -31,6 +31,11 @@ CONFIGS = [
     ("keys.toml", '[speed_ranges."1"]\nlow = 1\nhigh = 2\n'
      '[speed_ranges."1.0"]\nlow = 1\nhigh = 3\n',
      "speed_ranges: key '1.0' repeats horizon 1"),
+    ("sim.json", '{"simulator": "nope"}',
+     "simulator: unknown simulator 'nope'; known simulators:"),
+    ("family.toml", 'family = "nope"\n', "family: 'nope', but the scene family is 'billiards'"),
+    ("h1.toml", '[speed_ranges."2"]\nlow = 1\nhigh = 2\n',
+     "speed_ranges: no cue-speed range for horizon 1 s (have 2)"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
@@ -69,7 +74,7 @@ def test_a_config_whose_scenes_never_end_names_the_scene(tmp_path: Path) -> None
                            "--no-images", "--workers", "1"],
                           capture_output=True, text=True, timeout=300)  # fmt: skip
     line = _one_line(done)
-    assert "config: scene h100000_0000: more than 100000 events before t=100000" in line
+    assert f"{config}: scene h100000_0000: more than 100000 events before t=100000" in line
     assert not (tmp_path / "ds").exists()
 
 
