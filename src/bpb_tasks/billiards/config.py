@@ -58,11 +58,29 @@ class ImageConfig(_Strict):
     compress_level: int = Field(1, ge=0, le=9)
 
 
+MARGINS = ("margin_left", "margin_right", "margin_top", "margin_bottom")
+
+
+def needed_margins(px_per_m: float, pocket_radius: float) -> dict[str, int]:
+    """The smallest margins (px) that hold the header, axes, ticks, labels and the pockets and
+    rails beyond the table's edge, as :mod:`~bpb_tasks.billiards.render_canvas` draws them:
+    text scales with ``px_per_m / 600``, the axes sit just outside the rails and pockets."""
+    s = px_per_m / 600.0
+    beyond = max(8, round(0.03 * px_per_m), round(pocket_radius * px_per_m))  # rail or pocket
+    axis = beyond + round(6 * s)
+    return {
+        "margin_left": math.ceil(axis + 74 * s),  # the rotated "y (m)" 62 s left of the axis
+        "margin_right": math.ceil(beyond + 6 * s),  # the last tick label, half beyond the edge
+        "margin_top": math.ceil(max(46 * s, 2 * beyond - 10 * s)),  # header above the pockets
+        "margin_bottom": math.ceil(axis + 54 * s),  # "x (m)" 36 s below the axis
+    }
+
+
 MAX_IMAGE_SIDE = 20_000  # pixels of table per image side
 # Pixels of a whole canvas (margins included): drawing one takes about 20 bytes a pixel, so this
-# is about half a gigabyte per worker (the default canvas is 1.1 million, px_per_m 3000 on the
-# default table 19.6 million).
-MAX_IMAGE_PIXELS = 25_000_000
+# is about 600 MB per worker (the default canvas is 1.1 million, px_per_m 3000 on the
+# default table 26.6 million).
+MAX_IMAGE_PIXELS = 30_000_000
 
 
 class CalibrationConfig(_Strict):
@@ -128,6 +146,24 @@ class DatasetConfig(_Strict):
     stability_samples: int = Field(64, ge=1, le=100_000)
     calibration: CalibrationConfig = Field(default_factory=CalibrationConfig)
 
+    @model_validator(mode="before")
+    @classmethod
+    def _fitting_margins(cls, data: Any) -> Any:
+        # Margins not given grow with px_per_m above 600 and with the pockets, so that the text
+        # fits; at the defaults they are ImageConfig's (116, 48, 84, 96).
+        if not isinstance(data, Mapping) or not isinstance(data.get("image", {}), Mapping):
+            return data
+        image, pockets = dict(data.get("image", {})), data.get("pockets", {})
+        ppm = image.get("px_per_m", ImageConfig.model_fields["px_per_m"].default)
+        radius = pockets.get("radius", 0.06) if isinstance(pockets, Mapping) else 0.06
+        if not all(isinstance(v, int | float) and 0 < v < 1e6 for v in (ppm, radius or 1)):
+            return data  # the field validators say what is wrong
+        needed = needed_margins(ppm, radius)
+        for key in MARGINS:
+            default = ImageConfig.model_fields[key].default
+            image.setdefault(key, max(round(default * max(1.0, ppm / 600.0)), needed[key]))
+        return {**data, "image": image}
+
     @field_validator("speed_ranges")
     @classmethod
     def _horizon_keys(cls, ranges: dict[str, SpeedRange]) -> dict[str, SpeedRange]:
@@ -164,6 +200,23 @@ class DatasetConfig(_Strict):
                 "lower image.px_per_m, the margins or the table size"
             )
         return self
+
+    def check_margins(self) -> None:
+        """Raise :class:`BadInput` if a margin cannot hold what the images draw in it.
+
+        Checked before generating rather than by the model: a dataset made before margins
+        were checked still loads.
+        """
+        im = self.image
+        needed = needed_margins(im.px_per_m, self.pockets.radius)
+        for key in MARGINS:
+            if getattr(im, key) < needed[key]:
+                raise BadInput(
+                    f"config: image.{key}: {getattr(im, key)} px cuts off the image's labels or "
+                    f"pockets at px_per_m {im.px_per_m:g} with pockets of radius "
+                    f"{self.pockets.radius:g} m (needs at least {needed[key]}; leave it out "
+                    "for a margin that fits)"
+                )
 
     def speed_range(self, horizon: float) -> SpeedRange:
         """The cue-speed range for ``horizon``; raises :class:`BadInput` if none is set."""

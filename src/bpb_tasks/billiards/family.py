@@ -137,7 +137,9 @@ class BilliardsFamily:
         return config_from_mapping(source)
 
     def check_config(self, config: DatasetConfig, horizons: Sequence[float]) -> None:
-        """Every horizon needs a cue-speed range (unless calibrated first)."""
+        """Every horizon needs a cue-speed range (unless calibrated first), and the image
+        margins must hold the labels."""
+        config.check_margins()
         for horizon in horizons:
             config.speed_range(horizon)
 

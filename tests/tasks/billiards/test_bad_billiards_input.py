@@ -36,11 +36,13 @@ CONFIGS = [
     ("family.toml", 'family = "nope"\n', "family: 'nope', but the scene family is 'billiards'"),
     ("h1.toml", '[speed_ranges."2"]\nlow = 1\nhigh = 2\n',
      "speed_ranges: no cue-speed range for horizon 1 s (have 2)"),
+    ("margins.toml", "[image]\nmargin_left = 40\n", "image.margin_left: 40 px cuts off the "
+     "image's labels or pockets at px_per_m 600 with pockets of radius 0.06 m (needs at least 116"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
     ("area.toml", "[table]\nwidth = 6.6\nheight = 6\n[image]\npx_per_m = 3000\n",
-     "image: the table at px_per_m 3000 plus the margins makes a 19,964 x 18,180 px image"),
+     "image: the table at px_per_m 3000 plus the margins makes a 20,620 x 18,900 px image"),
     ("margin.json", '{"image": {"margin_left": 100000}}',
      "image: the table at px_per_m 600 plus the margins makes a 101,248 x 780 px image"),
 ]  # fmt: skip

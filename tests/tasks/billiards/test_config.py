@@ -7,7 +7,12 @@ from pathlib import Path
 import pytest
 
 from bpb_core.errors import BadInput
-from bpb_tasks.billiards.config import DEFAULT_SPEED_RANGES, DatasetConfig, load_config
+from bpb_tasks.billiards.config import (
+    DEFAULT_SPEED_RANGES,
+    DatasetConfig,
+    config_from_mapping,
+    load_config,
+)
 
 
 def test_no_file_gives_the_spec_defaults() -> None:
@@ -76,3 +81,13 @@ def test_speed_range_keys_are_read_as_horizons(tmp_path: Path) -> None:
     assert cfg.speed_range(1.0).high == 2 and cfg.speed_range(3.0).high == 1
     assert list(cfg.speed_ranges) == ["1", "3"]
     assert load_config(None).speed_ranges == DEFAULT_SPEED_RANGES
+
+
+def test_margins_left_out_fit_the_text_and_given_ones_are_checked_before_generating() -> None:
+    assert DatasetConfig().image.margin_left == 116  # the paper's canvas is unchanged
+    bigger = config_from_mapping({"image": {"px_per_m": 800}, "pockets": {"radius": 0.08}})
+    assert bigger.image.margin_left > 116 and bigger.image.margin_top > 84
+    bigger.check_margins()
+    narrow = config_from_mapping({"image": {"margin_left": 40}})  # an older manifest still loads
+    with pytest.raises(BadInput, match=r"image\.margin_left: 40 px cuts off .* at least 116"):
+        narrow.check_margins()

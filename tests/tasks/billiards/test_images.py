@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import io
 import math
+import subprocess
+import sys
 from pathlib import Path
 
-from PIL import Image
+from PIL import Image, ImageChops
 
 from bpb_core.dataset import load_dataset
 from bpb_tasks.billiards.config import DatasetConfig
@@ -16,6 +18,7 @@ from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_style import ball_colour
 from bpb_tasks.billiards.scene import Ball, Scene
 
+BPB = str(Path(sys.executable).with_name("bpb"))
 CONFIG = DatasetConfig()
 SPEC = CanvasSpec.from_config(CONFIG)
 
@@ -96,3 +99,26 @@ def test_encoded_pngs_are_small_palette_images_and_deterministic() -> None:
     for data in first.values():
         assert data.startswith(b"\x89PNG") and len(data) < 200_000
         assert Image.open(io.BytesIO(data)).mode == "P"
+
+
+def _ink_box(path: Path) -> tuple[int, int, int, int]:
+    """Distances (left, top, right, bottom) from the image's edges to its nearest drawn pixel."""
+    with Image.open(path) as img:
+        rgb = img.convert("RGB")
+    page = Image.new("RGB", rgb.size, rgb.getpixel((0, 0)))  # type: ignore[arg-type]
+    x0, y0, x1, y1 = ImageChops.difference(rgb, page).getbbox() or (0, 0, *rgb.size)
+    return x0, y0, rgb.width - x1, rgb.height - y1
+
+
+def test_labels_and_pockets_stay_on_larger_images(tmp_path: Path) -> None:
+    """At px_per_m 800 the text is a third larger; margins left out grow with it (with the
+    fixed 600-px margins the y and x axis labels and the right pockets were cut off)."""
+    config = tmp_path / "big.toml"
+    config.write_text("[image]\npx_per_m = 800\n[pockets]\nradius = 0.08\n")
+    out = tmp_path / "ds"
+    done = subprocess.run([BPB, "generate", "--out", str(out), "--config", str(config),
+                           "--horizons", "1", "--per-horizon", "1", "--workers", "1"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    for name in ("init.png", "final.png", "trajectory.png"):
+        assert min(_ink_box(out / "h1" / "scene_0000" / name)) >= 1, name
