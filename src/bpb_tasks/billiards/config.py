@@ -61,16 +61,22 @@ class ImageConfig(_Strict):
 MARGINS = ("margin_left", "margin_right", "margin_top", "margin_bottom")
 
 
-def needed_margins(px_per_m: float, pocket_radius: float) -> dict[str, int]:
+HEADER_SPAN = 820  # px at 600 px per metre from the header's start (60 px left of the table)
+# to its end: a title such as "Trajectories, t = 0 to 12.5 s", a gap and the legend
+
+
+def needed_margins(px_per_m: float, pocket_radius: float, table_width: float) -> dict[str, int]:
     """The smallest margins (px) that hold the header, axes, ticks, labels and the pockets and
     rails beyond the table's edge, as :mod:`~bpb_tasks.billiards.render_canvas` draws them:
-    text scales with ``px_per_m / 600``, the axes sit just outside the rails and pockets."""
+    text scales with ``px_per_m / 600``, the axes sit just outside the rails and pockets, and
+    the header runs past the table's right edge when the table is narrower than it."""
     s = px_per_m / 600.0
     beyond = max(8, round(0.03 * px_per_m), round(pocket_radius * px_per_m))  # rail or pocket
     axis = beyond + round(6 * s)
+    header = (HEADER_SPAN - 60) * s - table_width * px_per_m + 1  # + 1: the table rounded
     return {
         "margin_left": math.ceil(axis + 74 * s),  # the rotated "y (m)" 62 s left of the axis
-        "margin_right": math.ceil(beyond + 6 * s),  # the last tick label, half beyond the edge
+        "margin_right": math.ceil(max(beyond + 6 * s, header)),  # last tick label, header
         "margin_top": math.ceil(max(46 * s, 2 * beyond - 10 * s)),  # header above the pockets
         "margin_bottom": math.ceil(axis + 54 * s),  # "x (m)" 36 s below the axis
     }
@@ -154,11 +160,13 @@ class DatasetConfig(_Strict):
         if not isinstance(data, Mapping) or not isinstance(data.get("image", {}), Mapping):
             return data
         image, pockets = dict(data.get("image", {})), data.get("pockets", {})
+        table = data.get("table", {})
         ppm = image.get("px_per_m", ImageConfig.model_fields["px_per_m"].default)
         radius = pockets.get("radius", 0.06) if isinstance(pockets, Mapping) else 0.06
-        if not all(isinstance(v, int | float) and 0 < v < 1e6 for v in (ppm, radius or 1)):
+        width = table.get("width", 2.0) if isinstance(table, Mapping) else 2.0
+        if not all(isinstance(v, int | float) and 0 < v < 1e6 for v in (ppm, radius or 1, width)):
             return data  # the field validators say what is wrong
-        needed = needed_margins(ppm, radius)
+        needed = needed_margins(ppm, radius, width)
         for key in MARGINS:
             default = ImageConfig.model_fields[key].default
             image.setdefault(key, max(round(default * max(1.0, ppm / 600.0)), needed[key]))
@@ -208,7 +216,7 @@ class DatasetConfig(_Strict):
         were checked still loads.
         """
         im = self.image
-        needed = needed_margins(im.px_per_m, self.pockets.radius)
+        needed = needed_margins(im.px_per_m, self.pockets.radius, self.table.width)
         for key in MARGINS:
             if getattr(im, key) < needed[key]:
                 raise BadInput(

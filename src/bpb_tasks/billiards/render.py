@@ -50,7 +50,7 @@ def paste_ball(
 def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
     """Right-aligned grey note in the header line."""
     patch = text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE)
-    x = img.width - spec.right - patch.width
+    x = spec.header_right - patch.width
     img.paste(patch, (x, round(header_y(spec) - patch.height / 2)))
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from PIL import Image, ImageDraw
 
 from bpb_tasks.billiards import render_style as st
-from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.config import HEADER_SPAN, DatasetConfig
 
 TICK_MAJOR = 0.25  # metres between labelled ticks
 TICK_MINOR = 0.05
@@ -57,6 +57,13 @@ class CanvasSpec:
         """Image size (width, height) in pixels."""
         w = self.left + round(self.width_m * self.ppm) + self.right
         return w, self.top + round(self.height_m * self.ppm) + self.bottom
+
+    @property
+    def header_right(self) -> int:
+        """Where the header line ends: the table's right edge, or further right on a table
+        narrower than the header (the margins make room, see ``config.needed_margins``)."""
+        table_right = self.left + round(self.width_m * self.ppm)
+        return max(table_right, self.left + math.ceil((HEADER_SPAN - 60) * self.scale))
 
     @property
     def radius_px(self) -> float:
@@ -159,7 +166,7 @@ def draw_legend(img: Image.Image, spec: CanvasSpec) -> None:
     s = spec.scale
     font = st.font(round(14 * s))
     y = spec.top / 2 - 14 * s  # the header line (render_palette.header_y)
-    x = float(img.width - spec.right)
+    x = float(spec.header_right)
     items = (
         ("pocketed", "pocket"),
         ("wall contact", "wall"),

@@ -8,13 +8,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from PIL import Image, ImageChops
 
 from bpb_core.dataset import load_dataset
-from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
 from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render_palette import base
 from bpb_tasks.billiards.render_style import ball_colour
 from bpb_tasks.billiards.scene import Ball, Scene
 
@@ -122,3 +124,21 @@ def test_labels_and_pockets_stay_on_larger_images(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     for name in ("init.png", "final.png", "trajectory.png"):
         assert min(_ink_box(out / "h1" / "scene_0000" / name)) >= 1, name
+
+
+def _header_box(spec: CanvasSpec, header: str, legend: bool) -> tuple[int, int, int, int]:
+    plain = base(spec).convert("RGB")
+    drawn = base(spec, header, legend=legend).convert("RGB")
+    box = ImageChops.difference(drawn, plain).getbbox()
+    assert box is not None
+    return box
+
+
+@pytest.mark.parametrize("width", [1.0, 0.3, 2.0])
+def test_the_header_title_and_legend_do_not_overlap_on_narrow_tables(width: float) -> None:
+    """On a 1 m table the legend used to end at the table's edge, over the title."""
+    config = config_from_mapping({"table": {"width": width, "height": 1.0}})
+    spec = CanvasSpec.from_config(config)
+    title = _header_box(spec, "Trajectories, t = 0 to 12.5 s", legend=False)
+    legend = _header_box(spec, "", legend=True)
+    assert title[2] + 10 <= legend[0] and legend[2] <= spec.size[0]
