@@ -83,12 +83,12 @@ def ball_sprite(ball_id: int, radius_px: float, alpha: int = 255) -> Image.Image
     draw = ImageDraw.Draw(img)
     rim = max(1.0, radius_px * 0.09) * SUPERSAMPLE
     draw.ellipse((c - r, c - r, c + r, c + r), fill=(*HALO, 255))
-    inner = r - rim
+    inner = max(r - rim, 0.0)  # a ball under a pixel across is all rim
     draw.ellipse((c - inner, c - inner, c + inner, c + inner), fill=(*ball_colour(ball_id), 255))
     badge = r * 0.62
     if ball_id != 0:
         draw.ellipse((c - badge, c - badge, c + badge, c + badge), fill=(*PAGE, 255))
-    label = font(round(r * (0.95 if ball_id < 10 else 0.72)), bold=True)
+    label = font(max(1, round(r * (0.95 if ball_id < 10 else 0.72))), bold=True)
     draw.text((c, c + 0.04 * r), str(ball_id), fill=(*INK, 255), font=label, anchor="mm")
     small = img.resize((side, side), Image.Resampling.LANCZOS)
     if alpha < 255:

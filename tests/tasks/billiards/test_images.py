@@ -142,3 +142,17 @@ def test_the_header_title_and_legend_do_not_overlap_on_narrow_tables(width: floa
     title = _header_box(spec, "Trajectories, t = 0 to 12.5 s", legend=False)
     legend = _header_box(spec, "", legend=True)
     assert title[2] + 10 <= legend[0] and legend[2] <= spec.size[0]
+
+
+def test_balls_under_a_pixel_across_are_drawn_without_error(tmp_path: Path) -> None:
+    """A 1 mm ball is 0.6 px at 600 px per metre: its rim used to be drawn with a negative
+    radius (internal error, exit 3)."""
+    config = tmp_path / "specks.json"
+    config.write_text('{"physics": {"ball_radius": 0.001}}')
+    out = tmp_path / "ds"
+    done = subprocess.run([BPB, "generate", "--out", str(out), "--config", str(config),
+                           "--horizons", "1", "--per-horizon", "1", "--workers", "1"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    with Image.open(out / "h1" / "scene_0000" / "init.png") as img:
+        assert img.size == SPEC.size
