@@ -101,7 +101,7 @@ class CalibrationConfig(_Strict):
     """
 
     target: float = Field(0.5, gt=0, lt=1)
-    samples: int = Field(20_000, ge=20)
+    samples: int = Field(20_000, ge=20, le=200_000)  # about 4 KB each, all held at once
     low_ratio: float = Field(0.2, ge=0, lt=1)
     seed: int = 20260101
     iterations: int = Field(14, ge=4, le=40)

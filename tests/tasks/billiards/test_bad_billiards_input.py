@@ -38,6 +38,8 @@ CONFIGS = [
      "speed_ranges: no cue-speed range for horizon 1 s (have 2)"),
     ("margins.toml", "[image]\nmargin_left = 40\n", "image.margin_left: 40 px cuts off the "
      "image's labels or pockets at px_per_m 600 with pockets of radius 0.06 m (needs at least 116"),
+    ("calibration.toml", "[calibration]\nsamples = 1_000_000_000\n",
+     "calibration.samples: Input should be less than or equal to 200000"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
