@@ -68,6 +68,15 @@ def test_bad_config_is_one_line_exit_2(name: str, text: str, expected: str, tmp_
     assert not (tmp_path / "ds").exists()
 
 
+def test_a_config_that_is_not_utf8_is_one_line_exit_2(tmp_path: Path) -> None:
+    config = tmp_path / "latin1.toml"
+    config.write_bytes("# r\xe9glages\nballs = 3\n".encode("latin-1"))
+    done = subprocess.run([BPB, "generate", "--out", str(tmp_path / "ds"), "--config",
+                           str(config), "--horizons", "1", "--per-horizon", "1", "--no-images"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert f"{config}: cannot read config: not UTF-8 text" in _one_line(done)
+
+
 @pytest.mark.slow
 def test_a_config_whose_scenes_never_end_names_the_scene(tmp_path: Path) -> None:
     config = tmp_path / "endless.toml"  # no friction, no pockets: bounces up to the event cap

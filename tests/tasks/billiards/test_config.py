@@ -91,3 +91,10 @@ def test_margins_left_out_fit_the_text_and_given_ones_are_checked_before_generat
     narrow = config_from_mapping({"image": {"margin_left": 40}})  # an older manifest still loads
     with pytest.raises(BadInput, match=r"image\.margin_left: 40 px cuts off .* at least 116"):
         narrow.check_margins()
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path: Path) -> None:
+    """Windows Notepad starts UTF-8 files with a BOM; json.loads refused it."""
+    (tmp_path / "bom.json").write_bytes(b'\xef\xbb\xbf{"balls": 3}')
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbfballs = 3\n")
+    assert load_config(tmp_path / "bom.json").balls == load_config(tmp_path / "bom.toml").balls == 3
