@@ -35,7 +35,12 @@ import numpy as np
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.stability_batch import Tally, kernel_pair_margins, kernel_tally
+from bpb_tasks.billiards.stability_batch import (
+    KERNEL_MAX_BALLS,
+    Tally,
+    kernel_pair_margins,
+    kernel_tally,
+)
 from bpb_tasks.billiards.stability_margins import (
     horizon_gap,
     min_event_gap,
@@ -98,10 +103,11 @@ def copy_budget(nominal_events: int, max_events: int) -> int:
 
 def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
     """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
-    ``simulator`` runs the kernel, else copy by copy. A copy the analytic engine cannot finish
-    within :func:`copy_budget` events is counted unfinished, not simulated further."""
+    ``simulator`` runs the kernel and the scene has at most :data:`KERNEL_MAX_BALLS` balls,
+    else copy by copy. A copy the analytic engine cannot finish within :func:`copy_budget`
+    events is counted unfinished, not simulated further."""
     ids, pos, vel = perturbation_arrays(scene, delta, samples)
-    if _runs_kernel(simulator):
+    if _runs_kernel(simulator) and len(ids) <= KERNEL_MAX_BALLS:
         budget = copy_budget(len(base.events), simulator.max_events)
         return kernel_tally(scene, base, ids, pos, vel, budget)
     reference = labels(base)

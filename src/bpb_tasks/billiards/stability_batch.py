@@ -21,6 +21,8 @@ from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import TOUCH_TOLERANCE, WALLS, Scene
 from bpb_tasks.billiards.truth import UNFINISHED
 
+KERNEL_MAX_BALLS = 63  # one bit per ball index in an int64 mask, the sign bit unused
+
 
 @dataclass
 class Tally:

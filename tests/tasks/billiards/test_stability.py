@@ -102,6 +102,18 @@ def test_kernel_batch_and_python_engine_annotate_alike() -> None:
     assert unstable >= 2  # flips and spreads were compared, not only zeros
 
 
+def test_scenes_with_more_balls_than_a_kernel_mask_holds_annotate_like_the_python_engine() -> None:
+    """The kernel keeps one bit per ball in an int64; a hand-written scene of 70 balls where
+    the cue ball hits ball 69 raised OverflowError (a PluginBug from `bpb simulate
+    --stability`). Such scenes now take the copy-by-copy path."""
+    grid = [(1.0 + 0.06 * i, 0.2 + 0.2 * j, 0.0, 0.0) for i in range(17) for j in range(4)]
+    crowd = scene([(0.3, 0.5, 1.0, 0.0), *grid, (0.6, 0.5, 0.0, 0.0)])
+    assert len(crowd.balls) == 70 and crowd.balls[-1].id == 69
+    kernel = annotate(crowd, simulator=AnalyticSimulator(), samples=16)
+    assert kernel == annotate(crowd, simulator=PYTHON, samples=16)
+    assert "q1:1" in kernel.flips  # the cue ball runs on into the crowd: flips were compared
+
+
 def _same_margins(out: Outcome, radius: float) -> tuple[float | None, float | None]:
     """The kernel's near-miss gap and overlap, checked equal to the reference's to the bit."""
     compiled, reference = kernel_pair_margins(out, radius), pair_margins(out, radius)
