@@ -89,8 +89,9 @@ def _positions(rng: random.Random, config: DatasetConfig) -> tuple[tuple[float, 
                 break
         else:
             raise BadInput(
-                f"config: balls: could not place ball {len(placed)} of {config.balls} without "
-                "overlap; use fewer or smaller balls, or a smaller min_gap"
+                f"config: balls: could not place ball {len(placed)} of {config.balls} clear of "
+                "the other balls and the pockets; use fewer or smaller balls, a smaller min_gap, "
+                "or smaller pockets (pockets.radius, pocket_margin)"
             )
     return tuple(placed)
 

@@ -40,6 +40,10 @@ CONFIGS = [
      "image's labels or pockets at px_per_m 600 with pockets of radius 0.06 m (needs at least 116"),
     ("calibration.toml", "[calibration]\nsamples = 1_000_000_000\n",
      "calibration.samples: Input should be less than or equal to 200000"),
+    # pockets that cover the table leave no place for a ball: the hint must name them
+    ("pockets.toml", "[pockets]\nradius = 0.75\n",
+     "balls: could not place ball 0 of 7 clear of the other balls and the pockets; use fewer or "
+     "smaller balls, a smaller min_gap, or smaller pockets (pockets.radius, pocket_margin)"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
