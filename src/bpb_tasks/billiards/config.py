@@ -46,7 +46,9 @@ class ImageConfig(_Strict):
     Attributes:
         px_per_m: Pixels per metre of table (600 makes the 2 m x 1 m table 1200 x 600 px).
         margin_left, margin_right, margin_top, margin_bottom: Space around the table for the
-            rails, axis ticks and labels, in pixels.
+            rails, axis ticks and labels, in pixels. Left out of a config, they grow with
+            ``px_per_m``, the pockets and a narrow table (:func:`needed_margins`); given, they
+            must be at least that (checked before generating).
         compress_level: zlib level of the PNG encoder (1 is fast; the palette images stay small).
     """
 
