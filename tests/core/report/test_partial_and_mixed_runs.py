@@ -20,6 +20,15 @@ from bpb_core.report.sections import headline_cells
 from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run
 
 
+def _report(
+    runs: Path, *args: str, env: dict[str, str] | None = None, check: bool = False
+) -> subprocess.CompletedProcess[str]:
+    """``bpb report RUNS ARGS`` in a subprocess, its output captured as text."""
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    command = [bpb, "report", str(runs), *args]
+    return subprocess.run(command, capture_output=True, text=True, env=env, check=check)
+
+
 def _stopped_run(root: Path, data: Path) -> Path:
     """An oracle-perfect model stopped after horizon 1: nothing answered at horizon 2."""
     answers = {key: value for key, value in all_answers(oracle_answer).items() if key[0][1] == "1"}
@@ -220,12 +229,7 @@ def test_an_answer_file_copied_in_from_elsewhere_is_refused_not_scored(
     target = runs / "baseline_oracle" / "h1" / "scene_0001" / "q3.json"
     record = json.loads(target.read_text())
     target.write_text(json.dumps(record | {field: value}))
-    done = subprocess.run(
-        [str(Path(sys.executable).with_name("bpb")), "report", str(runs), "--json"],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    done = _report(runs, "--json")
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.strip().splitlines() == [
         f"error: {target}: {field} is {value!r}, but a file here holds the answer of h1_0001, "
@@ -253,17 +257,12 @@ def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
         "state); chain of thought on q2: off (no_cot), on (image, image_too, state)): a gap "
         "between them may come from the conditions, not the models; rank only runs asked alike."
     )
-    bpb = str(Path(sys.executable).with_name("bpb"))
     env = {**os.environ, "COLUMNS": "1000"}
-    shown = subprocess.run(
-        [bpb, "report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10"],
-        capture_output=True, text=True, check=True, env=env,
-    ).stdout  # fmt: skip
+    out = str(tmp_path / "out")
+    shown = _report(runs, "--out", out, "--bootstrap", "10", env=env, check=True).stdout
     assert expected in shown.splitlines()
     assert expected in (tmp_path / "out" / "report.html").read_text()
-    summary = json.loads(
-        subprocess.run([bpb, "report", str(runs), "--json"], capture_output=True, check=True).stdout
-    )
+    summary = json.loads(_report(runs, "--json", check=True).stdout)
     assert summary["different_conditions"] == expected
     write_run(tmp_path / "alike" / "a", "litellm:m", data, answers)
     write_run(tmp_path / "alike" / "b", "litellm:n", data, answers)
@@ -285,17 +284,12 @@ def test_a_run_whose_answers_could_not_be_parsed_is_said_so(tmp_path: Path) -> N
         "unread: answers that could not be parsed (q1 4 of 4, q2 4 of 4, q3 4 of 4) are scored "
         "wrong: those scores say how the run answered, not what it knows; see the failure gallery"
     )
-    bpb = str(Path(sys.executable).with_name("bpb"))
     env = {**os.environ, "COLUMNS": "1000"}
-    shown = subprocess.run(
-        [bpb, "report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10"],
-        capture_output=True, text=True, check=True, env=env,
-    ).stdout  # fmt: skip
+    out = str(tmp_path / "out")
+    shown = _report(runs, "--out", out, "--bootstrap", "10", env=env, check=True).stdout
     assert line in shown.splitlines() and "one_bad:" not in shown
     assert line in (tmp_path / "out" / "report.html").read_text()
-    summary = json.loads(
-        subprocess.run([bpb, "report", str(runs), "--json"], capture_output=True, check=True).stdout
-    )
+    summary = json.loads(_report(runs, "--json", check=True).stdout)
     assert summary["unparsed"] == {"unread": line.removeprefix("unread: ")}
 
 
@@ -304,12 +298,7 @@ def test_an_ok_answer_file_without_an_answer_is_refused_not_scored_wrong(runs: P
     # wrong as if answered: the oracle read 0% on q1 at complete 100%, with no word.
     target = runs / "baseline_oracle" / "h2" / "scene_0001" / "q1.json"
     target.write_text(json.dumps(json.loads(target.read_text()) | {"answer": None}))
-    done = subprocess.run(
-        [str(Path(sys.executable).with_name("bpb")), "report", str(runs), "--json"],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    done = _report(runs, "--json")
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.strip().splitlines() == [
         f"error: {target}: status is 'ok' but answer is null: an ok answer file holds one"
