@@ -24,6 +24,8 @@ from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
+from bpb_core.plugin_calls import simulated_truth
+from bpb_core.scored_units import object_origin
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -150,9 +152,6 @@ def simulate_scene(
         PluginBug: The family raised or returned something other than its ``truth_model``,
             naming ``origin`` (who supplied it; default: its module).
     """
-    from bpb_core.plugin_calls import simulated_truth
-    from bpb_core.scored_units import object_origin
-
     who = origin if origin is not None else object_origin(family)
     truth: GroundTruth = simulated_truth(
         family, who, scene, simulator, horizon=horizon, stability=stability

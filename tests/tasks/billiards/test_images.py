@@ -112,16 +112,21 @@ def _ink_box(path: Path) -> tuple[int, int, int, int]:
     return x0, y0, rgb.width - x1, rgb.height - y1
 
 
+def _generate_one(config: Path, out: Path) -> Path:
+    """``bpb generate`` of one scene at horizon 1 with ``config``; its dataset folder."""
+    done = subprocess.run([BPB, "generate", "--out", str(out), "--config", str(config),
+                           "--horizons", "1", "--per-horizon", "1", "--workers", "1"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return out
+
+
 def test_labels_and_pockets_stay_on_larger_images(tmp_path: Path) -> None:
     """At px_per_m 800 the text is a third larger; margins left out grow with it (with the
     fixed 600-px margins the y and x axis labels and the right pockets were cut off)."""
     config = tmp_path / "big.toml"
     config.write_text("[image]\npx_per_m = 800\n[pockets]\nradius = 0.08\n")
-    out = tmp_path / "ds"
-    done = subprocess.run([BPB, "generate", "--out", str(out), "--config", str(config),
-                           "--horizons", "1", "--per-horizon", "1", "--workers", "1"],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
-    assert done.returncode == 0, done.stderr
+    out = _generate_one(config, tmp_path / "ds")
     for name in ("init.png", "final.png", "trajectory.png"):
         assert min(_ink_box(out / "h1" / "scene_0000" / name)) >= 1, name
 
@@ -149,10 +154,6 @@ def test_balls_under_a_pixel_across_are_drawn_without_error(tmp_path: Path) -> N
     radius (internal error, exit 3)."""
     config = tmp_path / "specks.json"
     config.write_text('{"physics": {"ball_radius": 0.001}}')
-    out = tmp_path / "ds"
-    done = subprocess.run([BPB, "generate", "--out", str(out), "--config", str(config),
-                           "--horizons", "1", "--per-horizon", "1", "--workers", "1"],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
-    assert done.returncode == 0, done.stderr
+    out = _generate_one(config, tmp_path / "ds")
     with Image.open(out / "h1" / "scene_0000" / "init.png") as img:
         assert img.size == SPEC.size
