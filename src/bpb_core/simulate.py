@@ -177,10 +177,13 @@ def prepare(
     files: Sequence[Path] = (),
 ) -> Prepared:
     """Resolve ``simulator`` (a name, an object, or ``None``: the simulator the scenes' dataset
-    was made with, else the default family's) and its scene family.
+    was made with, else the default family's) and its scene family: for ``None`` the family of
+    that dataset (else the default one), which reads the scenes and makes their truth as it did
+    when the dataset was generated, whatever family the simulator itself is registered for.
 
     Raises:
-        BadInput: A bad horizon, an unknown simulator or an option it does not take.
+        BadInput: A bad horizon, an unknown simulator (one the dataset names but that is not
+            installed: naming its ``dataset.json``) or an option it does not take.
     """
     from bpb_core.registry import make_registry
 
@@ -192,6 +195,8 @@ def prepare(
         simulator = family.simulator_name(config)
         if manifest is not None:
             check_simulator(manifest, simulator, reg, "; or choose one with --simulator")
+        made = reg.simulator(simulator, **dict(options or {}))
+        return Prepared(made, family, reg.origin("scene_family", family.name))
     if isinstance(simulator, str):
         name = reg.simulator_info(simulator).family or reg.default_family()
         made = reg.simulator(simulator, **dict(options or {}))

@@ -156,12 +156,17 @@ def test_bpb_simulate_names_a_flawed_family(
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
 
 
+@pytest.mark.parametrize("simulator", ["flawed-analytic", None])
 def test_simulate_paths_names_a_flawed_ground_truth(
-    monkeypatch: pytest.MonkeyPatch, flawed_data: Path
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path, simulator: str | None
 ) -> None:
+    # None: the dataset's config names 'analytic', registered for billiards; bpb simulate took
+    # that family, not the dataset's (which generate pairs with it), and the flaw went unseen
+    manifest = json.loads((flawed_data / "dataset.json").read_text())
+    assert manifest["config"]["simulator"] == "analytic"
     monkeypatch.setenv("BPB_TEST_FLAW", "truth_type")
     with pytest.raises(PluginBug) as info:
-        list(simulate_paths([flawed_data], simulator="flawed-analytic", registry=_registry()))
+        list(simulate_paths([flawed_data], simulator=simulator, registry=_registry()))
     assert str(info.value) == f"{ORIGIN}: {FAMILY}: {TRUTH_TYPE}"
 
 
