@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bpb_tasks.billiards.bench_compare import random_scene
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene import Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 
@@ -78,6 +78,22 @@ def test_pymunk_with_dt(scenes: list[tuple[Path, Scene]]) -> None:
     path, scene = scenes[1]
     (final,) = lines(bpb("simulate", str(path), "--simulator", "pymunk", "--dt", "0.01"))
     assert final.simulator == "pymunk" and final.scene_id == scene.scene_id
+
+
+def test_pymunk_refuses_a_step_that_tunnels_and_the_bound_it_names_works(
+    scenes: list[tuple[Path, Scene]],
+) -> None:
+    # --dt 0.1 carried this cue ball through the bottom cushion to (0.61, -1.43), written as
+    # its truth with exit 0
+    path, scene = scenes[0]
+    message = one_line_error(bpb("simulate", str(path), "--simulator", "pymunk", "--dt", "0.1"))
+    said = f"error: {path}: --dt: 0.1 s is above this scene's stability bound, "
+    assert message.startswith(said) and message.endswith("can carry a ball through a cushion")
+    bound = message[len(said) :].split(" s ", 1)[0]
+    (final,) = lines(bpb("simulate", str(path), "--simulator", "pymunk", "--dt", bound))
+    lo_x, hi_x, lo_y, hi_y = table_box(scene.table, scene.physics.ball_radius)
+    on_table = [p.pos for p in final.predictions if p.pos is not None]
+    assert on_table and all(lo_x <= x <= hi_x and lo_y <= y <= hi_y for x, y in on_table)
 
 
 def one_line_error(result: subprocess.CompletedProcess[str]) -> str:

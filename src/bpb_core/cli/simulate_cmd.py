@@ -26,7 +26,13 @@ class _Named(click.Path):
     help="Simulator [default: the one the dataset was made with; the default family's for loose "
     "scene files].",
 )
-@click.option("--dt", type=float, default=None, help="Time step (s) of fixed-step simulators.")
+@click.option(
+    "--dt",
+    type=float,
+    default=None,
+    help="Time step (s) of fixed-step simulators; one above a scene's stability bound is an error "
+    "naming the bound.",
+)
 @click.option(
     "--precision", default=None, help="analytic only: 'float64' (default) or digits for mpmath."
 )

@@ -128,12 +128,11 @@ def check_geometry(scene: Scene) -> None:
             raise ValueError(f"balls[{i}].id: duplicate ball id {ball.id}")
         seen.add(ball.id)
         x, y = ball.pos
-        lo, hi_x, hi_y = (
-            radius - TOUCH_TOLERANCE,
-            scene.table.width - radius + TOUCH_TOLERANCE,
-            (scene.table.height - radius + TOUCH_TOLERANCE),
-        )
-        if not (lo <= x <= hi_x and lo <= y <= hi_y):
+        lo_x, hi_x, lo_y, hi_y = table_box(scene.table, radius)
+        if not (
+            lo_x - TOUCH_TOLERANCE <= x <= hi_x + TOUCH_TOLERANCE
+            and lo_y - TOUCH_TOLERANCE <= y <= hi_y + TOUCH_TOLERANCE
+        ):
             raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} is off the table")
         for k, centre in enumerate(scene.pockets.centers):
             if math.dist(ball.pos, centre) <= scene.pockets.radius:
@@ -145,6 +144,12 @@ def check_geometry(scene: Scene) -> None:
         for b in scene.balls[i + 1 :]:
             if math.dist(a.pos, b.pos) < min_gap:
                 raise ValueError(f"balls: ball {a.id} and ball {b.id} overlap")
+
+
+def table_box(table: Table, radius: float) -> tuple[float, float, float, float]:
+    """``(x_lo, x_hi, y_lo, y_hi)``: where the centre of a ball of ``radius`` lies on ``table``,
+    ``radius`` from every cushion (a scene's balls may touch within :data:`TOUCH_TOLERANCE`)."""
+    return radius, table.width - radius, radius, table.height - radius
 
 
 def scene_json_schema() -> dict[str, Any]:

@@ -73,7 +73,8 @@ DEFAULT_MAX_EVENTS = 100_000
 
 
 class SimulationError(BpbError):
-    """The simulation exceeded its event budget (a scene the simulator cannot finish)."""
+    """A scene the simulator cannot finish: the analytic engine exceeded its event budget, or
+    a pymunk ball went through a cushion."""
 
 
 class AnalyticSimulator:
