@@ -150,6 +150,32 @@ def test_missing_path_and_unknown_simulator(
     assert "--precision" in one_line_error(bpb("simulate", str(scenes[0][0]), "--precision", "x"))
 
 
+@pytest.mark.parametrize(
+    "args", [[], ["--workers", "2"], ["--stability"]], ids=["batch", "forked", "ordinary"]
+)
+def test_an_event_cap_overrun_among_many_scenes_is_named_never_truncated(
+    tmp_path: Path, args: list[str]
+) -> None:
+    # a frictionless ball between two cushions never rests: its truth is never a cut-off run
+    paths = [write(tmp_path / f"s{i:02d}.json", random_scene(11, i)) for i in range(40)]
+    endless = random_scene(11, 20).model_dump(mode="json")
+    endless.update(horizon=1e9, physics={"mu": 0.0}, pockets={"radius": 0.0, "centers": []})
+    endless["balls"] = [{"id": 0, "pos": [0.5, 0.5], "vel": [0.0, 1.0]}]
+    paths[20].write_text(json.dumps(endless))
+    done = bpb("simulate", *map(str, paths), *args)
+    assert one_line_error_after_output(done) == (
+        f"error: {paths[20]}: more than 100000 events before t=1000000000.0"
+    )
+    kept = [FinalState.model_validate_json(line).scene_id for line in done.stdout.splitlines()]
+    assert kept == [f"r11_{i:05d}" for i in range(20)]  # those before it, none after
+
+
+def one_line_error_after_output(result: subprocess.CompletedProcess[str]) -> str:
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    return result.stderr.strip()
+
+
 def test_mpmath_precision_matches_float64(scenes: list[tuple[Path, Scene]]) -> None:
     paths = [str(p) for p, _ in scenes]
     exact = lines(bpb("simulate", *paths, "--precision", "40"))
