@@ -15,9 +15,12 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   up to ``dt``; the last step is shortened to land exactly on the horizon.
 * A step may carry no ball further than half its radius: ``dt`` above the scene's stability
   bound :func:`stable_dt` (half the ball radius over the fastest speed any ball can reach) is
-  refused as bad input naming ``--dt`` and the bound. Beyond it pymunk tunnels: at three times
-  the bound 26 of 60 random scenes (cue at 0.5-6 m/s) ended a ball off the table, and at twice
-  it a ball squeezed between a cushion and a fast stack of balls now and then went through.
+  refused, naming ``--dt`` and the bound, with
+  :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (``bpb simulate`` names the
+  scene file, ``bpb generate`` the config and the scene; a stability copy a hair faster than
+  its scene counts as unfinished). Beyond the bound pymunk tunnels: at three times it 26 of 60
+  random scenes (cue at 0.5-6 m/s) ended a ball off the table, and at twice it a ball squeezed
+  between a cushion and a fast stack of balls now and then went through.
 * Final positions lie on the table as a scene file's balls do, ``R`` from every cushion
   (:func:`bpb_tasks.billiards.scene.table_box`): a ball the horizon catches mid-bounce, sunk
   into a cushion by part of a step's travel that pymunk would push out over the next steps, is
@@ -59,14 +62,14 @@ class PymunkSimulator:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon).
 
         Raises:
-            BadInput: ``dt`` is above the scene's :func:`stable_dt`, or the run would take more
-                than :data:`MAX_STEPS` steps.
-            SimulationError: A ball left the table all the same.
+            SimulationError: ``dt`` is above the scene's :func:`stable_dt`, or a ball left the
+                table all the same.
+            BadInput: The run would take more than :data:`MAX_STEPS` steps.
         """
         bound = stable_dt(scene)
         if self.dt > bound:
             radius = scene.physics.ball_radius
-            raise BadInput(
+            raise SimulationError(
                 f"--dt: {self.dt:g} s is above this scene's stability bound, {_down(bound)} s "
                 f"(half the ball radius, {radius / 2:g} m, over the fastest possible speed, "
                 f"{radius / (2 * bound):.4g} m/s): a longer step can carry a ball through a cushion"

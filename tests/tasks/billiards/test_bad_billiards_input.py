@@ -44,6 +44,9 @@ CONFIGS = [
     ("pockets.toml", "[pockets]\nradius = 0.75\n",
      "balls: could not place ball 0 of 7 clear of the other balls and the pockets; use fewer or "
      "smaller balls, a smaller min_gap, or smaller pockets (pockets.radius, pocket_margin)"),
+    # pymunk's step (1e-3 s) would carry these balls through a cushion: the scene and bound
+    ("pymunk.toml", 'simulator = "pymunk"\n[speed_ranges."1"]\nlow = 20\nhigh = 30\n',
+     "scene h1_0000: --dt: 0.001 s is above this scene's stability bound, 0.000559 s"),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene

@@ -78,7 +78,7 @@ def test_pymunk_at_its_stability_bound_ends_every_ball_on_the_table() -> None:
         out = PymunkSimulator(dt=stable_dt(s)).run(s)
         on_table = [p for p in out.positions.values() if p is not None]
         assert all(lo_x <= x <= hi_x and lo_y <= y <= hi_y for x, y in on_table), s.scene_id
-        with pytest.raises(BadInput, match=r"^--dt: .* above this scene's stability bound"):
+        with pytest.raises(SimulationError, match=r"^--dt: .* above this scene's stability bound"):
             PymunkSimulator(dt=stable_dt(s) * 1.01).run(s)
 
 
