@@ -9,6 +9,7 @@ object no plugin registers).
 
 from __future__ import annotations
 
+import math
 import random
 from typing import TYPE_CHECKING, Any
 
@@ -16,7 +17,7 @@ from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 
 if TYPE_CHECKING:
-    from bpb_core.capabilities import Predicting, PublishesSchema
+    from bpb_core.capabilities import Estimating, Predicting, PublishesSchema
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.model_calls import Message
 
@@ -155,7 +156,7 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
         return None
     import json
 
-    what = f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}: settings()"
+    what = f"{_adapter(adapter)}: settings()"
     with blamed(origin, what):
         settings = adapter.settings()
     try:
@@ -168,3 +169,84 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
             "of JSON values"
         ) from exc
     return stored
+
+
+def preflight_problem(adapter: object, origin: str) -> str | None:
+    """The adapter's :meth:`Preflighting.preflight` (``None`` without it), checked: ``None`` or
+    a str (anything else would be shown to the user as what to fix, or break the run before
+    its first call naming no plugin).
+
+    Raises:
+        PluginBug: ``preflight()`` raised or returned something else, naming ``origin`` (who
+            supplied the adapter).
+    """
+    from bpb_core.capabilities import Preflighting
+
+    if not isinstance(adapter, Preflighting):
+        return None
+    what = f"{_adapter(adapter)}: preflight()"
+    with blamed(origin, what):
+        problem = adapter.preflight()
+    return _checked_line(origin, what, problem)
+
+
+def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | None:
+    """The adapter's :meth:`KnowsFamilies.cannot_answer` for ``family`` (``None`` without it),
+    checked as :func:`preflight_problem` is.
+
+    Raises:
+        PluginBug: ``cannot_answer()`` raised or returned something other than ``None`` or a
+            str, naming ``origin`` (who supplied the adapter).
+    """
+    from bpb_core.capabilities import KnowsFamilies
+
+    if not isinstance(adapter, KnowsFamilies):
+        return None
+    what = f"{_adapter(adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
+    with blamed(origin, what):
+        why = adapter.cannot_answer(family)
+    return _checked_line(origin, what, why)
+
+
+def estimated_input(
+    adapter: Estimating, origin: str, messages: tuple[Message, ...]
+) -> tuple[int, float | None]:
+    """``adapter.estimate(messages)``, checked: input tokens (an int, at least 0) and their cost
+    in USD (a finite number, at least 0, or ``None``), which ``bpb run --dry-run`` adds up.
+
+    Raises:
+        PluginBug: ``estimate()`` raised or returned something else, naming ``origin`` (who
+            supplied the adapter).
+    """
+    what = f"{_adapter(adapter)}: estimate()"
+    with blamed(origin, what):
+        estimate = adapter.estimate(messages)
+    if isinstance(estimate, tuple | list) and len(estimate) == 2:
+        tokens, cost = estimate
+        if _count(tokens) and (cost is None or _amount(cost)):
+            return tokens, None if cost is None else float(cost)
+    raise PluginBug(
+        f"{origin}: {what} returned {estimate!r:.80}; expected (input tokens, cost): an int "
+        "at least 0 and a finite float at least 0 or None"
+    )
+
+
+def _adapter(adapter: object) -> str:
+    return f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}"
+
+
+def _checked_line(origin: str, what: str, line: object) -> str | None:
+    """``line`` if it is ``None`` or a str (one line shown to the user)."""
+    if line is None or isinstance(line, str):
+        return line
+    raise PluginBug(f"{origin}: {what} returned {type(line).__name__}; expected None or a str")
+
+
+def _count(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _amount(value: object) -> bool:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    return math.isfinite(value) and value >= 0

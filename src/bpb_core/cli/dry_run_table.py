@@ -33,7 +33,7 @@ def show_dry_run(
         title="bpb run --dry-run (nothing sent; output tokens not included)",
     )
     for item in ready:
-        plan = dry_run(data, out / slug(item.name), options, registry, item.adapter)
+        plan = dry_run(data, out / slug(item.name), options, registry, item.adapter, item.origin)
         for task in options.tasks:
             cost = plan.input_cost.get(task, 0.0)
             table.add_row(

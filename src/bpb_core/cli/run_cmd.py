@@ -93,16 +93,16 @@ def _offline_adapters(registry: Registry, data: Path) -> list[str]:
     whose simulator, if it runs one, is installed)."""
     from rich.markup import escape
 
-    from bpb_core.capabilities import KnowsFamilies
     from bpb_core.cli.console import stderr
+    from bpb_core.plugin_calls import answer_refusal
     from bpb_core.runner.asking import data_family
-    from bpb_core.runner.run import check_simulator_for
+    from bpb_core.runner.run import adapter_origin, check_simulator_for
 
     family = data_family(data, registry)
     chosen = []
     for spec in registry.offline_specs():
         adapter = registry.adapter(spec)
-        if isinstance(adapter, KnowsFamilies) and adapter.cannot_answer(family) is not None:
+        if answer_refusal(adapter, adapter_origin(registry, spec, adapter), family) is not None:
             continue
         try:
             check_simulator_for(data, spec, adapter, registry)

@@ -217,11 +217,12 @@ def command_line_plans(
 
 @dataclass(frozen=True)
 class Prepared:
-    """An adapter built and checked before the first call of the run."""
+    """An adapter built and checked before the first call of the run, and who supplied it."""
 
     name: str
     adapter: Any
     plan: AdapterPlan
+    origin: str
 
 
 def prepare(registry: Any, plans: list[AdapterPlan], *, check: bool = True) -> list[Prepared]:
@@ -232,14 +233,15 @@ def prepare(registry: Any, plans: list[AdapterPlan], *, check: bool = True) -> l
         BadInput: A preflight failed (a key missing, an unknown provider, a module missing), or
             two adapters would share a run folder name.
     """
-    from bpb_core.runner.run import check_adapter, run_name
+    from bpb_core.runner.run import adapter_origin, check_adapter, run_name
 
     ready: list[Prepared] = []
     for plan in plans:
         adapter = registry.adapter(plan.spec, plan.options)
+        origin = adapter_origin(registry, plan.spec, adapter)
         if check:
-            check_adapter(plan.spec, adapter)
-        ready.append(Prepared(run_name(plan.spec, adapter), adapter, plan))
+            check_adapter(plan.spec, adapter, origin)
+        ready.append(Prepared(run_name(plan.spec, adapter), adapter, plan, origin))
     names = [p.name for p in ready]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:

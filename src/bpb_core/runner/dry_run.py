@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING
 from bpb_core.capabilities import Estimating
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
-from bpb_core.plugin_calls import prompt_messages
+from bpb_core.plugin_calls import estimated_input, prompt_messages
 from bpb_core.run_folder import completed_epochs
 from bpb_core.runner.asking import asking
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import check_images
+from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Task
@@ -75,9 +76,15 @@ def dry_run(
     options: RunOptions,
     registry: Registry,
     adapter: object = None,
+    origin: str | None = None,
 ) -> DryRun:
     """Count the calls and estimate the input tokens (and, when ``adapter`` can estimate, the
-    input cost) of a run without sending anything."""
+    input cost) of a run without sending anything. ``origin`` is who supplied ``adapter``
+    (default: its module).
+
+    Raises:
+        PluginBug: The adapter's ``estimate()`` raised or returned no (tokens, cost) pair.
+    """
     plan = DryRun()
     asked = asking(data, options, registry)
     options, tasks = asked.options, asked.tasks
@@ -94,7 +101,8 @@ def dry_run(
             prompt = PromptOptions(options.input_mode, cot, options.force_numeric)
             messages = prompt_messages(task, registry.origin("task", name), scene, image, prompt)
             if isinstance(adapter, Estimating):
-                plan.add(name, *adapter.estimate(messages))
+                who = origin or object_origin(adapter)
+                plan.add(name, *estimated_input(adapter, who, messages))
                 continue
             chars = sum(len(p.text) for m in messages for p in m.parts if isinstance(p, TextPart))
             plan.add(name, chars // 4 + (0 if image is None else image_tokens(image)), None)

@@ -18,13 +18,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import KnowsFamilies, NeedsSimulator, Preflighting
+from bpb_core.capabilities import NeedsSimulator
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config
 from bpb_core.errors import BadInput
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
-from bpb_core.plugin_calls import described_settings
+from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
 from bpb_core.runner.asking import Asking, asking, data_family
 from bpb_core.runner.drive import drive
@@ -62,21 +62,23 @@ def run_name(spec: str, adapter: ModelAdapter) -> str:
     return name if isinstance(name, str) and name.startswith(spec) else spec
 
 
-def check_adapter(spec: str, adapter: ModelAdapter, flag: str = "--adapter") -> None:
+def check_adapter(spec: str, adapter: ModelAdapter, origin: str, flag: str = "--adapter") -> None:
     """Raise :class:`BadInput` when ``adapter`` cannot make a call (it has no async
     ``complete``: an object passed in by the caller, since the registry checks the ones its
     plugins build) or says before any call that no call can succeed. ``flag`` names where the
-    adapter was given: ``--adapter``, or a library parameter (``adapter``, ``adapters``).
+    adapter was given: ``--adapter``, or a library parameter (``adapter``, ``adapters``);
+    ``origin`` who supplied it (:func:`adapter_origin`).
 
     Raises:
         BadInput: One line: what to fix (a missing key, an unknown provider, a module).
+        PluginBug: Its ``preflight()`` raised or returned neither ``None`` nor a str.
     """
     shape = adapter_problem(adapter)
     if shape is not None:
         raise BadInput(
             f"adapter {spec}: {shape}; expected an object with an async complete(request)"
         )
-    problem = adapter.preflight() if isinstance(adapter, Preflighting) else None
+    problem = preflight_problem(adapter, origin)
     if problem:
         raise BadInput(f"{flag} {spec}: {problem}")
 
@@ -166,12 +168,13 @@ def _prepare(
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
-    check_adapter(spec, model, flag)
-    why = model.cannot_answer(asked.family) if isinstance(model, KnowsFamilies) else None
+    origin = adapter_origin(registry, spec, model)
+    check_adapter(spec, model, origin, flag)
+    why = answer_refusal(model, origin, asked.family)
     if why is not None:
         raise BadInput(f"{flag} {spec}: {why}")
     check_simulator_for(data, spec, model, registry)
-    settings = described_settings(model, _origins(registry, spec, model, {})[spec])
+    settings = described_settings(model, origin)
     make_run_folder(run_dir)
     return asked, model, spec, registry, settings
 
@@ -232,17 +235,23 @@ def _opening(
 def _origins(
     registry: Registry, spec: str, model: ModelAdapter, tasks: dict[str, Task]
 ) -> dict[str, str]:
-    """Who supplied each task and the adapter (``spec``), for one-line plugin errors: an
-    adapter object no plugin registers is blamed on its module (its name follows anyway)."""
+    """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
     found = {name: registry.origin("task", name) for name in tasks}
-    found[spec] = object_origin(model)
+    found[spec] = adapter_origin(registry, spec, model)
+    return found
+
+
+def adapter_origin(registry: Registry, spec: str, model: object) -> str:
+    """Who supplied the adapter run as ``spec``, for one-line plugin errors: the plugin that
+    registers its name, else (an adapter object no plugin registers) its module (its name
+    follows anyway)."""
     try:
         adapter = split_spec(spec)[0]
     except BadInput:  # an adapter object's own name ("buggy"), not a NAME:MODEL spec
-        return found
+        return object_origin(model)
     if adapter in registry.names("adapter"):
-        found[spec] = registry.origin("adapter", adapter)
-    return found
+        return registry.origin("adapter", adapter)
+    return object_origin(model)
 
 
 def _adapter(
