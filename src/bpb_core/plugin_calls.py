@@ -60,6 +60,27 @@ def simulated_truth(
     return _checked_truth(family, origin, what, truth)
 
 
+def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
+    """``family.load_config(source)``, checked: an instance of the family's ``config_model``
+    (the manifest records it and the family's other hooks take it). A
+    :class:`~bpb_core.errors.BadInput` naming the file or field passes through.
+
+    Raises:
+        PluginBug: The family raised anything else or returned something else, naming
+            ``origin`` (who supplied it) and the family.
+    """
+    what = f"{_family(family)}: load_config()"
+    with blamed(origin, what):
+        config = family.load_config(source)
+    model = getattr(family, "config_model", None)
+    if not isinstance(model, type) or isinstance(config, model):
+        return config
+    raise PluginBug(
+        f"{origin}: {what} returned {type(config).__name__}; expected {model.__name__} "
+        "(the family's config_model)"
+    )
+
+
 def prompt_messages(
     task: Task, origin: str, scene: Any, image: bytes | None, options: PromptOptions
 ) -> tuple[Message, ...]:

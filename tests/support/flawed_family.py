@@ -8,7 +8,12 @@ family's truth model), ``truth_type`` (the same from ``ground_truth``), ``pictur
 ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict),
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
 line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
-``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str).
+``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
+and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its config model),
+``make_scene_raise`` and ``make_scene_type`` (the scene's truth, not the scene), both from the
+second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
+``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
+(a path it never wrote).
 Its simulator ``flawed-analytic`` is the analytic one, for this family's scenes.
 The module is self-contained: tests install its source as a real distribution.
 """
@@ -47,6 +52,16 @@ class ReasonsAsText(FinalState):
         return "q1"  # a str, not a list of them
 
 
+class FileNames:
+    """A made scene whose files() are its file names alone."""
+
+    def __init__(self, made: Any) -> None:
+        self.truth, self.row, self._made = made.truth, made.row, made
+
+    def files(self, images: bool) -> Any:
+        return list(self._made.files(images))
+
+
 class FlawedFamily(BilliardsFamily):
     name = "flawed"
 
@@ -55,7 +70,28 @@ class FlawedFamily(BilliardsFamily):
         return ReasonsAsText if _flaw() == "unstable_reasons_type" else FinalState
 
     def load_config(self, source: Any) -> Any:
-        return super().load_config(source).model_copy(update={"family": self.name})
+        if _flaw() == "load_config_raise":
+            raise ValueError("load_config exploded")
+        config = super().load_config(source).model_copy(update={"family": self.name})
+        return config.model_dump() if _flaw() == "load_config_type" else config
+
+    def make_scene(self, config: Any, simulator: Any, seed: int, horizon: float, index: int) -> Any:
+        made = super().make_scene(config, simulator, seed, horizon, index)
+        if index >= 1 and _flaw() == "make_scene_raise":
+            raise RuntimeError("make_scene exploded")
+        if index >= 1 and _flaw() == "make_scene_type":
+            return made.truth
+        if _flaw() == "files_type":
+            return FileNames(made)
+        return made
+
+    def write_stats(self, root: Path, config: Any, tallies: Any) -> Any:
+        if _flaw() == "write_stats_raise":
+            raise RuntimeError("write_stats exploded")
+        written = super().write_stats(root, config, tallies)
+        if _flaw() == "write_stats_missing":
+            return [*written, "stats/never.png"]
+        return written[0] if _flaw() == "write_stats_type" else written
 
     def predict(self, name: str, scene: Any, rng: random.Random) -> Any:
         if _flaw() == "predict_raise":

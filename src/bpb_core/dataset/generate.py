@@ -30,10 +30,11 @@ from bpb_core.dataset.jobs import (
 from bpb_core.dataset.manifest import DatasetManifest
 from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
-from bpb_core.errors import BadInput, UnknownName
+from bpb_core.errors import BadInput, PluginBug, UnknownName, blamed
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
+from bpb_core.plugin_calls import loaded_config
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -90,7 +91,7 @@ def generate_dataset(
         registry = registry if registry is not None else _registry()
         name = family or registry.default_family()
         maker = registry.scene_family(name)
-        cfg = _config(maker, config)
+        cfg = _config(maker, registry.origin("scene_family", name), config)
         _check_simulator(registry, maker, cfg)
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
@@ -139,8 +140,8 @@ def _registry() -> Registry:
         return make_registry()
 
 
-def _config(family: SceneFamily, config: Any) -> Any:
-    cfg = family.load_config(config)
+def _config(family: SceneFamily, origin: str, config: Any) -> Any:
+    cfg = loaded_config(family, origin, config)
     named = getattr(cfg, "family", family.name)
     if named != family.name:
         raise BadInput(f"config: family: {named!r}, but the scene family is {family.name!r}")
@@ -195,7 +196,21 @@ def _write_stats(
     if not isinstance(family, DrawingStats):
         return
     progress.phase("stats", 1)
-    for rel in family.write_stats(setup.root, setup.config, writer.tallies):
+    what = f"scene family {family.name!r}: write_stats()"
+    with blamed(setup.origin, what):
+        written = family.write_stats(setup.root, setup.config, writer.tallies)
+    if not isinstance(written, list | tuple) or not all(isinstance(r, str) for r in written):
+        raise PluginBug(
+            f"{setup.origin}: {what} returned {type(written).__name__}; expected a list of "
+            "the paths it wrote (str, relative to the dataset folder)"
+        )
+    missing = [rel for rel in written if not (setup.root / rel).is_file()]
+    if missing:
+        raise PluginBug(
+            f"{setup.origin}: {what} returned {missing[0]!r}, which is no file it wrote "
+            "in the dataset folder"
+        )
+    for rel in written:
         writer.add_file(rel)
     progress.advance()
 

@@ -74,6 +74,7 @@ def worker_setup(
         family_cls=family_cls,
         simulator_cls=simulator_entry.info.load(),
         images=images,
+        origin=family_entry.origin,
         plugins=plugins,
     )
 

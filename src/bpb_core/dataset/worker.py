@@ -9,14 +9,15 @@ from __future__ import annotations
 
 import shutil
 import signal
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BadInput, BpbError
-from bpb_core.interfaces import SceneFamily, Simulator
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
+from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
 
@@ -46,6 +47,7 @@ class WorkerSetup:
     """Everything a worker needs, picklable (classes travel by reference).
 
     Attributes:
+        origin: Who supplied the family (a registry entry's origin), for one-line plugin errors.
         options: Keyword options the simulator is built with.
     """
 
@@ -55,6 +57,7 @@ class WorkerSetup:
     family_cls: type
     simulator_cls: type
     images: bool
+    origin: str
     plugins: tuple[tuple[str, str], ...] = ()
     options: tuple[tuple[str, Any], ...] = ()
 
@@ -99,31 +102,75 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
 
 
 def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
-    """Make, write and hash one scene; return its row and file hashes."""
+    """Make, write and hash one scene; return its row and file hashes.
+
+    Raises:
+        BadInput: The config makes a scene the simulator cannot finish.
+        PluginBug: The family's ``make_scene()`` (or its scene's ``files()``) raised or
+            returned something else than it should, naming the family's plugin.
+    """
     name = scene_id(job.horizon, job.index)
+    what = f"scene family {family.name!r}: make_scene({name!r})"
     try:
-        made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
-    except BadInput:
+        with blamed(setup.origin, what):
+            made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
+    except (BadInput, PluginBug):
         raise
     except BpbError as exc:  # e.g. an event budget overrun: the config makes unfinishable scenes
         raise BadInput(f"config: scene {name}: {exc}; the simulator cannot finish it") from None
-    if made.truth.scene_id != name:
-        raise BpbError(
-            f"scene family {family.name!r}: made scene {made.truth.scene_id!r} for {name!r}; "
-            "make_scene must name scene i at horizon t bpb_core.layout.scene_id(t, i)"
-        )
-    values = tuple((column, made.row[column]) for column in family.index_columns)
-    row = IndexRow(name, job.horizon, job.index, values, made.truth.stable)
+    row = IndexRow(name, job.horizon, job.index, *_cells(setup.origin, what, name, family, made))
     if not job.keep_unstable and row.stable is False:
         return SceneResult(row, ())
     folder = scene_dir(setup.root, job.horizon, job.index)
     folder.mkdir(parents=True, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
-    for file_name, data in made.files(setup.images).items():
+    for file_name, data in _files(setup, what, made).items():
         (folder / file_name).write_bytes(data)
         files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
+
+
+def _cells(
+    origin: str, what: str, name: str, family: SceneFamily, made: Any
+) -> tuple[tuple[tuple[str, object], ...], bool | None]:
+    """The index cells and stability of a made scene, checked: a :class:`GeneratedScene` named
+    as the folder it lands in, whose row holds every index column."""
+    with blamed(origin, f"{what}'s scene"):  # its attributes may be properties
+        truth, row = getattr(made, "truth", None), getattr(made, "row", None)
+        made_id, stable = getattr(truth, "scene_id", None), getattr(truth, "stable", None)
+    shaped = isinstance(made_id, str) and stable in (True, False, None)
+    if not (shaped and isinstance(row, Mapping) and callable(getattr(made, "files", None))):
+        raise PluginBug(
+            f"{origin}: {what} returned {type(made).__name__}; expected a "
+            "bpb_core.GeneratedScene (truth with scene_id and stable, row, files())"
+        )
+    if made_id != name:
+        raise PluginBug(
+            f"{origin}: {what} made scene {made_id!r}; make_scene must name scene i at "
+            "horizon t bpb_core.layout.scene_id(t, i)"
+        )
+    missing = [column for column in family.index_columns if column not in row]
+    if missing:
+        raise PluginBug(
+            f"{origin}: {what} returned a scene whose row lacks {missing[0]!r} (one of the "
+            "family's index_columns)"
+        )
+    return tuple((column, row[column]) for column in family.index_columns), stable
+
+
+def _files(setup: WorkerSetup, what: str, made: GeneratedScene) -> dict[str, bytes]:
+    """The made scene's ``files()``, checked: file names and their bytes."""
+    with blamed(setup.origin, f"{what}'s files()"):
+        files = made.files(setup.images)
+    if isinstance(files, dict) and all(
+        isinstance(k, str) and isinstance(v, bytes) for k, v in files.items()
+    ):
+        return files
+    raise PluginBug(
+        f"{setup.origin}: {what}'s files() returned {type(files).__name__}; expected a dict "
+        "of file names (str) and their contents (bytes)"
+    )
 
 
 def remove_scene(root: Path, horizon: float, index: int) -> None:
