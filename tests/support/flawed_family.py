@@ -13,7 +13,11 @@ and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its c
 ``make_scene_raise`` and ``make_scene_type`` (the scene's truth, not the scene), both from the
 second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
-(a path it never wrote).
+(a path it never wrote); and in ``bpb bench sim`` (whose reference and contestant are its own
+simulator) ``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
+``bench_scenes_raise``, ``bench_scenes_type`` (dicts, not scenes), ``compare_raise``,
+``compare_no_error`` (no ``error`` key), ``compare_type`` (an ``error`` in words),
+``events_type`` (a float), ``scaled_scene_raise`` and ``scaled_scene_type`` (a dict).
 Its simulator ``flawed-analytic`` is the analytic one, for this family's scenes.
 The module is self-contained: tests install its source as a real distribution.
 """
@@ -64,6 +68,39 @@ class FileNames:
 
 class FlawedFamily(BilliardsFamily):
     name = "flawed"
+    bench_description = "billiards scenes with flaws on demand"
+
+    @property  # type: ignore[misc]
+    def bench_reference(self) -> Any:
+        return None if _flaw() == "bench_reference_type" else "flawed-analytic:precision=50"
+
+    @property  # type: ignore[misc]
+    def bench_contestants(self) -> Any:
+        return "flawed-analytic" if _flaw() == "bench_contestants_type" else ("flawed-analytic",)
+
+    def bench_scenes(self, count: int, seed: int) -> Any:
+        if _flaw() == "bench_scenes_raise":
+            raise RuntimeError("bench_scenes exploded")
+        scenes = super().bench_scenes(count, seed)
+        return [s.model_dump() for s in scenes] if _flaw() == "bench_scenes_type" else scenes
+
+    def compare(self, outcome: Any, reference: Any, scene: Any) -> Any:
+        if _flaw() == "compare_raise":
+            raise RuntimeError("compare exploded")
+        measures = super().compare(outcome, reference, scene)
+        if _flaw() == "compare_no_error":
+            return {k: v for k, v in measures.items() if k != "error"}
+        return {**measures, "error": "small"} if _flaw() == "compare_type" else measures
+
+    def events(self, outcome: Any) -> Any:
+        count = super().events(outcome)
+        return count + 0.5 if _flaw() == "events_type" else count
+
+    def scaled_scene(self, scene: Any, factor: float) -> Any:
+        if _flaw() == "scaled_scene_raise":
+            raise RuntimeError("scaled_scene exploded")
+        busy = super().scaled_scene(scene, factor)
+        return busy.model_dump() if _flaw() == "scaled_scene_type" else busy
 
     @property  # type: ignore[misc]
     def truth_model(self) -> Any:

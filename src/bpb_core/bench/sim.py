@@ -22,22 +22,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.bench import machine_description, today
-from bpb_core.bench.contestants import (
-    build_simulators,
-    comparing_family,
-    parse_contestant,
-    timed_run,
-)
-from bpb_core.capabilities import CountsEvents, RunsMany
-from bpb_core.errors import BadInput, PluginError
+from bpb_core.bench.comparing import ERROR, BenchFamily, bench_family
+from bpb_core.bench.contestants import build_simulators, parse_contestant, timed_run
+from bpb_core.capabilities import RunsMany
+from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
-    from bpb_core.capabilities import Comparing
     from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
-
-ERROR = "error"
-"""The key of :meth:`Comparing.compare`'s result that holds the distance to the reference."""
 
 Progress = Callable[[int, int], None]
 """Called with (scenes done, scenes in all) after each scene."""
@@ -157,6 +149,7 @@ def bench_simulators(
     Raises:
         BadInput: Too few scenes, an unknown or foreign simulator, or a family that cannot
             compare simulators.
+        PluginBug: A hook of the family raised or gave something else than it should.
     """
     from bpb_core.registry import make_registry
 
@@ -166,26 +159,26 @@ def bench_simulators(
         raise BadInput(f"--reference-scenes: must be at least 1, got {reference_scenes}")
     reg = registry if registry is not None else make_registry()
     name = family or reg.default_family()
-    maker = comparing_family(reg, name)
-    ref = parse_contestant(reference or maker.bench_reference, "--reference")
-    others = [parse_contestant(s) for s in (contestants or maker.bench_contestants)]
+    maker = bench_family(reg, name)
+    ref = parse_contestant(reference or maker.text("bench_reference"), "--reference")
+    others = [parse_contestant(s) for s in (contestants or maker.contestants())]
     build_simulators(reg, name, [ref], "--reference")
     sims = build_simulators(reg, name, [ref, *(c for c in others if c.spec != ref.spec)])
-    sample = maker.bench_scenes(scenes, seed)
+    sample = maker.scenes(scenes, seed)
     compared = min(len(sample), reference_scenes or len(sample))
     tallies = _run_all(maker, sims, sample, progress, compared)
     _time_batches(sims, sample, tallies)
-    counting = isinstance(maker, CountsEvents)
+    counting = maker.counts_events
     rows = [t.row(label, label == ref.spec, counting) for label, t in tallies.items()]
     columns = tuple(next((r.counts for r in rows if r.counts), {}))
-    description, measures = maker.bench_description, maker.bench_measures
+    description, measures = maker.text("bench_description"), maker.text("bench_measures")
     return SimBench(
         name, len(sample), seed, description, measures, columns, rows, compared=compared
     )
 
 
 def _run_all(
-    family: Comparing,
+    family: BenchFamily,
     sims: dict[str, Simulator],
     sample: list[Any],
     progress: Progress | None,
@@ -193,9 +186,9 @@ def _run_all(
 ) -> dict[str, _Tally]:
     """Each scene through every simulator in turn, the first one's outcome the reference (run
     on the first ``compared`` scenes only). A run that raises, or whose error is not finite,
-    is a failed scene of that simulator; a scene the reference failed is compared by none."""
+    is a failed scene of that simulator; a scene the reference failed is compared by none.
+    The family's own compare() and events() failing stop the bench (a PluginBug)."""
     tallies = {label: _Tally() for label in sims}
-    counter = family.events if isinstance(family, CountsEvents) else None
     for sim in sims.values():  # warm-up: imports, caches, compiled code loaded
         with contextlib.suppress(Exception):  # a failing simulator is counted below
             sim.run(sample[0])
@@ -207,14 +200,12 @@ def _run_all(
                 continue
             try:
                 outcome, seconds = timed_run(sim, scene)
-                truth = outcome if label == reference else truth
-                measures = None if truth is None else family.compare(outcome, truth, scene)
-                events = counter(outcome) if counter is not None else 0
-            except Exception as exc:  # a plugin's own failure on this scene
+            except Exception as exc:  # the simulator's own failure on this scene
                 tallies[label].fail(f"{type(exc).__name__}: {exc}")
                 continue
-            if measures is not None and ERROR not in measures:
-                raise PluginError(f"scene family: compare() returned no {ERROR!r}")
+            truth = outcome if label == reference else truth
+            measures = None if truth is None else family.compare(outcome, truth, scene)
+            events = family.events(outcome)
             if measures is not None and not math.isfinite(measures[ERROR]):
                 tallies[label].fail(f"{ERROR} {measures[ERROR]!r}")
                 continue
@@ -241,7 +232,7 @@ def _time_batches(
 
 
 def time_simulate(
-    family: Comparing,
+    family: BenchFamily,
     simulator: str,
     count: int = 1000,
     seed: int = 1,
@@ -282,10 +273,10 @@ def time_simulate(
     return best
 
 
-def _scene_files(family: Comparing, count: int, seed: int, folder: Path) -> list[Path]:
+def _scene_files(family: BenchFamily, count: int, seed: int, folder: Path) -> list[Path]:
     """Write ``count`` bench scenes as ``scene_NNNNN.json`` files into ``folder``."""
     paths = []
-    for index, scene in enumerate(family.bench_scenes(count, seed)):
+    for index, scene in enumerate(family.scenes(count, seed)):
         paths.append(folder / f"scene_{index:05d}.json")
         paths[-1].write_text(scene.model_dump_json())
     return paths
@@ -312,7 +303,7 @@ def with_simulate_timing(
     from bpb_core.registry import make_registry
 
     reg = registry if registry is not None else make_registry()
-    family = comparing_family(reg, result.family)
+    family = bench_family(reg, result.family)
     names = [simulators] if isinstance(simulators, str) else list(simulators)
     check_simulate_with(reg, result.family, names)
     figures: dict[str, float] = {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from bpb_core.bench.comparing import bench_family
 from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
 from bpb_core.bench.sim import ScaleRow, SimBench
 from bpb_core.capabilities import CountsEvents
@@ -36,6 +37,7 @@ def with_scaling(
 
     Raises:
         BadInput: See :func:`scaling_simulators`.
+        PluginBug: A hook of the family raised or gave something else than it should.
     """
     from dataclasses import replace
 
@@ -44,14 +46,13 @@ def with_scaling(
 
     reg = registry if registry is not None else make_registry()
     sims = scaling_simulators(reg, result.family, contestants, scenes)
-    family = comparing_family(reg, result.family)
-    assert isinstance(family, CountsEvents), "checked by scaling_simulators"
-    sample = family.bench_scenes(scenes, result.seed)
+    family = bench_family(reg, result.family)
+    sample = family.scenes(scenes, result.seed)
     seconds = {(f, label): 0.0 for f in factors for label in sims}
     events = dict.fromkeys(seconds, 0)
     for scene in sample:
         for factor in factors:
-            busy = family.scaled_scene(scene, factor)
+            busy = family.scaled(scene, factor)
             for label, sim in sims.items():
                 outcome, spent = timed_run(sim, busy)
                 seconds[factor, label] += spent
