@@ -65,18 +65,21 @@ class PluginBug(PluginError):
 
 
 @contextmanager
-def blamed(origin: str, what: str) -> Iterator[None]:
+def blamed(origin: str, what: str, passing: tuple[type[Exception], ...] = ()) -> Iterator[None]:
     """Run plugin code; an unexpected exception leaves as a one-line :class:`PluginBug`
     naming the plugin (``origin``, e.g. ``Registered.origin``) and what it was doing.
 
     bpb's own errors (:class:`BpbError`: a ``BadInput``, a ``ParseFailure``, a model error)
-    pass through unchanged: raising them is part of a plugin's contract.
+    pass through unchanged: raising them is part of a plugin's contract, as raising the
+    ``passing`` types is for some hooks (a ``ValueError`` naming a field).
     """
     try:
         yield
     except BpbError:
         raise
     except Exception as exc:
+        if isinstance(exc, passing):
+            raise
         raise PluginBug(f"{origin}: {what} raised {type(exc).__name__}: {exc}") from exc
 
 

@@ -29,6 +29,7 @@ from bpb_core.runner.asking import asking
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef
+from bpb_core.web.task_forms import form_answer, form_context, form_html
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Task
@@ -50,7 +51,7 @@ class Page:
 
     ref: SceneRef
     prompts: dict[str, str]
-    forms: dict[str, tuple[str, dict[str, Any]]]
+    forms: dict[str, dict[str, Any]]
     done: int
     total: int
 
@@ -100,7 +101,12 @@ class HumanSession:
         return None
 
     def page(self, ref: SceneRef) -> Page:
-        """The prompts (exactly as a model gets them) and the task forms of ``ref``."""
+        """The prompts (exactly as a model gets them) and the task forms' values of ``ref``.
+
+        Raises:
+            PluginBug: A task's messages() or form_context() raised or returned something
+                else than it should, naming its plugin.
+        """
         scene, image = ref.load(), ref.image()
         prompts, forms = {}, {}
         for name, task in self.tasks.items():
@@ -110,9 +116,23 @@ class HumanSession:
                 p.text for m in messages for p in m.parts if isinstance(p, TextPart)
             )
             assert isinstance(task, AnswersInBrowser)
-            forms[name] = (task.form_template, task.form_context(scene, image))
+            forms[name] = form_context(task, origin, scene, image)
         done = len({sid for sid, _ in completed(self.run_dir)})
         return Page(ref, prompts, forms, done, len(self.order))
+
+    def form(self, task: str, context: dict[str, Any], width: int, height: int) -> str:
+        """The HTML of ``task``'s form on a page (``context`` from :meth:`page`; the input
+        image ``width`` by ``height`` pixels).
+
+        Raises:
+            PluginBug: The task's form template is no str or does not render, naming its plugin.
+        """
+        component = self.tasks[task]
+        assert isinstance(component, AnswersInBrowser)
+        origin = self.registry.origin("task", task)
+        return form_html(
+            component, origin, context, prefix=f"{task}.", image_width=width, image_height=height
+        )
 
     def _prompt_options(self, task: str) -> PromptOptions:
         cot = self.options.cot.get(task, self.tasks[task].default_cot)
@@ -124,6 +144,8 @@ class HumanSession:
         Raises:
             FormError: A field is unknown, missing or invalid, or the scene is not the one
                 being asked; nothing is stored.
+            PluginBug: A task's read_form() or parse() raised or returned something else than
+                it should, naming its plugin; nothing is stored.
         """
         if not secrets.compare_digest(fields.get("token", ""), self.token):
             raise FormError("token: not this session's page (another site, or a restarted app)")
@@ -163,13 +185,13 @@ class HumanSession:
         out: dict[str, tuple[dict[str, Any], str | None, int | None]] = {}
         for name, component in self.tasks.items():
             assert isinstance(component, AnswersInBrowser)
+            origin = self.registry.origin("task", name)
             try:
-                answer = component.read_form(by_task[name], scene)
+                answer = form_answer(component, origin, by_task[name], scene)
             except ValueError as exc:
                 raise FormError(f"{name}.{exc}") from None
             try:
                 options = self._prompt_options(name)
-                origin = self.registry.origin("task", name)
                 parsed = parsed_answer(self.tasks[name], origin, json.dumps(answer), scene, options)
             except ParseFailure as exc:
                 raise FormError(f"{name}: {exc}") from None

@@ -15,9 +15,10 @@ from starlette.requests import Request
 from starlette.responses import HTMLResponse, RedirectResponse, Response
 from starlette.routing import Route
 
+from bpb_core.errors import PluginBug
 from bpb_core.web.human import MAX_FIELDS, MAX_VALUE, FormError, HumanSession
 from bpb_core.web.serve import loopback_only
-from bpb_core.web.templating import render, render_string
+from bpb_core.web.templating import render
 
 # A field's name and value as posted (percent-encoded: up to 12 bytes a character); the parser
 # stops reading past it, so a post cannot make the app hold more than MAX_FIELDS of these
@@ -32,21 +33,16 @@ def human_app(session: HumanSession) -> Starlette:
         ref = session.next_scene()
         if ref is None:
             return HTMLResponse(render("human_done.html", session=session))
-        page = session.page(ref)
         scene = ref.load()
         width, height = _image_size(ref.image())
-        forms = {
-            name: Markup(
-                render_string(
-                    source,
-                    **context,
-                    prefix=f"{name}.",
-                    image_width=width,
-                    image_height=height,
-                )
-            )
-            for name, (source, context) in page.forms.items()
-        }
+        try:
+            page = session.page(ref)
+            forms = {
+                name: Markup(session.form(name, context, width, height))
+                for name, context in page.forms.items()
+            }
+        except PluginBug as exc:  # one line naming the plugin, not a bare 500
+            return _bad(str(exc), 500)
         html = render(
             "human.html",
             session=session,
@@ -79,6 +75,8 @@ def human_app(session: HumanSession) -> Starlette:
             session.submit(fields, shown)
         except FormError as exc:
             return _bad(str(exc))
+        except PluginBug as exc:  # nothing stored
+            return _bad(str(exc), 500)
         return RedirectResponse("/", status_code=303)
 
     async def image(request: Request) -> Response:
