@@ -6,9 +6,10 @@ import math
 
 import pytest
 
+from bpb_core.bench.contestants import parse_contestant
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
-from bpb_tasks.billiards.bench_compare import random_scenes
+from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
 from bpb_tasks.billiards.scene import table_box
 from bpb_tasks.billiards.stability import annotate
 from bpb_tasks.billiards.stability_margins import pair_margins
@@ -88,6 +89,27 @@ def test_pymunk_fails_a_run_whose_ball_went_through_a_cushion() -> None:
     s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
     with pytest.raises(SimulationError, match=r"^pymunk: ball 0 went through a cushion by t="):
         _PymunkRun(s, 30 * stable_dt(s)).run(1.0)
+
+
+def test_pymunk_with_tunnel_allowed_gives_its_own_positions_as_bench_sim_measures_them() -> None:
+    # bpb bench sim measures pymunk at coarse steps on purpose: after the refusal above its
+    # default pymunk:dt=0.01 failed most scenes and --scaling pymunk stopped the whole benchmark
+    s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
+    coarse = parse_contestant(f"pymunk:dt={30 * stable_dt(s)!r},tunnel=allow")
+    allowed = make_registry().simulator(coarse.name, **coarse.options)
+    with pytest.raises(SimulationError, match="above this scene's stability bound"):
+        PymunkSimulator(dt=coarse.options["dt"]).run(s)
+    out = allowed.run(s)  # straight through the right cushion, as pymunk steps it
+    assert out.positions[0] == pytest.approx((7.0, 0.5)) and not out.events
+    # at the bound, ball 1 of this scene ends 0.8 mm into the right cushion: put back by default
+    s = random_scene(3, 45, speeds=(0.5, 6.0))
+    raw = PymunkSimulator(dt=stable_dt(s), tunnel="allow").run(s).positions
+    kept = PymunkSimulator(dt=stable_dt(s)).run(s).positions
+    right = table_box(s.table, R)[1]
+    assert raw[1][0] > right + 5e-4 and kept[1] == (right, raw[1][1])
+    assert {b: p for b, p in raw.items() if b != 1} == {b: p for b, p in kept.items() if b != 1}
+    with pytest.raises(BadInput, match=r"^tunnel: must be refuse or allow, got 'alow'$"):
+        make_registry().simulator("pymunk", dt=0.01, tunnel="alow")
 
 
 def test_isolated_roll_is_stable_with_margins() -> None:
