@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 from bpb_core.bench import sim_report
-from bpb_core.bench.contestants import parse_contestant
+from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
 from bpb_core.bench.sim import SimBench, SimRow, bench_simulators
 from bpb_core.errors import BadInput, UnknownName
 from bpb_core.hookspecs import hookimpl
@@ -45,6 +45,23 @@ def test_billiards_reference_is_exact_and_analytic_close(registry: Registry) -> 
     assert analytic.max_error < 1e-9 and not any(analytic.counts.values())
     assert pymunk.median_error > 1e3 * analytic.median_error
     assert all(row.ms_per_scene > 0 for row in result.rows)
+
+
+def test_billiards_default_contestants_measure_pymunk_on_fast_scenes(registry: Registry) -> None:
+    # after pymunk learned to refuse coarse steps, the default pymunk:dt=0.01 refused every
+    # scene with a cue over 1.43 m/s (most --scaling scenes): it is measured, not refused
+    family = comparing_family(registry, "billiards")
+    reference = build_simulators(registry, "billiards", [parse_contestant(family.bench_reference)])
+    specs = [parse_contestant(c) for c in family.bench_contestants]
+    sims = build_simulators(registry, "billiards", specs)
+    for scene in family.bench_scenes(2, 0):
+        fast = family.scaled_scene(scene, 8.0)  # cue at 0.8-9.6 m/s
+        truth = next(iter(reference.values())).run(fast)
+        errors = {
+            label: family.compare(sim.run(fast), truth, fast)["error"]
+            for label, sim in sims.items()
+        }
+        assert all(math.isfinite(e) for e in errors.values()), errors
 
 
 def test_kernel_and_python_engine_side_by_side_with_events_batches_and_scaling(
