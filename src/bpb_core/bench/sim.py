@@ -79,16 +79,22 @@ class SimBench:
 
 @dataclass(frozen=True)
 class ScaleRow:
-    """Cost of one contestant on the scenes made busier by ``factor``."""
+    """Cost of one contestant on the scenes made busier by ``factor``: means over the scenes
+    it ran. A scene on which it raised is ``failed`` (``first_error`` says why) and counts in
+    neither mean; with every scene failed both are None."""
 
     factor: float
     name: str
-    ms_per_scene: float
-    events_per_scene: float
+    ms_per_scene: float | None
+    events_per_scene: float | None
+    failed: int = 0
+    first_error: str = ""
 
     @property
-    def us_per_event(self) -> float:
-        """Microseconds per event."""
+    def us_per_event(self) -> float | None:
+        """Microseconds per event (None when every scene failed)."""
+        if self.ms_per_scene is None or self.events_per_scene is None:
+            return None
         return 1000 * self.ms_per_scene / self.events_per_scene if self.events_per_scene else 0.0
 
 

@@ -96,8 +96,9 @@ def _table(result: SimBench) -> list[str]:
 def _scaling(result: SimBench) -> list[str]:
     """Cost against events per scene (the scaled scenes of ``--scaling``)."""
     names = list(dict.fromkeys(r.name for r in result.scaling))
+    failing = list(dict.fromkeys(r.name for r in result.scaling if r.failed))
     head = ["speed x", "events/scene", *(f"{n} ms/scene" for n in names)]
-    head += [f"{n} µs/event" for n in names]
+    head += [f"{n} µs/event" for n in names] + [f"{n} failed scenes" for n in failing]
     lines = [
         _wrap(
             "Cost against events per scene: the same scenes made busier by the family (same "
@@ -109,10 +110,23 @@ def _scaling(result: SimBench) -> list[str]:
     ]
     for factor in dict.fromkeys(r.factor for r in result.scaling):
         rows = {r.name: r for r in result.scaling if r.factor == factor}
-        cells = [f"{factor:g}", f"{rows[names[0]].events_per_scene:.3g}"]
-        cells += [f"{rows[n].ms_per_scene:.3g}" for n in names]
-        cells += [f"{rows[n].us_per_event:.3g}" for n in names]
+        events = (rows[n].events_per_scene for n in names)  # the first simulator that ran
+        cells = [f"{factor:g}", figure(next((e for e in events if e is not None), None))]
+        cells += [figure(rows[n].ms_per_scene) for n in names]
+        cells += [figure(rows[n].us_per_event) for n in names]
+        cells += [str(rows[n].failed) for n in failing]
         lines.append("| " + " | ".join(cells) + " |")
+    if failing:
+        first = next(r for r in result.scaling if r.failed)
+        lines += [
+            "",
+            _wrap(
+                "Failed scenes: the simulator raised on the scaled scene, which is left out of "
+                'its means ("–" where every scene failed; events/scene is then the next '
+                "simulator's); first: "
+                f"`{first.name}` at x{first.factor:g}, {first.first_error}"
+            ),
+        ]
     return lines
 
 

@@ -5,7 +5,9 @@ scenes busier by a factor (for instance every velocity times the factor, so more
 in the same simulated time). Each chosen simulator runs every scaled scene (the
 factors interleaved per scene, so machine noise hits them alike); per factor the result holds the
 mean milliseconds and events per scene. If the cost follows the events, the microseconds per
-event stay about flat while the events per scene grow.
+event stay about flat while the events per scene grow. A run that raises (a fixed-step simulator
+may refuse a scene made too fast for its step) is a failed scene of that simulator at that
+factor, left out of its means, as in the main comparison.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from bpb_core.bench.comparing import bench_family
 from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
-from bpb_core.bench.sim import ScaleRow, SimBench
+from bpb_core.bench.sim import ScaleRow, SimBench, _Tally
 from bpb_core.capabilities import CountsEvents
 from bpb_core.errors import BadInput
 
@@ -48,20 +50,25 @@ def with_scaling(
     sims = scaling_simulators(reg, result.family, contestants, scenes)
     family = bench_family(reg, result.family)
     sample = family.scenes(scenes, result.seed)
-    seconds = {(f, label): 0.0 for f in factors for label in sims}
-    events = dict.fromkeys(seconds, 0)
+    tallies = {(f, label): _Tally() for f in factors for label in sims}
     for scene in sample:
         for factor in factors:
             busy = family.scaled(scene, factor)
             for label, sim in sims.items():
-                outcome, spent = timed_run(sim, busy)
-                seconds[factor, label] += spent
-                events[factor, label] += family.events(outcome)
-    rows = [
-        ScaleRow(f, label, 1000 * seconds[f, label] / len(sample), events[f, label] / len(sample))
-        for f, label in seconds
-    ]
+                try:
+                    outcome, spent = timed_run(sim, busy)
+                except Exception as exc:  # the simulator's own failure on this scene
+                    tallies[factor, label].fail(f"{type(exc).__name__}: {exc}")
+                    continue
+                tallies[factor, label].add(spent, None, family.events(outcome))
+    rows = [_scale_row(f, label, t) for (f, label), t in tallies.items()]
     return replace(result, scaling=rows)
+
+
+def _scale_row(factor: float, label: str, tally: _Tally) -> ScaleRow:
+    ms = 1000 * tally.seconds / tally.runs if tally.runs else None
+    events = tally.events / tally.runs if tally.runs else None
+    return ScaleRow(factor, label, ms, events, tally.failed, tally.first_error)
 
 
 def scaling_simulators(

@@ -347,6 +347,42 @@ def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
     assert plot.stat().st_size > 0
 
 
+def test_scaling_counts_a_simulator_s_refused_scenes_per_factor_and_keeps_the_rest(
+    tmp_path: Path, bench: Callable[..., Any]
+) -> None:
+    # pymunk at its default 1e-3 s step refuses a scene made over 14.3 m/s: that ended the whole
+    # benchmark with a bare "error: --dt: ..." (exit 3), every figure lost
+    doc = tmp_path / "benchmarks.md"
+    done = bench(
+        "sim", "--scenes", "1", "--simulate-scenes", "0", "--scaling", "pymunk",
+        "--scaling", "analytic", "--scaling-scenes", "2", "--markdown", doc,
+    )  # fmt: skip
+    assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr
+    assert [row[0] for row in done.rows][2:] == [  # the default contestants, none failing
+        "pymunk:dt=0.01,tunnel=allow",
+        "pymunk:dt=0.001,tunnel=allow",
+        "pymunk:dt=0.0001,tunnel=allow",
+    ]
+    lines = {line.split(":")[0]: line for line in done.stdout.splitlines() if line[:1] == "x"}
+    assert [f for f in lines if f.endswith(" pymunk") and "failed" in lines[f]] == [
+        "x16 pymunk",
+        "x32 pymunk",
+    ]
+    assert lines["x16 pymunk"].endswith("µs/event, failed on 1 scene(s)")
+    assert lines["x32 pymunk"] == (
+        "x32 pymunk: – events/scene, – ms/scene, – µs/event, failed on 2 scene(s)"
+    )
+    analytic = [lines[f"x{f} analytic"] for f in (1, 2, 4, 8, 16, 32)]
+    assert all("–" not in line and "failed" not in line for line in analytic)
+    said = " ".join(done.stderr.split())
+    assert said.count("warning:") == 1 and "failed" not in done.stdout.split("x1 ")[0]
+    assert said.startswith("warning: --scaling pymunk: failed on 3 scaled scene(s) (x16: 1, ")
+    assert "x32: 2), left out of its figures; first: SimulationError: --dt: 0.001 s" in said
+    text = doc.read_text()
+    assert "| pymunk ms/scene | analytic ms/scene |" in text and "| pymunk failed scenes |" in text
+    assert "| 8 |" in text and " | 0 |\n| 16 |" in text and " | – | " in text
+
+
 def test_an_unknown_family_lists_the_known_scene_families(bench: Callable[..., Any]) -> None:
     done = bench("sim", "--scenes", "1", "--family", "snooker")
     lines = done.stderr.strip().splitlines()

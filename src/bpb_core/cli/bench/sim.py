@@ -112,7 +112,7 @@ def bench_sim(
     if markdown is not None:
         rel = None if plot is None else _relative(plot, markdown.parent)
         sim_report.update_section(markdown, sim_report.markdown(result, rel))
-    if any(row.failed for row in result.rows):
+    if any(row.failed for row in result.rows) or any(s.failed for s in result.scaling):
         raise click.exceptions.Exit(1)  # figures written; a contestant failed on some scenes
 
 
@@ -170,12 +170,28 @@ def _show(result: SimBench) -> None:
             per_event = "–" if row.us_per_event is None else f"{row.us_per_event:.3g}"
             stdout().print(f"{row.name}: {per_event} µs/event, batch {batch} ms/scene")
     for s in result.scaling:
+        lost = f", failed on {s.failed} scene(s)" if s.failed else ""
         stdout().print(
-            f"x{s.factor:g} {s.name}: {s.events_per_scene:.3g} events/scene, "
-            f"{s.ms_per_scene:.3g} ms/scene, {s.us_per_event:.3g} µs/event"
+            f"x{s.factor:g} {s.name}: {figure(s.events_per_scene)} events/scene, "
+            f"{figure(s.ms_per_scene)} ms/scene, {figure(s.us_per_event)} µs/event{lost}"
         )
+    _warn_scaling(result)
     for label, ms in (result.simulate_ms or {}).items():
         stdout().print(f"bpb simulate ({result.simulate_with}), {label}: {ms:.3f} ms/scene")
+
+
+def _warn_scaling(result: SimBench) -> None:
+    """One warning per ``--scaling`` simulator that failed on scaled scenes."""
+    from bpb_core.cli.console import stderr
+
+    for name in dict.fromkeys(s.name for s in result.scaling if s.failed):
+        rows = [s for s in result.scaling if s.name == name and s.failed]
+        where = ", ".join(f"x{s.factor:g}: {s.failed}" for s in rows)
+        stderr().print(
+            f"warning: --scaling {name}: failed on {sum(s.failed for s in rows)} scaled "
+            f"scene(s) ({where}), left out of its figures; first: {rows[0].first_error}",
+            markup=False,
+        )
 
 
 def _relative(path: Path, base: Path) -> str:
