@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -149,6 +149,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
     from bpb_core.report.sections import (
         different_conditions_note,
         different_scenes_note,
+        epoch_columns,
         headline_cells,
         horizon_cells,
     )
@@ -169,7 +170,8 @@ def _print_part(part: ReportPart, built: Report) -> None:
             "baseline:stasis --adapter baseline:straight (offline, free)[/]", highlight=False,
         )  # fmt: skip
     for task, notes in part.metric_notes.items():
-        frame = tables[f"{task}_metrics"][["run", "baseline", "complete", *notes]]
+        table = tables[f"{task}_metrics"]
+        frame = table[["run", "baseline", "complete", *epoch_columns(table), *notes]]
         title = f"{task} metrics beside accuracy (answered only)"
         console.print(_frame_table(title, frame, percent=True))
         for name, note in notes.items():
@@ -188,6 +190,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
         if diagnostic.terminal:
             table = tables[diagnostic.name]
             shown = ["complete"] if "complete" in table.columns else []
+            shown += epoch_columns(table)
             frame = table[["run", "baseline", *shown, *diagnostic.terminal]]
             percent = (*diagnostic.percent, "complete")
             console.print(_frame_table(diagnostic.title, frame, percent=percent))
@@ -255,9 +258,15 @@ def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
             _name(run, bool(row["baseline"])),
             _pct(row[suite]),
             "–" if kept is None else _pct(kept[suite]),
-            "0" if kept is None else str(kept["expected"]),
+            "0" if kept is None else _scene_tasks(kept),
         )
     return table
+
+
+def _scene_tasks(row: Mapping[Any, Any]) -> str:
+    """A count of scene-tasks, with how many times each was asked when more than once."""
+    epochs = int(row["epochs"])
+    return str(row["expected"]) + (f" (x{epochs} epochs)" if epochs > 1 else "")
 
 
 def _exclusions(frame: pd.DataFrame) -> str:

@@ -12,7 +12,9 @@ if TYPE_CHECKING:
 
     from bpb_core.registry import Registry
 
-_NOT_SCORES = ("run", "adapter", "model", "baseline", "expected", "completeness", "worst_cell")
+_NOT_SCORES = (
+    "run", "adapter", "model", "baseline", "expected", "epochs", "completeness", "worst_cell",
+)  # fmt: skip
 
 
 def show_summary(run_dirs: list[Path], registry: Registry) -> None:

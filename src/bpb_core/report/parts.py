@@ -177,7 +177,7 @@ def report_tables(
         ci = bootstrap_ci(units, suites, view=view, n_boot=n_boot, seed=seed)  # type: ignore[arg-type]
         tables[f"bootstrap{suffix}"] = _blank(ci, tables[f"leaderboard{suffix}"])
     tables["completeness"] = tables["accuracy"].drop(columns=["accuracy", "scenes"])
-    done = tables["leaderboard"].set_index("run")["completeness"]
+    done = tables["leaderboard"].set_index("run")[["completeness", "epochs"]]
     for diagnostic in diagnostics:
         origin = (origins or {}).get(diagnostic.name, f"diagnostic {diagnostic.name!r}")
         tables[diagnostic.name] = _with_completeness(_table(diagnostic, origin, results), done)
@@ -249,14 +249,18 @@ def _metrics(scorer: ReportsMetrics, origin: str, answered: pd.DataFrame) -> pd.
     )
 
 
-def _with_completeness(table: pd.DataFrame, done: pd.Series) -> pd.DataFrame:
-    """A diagnostic's table with each run's completeness after the run columns: a diagnostic
-    of a half-answered run says less than its numbers suggest."""
+def _with_completeness(table: pd.DataFrame, done: pd.DataFrame) -> pd.DataFrame:
+    """A diagnostic's table with each run's completeness and epochs after the run columns: a
+    diagnostic of a half-answered run says less than its numbers suggest, and its counts are
+    of answers, each scene-task counted once per epoch (``--epochs``)."""
     if "run" not in table.columns or "complete" in table.columns:
         return table
     at = next((i for i, c in enumerate(table.columns) if c not in RUN_COLUMNS), len(table.columns))
     out = table.copy()
-    out.insert(at, "complete", out["run"].astype(str).map(done).astype("float64"))
+    runs = out["run"].astype(str)
+    out.insert(at, "complete", runs.map(done["completeness"]).astype("float64"))
+    if "epochs" not in out.columns:
+        out.insert(at + 1, "epochs", runs.map(done["epochs"]).fillna(1).astype("int64"))
     return out
 
 

@@ -74,7 +74,8 @@ def metrics_body(part: ReportPart, task: str) -> Markup:
     )
     table = part.tables[f"{task}_metrics"]
     percent = (*notes, "complete")
-    return html.table(table, percent=percent) + Markup("<ul class='muted'>{}</ul>").format(items)
+    listed = Markup("<ul class='muted'>{}</ul>").format(items)
+    return html.table(table, percent=percent, drop=_dropped(table)) + listed
 
 
 def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Rows]:
@@ -234,9 +235,18 @@ def horizon_cells(acc: pd.DataFrame, rule: Completeness) -> tuple[list[str], Row
     return head, rows
 
 
+def _answered_title(cell: Mapping[Any, Any]) -> str:
+    """``6 of 8 answered``; with ``--epochs`` (answers, not scene-tasks, are counted)
+    ``6 of 8 answers (4 scene-tasks x 2 epochs)``."""
+    done, expected, epochs = int(cell["answered"]), int(cell["expected"]), int(cell["epochs"])
+    if epochs == 1:
+        return f"{done} of {expected} answered"
+    return f"{done} of {expected} answers ({expected // epochs} scene-tasks x {epochs} epochs)"
+
+
 def _horizon_cell(cell: Mapping[Any, Any], rule: Completeness) -> Cell:
     value, done = float(cell["accuracy"]), float(cell["completeness"])
-    answered = f"{int(cell['answered'])} of {int(cell['expected'])} answered"
+    answered = _answered_title(cell)
     if cell["level"] == "short":
         text = pct(value) if rule.include_incomplete and not math.isnan(value) else LEFT_OUT
         return Cell(text, note=pct(done), css="short", title=answered)
@@ -267,6 +277,7 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
                 tables["leaderboard_stable"],
                 percent=[*scores, "completeness", "worst_cell"],
                 empty="no stable scenes (the dataset has no stability annotation?)",
+                headers={"expected": "scene-tasks", "epochs": "epochs (answers each)"},
             )
             + Markup('<p class="muted">Scenes left out of the stable subset, by reason:</p>')
             + html.table(tables["stable_exclusions"]),
@@ -285,10 +296,24 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     if not tables["metadata"].empty:
         out.insert(2, _metadata_section(tables["metadata"]))
     for diagnostic in part.diagnostics:
-        body = html.table(tables[diagnostic.name], percent=(*diagnostic.percent, "complete"))
+        table = tables[diagnostic.name]
+        percent = (*diagnostic.percent, "complete")
+        body = html.table(table, percent=percent, drop=_dropped(table))
         out.append((diagnostic.title, body))
     out.append(("Tokens, cost, latency, retries", usage_table(tables["usage"])))
     return out
+
+
+def epoch_columns(table: pd.DataFrame) -> list[str]:
+    """``["epochs"]`` when a run of ``table`` asked its scene-tasks more than once (its counts
+    are of answers, not scene-tasks), else nothing: a column of 1s says nothing."""
+    if "epochs" in table.columns and bool((table["epochs"] > 1).any()):
+        return ["epochs"]
+    return []
+
+
+def _dropped(table: pd.DataFrame) -> tuple[str, ...]:
+    return ("adapter", "model", *([] if epoch_columns(table) else ["epochs"]))
 
 
 def _metadata_section(frame: pd.DataFrame) -> tuple[str, Markup]:

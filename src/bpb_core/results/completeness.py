@@ -61,8 +61,9 @@ def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str
 
 
 def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[str, object]]:
-    """JSON-ready cells: run, task, horizon, answered, expected, completeness, level."""
-    cells = acc[["run", "task", "horizon", "answered", "expected", "completeness"]].copy()
+    """JSON-ready cells: run, task, horizon, answered, expected (answers), completeness, level,
+    epochs (the answers asked per scene-task)."""
+    cells = acc[["run", "task", "horizon", "answered", "expected", "completeness", "epochs"]].copy()
     cells["level"] = cell_levels(acc, min_complete)
     records: list[dict[str, object]] = []
     for row in cells.to_dict(orient="records"):
@@ -75,6 +76,7 @@ def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[st
                 "expected": int(row["expected"]),
                 "completeness": float(row["completeness"]),
                 "level": str(row["level"]),
+                "epochs": int(row["epochs"]),
             }
         )
     return records

@@ -77,24 +77,26 @@ def accuracy(
 
     Returns:
         Columns ``run, adapter, model, baseline, task, horizon, accuracy, scenes, answered,
-        expected, completeness`` (``scenes`` counted in the view; ``answered`` = not
-        api_error/missing; ``expected`` = all scenes the run should have answered).
+        expected, completeness, epochs``: ``scenes`` counts the scene-tasks in the view, each
+        once; ``answered`` (not api_error/missing) and ``expected`` count answers, ``epochs``
+        per scene-task (``--epochs``), so ``completeness`` is the share of answers given.
     """
     scenes = scene_scores(units, stable_only=stable_only)
     scenes["answered"] = ~scenes["status"].isin(UNANSWERED)
     keys = [*RUN_COLUMNS, "task", "horizon"]
     counts = scenes.groupby(keys, observed=True).agg(
-        expected=("score", "size"), answered=("answered", "sum")
+        expected=("score", "size"), answered=("answered", "sum"), epochs=("epoch", "max")
     )
     kept = _in_view(scenes, view)
     acc = kept.groupby(keys, observed=True).agg(
-        accuracy=("score", "mean"), scenes=("score", "size")
+        accuracy=("score", "mean"), scenes=("scene_id", "nunique")
     )
     out = counts.join(acc, how="left").reset_index()
     out["completeness"] = out["answered"] / out["expected"]
     out["scenes"] = out["scenes"].fillna(0).astype("int64")
     out["answered"] = out["answered"].astype("int64")
-    cols = [*keys, "accuracy", "scenes", "answered", "expected", "completeness"]
+    out["epochs"] = out["epochs"].astype("int64")
+    cols = [*keys, "accuracy", "scenes", "answered", "expected", "completeness", "epochs"]
     return out[cols].sort_values(["run", "task", "horizon"]).reset_index(drop=True)
 
 
@@ -158,7 +160,8 @@ def leaderboard(
     does every suite built on it), unless ``include_incomplete``: it is left out of the ranking
     instead of being read as a finding (:mod:`bpb_core.results.completeness`). ``worst_cell``
     is the run's least complete cell; ``short`` names its tasks with a cell under
-    ``min_complete``.
+    ``min_complete``. ``expected`` counts the scene-tasks the run was asked, each once;
+    ``epochs`` is how many times each was asked (``--epochs``; completeness counts answers).
     """
     acc = accuracy(units, view=view, stable_only=stable_only)
     tasks = tasks_of(units)
@@ -171,13 +174,18 @@ def leaderboard(
             means.loc[means.index.get_level_values("run") == run, names] = np.nan
     for suite in suites:
         means[suite.name] = suite_score(means, suite)
-    counts = acc.groupby(RUN_COLUMNS, observed=True)[["answered", "expected"]].sum()
+    cells = acc.assign(scene_tasks=acc["expected"] // acc["epochs"])
+    counts = cells.groupby(RUN_COLUMNS, observed=True).agg(
+        answered=("answered", "sum"), answers=("expected", "sum"),
+        expected=("scene_tasks", "sum"), epochs=("epochs", "max"),
+    )  # fmt: skip
     out = means.reindex(counts.index).join(counts).reset_index()  # a run with no answer stays
     out.columns.name = None
-    out["completeness"] = out["answered"] / out["expected"]
+    out["completeness"] = out["answered"] / out["answers"]
     out["worst_cell"] = out["run"].map(acc.groupby("run", observed=True)["completeness"].min())
     out["short"] = [", ".join(short.get(str(run), [])) for run in out["run"]]
     columns = [*metrics(units, suites), "completeness", "worst_cell", "short", "expected"]
+    columns.append("epochs")
     out = out[[*RUN_COLUMNS, *columns]]
     key = sort_by or (suites[0].name if suites else None)
     order = out[key] if key is not None else out[tasks].mean(axis=1)
@@ -192,8 +200,9 @@ def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: An
     first (``options``: ``min_complete``, ``include_incomplete`` of :func:`leaderboard`).
 
     Columns: ``run, adapter, model, baseline``, each task and each suite followed by its
-    answered-only score ``<name>_answered``, ``completeness, worst_cell, short, expected``
-    (``expected``: scene-task pairs the run should have answered).
+    answered-only score ``<name>_answered``, ``completeness, worst_cell, short, expected,
+    epochs`` (``expected``: scene-task pairs the run should have answered, each once however
+    many ``epochs`` it asked them).
     """
     strict = leaderboard(units, suites, view="strict", **options)
     answered = leaderboard(units, suites, view="answered", **options).set_index("run")

@@ -241,6 +241,50 @@ def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
     assert json.loads(both.stdout)["different_scenes"] is None
 
 
+def test_a_two_epoch_run_counts_its_scene_tasks_once_and_states_its_epochs(
+    tmp_path: Path, small_dataset: Path
+) -> None:
+    # With --epochs 2 every count keyed by scene-task came out doubled: the stable subset's
+    # "stable scene-tasks" and the leaderboards' expected (documented as scene-task pairs),
+    # accuracy's scenes; counts of answers (completeness cells, diagnostics) did not say that
+    # they span two epochs.
+    runs = tmp_path / "runs"
+    for name, more in (("once", []), ("twice", ["--epochs", "2"])):
+        out = str(runs / name)
+        ran = bpb(
+            "run", "--data", str(small_dataset), "--adapter", "baseline:stasis", "--out", out, *more
+        )
+        assert ran.returncode == 0, ran.stderr
+    folders = [str(runs / "once"), str(runs / "twice")]
+    done = bpb("report", *folders, "--json", "--bootstrap", "20")
+    once, twice = "once/baseline_stasis", "twice/baseline_stasis"
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    board = {row["run"]: row for row in summary["leaderboard"]}
+    stable = {row["run"]: row for row in summary["stable"]}
+    assert (board[once]["expected"], board[once]["epochs"]) == (18, 1)  # 6 scenes x 3 tasks
+    assert (board[twice]["expected"], board[twice]["epochs"]) == (18, 2)
+    assert 0 < stable[twice]["expected"] == stable[once]["expected"] < 18
+    assert stable[twice]["epochs"] == 2
+    cells = [c for c in summary["completeness"] if c["run"] == twice and c["task"] == "q1"]
+    assert [(c["answered"], c["expected"], c["epochs"]) for c in cells] == [(6, 6, 2)] * 2
+    scenes = {(c["run"], c["horizon"]) for c in summary["by_horizon"] if c["scenes_strict"] == 3}
+    assert len(scenes) == 4  # both runs, both horizons: 3 scenes each, not 6 for the second
+    stasis = {row["run"]: row for row in summary["diagnostics"]["stasis"]}
+    assert (stasis[once]["epochs"], stasis[twice]["epochs"]) == (1, 2)
+    assert stasis[twice]["contacts"] == 2 * stasis[once]["contacts"]  # answers, labelled
+
+    shown = bpb("report", *folders, "--out", str(tmp_path / "rep"), "--bootstrap", "20")
+    assert shown.returncode == 0, shown.stderr
+    count = stable[once]["expected"]
+    table = shown.stdout.split("stable scene-tasks")[1].split("└")[0]
+    line = {row.split()[1]: row.split("│")[-2].strip() for row in table.splitlines()[2:]}
+    assert line == {once: str(count), twice: f"{count} (x2 epochs)"}
+    page = (tmp_path / "rep" / "report.html").read_text()
+    assert "6 of 6 answers (3 scene-tasks x 2 epochs)" in page
+    assert "3 of 3 answered" in page and "<th>scene-tasks</th>" in page
+
+
 def test_a_run_folder_copied_under_another_name_is_counted_once_and_said_so(
     tmp_path: Path, dataset: Path
 ) -> None:
