@@ -98,18 +98,21 @@ def report(
     from rich.markup import escape
 
     from bpb_core.report.build import Completeness, build_report
-    from bpb_core.results.reading import DuplicateRunWarning
+    from bpb_core.results.reading import DuplicateRunWarning, StrayAnswerWarning
 
+    told = (DuplicateRunWarning, StrayAnswerWarning)
     rule = Completeness(min_complete, include_incomplete)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", DuplicateRunWarning)
+        for told_one in told:
+            warnings.simplefilter("always", told_one)
         built = build_report(
             run_dirs, out, n_boot=n_boot, seed=seed, gallery_size=gallery_size,
             registry=load_registry(), completeness=rule,
         )  # fmt: skip
-    for caught_one in caught:  # a run given twice is counted once: one line says so
+    # a run given twice is counted once, stray answer files are left out: one line says so
+    for caught_one in caught:
         message, category = caught_one.message, caught_one.category
-        if issubclass(category, DuplicateRunWarning):
+        if issubclass(category, told):
             line = f"[yellow]warning:[/] {escape(str(message))}"
             stderr().print(line, highlight=False, soft_wrap=True)
         else:

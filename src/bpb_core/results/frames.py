@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput, PluginBug, blamed
 from bpb_core.registration import SuiteInfo
-from bpb_core.results.reading import RunFolder, find_runs
+from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
 from bpb_core.scored_units import (
     SCORER_INPUT,
@@ -116,6 +116,9 @@ def load_results(
     Raises:
         BadInput: No run folder found, a run, answer or ground-truth file cannot be read, or
             no installed scorer scores a task.
+
+    Warns:
+        StrayAnswerWarning: A run folder holds answer files outside its selection (left out).
     """
     from bpb_core.registry import make_registry
 
@@ -133,6 +136,7 @@ def load_results(
     calls = _Columns(CALL_DTYPES)
     for run in runs:
         _read_one(run, scorers, origins, units, calls)
+        warn_stray_answers(run)
     unit_frame = _score(units.frame(), scorers, origins)
     present = set(scorers)
     suites = tuple(s for s in registry.suites() if set(s.weights) <= present)

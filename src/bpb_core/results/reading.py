@@ -25,10 +25,11 @@ from bpb_core.layout import (
     MANIFEST,
     RUN_MANIFEST,
     SceneKey,
+    iter_scene_keys,
     select_keys,
 )
 from bpb_core.model_calls import valid_unicode
-from bpb_core.run_folder import live_run, read_manifest as read_run_manifest
+from bpb_core.run_folder import answer_path, live_run, read_manifest as read_run_manifest
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
@@ -39,6 +40,11 @@ if TYPE_CHECKING:
 class DuplicateRunWarning(UserWarning):
     """The same run folder was given more than once (under other paths, or both itself and a
     folder holding it); it is counted once."""
+
+
+class StrayAnswerWarning(UserWarning):
+    """A run folder holds answer files its ``run.json`` selection does not ask for (another
+    scene, task or epoch: put there by hand, or left by another run); they are left out."""
 
 
 @dataclass(frozen=True)
@@ -262,3 +268,28 @@ def _expected_keys(manifest: dict[str, Any], dataset: Path, run_path: Path) -> t
             )
         keys = [key for key in keys if key.scene_id in wanted]
     return tuple(keys)
+
+
+def warn_stray_answers(run: RunFolder) -> None:
+    """One :class:`StrayAnswerWarning` when ``run``'s folder holds answer files outside its
+    selection (``h{t}/scene_{i}/*.json`` for a scene, task or epoch ``run.json`` does not ask):
+    the report leaves them out, so a reader counting the files would otherwise see answers the
+    figures silently ignore."""
+    epochs = range(1, run.epochs + 1)
+    wanted = {
+        answer_path(run.path, k, t, e) for k in run.scene_keys for t in run.tasks for e in epochs
+    }
+    stray = sorted(
+        path
+        for key in iter_scene_keys(run.path)
+        for path in key.dir(run.path).glob("*.json")
+        if path not in wanted and not path.name.startswith(".")
+    )
+    if stray:
+        many = f"{len(stray)} answer files" if len(stray) > 1 else "1 answer file"
+        warnings.warn(
+            f"{run.path}: {many} outside the run's selection (the scenes, tasks and epochs of its "
+            f"{RUN_MANIFEST}), e.g. {stray[0]}: left out of the report",
+            StrayAnswerWarning,
+            stacklevel=3,
+        )

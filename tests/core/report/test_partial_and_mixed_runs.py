@@ -303,3 +303,30 @@ def test_an_ok_answer_file_without_an_answer_is_refused_not_scored_wrong(runs: P
     assert done.stderr.strip().splitlines() == [
         f"error: {target}: status is 'ok' but answer is null: an ok answer file holds one"
     ]
+
+
+def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: Path) -> None:
+    # Answer files the run's selection does not ask for (a scene outside its horizons, a task
+    # it was not asked, an epoch past its --epochs: put there by hand or left by another run)
+    # were left out of every figure without a word.
+    run = runs / "baseline_oracle"
+    source = run / "h1" / "scene_0001" / "q3.json"
+    record = json.loads(source.read_text())
+    (run / "h1" / "scene_0001" / "q3.e2.json").write_text(json.dumps(record | {"epoch": 2}))
+    (run / "h1" / "scene_0001" / "firsthit.json").write_text(json.dumps(record | {"task": "x"}))
+    (run / "h9" / "scene_0000").mkdir(parents=True)
+    (run / "h9" / "scene_0000" / "q3.json").write_text(source.read_text())
+    done = _report(runs, "--json", check=True)
+    assert done.stderr.strip().splitlines() == [
+        f"warning: {run}: 3 answer files outside the run's selection (the scenes, tasks and "
+        f"epochs of its run.json), e.g. {source.parent / 'firsthit.json'}: left out of the report"
+    ]
+    board = {row["run"]: row for row in json.loads(done.stdout)["leaderboard"]}
+    assert board["baseline_oracle"]["total"] == 1.0 and board["baseline_oracle"]["expected"] == 12
+    for stray in (
+        "h1/scene_0001/q3.e2.json",
+        "h1/scene_0001/firsthit.json",
+        "h9/scene_0000/q3.json",
+    ):
+        (run / stray).unlink()
+    assert _report(runs, "--json", check=True).stderr == ""
