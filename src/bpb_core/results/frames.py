@@ -24,7 +24,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.errors import BadInput, PluginBug, blamed
+from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
+from bpb_core.interfaces import PromptOptions
+from bpb_core.plugin_calls import parsed_answer
 from bpb_core.registration import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
@@ -40,7 +42,7 @@ from bpb_core.scored_units import (
 if TYPE_CHECKING:
     import pandas as pd
 
-    from bpb_core.interfaces import Scorer
+    from bpb_core.interfaces import Scorer, Task
     from bpb_core.layout import SceneKey
     from bpb_core.registry import Registry
 
@@ -134,8 +136,9 @@ def load_results(
     extra = _extra_columns(scorers.values())
     units = _Columns({**META_DTYPES, **SCORER_INPUT, **extra, **SCORER_OUTPUT})
     calls = _Columns(CALL_DTYPES)
+    tasks = _parsers(registry, scorers)
     for run in runs:
-        _read_one(run, scorers, origins, units, calls)
+        _read_one(run, _Readers(scorers, origins, tasks), units, calls)
         warn_stray_answers(run)
     unit_frame = _score(units.frame(), scorers, origins)
     present = set(scorers)
@@ -217,13 +220,26 @@ class _Columns:
         return pd.DataFrame(columns)
 
 
-def _read_one(
-    run: RunFolder,
-    scorers: dict[str, Scorer],
-    origins: dict[str, str],
-    units: _Columns,
-    calls: _Columns,
-) -> None:
+@dataclass(frozen=True)
+class _Readers:
+    """Per task: its scorer, who supplied the scorer, and the task with who supplied it (to
+    check recorded answers; ``None`` for a task no installed plugin registers)."""
+
+    scorers: dict[str, Scorer]
+    origins: dict[str, str]
+    tasks: dict[str, tuple[Task, str] | None]
+
+
+def _parsers(registry: Registry, scorers: dict[str, Scorer]) -> dict[str, tuple[Task, str] | None]:
+    found: dict[str, tuple[Task, str] | None] = {}
+    for name in scorers:
+        known = name in registry.names("task")
+        found[name] = (registry.task(name), registry.origin("task", name)) if known else None
+    return found
+
+
+def _read_one(run: RunFolder, readers: _Readers, units: _Columns, calls: _Columns) -> None:
+    scorers, origins = readers.scorers, readers.origins
     for key in run.scene_keys:
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
@@ -232,6 +248,7 @@ def _read_one(
         for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
             meta["epoch"] = epoch
             record = _placed(run, key, task, epoch)
+            _check_answer(run, key, epoch, record, readers.tasks[task], scene)
             status = "missing" if record is None else record.status
             answer = None if record is None else record.answer
             scorer = scorers[task]
@@ -273,6 +290,33 @@ def _placed(run: RunFolder, key: SceneKey, task: str, epoch: int) -> AnswerRecor
                 "another scene, task or run?)"
             )
     return record
+
+
+def _check_answer(
+    run: RunFolder,
+    key: SceneKey,
+    epoch: int,
+    record: AnswerRecord | None,
+    task: tuple[Task, str] | None,
+    scene: Any,
+) -> None:
+    """Refuse an ``ok`` answer its task's parser does not accept (a wrong-typed field, a label
+    that is none): bpb records only answers the parser validated, a reply it could not parse as
+    ``parse_error``; scored, a damaged file would read as the model's wrong answer.
+
+    Raises:
+        BadInput: Naming the file and the field at fault; ``PluginBug`` if the parser raised.
+    """
+    if record is None or record.status != "ok" or record.answer is None or task is None:
+        return
+    try:
+        parsed_answer(task[0], task[1], json.dumps(record.answer), scene, PromptOptions())
+    except ParseFailure as exc:
+        path = answer_path(run.path, key, record.task, epoch)
+        raise BadInput(
+            f"{path}: answer: {exc} (a damaged answer file: bpb records only answers the task's "
+            "parser accepted)"
+        ) from None
 
 
 def _add_call(

@@ -330,3 +330,44 @@ def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: P
     ):
         (run / stray).unlink()
     assert _report(runs, "--json", check=True).stderr == ""
+
+
+@pytest.mark.parametrize(
+    ("task", "edit", "field"),
+    [
+        ("q1", lambda a: a["answers"][2].update(answer="yes"), "answers.2.answer"),
+        ("q1", lambda a: a.update(answers="TFFFFF"), "answers"),
+        ("q3", lambda a: a["predictions"][0].update(pos="0.5, 0.5"), "predictions.0.pos"),
+    ],
+)
+def test_a_recorded_answer_with_a_wrong_typed_field_is_refused_not_scored_wrong(
+    runs: Path, task: str, edit: Any, field: str
+) -> None:
+    # An answer file edited so a field held the wrong type (a label "yes", a string for a list)
+    # was scored as the model's wrong answer: the oracle read under 100% with no word.
+    target = runs / "baseline_oracle" / "h2" / "scene_0001" / f"{task}.json"
+    record = json.loads(target.read_text())
+    edit(record["answer"])
+    target.write_text(json.dumps(record))
+    done = _report(runs, "--json")
+    assert done.returncode == 2 and done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {target}: answer: {task}: {field}: ")
+    assert lines[0].endswith(
+        "(a damaged answer file: bpb records only answers the task's parser accepted)"
+    )
+
+
+def test_a_well_typed_wrong_answer_is_still_scored_wrong_and_a_parse_error_unparsed(
+    runs: Path,
+) -> None:
+    target = runs / "baseline_oracle" / "h2" / "scene_0001" / "q2.json"
+    record = json.loads(target.read_text())
+    for label in record["answer"]["answers"]:
+        label["answer"] = "F" if label["answer"] == "T" else "T"  # every wall wrong, well typed
+    target.write_text(json.dumps(record))
+    summary = json.loads(_report(runs, "--json", check=True).stdout)
+    board = {row["run"]: row for row in summary["leaderboard"]}
+    assert board["baseline_oracle"]["q2"] == 0.75 and board["baseline_oracle"]["completeness"] == 1
+    usage = {row["run"]: row for row in summary["usage"]}
+    assert usage["litellm_model"]["parse_error"] == 1  # its h1_0001 q2 reply did not parse
