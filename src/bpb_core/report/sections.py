@@ -276,8 +276,9 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
             html.table(
                 tables["leaderboard_stable"],
                 percent=[*scores, "completeness", "worst_cell"],
+                drop=_dropped(tables["leaderboard_stable"]),
                 empty="no stable scenes (the dataset has no stability annotation?)",
-                headers={"expected": "scene-tasks", "epochs": "epochs (answers each)"},
+                headers={"expected": "scene-tasks", "epochs": "epochs (answers per scene-task)"},
             )
             + Markup('<p class="muted">Scenes left out of the stable subset, by reason:</p>')
             + html.table(tables["stable_exclusions"]),

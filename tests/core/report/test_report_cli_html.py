@@ -283,6 +283,7 @@ def test_a_two_epoch_run_counts_its_scene_tasks_once_and_states_its_epochs(
     page = (tmp_path / "rep" / "report.html").read_text()
     assert "6 of 6 answers (3 scene-tasks x 2 epochs)" in page
     assert "3 of 3 answered" in page and "<th>scene-tasks</th>" in page
+    assert "<th>epochs (answers per scene-task)</th>" in page
 
 
 def test_a_run_folder_copied_under_another_name_is_counted_once_and_said_so(
