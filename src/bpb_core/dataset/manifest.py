@@ -53,7 +53,7 @@ class HorizonSummary(BaseModel):
         unstable: Kept scenes whose stability annotation says unstable.
     """
 
-    model_config = ConfigDict(extra="allow")
+    model_config = ConfigDict(extra="allow", strict=True)
 
     scenes: int
     dropped_unstable: int = 0
@@ -63,7 +63,7 @@ class HorizonSummary(BaseModel):
 class DatasetManifest(BaseModel):
     """The content of ``dataset.json``."""
 
-    model_config = ConfigDict(extra="allow")
+    model_config = ConfigDict(extra="allow", strict=True)  # "4" is no count, "yes" no flag
 
     format: str = FORMAT
     dataset_hash: str = ""

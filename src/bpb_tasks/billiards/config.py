@@ -16,18 +16,14 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import validate_mapping
-from bpb_tasks.billiards.scene import MAX_SPEED, Physics, Pockets, Table
+from bpb_tasks.billiards.scene import MAX_SPEED, Physics, Pockets, StrictModel, Table
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-
-class SpeedRange(_Strict):
+class SpeedRange(StrictModel):
     """Cue speeds (m/s) are drawn uniformly from ``[low, high]``."""
 
     low: float = Field(ge=0)
@@ -40,7 +36,7 @@ class SpeedRange(_Strict):
         return self
 
 
-class ImageConfig(_Strict):
+class ImageConfig(StrictModel):
     """Canvas geometry of the rendered PNGs (all three images share it).
 
     Attributes:
@@ -91,7 +87,7 @@ MAX_IMAGE_SIDE = 20_000  # pixels of table per image side
 MAX_IMAGE_PIXELS = 30_000_000
 
 
-class CalibrationConfig(_Strict):
+class CalibrationConfig(StrictModel):
     """How :func:`~bpb_tasks.billiards.calibrate.calibrate_ranges` searches speed ranges.
 
     Attributes:
@@ -120,7 +116,7 @@ DEFAULT_SPEED_RANGES: dict[str, SpeedRange] = {
 }
 
 
-class DatasetConfig(_Strict):
+class DatasetConfig(StrictModel):
     """Everything that shapes a generated dataset.
 
     Attributes:

@@ -8,9 +8,9 @@ JSON Schema.
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, Strict, field_validator, model_validator
 
 Wall = Literal["TOP", "BOTTOM", "LEFT", "RIGHT"]
 WALLS: tuple[Wall, ...] = ("TOP", "BOTTOM", "LEFT", "RIGHT")
@@ -25,10 +25,13 @@ DEFAULT_POCKETS: list[tuple[float, float]] = [
 
 
 class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    """Unknown fields refused, and no coercion: ``true`` is no count, ``"0"`` no id and ``1`` no
+    name (a float field still takes an integer, ``2`` for ``2.0``)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, strict=True)
 
 
-Vec = tuple[float, float]
+Vec = Annotated[tuple[float, float], Strict(False)]  # a JSON or TOML array; its numbers strict
 
 
 class Table(StrictModel):

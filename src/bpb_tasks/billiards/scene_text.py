@@ -3,7 +3,7 @@ fast path).
 
 :func:`light_scene` decodes a text with msgspec into plain structs with the
 :class:`~bpb_tasks.billiards.scene.Scene` fields and no others (unknown fields refused, integer
-ids >= 0, number pairs, a positive horizon, at least one ball). msgspec is stricter than the
+ids >= 0, number pairs, a positive horizon, at least one ball). msgspec is as strict as the
 model: it takes no strings for numbers, no floats for ids and no numbers out of float range, so
 every text it accepts the model accepts with the same values. :func:`scene_groups` then checks,
 on arrays and for many scenes at once: ids distinct and including the cue ball (0),

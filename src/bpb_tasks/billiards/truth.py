@@ -8,7 +8,7 @@ those labels are to flipping. :func:`final_json_schema` publishes the model as a
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -95,7 +95,7 @@ class Stability(BaseModel):
             ``flip_rate``, in no group of ``flip_rates`` and not in ``q3_spread``.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
     stable: bool
     delta: float
@@ -168,9 +168,13 @@ def final_state(scene: Scene, outcome: Outcome, simulator: str = "analytic") -> 
             BallPosition(id=b.id, pos=rounded(outcome.positions[b.id]))
             for b in sorted(scene.balls, key=lambda b: b.id)
         ],
-        events=[
+        events=[  # the simulator's kind and wall names, checked by the model
             EventRecord(
-                t=e.t, kind=e.kind, ids=list(e.ids), wall=e.wall, positions=list(e.positions)
+                t=e.t,
+                kind=cast(EventKind, e.kind),
+                ids=list(e.ids),
+                wall=cast("Wall | None", e.wall),
+                positions=list(e.positions),
             )
             for e in outcome.events
         ],

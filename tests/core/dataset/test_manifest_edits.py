@@ -72,6 +72,23 @@ EDITS: dict[str, tuple[Callable[[Path], None], str]] = {
     "mu NaN": (text('"mu": 0.002', '"mu": NaN'), f"config.physics.mu: {NOT_FINITE}"),
     "seed NaN": (text('"seed": 11', '"seed": NaN'), f"seed: {NOT_FINITE}"),
     "seed a word": (edit(lambda m: m.update(seed="x")), "seed: Input should be a valid integer"),
+    # no coercion: "11" is no seed, "yes" no flag, true no count of balls
+    "seed a numeral": (
+        edit(lambda m: m.update(seed="11")),
+        "seed: Input should be a valid integer",
+    ),
+    "images a word": (
+        edit(lambda m: m.update(images="yes")),
+        "images: Input should be a valid boolean",
+    ),
+    "scenes true": (
+        edit(lambda m: m["summary"]["h1"].update(scenes=True)),
+        "summary.h1.scenes: Input should be a valid integer",
+    ),
+    "balls true": (
+        edit(lambda m: m["config"].update(balls=True)),
+        "config: balls: Input should be a valid integer",
+    ),
     "no summary": (edit(lambda m: m.pop("summary")), "summary: Field required"),
     "hash a number": (
         edit(lambda m: m.update(dataset_hash=5)),

@@ -54,6 +54,12 @@ CONFIGS = [
      "image: the table at px_per_m 3000 plus the margins makes a 20,620 x 18,900 px image"),
     ("margin.json", '{"image": {"margin_left": 100000}}',
      "image: the table at px_per_m 600 plus the margins makes a 101,248 x 780 px image"),
+    # no coercion: true is not 1 ball, "0.01" not a number, 12.0 not a count
+    ("bool.toml", "balls = true\n", "balls: Input should be a valid integer"),
+    ("text.json", '{"physics": {"mu": "0.01"}}', "physics.mu: Input should be a valid number"),
+    ("count.toml", "[calibration]\nsamples = 100.0\n",
+     "calibration.samples: Input should be a valid integer"),
+    ("name.toml", "simulator = 1\n", "simulator: Input should be a valid string"),
 ]  # fmt: skip
 
 
@@ -128,6 +134,9 @@ SCENES = [
     ("pymunk-huge-horizon-in-file", lambda: _scene(horizon=1e308), ["--simulator", "pymunk"],
      "pymunk: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
     ("event-cap", _bouncer, ["--horizon", "1e9"], "more than 100000 events before t=1000000000"),
+    # no coercion: "0" is no ball id, so this scene has no cue ball
+    ("text-id", lambda: _scene(balls=[{"id": "0", "pos": [1.0, 0.5], "vel": [1.0, 0.0]}]), [],
+     "balls[0].id: Input should be a valid integer"),
 ]  # fmt: skip
 
 

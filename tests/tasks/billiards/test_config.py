@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from bpb_core.errors import BadInput
 from bpb_tasks.billiards.config import (
     DEFAULT_SPEED_RANGES,
     DatasetConfig,
+    SpeedRange,
     config_from_mapping,
     load_config,
 )
@@ -98,3 +102,65 @@ def test_a_byte_order_mark_is_read_past(tmp_path: Path) -> None:
     (tmp_path / "bom.json").write_bytes(b'\xef\xbb\xbf{"balls": 3}')
     (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbfballs = 3\n")
     assert load_config(tmp_path / "bom.json").balls == load_config(tmp_path / "bom.toml").balls == 3
+
+
+# Every field of a config that is not a float, and a few that are, by the kind of value it takes.
+TYPED_FIELDS = {
+    "balls": "int",
+    "decimals": "int",
+    "stability_samples": "int",
+    "image.margin_left": "int",
+    "image.compress_level": "int",
+    "calibration.samples": "int",
+    "calibration.seed": "int",
+    "calibration.iterations": "int",
+    "family": "str",
+    "simulator": "str",
+    "physics.mu": "float",
+    "table.width": "float",
+    "image.px_per_m": "float",
+    "speed_ranges.3.low": "float",
+    "pockets.centers[0][1]": "float",
+}
+_TEXT = st.text(max_size=8)
+WRONG = {  # what pydantic used to coerce: true to 1, "7" to 7, 7.0 to 7, 1 to "1"
+    "int": st.booleans() | _TEXT | st.integers(0, 20).map(float),
+    "float": st.booleans() | _TEXT | st.integers(0, 20).map(str),
+    "str": st.booleans() | st.integers() | st.floats(allow_nan=False, allow_infinity=False),
+}
+
+
+def _nested(field: str, value: Any) -> dict[str, Any]:
+    """``{"a": {"b": value}}`` for ``a.b``; ``pockets.centers[0][1]`` puts value in a pair."""
+    if field == "pockets.centers[0][1]":
+        return {"pockets": {"centers": [[1.0, value]]}}
+    *outer, last = field.split(".")
+    data: dict[str, Any] = {last: value}
+    for key in reversed(outer):
+        data = {key: data}
+    return data
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data())
+def test_a_wrong_typed_field_is_refused_naming_it(data: st.DataObject) -> None:
+    """No coercion: ``balls = true`` is not 1 ball and ``seed = "1"`` not seed 1."""
+    field = data.draw(st.sampled_from(sorted(TYPED_FIELDS)))
+    value = data.draw(WRONG[TYPED_FIELDS[field]])
+    text = json.dumps(_nested(field, value))
+    with pytest.raises(BadInput) as caught:
+        config_from_mapping(json.loads(text), "c.json")
+    message = str(caught.value)
+    assert message.startswith(f"c.json: {field}: Input should be a valid "), (text, message)
+    assert "\n" not in message
+
+
+def test_a_float_field_still_takes_an_integer(tmp_path: Path) -> None:
+    (tmp_path / "c.toml").write_text(
+        "[table]\nwidth = 3\n[physics]\ng = 10\n[image]\npx_per_m = 700\n"
+        '[pockets]\ncenters = [[0, 0], [3, 1]]\n[speed_ranges."6"]\nlow = 0\nhigh = 1\n'
+    )
+    cfg = load_config(tmp_path / "c.toml")
+    assert (cfg.table.width, cfg.physics.g, cfg.image.px_per_m) == (3.0, 10.0, 700.0)
+    assert cfg.pockets.centers == [(0.0, 0.0), (3.0, 1.0)]
+    assert cfg.speed_range(6) == SpeedRange(low=0.0, high=1.0)

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
+import pytest
+
+from bpb_core.errors import BadInput
+from bpb_core.validated_files import read_model
 from bpb_tasks.billiards.scene import Scene, scene_json_schema
 from bpb_tasks.billiards.truth import FinalState, final_json_schema
 from support.paths import DOCS
@@ -27,3 +32,42 @@ def test_generated_files_round_trip_through_the_models(small_dataset: Path) -> N
     assert (truth.model_dump_json(indent=2) + "\n").encode() == final.read_bytes()
     assert [p.id for p in truth.predictions] == list(range(7))
     assert [q.id for q in truth.q1] == list(range(1, 7))
+
+
+WRONG_TYPES = [  # (file, field path, value): each one pydantic used to coerce
+    ("init.json", ("balls", 1, "id"), "1"),
+    ("init.json", ("balls", 0, "id"), True),
+    ("init.json", ("balls", 2, "id"), 2.0),
+    ("init.json", ("balls", 0, "pos", 0), "1.0"),
+    ("init.json", ("horizon",), "3"),
+    ("init.json", ("scene_id",), 7),
+    ("init.json", ("physics", "mu"), False),
+    ("final.json", ("q1", 0, "id"), "1"),
+    ("final.json", ("predictions", 1, "id"), 1.0),
+    ("final.json", ("predictions", 1, "pos", 1), "0.5"),
+    ("final.json", ("events", 0, "ids", 0), "0"),
+    ("final.json", ("events", 0, "t"), "0.1"),
+    ("final.json", ("stability", "stable"), "true"),
+    ("final.json", ("stability", "samples"), 64.0),
+    ("final.json", ("stability", "q3_stable"), 1),
+    ("final.json", ("simulator",), 1),
+]
+
+
+@pytest.mark.parametrize(("name", "loc", "value"), WRONG_TYPES, ids=lambda v: str(v))
+def test_a_wrong_typed_field_of_a_scene_file_is_refused_naming_it(
+    small_dataset: Path, tmp_path: Path, name: str, loc: tuple[Any, ...], value: Any
+) -> None:
+    data = json.loads((small_dataset / "h3" / "scene_0001" / name).read_text())
+    *outer, last = loc
+    target = data
+    for key in outer:
+        target = target[key]
+    target[last] = value
+    path = tmp_path / name
+    path.write_text(json.dumps(data))
+    model = Scene if name == "init.json" else FinalState
+    with pytest.raises(BadInput) as caught:
+        read_model(path, model)
+    field = "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in loc).lstrip(".")
+    assert str(caught.value).startswith(f"{path}: {field}: Input should be a valid ")
