@@ -152,7 +152,9 @@ class SceneFamily(Protocol):
 
     def check_config(self, config: Any, horizons: Sequence[float]) -> None:
         """Raise :class:`~bpb_core.errors.BadInput` before anything is written when
-        ``config`` cannot make scenes at ``horizons``."""
+        ``config`` cannot make scenes at ``horizons``. With ``--calibrate`` it is called first
+        with no horizons (check what calibration does not set), then with the horizons on the
+        calibrated config."""
         ...
 
     def simulator_name(self, config: Any) -> str:

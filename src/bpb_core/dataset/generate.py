@@ -96,8 +96,9 @@ def generate_dataset(
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
             raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
-        if not calibrate:
-            maker.check_config(cfg, hs)  # fail before touching the disk
+        # Fail before touching the disk; with --calibrate, before the slow calibration, without
+        # the horizons (it gives them their settings; checked again on its result)
+        maker.check_config(cfg, () if calibrate else hs)
         progress = progress or NoProgress()
         target = Path(out)
         _check_target(target, overwrite)
@@ -110,6 +111,7 @@ def generate_dataset(
                     with make_pool(n_workers, setup) as pool:
                         results = run_calibration(pool, hs, progress)
                     cfg, calibration = maker.apply_calibration(cfg, results)
+                    maker.check_config(cfg, hs)
                     setup = replace(setup, config=cfg)
                 tallies = (
                     {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}

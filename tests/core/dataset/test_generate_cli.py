@@ -142,3 +142,19 @@ def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> 
         process.kill()  # no-op when it ended; else do not leave it and its pool behind
     assert process.returncode == 0 and "Traceback" not in stderr, stderr
     assert json.loads((out / "dataset.json").read_text())["scenes"] == 150
+
+
+def test_calibrate_checks_the_image_margins_before_calibrating(tmp_path: Path) -> None:
+    """--calibrate used to skip the margin check and make images with cut-off labels."""
+    config = tmp_path / "narrow.json"
+    config.write_text('{"image": {"margin_left": 40}, "calibration": {"samples": 20}}')
+    # calibration refuses a horizon of 0.001 s: the margin error shows it never started
+    done = bpb("generate", "--out", str(tmp_path / "ds"), "--per-horizon", "1", "--workers", "1",
+               "--horizons", "0.001", "--calibrate", "--config", str(config))  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"error: {config}: image.margin_left: 40 px cuts off the image's labels or pockets at "
+        "px_per_m 600 with pockets of radius 0.06 m (needs at least 116; leave it out for a "
+        "margin that fits)"
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["narrow.json"]
