@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_config, dataset_family
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
@@ -273,6 +274,7 @@ def simulate_lines(
     global _JOB
     if workers < 0:
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
+    check_workers(workers, least=0)
     with _collector_paused():  # ten thousand names: see _collector_paused
         files = _scene_names(paths)
     job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]])

@@ -3,6 +3,7 @@ line naming the option or the path at fault, and nothing is started or written."
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +13,8 @@ import pytest
 BPB = str(Path(sys.executable).with_name("bpb"))
 
 # (command line, text the one line must hold); {tmp} is a fresh folder, {file} a plain file in
-# it, {scene} a valid scene file, {data} the small runner dataset.
+# it, {scene} a valid scene file, {data} the small runner dataset, {most} the most worker
+# processes a command takes (4 per core) and {over} one more.
 CATALOGUE = [
     ("run --timeout nan", "--timeout': 'nan' is not a finite number"),
     ("run --timeout inf", "--timeout': 'inf' is not a finite number"),
@@ -33,10 +35,16 @@ CATALOGUE = [
      "/sys/bpb-unwritable/ds: --out: cannot create the folder"),
     ("generate --out {tmp}/ds --horizons inf", "--horizons: 'inf' must be a positive"),
     ("generate --out {tmp}/ds --workers -1", "--workers: must be at least 1"),
+    ("generate --out {tmp}/ds --workers {over}",
+     "--workers: at most {most} (4 per core; more only wait for a core), got {over}"),
+    ("bench generate --workers {over}", "--workers: at most {most} (4 per core"),
+    ("bench generate --workers 0", "--workers: must be at least 1, got 0"),
+    ("bench score --rows 20000001", "--rows: at most 20,000,000 (about 3 GB of units)"),
     ("simulate {scene} --horizon inf", "--horizon: must be a positive finite number, got inf"),
     ("simulate {scene} --horizon nan", "--horizon: must be a positive finite number, got nan"),
     ("simulate {scene} --horizon -1", "--horizon: must be a positive finite number, got -1"),
     ("simulate {scene} --workers -1", "--workers: must be 0 (automatic) or more, got -1"),
+    ("simulate {scene} --workers {over}", "--workers: at most {most} (4 per core"),
     ("simulate {scene} --simulator pymunk --dt nan", "--dt: must be a positive finite number"),
     ("simulate {scene} --simulator pymunk --dt inf", "--dt: must be a positive finite number"),
     ("prompt h1_0000 --data {tmp}/nowhere", "{tmp}/nowhere: --data: no such dataset folder"),
@@ -50,10 +58,13 @@ def test_bad_option_is_one_line_exit_2(
     (tmp_path / "file").write_text("not a folder\n")
     names = {"tmp": str(tmp_path), "file": str(tmp_path / "file"), "data": str(dataset)}
     names["scene"] = str(dataset / "h1" / "scene_0000" / "init.json")
+    most = 4 * (os.cpu_count() or 1)
+    names.update(most=str(most), over=str(most + 1))
     args = [part.format(**names) for part in command.split()]
     before = sorted(p.name for p in tmp_path.iterdir())
     done = subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
     assert done.returncode == 2, done.stderr
+    assert done.stdout == ""  # refused before any work, no table or scene line
     line = done.stderr.strip()
     assert "\n" not in line and expected.format(**names) in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing started

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
 
 TARGET_SECONDS = 2.0
+MAX_ROWS = 20_000_000  # the tiled units are held in memory, about 150 bytes a row: 3 GB
 Progress = Callable[[str], None]
 """Called with what is being done next (``<task>: timing``)."""
 

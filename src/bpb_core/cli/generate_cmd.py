@@ -117,7 +117,9 @@ def _figure(name: str, value: object) -> str:
 @click.option("--seed", default=0, show_default=True, help="Dataset seed.")
 @click.option("--config", "config_path", type=click.Path(path_type=Path), help="JSON/TOML config.")
 @click.option("--stable-only", is_flag=True, help="Draw until N stable scenes per horizon.")
-@click.option("--workers", type=int, default=None, help="Processes [default: all cores].")
+@click.option(
+    "--workers", type=int, default=None, help="Processes, at most 4 per core [default: all cores]."
+)
 @click.option("--no-images", is_flag=True, help="Skip the PNGs (JSON and stats only).")
 @click.option("--calibrate", is_flag=True, help="Recalibrate the family's sampling first.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing dataset at --out.")
@@ -136,12 +138,12 @@ def generate(
 ) -> None:
     """Generate a dataset: scenes, ground truth, images, index, stats and manifest."""
     from bpb_core.dataset.generate import generate_dataset
+    from bpb_core.dataset.jobs import check_workers
     from bpb_core.dataset.reader import read_manifest
 
     if per_horizon < 1:
         raise BadInput(f"--per-horizon: must be at least 1, got {per_horizon}")
-    if workers is not None and workers < 1:
-        raise BadInput(f"--workers: must be at least 1, got {workers}")
+    check_workers(workers)
     hs = parse_horizons(horizons)
     registry = console.load_registry()
     if family is not None:

@@ -46,7 +46,7 @@ class _Named(click.Path):
     "--workers",
     default=0,
     show_default=True,
-    help="Processes; 0 = all cores for 256+ scenes, 1 = no worker processes.",
+    help="Processes (at most 4 per core); 0 = all cores for 256+ scenes, 1 = none.",
 )
 def simulate(
     paths: tuple[str, ...],

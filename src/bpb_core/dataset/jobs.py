@@ -9,6 +9,7 @@ from __future__ import annotations
 import gc
 import itertools
 import multiprocessing
+import os
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.pool import Pool
 from pathlib import Path
@@ -31,6 +32,26 @@ if TYPE_CHECKING:
 
 CHUNK = 4
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
+WORKERS_PER_CORE = 4  # beyond, processes only queue for the cores, each with its own memory
+
+
+def check_workers(workers: int | None, least: int = 1) -> None:
+    """Refuse a ``--workers`` count below ``least`` or above :data:`WORKERS_PER_CORE` per core
+    (``None``: the command's default).
+
+    Raises:
+        BadInput: ``"--workers: must be at least 1, got 0"`` or ``"--workers: at most 8 ..."``.
+    """
+    if workers is None:
+        return
+    if workers < least:
+        raise BadInput(f"--workers: must be at least {least}, got {workers}")
+    most = WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if workers > most:
+        raise BadInput(
+            f"--workers: at most {most} ({WORKERS_PER_CORE} per core; more only wait for a "
+            f"core), got {workers}"
+        )
 
 
 class GenerateProgress(Protocol):

@@ -7,7 +7,9 @@ import click
 
 @click.command("generate")
 @click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon (x5).")
-@click.option("--workers", type=int, default=None, help="Processes [default: all cores].")
+@click.option(
+    "--workers", type=int, default=None, help="Processes, at most 4 per core [default: all cores]."
+)
 @click.option(
     "--memory",
     "memory",
@@ -20,14 +22,16 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
 
     from bpb_core.bench.generate import measure_generate, measure_memory
     from bpb_core.cli.console import stdout
+    from bpb_core.dataset.jobs import check_workers
     from bpb_core.errors import BadInput
 
     try:
         sizes = [int(x) for x in memory.split(",") if x.strip()]
     except ValueError:
         raise BadInput(f"--memory: expected comma-separated numbers, got {memory!r}") from None
-    if per_horizon < 1 or any(s < 1 for s in sizes) or (workers is not None and workers < 1):
-        raise BadInput("--per-horizon/--memory/--workers: must be at least 1")
+    if per_horizon < 1 or any(s < 1 for s in sizes):
+        raise BadInput("--per-horizon/--memory: must be at least 1")
+    check_workers(workers)
     t = measure_generate(per_horizon, workers=workers)
     size = f" of {t.size[0]}x{t.size[1]} px" if t.size else ""
     plural = "s" if t.workers != 1 else ""

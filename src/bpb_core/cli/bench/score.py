@@ -6,7 +6,9 @@ import click
 
 
 @click.command("score")
-@click.option("--rows", default=1_000_000, show_default=True, help="Unit rows per scorer.")
+@click.option(
+    "--rows", default=1_000_000, show_default=True, help="Unit rows per scorer (at most 20M)."
+)
 @click.option("--repeats", default=5, show_default=True, help="Timed repeats (best and median).")
 @click.option(
     "--per-horizon",
@@ -21,12 +23,14 @@ def bench_score(rows: int, repeats: int, per_horizon: int, run_dirs: tuple[str, 
     """Time each scorer on real units (target: 1M rows in at most 2 s); exit 1 when slower."""
     from rich.table import Table
 
-    from bpb_core.bench.score import TARGET_SECONDS, bench_score
+    from bpb_core.bench.score import MAX_ROWS, TARGET_SECONDS, bench_score
     from bpb_core.cli.console import load_registry, stderr, stdout
     from bpb_core.errors import BadInput
 
     if rows < 1 or repeats < 1 or per_horizon < 1:
         raise BadInput("--rows/--repeats/--per-horizon: must be at least 1")
+    if rows > MAX_ROWS:  # the units are tiled to --rows and held in memory at once
+        raise BadInput(f"--rows: at most {MAX_ROWS:,} (about 3 GB of units), got {rows:,}")
     registry = load_registry()
     if run_dirs:  # a bad folder is refused now, not after the scoring benchmark
         from bpb_core.results.reading import find_runs
