@@ -74,11 +74,17 @@ def init_worker(setup: WorkerSetup) -> None:
     _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
 
 
-def init_pool_worker(setup: WorkerSetup) -> None:
-    """Initializer of a pool process: :func:`init_worker`, and SIGINT ignored. Ctrl-C in a
-    terminal reaches the whole process group and the parent stops the pool; a worker dying of
-    it mid-scene printed a traceback, and its scene was never answered (the parent waited)."""
+def ignore_sigint() -> None:
+    """Initializer of a pool process that leaves Ctrl-C to its parent. Ctrl-C in a terminal
+    reaches the whole process group and the parent stops the pool; a worker dying of it
+    mid-job printed a traceback, and its job was never answered (the parent waited)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def init_pool_worker(setup: WorkerSetup) -> None:
+    """Initializer of a pool process: :func:`init_worker`, and SIGINT ignored
+    (:func:`ignore_sigint`)."""
+    ignore_sigint()
     init_worker(setup)
 
 
