@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 from bpb_core.registry import Registry
+from support.processes import HAS_PROC, settled_workers
 
 BENCHMARKS = ("extract", "generate", "run", "score", "sim", "startup")
 
@@ -174,19 +175,7 @@ def test_a_terminated_bench_run_stops_its_fake_server_and_client(tmp_path: Path)
                 os.kill(pid, signal.SIGKILL)
 
 
-def _ignores_sigint(pid: str) -> bool:
-    """Whether process ``pid`` ignores SIGINT (its SigIgn mask in /proc)."""
-    import signal
-
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    (mask,) = [line.split()[1] for line in status.splitlines() if line.startswith("SigIgn:")]
-    return bool(int(mask, 16) & (1 << (signal.SIGINT - 1)))
-
-
-@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="lists children through /proc")
+@pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
 def test_ctrl_c_during_the_pillow_timing_is_left_to_the_parent(tmp_path: Path) -> None:
     """The Pillow pool's workers printed a traceback each when Ctrl-C reached them."""
     import os
@@ -198,25 +187,16 @@ def test_ctrl_c_during_the_pillow_timing_is_left_to_the_parent(tmp_path: Path) -
     env = {**os.environ, "TMPDIR": str(tmp_path)}  # the datasets' folder goes before Pillow's
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                text=True, env=env, start_new_session=True)  # fmt: skip
-    listing = Path(f"/proc/{process.pid}/task/{process.pid}/children")
     try:
         deadline = time.monotonic() + 120
         made = False
         while time.monotonic() < deadline and not (made and not any(tmp_path.iterdir())):
             made = made or any(tmp_path.iterdir())
             time.sleep(0.02)
-        while time.monotonic() < deadline and len(listing.read_text().split()) < 2:
-            time.sleep(0.02)
-        workers = listing.read_text().split()
-        # wait until they ignore SIGINT, at most 0.5 s: one that gets it between its fork and
-        # its initializer still dies of it (a window of milliseconds, not this test's subject)
-        started = time.monotonic()
-        while time.monotonic() < started + 0.5 and not all(map(_ignores_sigint, workers)):
-            time.sleep(0.01)
         # a terminal's Ctrl-C reaches the whole group; the workers first, so that one of them
         # that does not ignore it has the time to print its traceback
-        for pid in workers:
-            os.kill(int(pid), signal.SIGINT)
+        for pid in settled_workers(process.pid, 2, deadline):
+            os.kill(pid, signal.SIGINT)
         time.sleep(0.5)
         os.killpg(process.pid, signal.SIGINT)
         _, stderr = process.communicate(timeout=60)
