@@ -71,3 +71,21 @@ def test_a_wrong_typed_field_of_a_scene_file_is_refused_naming_it(
         read_model(path, model)
     field = "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in loc).lstrip(".")
     assert str(caught.value).startswith(f"{path}: {field}: Input should be a valid ")
+
+
+def test_the_dataset_cards_examples_load(tmp_path: Path) -> None:
+    """The hand-written init.json, final.json and config examples of docs/dataset-card.md are
+    valid (their ``"..."`` list entries left out)."""
+    import re
+
+    from bpb_tasks.billiards.config import load_config
+
+    card = (DOCS / "dataset-card.md").read_text()
+    blocks = re.findall(r"```(json|toml)\n(.*?)```", card, re.S)
+    files = [re.sub(r',\s*"\.\.\."', "", body) for kind, body in blocks if kind == "json"]
+    scene = Scene.model_validate_json(files[0])  # as bpb reads the files
+    truth = FinalState.model_validate_json(files[1])
+    assert scene.balls[0].vel == (-0.6725, 0.8251) and truth.stability is not None
+    (config,) = [body for kind, body in blocks if kind == "toml"]
+    (tmp_path / "c.toml").write_text(config)
+    assert load_config(tmp_path / "c.toml").image.px_per_m == 800.0
