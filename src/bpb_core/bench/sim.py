@@ -195,9 +195,7 @@ def _run_all(
     is a failed scene of that simulator; a scene the reference failed is compared by none.
     The family's own compare() and events() failing stop the bench (a PluginBug)."""
     tallies = {label: _Tally() for label in sims}
-    for sim in sims.values():  # warm-up: imports, caches, compiled code loaded
-        with contextlib.suppress(Exception):  # a failing simulator is counted below
-            sim.run(sample[0])
+    warm_up(sims, sample[0])
     reference = next(iter(sims))
     for index, scene in enumerate(sample):
         truth = None
@@ -219,6 +217,14 @@ def _run_all(
         if progress is not None:
             progress(index + 1, len(sample))
     return tallies
+
+
+def warm_up(sims: dict[str, Simulator], scene: Any) -> None:
+    """Run each simulator once on ``scene``, untimed, so its imports, caches and compiled code
+    are loaded before anything is timed (a failing simulator is counted by the timed runs)."""
+    for sim in sims.values():
+        with contextlib.suppress(Exception):
+            sim.run(scene)
 
 
 def _time_batches(

@@ -7,7 +7,8 @@ factors interleaved per scene, so machine noise hits them alike); per factor the
 mean milliseconds and events per scene. If the cost follows the events, the microseconds per
 event stay about flat while the events per scene grow. A run that raises (a fixed-step simulator
 may refuse a scene made too fast for its step) is a failed scene of that simulator at that
-factor, left out of its means, as in the main comparison.
+factor, left out of its means, as in the main comparison. As there, each simulator runs once
+untimed first, so that loading its imports and compiled code is not timed as the first scene.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from bpb_core.bench.comparing import bench_family
 from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
-from bpb_core.bench.sim import ScaleRow, SimBench, _Tally
+from bpb_core.bench.sim import ScaleRow, SimBench, _Tally, warm_up
 from bpb_core.capabilities import CountsEvents
 from bpb_core.errors import BadInput
 
@@ -51,6 +52,8 @@ def with_scaling(
     family = bench_family(reg, result.family)
     sample = family.scenes(scenes, result.seed)
     tallies = {(f, label): _Tally() for f in factors for label in sims}
+    if sample and factors:  # untimed: imports and compiled code load before the x1 runs
+        warm_up(sims, family.scaled(sample[0], factors[0]))
     for scene in sample:
         for factor in factors:
             busy = family.scaled(scene, factor)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -179,6 +180,47 @@ def test_a_non_finite_error_is_a_failed_scene_not_a_figure() -> None:
     # max() of a list holding nan depends on where the nan is; the scene is failed instead
     assert (row.failed, row.max_error, row.median_error) == (1, 0.0, 0.0)
     assert row.first_error == "error nan"
+
+
+def test_scaling_does_not_time_a_simulator_s_first_load_as_a_scene() -> None:
+    """A simulator's first run loads its imports or compiled code; --scaling, like the main
+    comparison, runs each simulator once untimed, so the x1 figure is the scenes' cost."""
+    from bpb_core.bench.sim_scaling import with_scaling
+
+    class Cold(Exact):
+        name = "cold"
+        loaded = False
+
+        def run(self, scene: Mover, horizon: float | None = None) -> float:
+            if not Cold.loaded:  # what a first import or a compiled cache costs
+                time.sleep(0.2)
+                Cold.loaded = True
+            return super().run(scene, horizon)
+
+    class Counting(Line):
+        def events(self, outcome: float) -> int:
+            return 1
+
+        def scaled_scene(self, scene: Mover, factor: float) -> Mover:
+            return Mover(scene.scene_id, scene.horizon, scene.x, scene.v * factor)
+
+    class ColdPlugin:
+        @hookimpl
+        def bpb_scene_families(self) -> list[SceneFamilyInfo]:
+            return [SceneFamilyInfo("line", lambda: Counting, "points", default=True)]
+
+        @hookimpl
+        def bpb_simulators(self) -> list[SimulatorInfo]:
+            return [
+                SimulatorInfo("exact", lambda: Exact, "closed form", family="line"),
+                SimulatorInfo("cold", lambda: Cold, "slow first run", family="line"),
+            ]
+
+    registry = make_registry([ColdPlugin()], entry_points=False)
+    result = bench_simulators(2, 0, ("exact",), registry=registry)
+    rows = with_scaling(result, ["cold"], 2, (1.0, 2.0), registry=registry).scaling
+    assert [(r.factor, r.failed) for r in rows] == [(1.0, 0), (2.0, 0)]
+    assert all(r.ms_per_scene is not None and r.ms_per_scene < 50 for r in rows), rows
 
 
 def test_a_family_that_cannot_compare_is_bad_input() -> None:
