@@ -12,6 +12,8 @@ import platform
 from datetime import date
 from pathlib import Path
 
+MAX_REPEATS = 100  # timed repeats of a benchmark: more take minutes for no better best time
+
 
 def machine_description() -> str:
     """``2 cores, <CPU model>, CPython 3.11.7``: the machine a figure was measured on."""

@@ -112,7 +112,9 @@ def _figure(name: str, value: object) -> str:
     default=None,
     help="Scene family plugin [default: the default one; see bpb list scene-families].",
 )
-@click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon.")
+@click.option(
+    "--per-horizon", default=200, show_default=True, help="Scenes per horizon (at most 100,000)."
+)
 @click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma list.")
 @click.option("--seed", default=0, show_default=True, help="Dataset seed.")
 @click.option("--config", "config_path", type=click.Path(path_type=Path), help="JSON/TOML config.")
@@ -138,11 +140,10 @@ def generate(
 ) -> None:
     """Generate a dataset: scenes, ground truth, images, index, stats and manifest."""
     from bpb_core.dataset.generate import generate_dataset
-    from bpb_core.dataset.jobs import check_workers
+    from bpb_core.dataset.jobs import check_per_horizon, check_workers
     from bpb_core.dataset.reader import read_manifest
 
-    if per_horizon < 1:
-        raise BadInput(f"--per-horizon: must be at least 1, got {per_horizon}")
+    check_per_horizon(per_horizon)
     check_workers(workers)
     hs = parse_horizons(horizons)
     registry = console.load_registry()

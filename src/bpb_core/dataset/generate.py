@@ -22,6 +22,7 @@ from bpb_core.capabilities import Calibrating, DrawingStats, Tallying
 from bpb_core.dataset.jobs import (
     GenerateProgress,
     NoProgress,
+    check_per_horizon,
     make_pool,
     run_calibration,
     run_scenes,
@@ -66,7 +67,7 @@ def generate_dataset(
     Args:
         out: Folder to create; it must not exist or be empty (or be a dataset, with
             ``overwrite``).
-        per_horizon: Scenes per horizon.
+        per_horizon: Scenes per horizon (1 to 100,000).
         horizons: Horizons in seconds.
         seed: Dataset seed; scene ``i`` at horizon ``t`` is drawn from (seed, t, i).
         config: The family's config object, a mapping of its fields or a JSON/TOML file;
@@ -170,8 +171,7 @@ def _check_simulator(registry: Registry, family: SceneFamily, cfg: Any) -> None:
 
 
 def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
-    if per_horizon < 1:
-        raise BadInput(f"per_horizon: must be at least 1, got {per_horizon}")
+    check_per_horizon(per_horizon, "per_horizon")
     hs = [float(h) for h in horizons]
     if not hs:
         raise BadInput("horizons: give at least one horizon")

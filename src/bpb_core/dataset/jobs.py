@@ -33,6 +33,22 @@ if TYPE_CHECKING:
 CHUNK = 4
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
 WORKERS_PER_CORE = 4  # beyond, processes only queue for the cores, each with its own memory
+# 50 times the largest size in the docs (10,000 per horizon); 500,000 scenes over five horizons
+# are about 50 GB with images and hours of work, so more is a typo, not a dataset
+MAX_PER_HORIZON = 100_000
+
+
+def check_per_horizon(count: int, option: str = "--per-horizon", least: int = 1) -> None:
+    """Refuse a count of scenes per horizon below ``least`` or above :data:`MAX_PER_HORIZON`.
+
+    Raises:
+        BadInput: ``"--per-horizon: must be at least 1, got 0"`` or
+            ``"--per-horizon: at most 100,000 scenes per horizon, got 2,000,000,000"``.
+    """
+    if count < least:
+        raise BadInput(f"{option}: must be at least {least}, got {count}")
+    if count > MAX_PER_HORIZON:
+        raise BadInput(f"{option}: at most {MAX_PER_HORIZON:,} scenes per horizon, got {count:,}")
 
 
 def check_workers(workers: int | None, least: int = 1) -> None:

@@ -6,18 +6,23 @@ import click
 
 
 @click.command("extract")
-@click.option("--repeats", default=5, show_default=True, help="Timed repeats (best kept).")
+@click.option(
+    "--repeats", default=5, show_default=True, help="Timed repeats, at most 100 (best kept)."
+)
 def bench_extract(repeats: int) -> None:
     """Time the reply extractor at 250 kB, 500 kB and 1 MB (target: under 50 ms at 1 MB, time
     growing linearly); exit 1 when a 1 MB reply is slower."""
     from rich.table import Table
 
+    from bpb_core.bench import MAX_REPEATS
     from bpb_core.bench.extract import TARGET_MS, bench_extract as run
     from bpb_core.cli.console import stdout
     from bpb_core.errors import BadInput
 
     if repeats < 1:
         raise BadInput("--repeats: must be at least 1")
+    if repeats > MAX_REPEATS:
+        raise BadInput(f"--repeats: at most {MAX_REPEATS}, got {repeats:,}")
     sizes = (250_000, 500_000, 1_000_000)
     timings = run(sizes, repeats)
     title = f"Answer extraction (target: under {TARGET_MS:g} ms on any 1 MB reply)"

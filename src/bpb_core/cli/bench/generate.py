@@ -6,7 +6,12 @@ import click
 
 
 @click.command("generate")
-@click.option("--per-horizon", default=200, show_default=True, help="Scenes per horizon (x5).")
+@click.option(
+    "--per-horizon",
+    default=200,
+    show_default=True,
+    help="Scenes per horizon (x5; at most 100,000).",
+)
 @click.option(
     "--workers", type=int, default=None, help="Processes, at most 4 per core [default: all cores]."
 )
@@ -14,7 +19,7 @@ import click
     "--memory",
     "memory",
     default="",
-    help="Also measure peak RSS at these per-horizon sizes, e.g. 200,2000.",
+    help="Also measure peak RSS at these per-horizon sizes, e.g. 200,2000 (each at most 100,000).",
 )
 def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
     """Seconds for a dataset (1,000 scenes by default) beside Pillow encoding alone."""
@@ -22,15 +27,16 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
 
     from bpb_core.bench.generate import measure_generate, measure_memory
     from bpb_core.cli.console import stdout
-    from bpb_core.dataset.jobs import check_workers
+    from bpb_core.dataset.jobs import check_per_horizon, check_workers
     from bpb_core.errors import BadInput
 
     try:
         sizes = [int(x) for x in memory.split(",") if x.strip()]
     except ValueError:
         raise BadInput(f"--memory: expected comma-separated numbers, got {memory!r}") from None
-    if per_horizon < 1 or any(s < 1 for s in sizes):
-        raise BadInput("--per-horizon/--memory: must be at least 1")
+    check_per_horizon(per_horizon)
+    for scenes in sizes:
+        check_per_horizon(scenes, "--memory")
     check_workers(workers)
     t = measure_generate(per_horizon, workers=workers)
     size = f" of {t.size[0]}x{t.size[1]} px" if t.size else ""

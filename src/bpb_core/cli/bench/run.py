@@ -22,14 +22,16 @@ if TYPE_CHECKING:
     type=click.IntRange(min=1),
     default=43,
     show_default=True,
-    help="Scenes per horizon for the rate phases (x5 horizons x the family's default tasks).",
+    help="Scenes per horizon for the rate phases (x5 horizons x the family's default tasks; "
+    "at most 100,000).",
 )
 @click.option(
     "--memory-scenes",
     type=click.IntRange(min=0),
     default=200,
     show_default=True,
-    help="Scenes per horizon for the memory run (200 -> 3,000 calls with 3 tasks; 0 skips).",
+    help="Scenes per horizon for the memory run (200 -> 3,000 calls with 3 tasks; 0 skips; "
+    "at most 100,000).",
 )
 @click.option(
     "--work",
@@ -62,6 +64,7 @@ def bench_run(
     from bpb_core.bench.run import bench_dataset, bench_memory, bench_throughput
     from bpb_core.bench.run_bare import CALL_TIMEOUT
     from bpb_core.cli.console import stderr, stdout
+    from bpb_core.dataset.jobs import check_per_horizon
     from bpb_core.errors import BadInput
     from bpb_core.layout import check_writable_folder
 
@@ -70,6 +73,8 @@ def bench_run(
             f"--latency: must be at least 0 and below the clients' {CALL_TIMEOUT} s call "
             f"timeout, got {latency:g}"
         )
+    check_per_horizon(throughput_scenes, "--throughput-scenes")
+    check_per_horizon(memory_scenes, "--memory-scenes", least=0)
     check_writable_folder(work, "--work")
     # SIGTERM (a kill, a cancelled CI job) unwinds like Ctrl-C, so the fake server and the
     # client being measured are stopped instead of being left running

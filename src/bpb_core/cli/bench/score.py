@@ -9,12 +9,14 @@ import click
 @click.option(
     "--rows", default=1_000_000, show_default=True, help="Unit rows per scorer (at most 20M)."
 )
-@click.option("--repeats", default=5, show_default=True, help="Timed repeats (best and median).")
+@click.option(
+    "--repeats", default=5, show_default=True, help="Timed repeats, at most 100 (best and median)."
+)
 @click.option(
     "--per-horizon",
     default=20,
     show_default=True,
-    help="Scenes per horizon of the dataset the answers are about (x5 horizons).",
+    help="Scenes per horizon of the dataset the answers are about (x5 horizons; at most 100,000).",
 )
 @click.option(
     "--runs", "run_dirs", multiple=True, help="Also time reading and scoring these run folders."
@@ -23,14 +25,19 @@ def bench_score(rows: int, repeats: int, per_horizon: int, run_dirs: tuple[str, 
     """Time each scorer on real units (target: 1M rows in at most 2 s); exit 1 when slower."""
     from rich.table import Table
 
+    from bpb_core.bench import MAX_REPEATS
     from bpb_core.bench.score import MAX_ROWS, TARGET_SECONDS, bench_score
     from bpb_core.cli.console import load_registry, stderr, stdout
+    from bpb_core.dataset.jobs import check_per_horizon
     from bpb_core.errors import BadInput
 
-    if rows < 1 or repeats < 1 or per_horizon < 1:
-        raise BadInput("--rows/--repeats/--per-horizon: must be at least 1")
+    if rows < 1 or repeats < 1:
+        raise BadInput("--rows/--repeats: must be at least 1")
     if rows > MAX_ROWS:  # the units are tiled to --rows and held in memory at once
         raise BadInput(f"--rows: at most {MAX_ROWS:,} (about 3 GB of units), got {rows:,}")
+    if repeats > MAX_REPEATS:  # each repeat scores --rows units for every task
+        raise BadInput(f"--repeats: at most {MAX_REPEATS}, got {repeats:,}")
+    check_per_horizon(per_horizon)
     registry = load_registry()
     if run_dirs:  # a bad folder is refused now, not after the scoring benchmark
         from bpb_core.results.reading import find_runs
