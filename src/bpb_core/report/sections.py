@@ -146,7 +146,8 @@ def _headline_note(part: ReportPart, rule: Completeness) -> Markup:
 def different_scenes_note(part: ReportPart) -> str | None:
     """The warning that the runs were asked different scenes of a task they share (so their
     scores are means over different scenes), or ``None``; shown in the terminal, JSON and HTML
-    alike. Epochs ask the same scenes again and a task one run was not asked is its own '–'."""
+    alike. The counts are of distinct scene-tasks (not calls: epochs ask the same scenes again);
+    a task one run was not asked is its own '–'."""
     asked = part.results.units[["run", "task", "scene_id"]].drop_duplicates()
     asked = asked.astype(str)
     scenes = asked.groupby(["task", "run"])["scene_id"].agg(frozenset)
@@ -154,9 +155,9 @@ def different_scenes_note(part: ReportPart) -> str | None:
         return None
     counts = sorted(set(asked.groupby("run").size().tolist()))
     if len(counts) > 1:
-        told = f"different numbers of scenes ({', '.join(map(str, counts))} scene-task calls)"
+        told = f"different numbers of scenes ({', '.join(map(str, counts))} scene-tasks)"
     else:
-        told = f"different scenes ({counts[0]} scene-task calls each, not the same ones)"
+        told = f"different scenes ({counts[0]} scene-tasks each, not the same ones)"
     return (
         f"The runs were asked {told}: their scores are means over different scenes; compare "
         "them in the paired comparisons."

@@ -199,13 +199,16 @@ def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scene
 def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
     tmp_path: Path, dataset: Path
 ) -> None:
+    # The counts are of scene-tasks: stasis, asked each of its 18 twice (36 calls), counts 18;
+    # the warning said "scene-task calls" of these figures.
     runs = tmp_path / "runs"
-    for adapter, extra in (("baseline:stasis", []), ("baseline:straight", ["--horizons", "1"])):
+    runs_of = (("baseline:stasis", ["--epochs", "2"]), ("baseline:straight", ["--horizons", "1"]))
+    for adapter, extra in runs_of:
         ran = bpb("run", "--data", str(dataset), "--adapter", adapter, "--out", str(runs), *extra)
         assert ran.returncode == 0, ran.stderr
     shown = bpb("report", str(runs), "--out", str(tmp_path / "rep"))
     assert shown.returncode == 0, shown.stderr
-    warning = "The runs were asked different numbers of scenes (9, 18 scene-task calls)"
+    warning = "The runs were asked different numbers of scenes (9, 18 scene-tasks):"
     assert warning in " ".join(shown.stdout.split())
     summary = json.loads(bpb("report", str(runs), "--json").stdout)
     assert summary["different_scenes"].startswith(warning)
@@ -227,7 +230,7 @@ def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
         assert ran.returncode == 0, ran.stderr
     summary = json.loads(bpb("report", str(runs / "a"), str(runs / "b"), "--json").stdout)
     assert summary["different_scenes"] == (
-        "The runs were asked different scenes (3 scene-task calls each, not the same ones): "
+        "The runs were asked different scenes (3 scene-tasks each, not the same ones): "
         "their scores are means over different scenes; compare them in the paired comparisons."
     )
     again = tmp_path / "again"
