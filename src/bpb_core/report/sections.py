@@ -325,7 +325,8 @@ def _metadata_section(frame: pd.DataFrame) -> tuple[str, Markup]:
         "<p class='muted'>What adapters measured about their own answers (see each adapter's "
         "docs), per horizon: the median over scenes of each number, the share of scenes where "
         "a yes/no measure holds, the count of scenes of a text measure (e.g. a reason for not "
-        "answering). Counts, means and maxima: "
+        "answering). A scene counts once, its value the mean over its answers (tasks, epochs). "
+        "Counts of scenes, means and maxima: "
         "<i>tables/metadata.csv</i>.</p>"
     )
     return "Adapters' own measurements by horizon", note + html.table(metadata_by_horizon(frame))

@@ -31,7 +31,7 @@ def test_vision_reads_generated_images_and_reports_its_perception(
     table = report.tables["metadata"]
     centre = table[table["measure"] == "centre_error_mm"]
     assert set(centre["run"]) == {"baseline_vision"} and set(centre["horizon"]) == {1.0, 3.0}
-    assert (centre["n"] == 3).all() and (centre["median"] < 1.2).all()
+    assert (centre["scenes"] == 3).all() and (centre["median"] < 1.2).all()
     wide = metadata_by_horizon(table).set_index("measure")
     assert list(wide.columns) == ["run", "statistic", "h1", "h3"]
     assert wide.loc["centre_error_mm", "h1"] == centre["median"].iloc[0]
@@ -57,7 +57,7 @@ def test_an_unreadable_image_is_answered_unknown_and_scored_wrong(
     row = summary(results.units, results.suites).iloc[0]
     assert (row["q1"], row["q2"], row["q3"]) == (0.0, 0.0, 0.0)
     table = build_report([tmp_path], registry=registry, n_boot=20).tables["metadata"]
-    assert table.loc[table["measure"] == "perception_failed", "n"].sum() == 6
+    assert table.loc[table["measure"] == "perception_failed", "scenes"].sum() == 6
 
 
 def test_without_an_image_vision_says_so(dataset: Path, tmp_path: Path, registry: Registry) -> None:
