@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from support.processes import HAS_PROC, settled_workers
+
 BPB = str(Path(sys.executable).with_name("bpb"))
 
 
@@ -121,7 +123,7 @@ def test_stable_only_that_finds_too_few_stable_scenes_exits_2_and_writes_nothing
     assert sorted(p.name for p in tmp_path.iterdir()) == ["shaky.json"]
 
 
-@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="lists children through /proc")
+@pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
 def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> None:
     import os
     import signal
@@ -130,12 +132,8 @@ def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> 
     out = tmp_path / "ds"
     args = [BPB, "generate", "--out", str(out), "--per-horizon", "30", "--workers", "2"]
     process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    children = Path(f"/proc/{process.pid}/task/{process.pid}/children")
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and len(children.read_text().split()) < 2:
-        time.sleep(0.05)
-    for pid in children.read_text().split():  # what a terminal's Ctrl-C sends them
-        os.kill(int(pid), signal.SIGINT)
+    for pid in settled_workers(process.pid, 2, time.monotonic() + 60):  # what a terminal's
+        os.kill(pid, signal.SIGINT)  # Ctrl-C sends them
     try:
         _, stderr = process.communicate(timeout=120)  # a worker killed mid-scene hung it
     finally:
