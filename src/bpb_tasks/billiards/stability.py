@@ -106,10 +106,11 @@ def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: S
     ``simulator`` runs the kernel and the scene has at most :data:`KERNEL_MAX_BALLS` balls,
     else copy by copy. A copy the analytic engine cannot finish within :func:`copy_budget`
     events is counted unfinished, not simulated further."""
-    ids, pos, vel = perturbation_arrays(scene, delta, samples)
-    if _runs_kernel(simulator) and len(ids) <= KERNEL_MAX_BALLS:
+    if _runs_kernel(simulator) and len(scene.balls) <= KERNEL_MAX_BALLS:
+        ids, pos, vel = perturbation_arrays(scene, delta, samples, compiled=True)
         budget = copy_budget(len(base.events), simulator.max_events)
         return kernel_tally(scene, base, ids, pos, vel, budget)
+    ids, pos, vel = perturbation_arrays(scene, delta, samples)
     reference = labels(base)
     tally = Tally(counts=dict.fromkeys(GROUPS, 0))
     runner = _budgeted(simulator, len(base.events))
@@ -221,26 +222,35 @@ def _flip_order(name: str) -> tuple[str, str]:
 
 
 def perturbation_arrays(
-    scene: Scene, delta: float, samples: int, stream: str = "stability"
+    scene: Scene, delta: float, samples: int, stream: str = "stability", *, compiled: bool = False
 ) -> tuple[list[int], np.ndarray, np.ndarray]:
     """Ball ids and the ``(samples, n, 2)`` positions and velocities of the perturbed copies
-    (drawn from a generator seeded by ``stream`` and the scene id)."""
+    (drawn from a generator seeded by ``stream`` and the scene id); ``compiled`` builds the
+    arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_compiled.perturb`, the
+    same values to the bit; a test compares) instead of numpy operations."""
     balls = sorted(scene.balls, key=lambda b: b.id)
     rng = random.Random(f"{stream}:{scene.scene_id}")
     count = samples * (len(balls) + 1)
     draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row
     angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
     angles *= 2 * math.pi
-    pos = np.array([b.pos for b in balls], dtype=float)[None] + delta * np.stack(
+    ids = [b.id for b in balls]
+    cue = ids.index(CUE_ID) if CUE_ID in ids else -1
+    kick = delta * math.hypot(*balls[cue].vel) if cue >= 0 else 0.0
+    centres = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
+    velocities = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
+    if compiled:
+        from bpb_tasks.billiards.stability_compiled import perturb
+
+        pos, vel = perturb(centres, velocities, angles, delta, cue, kick)
+        return ids, pos, vel
+    pos = centres[None] + delta * np.stack(
         (np.cos(angles[:, :-1]), np.sin(angles[:, :-1])), axis=-1
     )
-    vel = np.repeat(np.array([b.vel for b in balls], dtype=float)[None], samples, axis=0)
-    ids = [b.id for b in balls]
-    if CUE_ID in ids:
-        cue = ids.index(CUE_ID)
-        speed = math.hypot(*balls[cue].vel)
-        vel[:, cue, 0] += delta * speed * np.cos(angles[:, -1])
-        vel[:, cue, 1] += delta * speed * np.sin(angles[:, -1])
+    vel = np.repeat(velocities[None], samples, axis=0)
+    if cue >= 0:
+        vel[:, cue, 0] += kick * np.cos(angles[:, -1])
+        vel[:, cue, 1] += kick * np.sin(angles[:, -1])
     return ids, pos, vel
 
 

@@ -5,6 +5,8 @@
   final state into the tally at once: label bit masks per copy (cue contacts, cue walls,
   pocketed balls; one bit per ball index or wall), XORed against the nominal masks, and the
   largest distance of a ball from its nominal final position. No per-copy table is built.
+* :func:`perturb` builds the perturbed copies' positions and velocities from their random
+  angles (:func:`~bpb_tasks.billiards.stability.perturbation_arrays` without the numpy calls).
 * :func:`pair_margin_arrays` is the near-miss margin and the overlap of
   :mod:`bpb_tasks.billiards.stability_margins` (the reference, ``pair_margins``) with the same
   float64 operations in the same order.
@@ -80,6 +82,28 @@ def tally_copies(
                 flipped = True
         any_flip += flipped
     return counts, unions, any_flip, spread, unfinished
+
+
+@jit
+def perturb(
+    centres: Arr, velocities: Arr, angles: Arr, delta: float, cue: int, kick: float
+) -> tuple[Arr, Arr]:
+    """The ``(samples, n, 2)`` positions and velocities of the copies of ``n`` balls at
+    ``centres`` moving at ``velocities``: ball ``j`` of copy ``k`` moved by ``delta`` at angle
+    ``angles[k, j]``, the cue ball (index ``cue``, -1 without one) kicked by ``kick`` at angle
+    ``angles[k, n]``. The numpy operations of ``perturbation_arrays`` element by element."""
+    samples, n = angles.shape[0], centres.shape[0]
+    pos = np.empty((samples, n, 2))
+    vel = np.empty((samples, n, 2))
+    for k in range(samples):
+        for j in range(n):
+            pos[k, j, 0] = centres[j, 0] + delta * np.cos(angles[k, j])
+            pos[k, j, 1] = centres[j, 1] + delta * np.sin(angles[k, j])
+            vel[k, j, 0], vel[k, j, 1] = velocities[j, 0], velocities[j, 1]
+        if cue >= 0:
+            vel[k, cue, 0] += kick * np.cos(angles[k, n])
+            vel[k, cue, 1] += kick * np.sin(angles[k, n])
+    return pos, vel
 
 
 @jit

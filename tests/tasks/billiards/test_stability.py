@@ -60,6 +60,17 @@ def test_perturbations_have_the_documented_size() -> None:
     assert (again == pos).all()
 
 
+def test_compiled_perturbations_are_the_numpy_ones_to_the_bit() -> None:
+    """The kernel path builds the copies in one compiled call; its positions and velocities
+    must be the numpy path's exactly, or generated annotations (and checksums) would change."""
+    for i in range(40):
+        s = random_scene(5, i, balls=2 + i % 12, speeds=(0.05, 3.0))
+        ids, pos, vel = perturbation_arrays(s, 1e-4, 64)
+        fast_ids, fast_pos, fast_vel = perturbation_arrays(s, 1e-4, 64, compiled=True)
+        assert fast_ids == ids and fast_pos.shape == pos.shape == (64, len(ids), 2)
+        assert pos.tobytes() == fast_pos.tobytes() and vel.tobytes() == fast_vel.tobytes()
+
+
 def test_grazing_contact_flips_q1_often() -> None:
     s = scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5 + 2 * R * (1 - 1e-9), 0.0, 0.0)], horizon=2)
     st = annotate(s)
