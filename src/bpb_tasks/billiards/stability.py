@@ -38,6 +38,7 @@ from bpb_tasks.billiards.scene import Ball, Scene
 from bpb_tasks.billiards.stability_batch import (
     KERNEL_MAX_BALLS,
     Tally,
+    kernel_horizon_gap,
     kernel_pair_margins,
     kernel_tally,
 )
@@ -157,14 +158,11 @@ def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
 
 
 def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | None:
-    """:func:`horizon_gap` of a run to ``horizon`` + 1 s: from the kernel's event times alone
-    when single runs take the kernel (the same events; no outcome is built), else from the
-    outcome."""
+    """:func:`horizon_gap` of a run to ``horizon`` + 1 s: in one compiled call from the
+    kernel's event rows (the same events; no outcome is built) when single runs take the
+    kernel, else from the outcome."""
     if isinstance(simulator, AnalyticSimulator) and simulator.kernel_loaded():
-        from bpb_tasks.simulators.analytic.compiled import event_times
-
-        times = event_times(scene, horizon + 1.0, simulator.max_events)
-        return float(np.abs(times - horizon).min()) if len(times) else None
+        return kernel_horizon_gap(scene, horizon, simulator.max_events)
     return horizon_gap(simulator.run(scene, horizon + 1.0), horizon)
 
 

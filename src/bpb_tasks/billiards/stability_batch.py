@@ -7,6 +7,8 @@ and keeps only bit masks per copy (cue contacts, cue walls, pocketed balls, one 
 or wall), so flips are XORs against the nominal masks; no per-copy Python objects or tables are
 built. It gives the same tally as running each copy through
 :meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.run` (a test compares).
+:func:`kernel_horizon_gap` is
+:func:`~bpb_tasks.billiards.stability_margins.horizon_gap` from the kernel's event rows and
 :func:`kernel_pair_margins` gives the near-miss margin and the overlap to the bit (a test
 compares).
 """
@@ -20,6 +22,7 @@ import numpy as np
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import TOUCH_TOLERANCE, WALLS, Scene
 from bpb_tasks.billiards.truth import UNFINISHED
+from bpb_tasks.simulators.analytic.engine import SimulationError
 
 KERNEL_MAX_BALLS = 63  # one bit per ball index in an int64 mask, the sign bit unused
 
@@ -92,6 +95,25 @@ def _nominal(base: Outcome, ids: list[int]) -> tuple[int, int, int]:
     walls = sum(1 << WALLS.index(w) for w in base.cue_walls())
     pocketed = sum(1 << index[i] for i, p in base.positions.items() if p is None)
     return contacts, walls, pocketed
+
+
+def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float | None:
+    """:func:`~bpb_tasks.billiards.stability_margins.horizon_gap` of ``scene`` run to
+    ``horizon`` + 1 s by the kernel, in one compiled call (the same value to the bit).
+
+    Raises:
+        SimulationError: More than ``max_events`` events (as :meth:`AnalyticSimulator.run`).
+    """
+    from bpb_tasks.billiards.stability_compiled import horizon_event_gap
+    from bpb_tasks.simulators.analytic.compiled import scene_arrays, table_params
+
+    _, pos, vel = scene_arrays(scene)
+    prm, pockets = table_params(scene)
+    end = float(horizon) + 1.0
+    gap, found, status = horizon_event_gap(pos, vel, prm, pockets, float(horizon), end, max_events)
+    if status:
+        raise SimulationError(f"more than {max_events} events before t={end}")
+    return float(gap) if found else None
 
 
 def kernel_pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, float | None]:

@@ -7,6 +7,8 @@
   largest distance of a ball from its nominal final position. No per-copy table is built.
 * :func:`perturb` builds the perturbed copies' positions and velocities from their random
   angles (:func:`~bpb_tasks.billiards.stability.perturbation_arrays` without the numpy calls).
+* :func:`horizon_event_gap` is the horizon gap of
+  :mod:`bpb_tasks.billiards.stability_margins` read off a kernel run's event rows.
 * :func:`pair_margin_arrays` is the near-miss margin and the overlap of
   :mod:`bpb_tasks.billiards.stability_margins` (the reference, ``pair_margins``) with the same
   float64 operations in the same order.
@@ -19,7 +21,7 @@ import math
 import numpy as np
 
 from bpb_tasks.simulators.analytic.kernel import run_rows
-from bpb_tasks.simulators.analytic.kernel_predict import BALL, WALL, Arr
+from bpb_tasks.simulators.analytic.kernel_predict import BALL, STOP, WALL, Arr
 from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
 
 
@@ -104,6 +106,24 @@ def perturb(
             vel[k, cue, 0] += kick * np.cos(angles[k, n])
             vel[k, cue, 1] += kick * np.sin(angles[k, n])
     return pos, vel
+
+
+@jit
+def horizon_event_gap(
+    pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, end: float, max_events: int
+) -> tuple[float, bool, int]:
+    """The smallest ``|t - horizon|`` over the ball, wall and pocket events (not stops) of the
+    balls ``pos``/``vel`` run to ``end``, whether there is such an event, and the run's status
+    (1: over ``max_events`` events)."""
+    events, _, _, status = run_rows(pos, vel, prm, pockets, end, max_events)
+    best = np.inf
+    found = False
+    for row in events:
+        if row[1] != STOP:
+            gap = abs(row[0] - horizon)
+            best = gap if not found or gap < best else best
+            found = True
+    return best, found, status
 
 
 @jit

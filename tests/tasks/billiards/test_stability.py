@@ -22,8 +22,12 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_batch import kernel_pair_margins, kernel_tally
-from bpb_tasks.billiards.stability_margins import near_miss_gap, pair_margins
+from bpb_tasks.billiards.stability_batch import (
+    kernel_horizon_gap,
+    kernel_pair_margins,
+    kernel_tally,
+)
+from bpb_tasks.billiards.stability_margins import horizon_gap, near_miss_gap, pair_margins
 from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
@@ -123,6 +127,27 @@ def test_scenes_with_more_balls_than_a_kernel_mask_holds_annotate_like_the_pytho
     kernel = annotate(crowd, simulator=AnalyticSimulator(), samples=16)
     assert kernel == annotate(crowd, simulator=PYTHON, samples=16)
     assert "q1:1" in kernel.flips  # the cue ball runs on into the crowd: flips were compared
+
+
+def test_compiled_horizon_gap_is_the_reference_to_the_bit() -> None:
+    """The kernel reads the horizon gap off its event rows in one call; it must equal the
+    reference's gap of a run to the horizon + 1 s exactly, say so when there is no event, and
+    stop at the event budget as the engine does."""
+    gaps = []
+    for i in range(60):
+        s = random_scene(8, i, balls=2 + i % 9, speeds=(0.05, 3.0))
+        expected = horizon_gap(PYTHON.run(s, s.horizon + 1.0), s.horizon)
+        gap = kernel_horizon_gap(s, s.horizon, PYTHON.max_events)
+        assert (gap is None) == (expected is None)
+        if gap is not None and expected is not None:
+            assert gap.hex() == expected.hex()
+            gaps.append(gap)
+    assert len(gaps) > 50
+    still = scene([(0.5, 0.5, 0.0, 0.0), (1.0, 0.5, 0.0, 0.0)])
+    assert kernel_horizon_gap(still, 1.0, 100) is None
+    bouncing = scene([(0.5, 0.5, 3.0, 0.0)], mu=0.0, horizon=5)
+    with pytest.raises(SimulationError, match=r"more than 3 events before t=6\.0"):
+        kernel_horizon_gap(bouncing, 5.0, 3)
 
 
 def _same_margins(out: Outcome, radius: float) -> tuple[float | None, float | None]:

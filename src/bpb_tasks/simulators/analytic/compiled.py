@@ -73,24 +73,6 @@ def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
     return build_outcome(ids, events, pieces, final, float(horizon), float(prm[0]))
 
 
-def event_times(scene: Scene, horizon: float, max_events: int) -> np.ndarray:
-    """Times of the ball, wall and pocket events (not stops) of ``scene`` run to ``horizon``
-    with the kernel, without building an outcome.
-
-    Raises:
-        SimulationError: More than ``max_events`` events (as :meth:`AnalyticSimulator.run`).
-    """
-    from bpb_tasks.simulators.analytic.engine import SimulationError
-
-    _, pos, vel = scene_arrays(scene)
-    prm, pockets = table_params(scene)
-    events, _, _, status = run_arrays(pos, vel, prm, pockets, float(horizon), max_events)
-    if status:
-        raise SimulationError(f"more than {max_events} events before t={float(horizon)}")
-    times: np.ndarray = events[events[:, 1] != KINDS.index("stop"), 0]
-    return times
-
-
 def build_outcome(
     ids: Sequence[int],
     events: np.ndarray,
