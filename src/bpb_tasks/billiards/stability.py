@@ -225,23 +225,26 @@ def perturbation_arrays(
     """Ball ids and the ``(samples, n, 2)`` positions and velocities of the perturbed copies
     (drawn from a generator seeded by ``stream`` and the scene id); ``compiled`` builds the
     arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_compiled.perturb`, the
-    same values to the bit; a test compares) instead of numpy operations."""
+    same values to the bit; a test compares) instead of a Python call per draw and numpy
+    operations."""
     balls = sorted(scene.balls, key=lambda b: b.id)
-    rng = random.Random(f"{stream}:{scene.scene_id}")
-    count = samples * (len(balls) + 1)
-    draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row
-    angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
-    angles *= 2 * math.pi
     ids = [b.id for b in balls]
     cue = ids.index(CUE_ID) if CUE_ID in ids else -1
     kick = delta * math.hypot(*balls[cue].vel) if cue >= 0 else 0.0
     centres = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     velocities = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
+    seed = f"{stream}:{scene.scene_id}"
     if compiled:
         from bpb_tasks.billiards.stability_compiled import perturb
+        from bpb_tasks.billiards.stability_draws import seed_key
 
-        pos, vel = perturb(centres, velocities, angles, delta, cue, kick)
+        pos, vel = perturb(seed_key(seed), samples, centres, velocities, delta, cue, kick)
         return ids, pos, vel
+    rng = random.Random(seed)
+    count = samples * (len(balls) + 1)
+    draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row
+    angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
+    angles *= 2 * math.pi
     pos = centres[None] + delta * np.stack(
         (np.cos(angles[:, :-1]), np.sin(angles[:, :-1])), axis=-1
     )

@@ -5,8 +5,9 @@
   final state into the tally at once: label bit masks per copy (cue contacts, cue walls,
   pocketed balls; one bit per ball index or wall), XORed against the nominal masks, and the
   largest distance of a ball from its nominal final position. No per-copy table is built.
-* :func:`perturb` builds the perturbed copies' positions and velocities from their random
-  angles (:func:`~bpb_tasks.billiards.stability.perturbation_arrays` without the numpy calls).
+* :func:`perturb` draws the perturbed copies' random angles and builds their positions and
+  velocities (:func:`~bpb_tasks.billiards.stability.perturbation_arrays` without a Python call
+  per draw or the numpy calls).
 * :func:`horizon_event_gap` is the horizon gap of
   :mod:`bpb_tasks.billiards.stability_margins` read off a kernel run's event rows.
 * :func:`pair_margin_arrays` is the near-miss margin and the overlap of
@@ -20,9 +21,12 @@ import math
 
 import numpy as np
 
+from bpb_tasks.billiards.stability_draws import random_draws
 from bpb_tasks.simulators.analytic.kernel import run_rows
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, STOP, WALL, Arr
 from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
+
+TWO_PI = 2 * math.pi
 
 
 @jit
@@ -88,23 +92,29 @@ def tally_copies(
 
 @jit
 def perturb(
-    centres: Arr, velocities: Arr, angles: Arr, delta: float, cue: int, kick: float
+    key: Arr, samples: int, centres: Arr, velocities: Arr, delta: float, cue: int, kick: float
 ) -> tuple[Arr, Arr]:
     """The ``(samples, n, 2)`` positions and velocities of the copies of ``n`` balls at
-    ``centres`` moving at ``velocities``: ball ``j`` of copy ``k`` moved by ``delta`` at angle
-    ``angles[k, j]``, the cue ball (index ``cue``, -1 without one) kicked by ``kick`` at angle
-    ``angles[k, n]``. The numpy operations of ``perturbation_arrays`` element by element."""
-    samples, n = angles.shape[0], centres.shape[0]
+    ``centres`` moving at ``velocities``, from the draws of a generator seeded with ``key``
+    (:func:`~bpb_tasks.billiards.stability_draws.random_draws`), ``n + 1`` per copy: ball ``j``
+    moved by ``delta`` at angle ``2 pi`` times draw ``j``, the cue ball (index ``cue``, -1
+    without one) kicked by ``kick`` at angle ``2 pi`` times draw ``n``. The numpy operations of
+    ``perturbation_arrays`` element by element."""
+    n = centres.shape[0]
+    angles = random_draws(key, samples * (n + 1))
     pos = np.empty((samples, n, 2))
     vel = np.empty((samples, n, 2))
     for k in range(samples):
+        row = k * (n + 1)
         for j in range(n):
-            pos[k, j, 0] = centres[j, 0] + delta * np.cos(angles[k, j])
-            pos[k, j, 1] = centres[j, 1] + delta * np.sin(angles[k, j])
+            angle = angles[row + j] * TWO_PI
+            pos[k, j, 0] = centres[j, 0] + delta * np.cos(angle)
+            pos[k, j, 1] = centres[j, 1] + delta * np.sin(angle)
             vel[k, j, 0], vel[k, j, 1] = velocities[j, 0], velocities[j, 1]
         if cue >= 0:
-            vel[k, cue, 0] += kick * np.cos(angles[k, n])
-            vel[k, cue, 1] += kick * np.sin(angles[k, n])
+            angle = angles[row + n] * TWO_PI
+            vel[k, cue, 0] += kick * np.cos(angle)
+            vel[k, cue, 1] += kick * np.sin(angle)
     return pos, vel
 
 

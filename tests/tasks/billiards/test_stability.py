@@ -4,6 +4,7 @@ their upper bound, the Q3 spread, the pocket-edge margin and the reasons reports
 from __future__ import annotations
 
 import math
+import random
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from bpb_tasks.billiards.stability_batch import (
     kernel_pair_margins,
     kernel_tally,
 )
+from bpb_tasks.billiards.stability_draws import random_draws, seed_key
 from bpb_tasks.billiards.stability_margins import horizon_gap, near_miss_gap, pair_margins
 from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
@@ -73,6 +75,15 @@ def test_compiled_perturbations_are_the_numpy_ones_to_the_bit() -> None:
         fast_ids, fast_pos, fast_vel = perturbation_arrays(s, 1e-4, 64, compiled=True)
         assert fast_ids == ids and fast_pos.shape == pos.shape == (64, len(ids), 2)
         assert pos.tobytes() == fast_pos.tobytes() and vel.tobytes() == fast_vel.tobytes()
+
+
+def test_compiled_draws_are_python_randoms_to_the_bit() -> None:
+    """The compiled Mersenne Twister seeded from a string gives random.Random(string)'s
+    floats exactly, across its 624-word blocks and for keys longer than a block."""
+    for text in ("stability:h3_0042", "check:h1_0000", "", "x" * 3000):
+        rng = random.Random(text)
+        expected = [rng.random() for _ in range(1500)]
+        assert random_draws(seed_key(text), 1500).tolist() == expected
 
 
 def test_grazing_contact_flips_q1_often() -> None:
