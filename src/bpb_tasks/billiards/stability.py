@@ -39,7 +39,7 @@ from bpb_tasks.billiards.stability_batch import (
     KERNEL_MAX_BALLS,
     Tally,
     kernel_horizon_gap,
-    kernel_pair_margins,
+    kernel_margins,
     kernel_tally,
 )
 from bpb_tasks.billiards.stability_margins import (
@@ -76,7 +76,7 @@ def annotate(
     tally = _tally(scene, base, delta, samples, simulator)
     counts, any_flip, flips, spread = tally.counts, tally.any_flip, tally.flips, tally.spread
     radius = scene.physics.ball_radius
-    gap, overlap = _pair_margins(base, radius, simulator)
+    gap, overlap, pocket = _margins(scene, base, simulator)
     return Stability(
         stable=any_flip == 0 and spread <= radius / 2 and overlap is None,
         delta=delta,
@@ -90,7 +90,7 @@ def annotate(
         min_graze_cos=min_graze_cos(base),
         min_event_gap=min_event_gap(base),
         horizon_gap=_horizon_gap(scene, base.horizon, simulator),
-        pocket_gap=pocket_gap(base, scene.pockets.centers, scene.pockets.radius),
+        pocket_gap=pocket,
         overlap=overlap,
         flips=sorted(flips, key=_flip_order),
     )
@@ -139,17 +139,20 @@ def _budgeted(simulator: Simulator, nominal_events: int) -> Simulator:
     return simulator
 
 
-def _pair_margins(
-    base: Outcome, radius: float, simulator: Simulator
-) -> tuple[float | None, float | None]:
-    """The near-miss gap and the overlap (:func:`pair_margins`), in compiled code when
-    ``simulator`` runs the kernel. The overlap is the analytic engine's only: a simulator that
-    steps time (pymunk) lets touching balls sink into each other by design (up to about 1 mm at
-    its default step), so there it is ``None``, not a finding."""
-    gap, overlap = (
-        kernel_pair_margins(base, radius) if _runs_kernel(simulator) else pair_margins(base, radius)
-    )
-    return gap, overlap if isinstance(simulator, AnalyticSimulator) else None
+def _margins(
+    scene: Scene, base: Outcome, simulator: Simulator
+) -> tuple[float | None, float | None, float | None]:
+    """The near-miss gap and the overlap (:func:`pair_margins`) and the :func:`pocket_gap`, in
+    compiled code when ``simulator`` runs the kernel. The overlap is the analytic engine's only:
+    a simulator that steps time (pymunk) lets touching balls sink into each other by design (up
+    to about 1 mm at its default step), so there it is ``None``, not a finding."""
+    radius, pockets = scene.physics.ball_radius, scene.pockets
+    if _runs_kernel(simulator):
+        gap, overlap, pocket = kernel_margins(base, radius, pockets.centers, pockets.radius)
+    else:
+        gap, overlap = pair_margins(base, radius)
+        pocket = pocket_gap(base, pockets.centers, pockets.radius)
+    return gap, overlap if isinstance(simulator, AnalyticSimulator) else None, pocket
 
 
 def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
@@ -224,7 +227,7 @@ def perturbation_arrays(
 ) -> tuple[list[int], np.ndarray, np.ndarray]:
     """Ball ids and the ``(samples, n, 2)`` positions and velocities of the perturbed copies
     (drawn from a generator seeded by ``stream`` and the scene id); ``compiled`` builds the
-    arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_compiled.perturb`, the
+    arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_draws.perturb`, the
     same values to the bit; a test compares) instead of a Python call per draw and numpy
     operations."""
     balls = sorted(scene.balls, key=lambda b: b.id)
@@ -235,8 +238,7 @@ def perturbation_arrays(
     velocities = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
     seed = f"{stream}:{scene.scene_id}"
     if compiled:
-        from bpb_tasks.billiards.stability_compiled import perturb
-        from bpb_tasks.billiards.stability_draws import seed_key
+        from bpb_tasks.billiards.stability_draws import perturb, seed_key
 
         pos, vel = perturb(seed_key(seed), samples, centres, velocities, delta, cue, kick)
         return ids, pos, vel

@@ -10,11 +10,13 @@ built. It gives the same tally as running each copy through
 :func:`kernel_horizon_gap` is
 :func:`~bpb_tasks.billiards.stability_margins.horizon_gap` from the kernel's event rows and
 :func:`kernel_pair_margins` gives the near-miss margin and the overlap to the bit (a test
-compares).
+compares), :func:`kernel_margins` those and the pocket-edge margin.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -121,10 +123,58 @@ def kernel_pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, 
     compiled code (the same values to the bit; a test compares)."""
     from bpb_tasks.billiards.stability_compiled import pair_margin_arrays
 
+    ids, rows, touched, moving = _segment_arrays(outcome)
+    gap, found, deepest, overlapped = pair_margin_arrays(
+        rows, len(ids), touched, moving, radius, TOUCH_TOLERANCE
+    )
+    return (float(gap) if found else None), (2 * radius - float(deepest) if overlapped else None)
+
+
+def kernel_margins(
+    outcome: Outcome, radius: float, centers: Sequence[tuple[float, float]], pocket_radius: float
+) -> tuple[float | None, float | None, float | None]:
+    """:func:`kernel_pair_margins` and
+    :func:`~bpb_tasks.billiards.stability_margins.pocket_gap` in one compiled call (the same
+    values to the bit; a test compares): only the final ``math.hypot`` of each pocket pass runs
+    in Python, as numba's differs from it in the last bit."""
+    from bpb_tasks.billiards.stability_compiled import margin_arrays
+
+    ids, rows, touched, moving = _segment_arrays(outcome)
+    pocketed = np.array([outcome.positions.get(i, ()) is None for i in ids], dtype=np.bool_)
+    gap, found, deepest, overlapped, passes, entering = margin_arrays(
+        rows,
+        len(ids),
+        touched,
+        moving,
+        radius,
+        TOUCH_TOLERANCE,
+        pocketed,
+        np.array(centers, dtype=float).reshape(-1, 2),
+    )
+    ex, ey = passes.T.tolist()
+    gaps = [h - pocket_radius for h in map(math.hypot, ex, ey)]
+    for x1, y1, *offsets in entering.tolist():
+        entered = min(range(len(centers)), key=lambda k: math.dist((x1, y1), centers[k]))
+        gaps.extend(
+            math.hypot(offsets[2 * k], offsets[2 * k + 1]) - pocket_radius
+            for k in range(len(centers))
+            if k != entered
+        )
+    return (
+        float(gap) if found else None,
+        2 * radius - float(deepest) if overlapped else None,
+        min((g for g in gaps if g > 0), default=None),
+    )
+
+
+def _segment_arrays(outcome: Outcome) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
+    """Ball ids (sorted), segment rows, touched pairs and moving balls of ``outcome`` as
+    :func:`~bpb_tasks.billiards.stability_compiled.margin_arrays` takes them (each row ending
+    in the segment's speed by Python's ``math.hypot``)."""
     ids = sorted(outcome.segments)
     index = {ball: k for k, ball in enumerate(ids)}
     rows = [
-        (index[ball], s.t0, s.t1, s.pos[0], s.pos[1], s.vel[0], s.vel[1], s.decel)
+        (index[ball], s.t0, s.t1, *s.pos, *s.vel, s.decel, math.hypot(*s.vel))
         for ball in ids
         for s in outcome.segments[ball]
     ]
@@ -136,12 +186,4 @@ def kernel_pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, 
     moving = np.array(
         [any(s.vel != (0.0, 0.0) for s in outcome.segments[ball]) for ball in ids], dtype=np.bool_
     )
-    gap, found, deepest, overlapped = pair_margin_arrays(
-        np.array(rows, dtype=float).reshape(-1, 8),
-        len(ids),
-        touched,
-        moving,
-        radius,
-        TOUCH_TOLERANCE,
-    )
-    return (float(gap) if found else None), (2 * radius - float(deepest) if overlapped else None)
+    return ids, np.array(rows, dtype=float).reshape(-1, 9), touched, moving

@@ -5,14 +5,12 @@
   final state into the tally at once: label bit masks per copy (cue contacts, cue walls,
   pocketed balls; one bit per ball index or wall), XORed against the nominal masks, and the
   largest distance of a ball from its nominal final position. No per-copy table is built.
-* :func:`perturb` draws the perturbed copies' random angles and builds their positions and
-  velocities (:func:`~bpb_tasks.billiards.stability.perturbation_arrays` without a Python call
-  per draw or the numpy calls).
 * :func:`horizon_event_gap` is the horizon gap of
   :mod:`bpb_tasks.billiards.stability_margins` read off a kernel run's event rows.
 * :func:`pair_margin_arrays` is the near-miss margin and the overlap of
   :mod:`bpb_tasks.billiards.stability_margins` (the reference, ``pair_margins``) with the same
-  float64 operations in the same order.
+  float64 operations in the same order; :func:`margin_arrays` adds the pocket-edge passes
+  (:func:`pocket_offsets`).
 """
 
 from __future__ import annotations
@@ -21,12 +19,9 @@ import math
 
 import numpy as np
 
-from bpb_tasks.billiards.stability_draws import random_draws
 from bpb_tasks.simulators.analytic.kernel import run_rows
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, STOP, WALL, Arr
 from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
-
-TWO_PI = 2 * math.pi
 
 
 @jit
@@ -91,34 +86,6 @@ def tally_copies(
 
 
 @jit
-def perturb(
-    key: Arr, samples: int, centres: Arr, velocities: Arr, delta: float, cue: int, kick: float
-) -> tuple[Arr, Arr]:
-    """The ``(samples, n, 2)`` positions and velocities of the copies of ``n`` balls at
-    ``centres`` moving at ``velocities``, from the draws of a generator seeded with ``key``
-    (:func:`~bpb_tasks.billiards.stability_draws.random_draws`), ``n + 1`` per copy: ball ``j``
-    moved by ``delta`` at angle ``2 pi`` times draw ``j``, the cue ball (index ``cue``, -1
-    without one) kicked by ``kick`` at angle ``2 pi`` times draw ``n``. The numpy operations of
-    ``perturbation_arrays`` element by element."""
-    n = centres.shape[0]
-    angles = random_draws(key, samples * (n + 1))
-    pos = np.empty((samples, n, 2))
-    vel = np.empty((samples, n, 2))
-    for k in range(samples):
-        row = k * (n + 1)
-        for j in range(n):
-            angle = angles[row + j] * TWO_PI
-            pos[k, j, 0] = centres[j, 0] + delta * np.cos(angle)
-            pos[k, j, 1] = centres[j, 1] + delta * np.sin(angle)
-            vel[k, j, 0], vel[k, j, 1] = velocities[j, 0], velocities[j, 1]
-        if cue >= 0:
-            angle = angles[row + n] * TWO_PI
-            vel[k, cue, 0] += kick * np.cos(angle)
-            vel[k, cue, 1] += kick * np.sin(angle)
-    return pos, vel
-
-
-@jit
 def horizon_event_gap(
     pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, end: float, max_events: int
 ) -> tuple[float, bool, int]:
@@ -143,12 +110,86 @@ def pair_margin_arrays(
     """:func:`~bpb_tasks.billiards.stability_margins.pair_margins` on arrays, with the same
     float64 operations in the same order (same result to the bit).
 
-    ``rows`` holds every segment as ``(ball, t0, t1, x, y, vx, vy, decel)``, balls numbered
+    ``rows`` holds every segment as ``(ball, t0, t1, x, y, vx, vy, decel, ...)``, balls numbered
     ``0..balls-1`` in id order and each ball's segments in time order; ``touched[a, b]`` marks
     pairs with a ball-ball event and ``moving[a]`` balls with a segment of non-zero velocity.
     Returns the near-miss gap and whether there is one, then the closest distance of the deepest
     overlap and whether it is under ``2 * radius - tolerance``.
     """
+    pieces, first = _ball_pieces(rows, balls, False)
+    return _pair_margins(pieces, first, touched, moving, radius, tolerance)
+
+
+@jit
+def margin_arrays(
+    rows: Arr,
+    balls: int,
+    touched: Arr,
+    moving: Arr,
+    radius: float,
+    tolerance: float,
+    pocketed: Arr,
+    centers: Arr,
+) -> tuple[float, bool, float, bool, Arr, Arr]:
+    """:func:`pair_margin_arrays` and :func:`pocket_offsets` (``pocketed[a]``: ball ``a`` ends
+    in a pocket; ``centers``: the pockets) in one call. The pocket passes take each segment's
+    speed from column 8 of ``rows`` (Python's hypot, as the reference ``pocket_gap``); the
+    pair margins keep numba's, as :func:`pair_margin_arrays` always has."""
+    pieces, first = _ball_pieces(rows, balls, False)
+    best, found, deepest, overlapped = _pair_margins(
+        pieces, first, touched, moving, radius, tolerance
+    )
+    pieces, first = _ball_pieces(rows, balls, True)
+    passes, entering = pocket_offsets(pieces, first, pocketed, centers)
+    return best, found, deepest, overlapped, passes, entering
+
+
+@jit
+def pocket_offsets(pieces: Arr, first: Arr, pocketed: Arr, centers: Arr) -> tuple[Arr, Arr]:
+    """``pocket_gap`` of :mod:`bpb_tasks.billiards.stability_margins` up to its ``math.hypot``
+    (which numba does not reproduce to the bit): per moving piece and pocket, the offset
+    ``(ex, ey)`` of the pocket centre from the nearest point of the piece's path. ``passes``
+    holds them for every piece but the last of a pocketed ball; ``entering`` holds a row
+    ``(x1, y1, ex_0, ey_0, ex_1, ...)`` for each of those, ``x1, y1`` its end (the reference
+    leaves out the pocket nearest to it)."""
+    balls, m = first.shape[0] - 1, centers.shape[0]
+    passes = np.empty((first[balls] * m, 2))
+    entering = np.empty((balls, 2 + 2 * m))
+    count = ends = 0
+    for b in range(balls):
+        for j in range(first[b], first[b + 1]):
+            p = pieces[j]
+            if p[4] == 0 and p[5] == 0:
+                continue
+            x0, y0, x1, y1 = _at_x(p, p[0]), _at_y(p, p[0]), _at_x(p, p[1]), _at_y(p, p[1])
+            last = pocketed[b] and j == first[b + 1] - 1
+            if last:
+                entering[ends, 0], entering[ends, 1] = x1, y1
+            for k in range(m):
+                ex, ey = _offset(centers[k, 0] - x0, centers[k, 1] - y0, x1 - x0, y1 - y0)
+                if last:
+                    entering[ends, 2 + 2 * k], entering[ends, 3 + 2 * k] = ex, ey
+                else:
+                    passes[count, 0], passes[count, 1] = ex, ey
+                    count += 1
+            ends += last
+    return passes[:count], entering[:ends]
+
+
+@jit
+def _offset(px: float, py: float, dx: float, dy: float) -> tuple[float, float]:
+    """``_segment_distance`` of the reference before its hypot."""
+    length2 = dx * dx + dy * dy
+    k = 0.0 if length2 == 0 else _min(_max((px * dx + py * dy) / length2, 0.0), 1.0)
+    return px - k * dx, py - k * dy
+
+
+@jit
+def _ball_pieces(rows: Arr, balls: int, given_speeds: bool) -> tuple[Arr, Arr]:
+    """The pieces of every ball's segments (``_add_pieces``), ball ``b``'s at
+    ``first[b]:first[b + 1]``; a segment's speed is its row's column 8 when ``given_speeds``
+    (Python's ``math.hypot``, which numba's differs from in the last bit now and then), else
+    numba's hypot of its velocity."""
     pieces = np.empty((2 * rows.shape[0], 12))
     first = np.zeros(balls + 1, dtype=np.int64)
     count = 0
@@ -156,8 +197,18 @@ def pair_margin_arrays(
         first[b] = count
         for r in range(rows.shape[0]):
             if int(rows[r, 0]) == b:
-                count = _add_pieces(pieces, count, rows[r])
+                row = rows[r]
+                speed = row[8] if given_speeds else math.hypot(row[5], row[6])
+                count = _add_pieces(pieces, count, row, speed)
     first[balls] = count
+    return pieces, first
+
+
+@jit
+def _pair_margins(
+    pieces: Arr, first: Arr, touched: Arr, moving: Arr, radius: float, tolerance: float
+) -> tuple[float, bool, float, bool]:
+    balls = first.shape[0] - 1
     best = 0.0
     found = False
     deepest = 2 * radius - tolerance
@@ -181,11 +232,10 @@ def pair_margin_arrays(
 
 
 @jit
-def _add_pieces(pieces: Arr, count: int, row: Arr) -> int:
+def _add_pieces(pieces: Arr, count: int, row: Arr, speed: float) -> int:
     """Append a segment's pieces ``(t0, t1, x, y, vx, vy, ax, ay, box)`` (``_pieces`` and
-    ``_box`` of the reference); returns the new count."""
+    ``_box`` of the reference) given its ``speed``; returns the new count."""
     t0, t1, x, y, vx, vy, decel = row[1], row[2], row[3], row[4], row[5], row[6], row[7]
-    speed = math.hypot(vx, vy)
     if speed == 0 or decel == 0:
         _piece(pieces, count, t0, t1, x, y, vx, vy, 0.0, 0.0)
         return count + 1

@@ -1,5 +1,7 @@
-"""The stability perturbations' random numbers in compiled code: the draws of
-``random.Random(text).random()``, to the bit, without a Python call per draw.
+"""The stability perturbations in compiled code: the draws of ``random.Random(text).random()``,
+to the bit, without a Python call per draw, and the perturbed copies built from them
+(:func:`perturb`, :func:`~bpb_tasks.billiards.stability.perturbation_arrays` without the numpy
+calls).
 
 CPython seeds its Mersenne Twister (MT19937) from a string by ``init_by_array`` on the 32-bit
 words of ``int.from_bytes(text + sha512(text))`` and builds each float from two 32-bit outputs
@@ -12,6 +14,7 @@ product overflows.
 from __future__ import annotations
 
 import hashlib
+import math
 
 import numpy as np
 
@@ -20,6 +23,7 @@ from bpb_tasks.simulators.analytic.kernel_roots import jit
 
 N, M = 624, 397
 MASK = 0xFFFFFFFF
+TWO_PI = 2 * math.pi
 
 
 def seed_key(text: str) -> np.ndarray:
@@ -29,6 +33,34 @@ def seed_key(text: str) -> np.ndarray:
     number = int.from_bytes(data + hashlib.sha512(data).digest(), "big")
     words = (number.bit_length() + 31) // 32 or 1
     return np.frombuffer(number.to_bytes(4 * words, "little"), dtype="<u4").astype(np.int64)
+
+
+@jit
+def perturb(
+    key: Arr, samples: int, centres: Arr, velocities: Arr, delta: float, cue: int, kick: float
+) -> tuple[Arr, Arr]:
+    """The ``(samples, n, 2)`` positions and velocities of the copies of ``n`` balls at
+    ``centres`` moving at ``velocities``, from the draws of a generator seeded with ``key``
+    (:func:`~bpb_tasks.billiards.stability_draws.random_draws`), ``n + 1`` per copy: ball ``j``
+    moved by ``delta`` at angle ``2 pi`` times draw ``j``, the cue ball (index ``cue``, -1
+    without one) kicked by ``kick`` at angle ``2 pi`` times draw ``n``. The numpy operations of
+    ``perturbation_arrays`` element by element."""
+    n = centres.shape[0]
+    angles = random_draws(key, samples * (n + 1))
+    pos = np.empty((samples, n, 2))
+    vel = np.empty((samples, n, 2))
+    for k in range(samples):
+        row = k * (n + 1)
+        for j in range(n):
+            angle = angles[row + j] * TWO_PI
+            pos[k, j, 0] = centres[j, 0] + delta * np.cos(angle)
+            pos[k, j, 1] = centres[j, 1] + delta * np.sin(angle)
+            vel[k, j, 0], vel[k, j, 1] = velocities[j, 0], velocities[j, 1]
+        if cue >= 0:
+            angle = angles[row + n] * TWO_PI
+            vel[k, cue, 0] += kick * np.cos(angle)
+            vel[k, cue, 1] += kick * np.sin(angle)
+    return pos, vel
 
 
 @jit

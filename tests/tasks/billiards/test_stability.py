@@ -14,6 +14,7 @@ from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
+from bpb_tasks.billiards.sampler import scene_rng
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.stability import (
     annotate,
@@ -25,11 +26,17 @@ from bpb_tasks.billiards.stability import (
 )
 from bpb_tasks.billiards.stability_batch import (
     kernel_horizon_gap,
+    kernel_margins,
     kernel_pair_margins,
     kernel_tally,
 )
 from bpb_tasks.billiards.stability_draws import random_draws, seed_key
-from bpb_tasks.billiards.stability_margins import horizon_gap, near_miss_gap, pair_margins
+from bpb_tasks.billiards.stability_margins import (
+    horizon_gap,
+    near_miss_gap,
+    pair_margins,
+    pocket_gap,
+)
 from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
@@ -159,6 +166,31 @@ def test_compiled_horizon_gap_is_the_reference_to_the_bit() -> None:
     bouncing = scene([(0.5, 0.5, 3.0, 0.0)], mu=0.0, horizon=5)
     with pytest.raises(SimulationError, match=r"more than 3 events before t=6\.0"):
         kernel_horizon_gap(bouncing, 5.0, 3)
+
+
+def test_compiled_margins_with_the_pocket_gap_are_the_reference_to_the_bit() -> None:
+    """kernel_margins computes near-miss gap, overlap and pocket gap in one compiled call (the
+    pocket passes' hypot in Python); each must be the reference's exactly, including scenes
+    where balls end in a pocket (its last piece is not measured against that pocket) and
+    generated scene h4_0853 of seed 7, where numba's hypot of a segment's speed is one bit off
+    Python's (the pocket gap differed in its last digit)."""
+    family, cfg = BilliardsFamily(), DatasetConfig()
+    scenes = [family.sample(scene_rng(7, 4.0, 853), 4.0, 853, cfg)]
+    for i in range(150):
+        data = random_scene(9, i, balls=2 + i % 8, speeds=(0.3, 4.0)).model_dump()
+        data["physics"]["mu"], data["horizon"] = (0.002, 0.02, 0.0)[i % 3], 3.0
+        scenes.append(Scene.model_validate(data))
+    entered = 0
+    for s in scenes:
+        out = PYTHON.run(s)
+        radius, pockets = s.physics.ball_radius, s.pockets
+        expected = (*pair_margins(out, radius), pocket_gap(out, pockets.centers, pockets.radius))
+        got = kernel_margins(out, radius, pockets.centers, pockets.radius)
+        assert [None if v is None else v.hex() for v in got] == [
+            None if v is None else v.hex() for v in expected
+        ]
+        entered += None in out.positions.values()
+    assert entered > 10
 
 
 def _same_margins(out: Outcome, radius: float) -> tuple[float | None, float | None]:
