@@ -79,9 +79,11 @@ def kernel_tally(
     )
     tally = Tally(counts={}, any_flip=int(any_flip), spread=float(spread))
     tally.add_unfinished(int(unfinished))
-    for (group, prefix, names), count, union in zip(_groups(ids), counts, unions, strict=True):
-        tally.counts[group] = int(count)
-        tally.flips.update(f"{prefix}:{names[j]}" for j in range(len(names)) if union >> j & 1)
+    groups = zip(_groups(ids), counts.tolist(), unions.tolist(), strict=True)
+    for (group, prefix, names), count, union in groups:  # Python ints: numpy scalars are slow
+        tally.counts[group] = count
+        if union:
+            tally.flips.update(f"{prefix}:{names[j]}" for j in range(len(names)) if union >> j & 1)
     return tally
 
 
