@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from bpb_tasks.simulators.analytic.kernel import run_rows
+from bpb_tasks.simulators.analytic.kernel import buffers, run_into, run_rows
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, STOP, WALL, Arr
 from bpb_tasks.simulators.analytic.kernel_roots import Poly, critical_points, horner, jit
 
@@ -54,9 +54,11 @@ def tally_copies(
     any_flip = 0
     spread = 0.0
     unfinished = 0
+    work = buffers(n)  # one set of working arrays for every copy
+    events, final = work[4], work[6]
     for c in range(copies):
         a, b = c * n, (c + 1) * n
-        events, _, final, status = run_rows(pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
+        status = run_into(work, pos[a:b], vel[a:b], prm, pockets, horizon, max_events)
         if status != 0:
             unfinished += 1
             continue

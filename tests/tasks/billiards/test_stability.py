@@ -286,6 +286,27 @@ def test_a_copy_over_the_event_budget_counts_unfinished_and_the_tally_goes_on() 
     assert tally.spread == pytest.approx(0.02**2 / (2 * 0.002 * 9.8) - 0.01**2 / (2 * 0.002 * 9.8))
 
 
+def test_copies_tallied_in_one_set_of_buffers_tally_as_when_run_alone() -> None:
+    """tally_copies runs every copy in one set of working arrays and lists; whatever the copy
+    before left there (an unfinished run with events still queued, pocketed balls, another
+    number of events) must not change the next copy's tally."""
+    scenes = [random_scene(6, i, balls=5, speeds=(0.3, 6.0)) for i in range(24)]
+    s = scenes[0]
+    base = PYTHON.run(s)
+    arrays = [perturbation_arrays(other, 0.0, 1) for other in scenes]
+    ids = arrays[0][0]
+    pos = np.concatenate([a[1] for a in arrays])
+    vel = np.concatenate([a[2] for a in arrays])
+    together = kernel_tally(s, base, ids, pos, vel, 6)
+    alone = [kernel_tally(s, base, ids, p[None], v[None], 6) for p, v in zip(pos, vel, strict=True)]
+    assert 0 < together.unfinished < len(scenes)
+    assert together.unfinished == sum(t.unfinished for t in alone)
+    assert together.any_flip == sum(t.any_flip for t in alone)
+    assert together.counts == {g: sum(t.counts[g] for t in alone) for g in together.counts}
+    assert together.flips == set().union(*(t.flips for t in alone))
+    assert together.spread == max(t.spread for t in alone)
+
+
 def test_a_copy_chattering_in_a_pressing_contact_makes_the_scene_unstable_not_an_error() -> None:
     """The rack break of the dataset card's known limitation: one perturbed copy squeezes a
     ball between two others at ever shorter intervals (it would run to the 100,000-event

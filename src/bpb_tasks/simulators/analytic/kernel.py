@@ -186,28 +186,54 @@ def run_rows(
 ) -> tuple[Any, Any, Arr, int]:
     """:func:`run_arrays` with the events and pieces as the lists of row tuples the loop
     appends (for compiled callers that read them once)."""
+    work = buffers(pos.shape[0])
+    status = run_into(work, pos, vel, prm, pockets, horizon, max_events)
+    return work[4], work[5], work[6], status
+
+
+@jit
+def buffers(n: int) -> tuple[Arr, Arr, Arr, Any, Any, Any, Arr]:
+    """The working arrays and lists of a run of ``n`` balls: ``(st, iv, ended, queue, events,
+    pieces, final)``; :func:`run_into` resets them, so many runs can share one set."""
+    queue = [(0.0, 0, 0, 0, 0, 0)]
+    events = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
+    pieces = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
+    st, iv, ended = np.zeros((n, 8)), np.zeros((n, 2), dtype=np.int64), np.zeros(n)
+    return st, iv, ended, queue, events, pieces, np.zeros((n, 4))
+
+
+@jit
+def run_into(
+    work: tuple[Arr, Arr, Arr, Any, Any, Any, Arr],
+    pos: Arr,
+    vel: Arr,
+    prm: Arr,
+    pockets: Arr,
+    horizon: float,
+    max_events: int,
+) -> int:
+    """Run the balls ``pos``/``vel`` in the :func:`buffers` ``work``, leaving the events,
+    pieces and final rows there (as :func:`run_rows` returns them); returns the status."""
+    st, iv, ended, queue, events, pieces, final = work
     n = pos.shape[0]
-    st = np.zeros((n, 8))
+    st[:] = 0.0
     st[:, 0] = pos[:, 0]
     st[:, 1] = pos[:, 1]
-    iv = np.zeros((n, 2), dtype=np.int64)
+    iv[:] = 0
     iv[:, ALIVE] = 1
-    ended = np.full(n, horizon)
-    queue = [(0.0, 0, 0, 0, 0, 0)]
-    queue.pop()
-    events = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
-    events.pop()
-    pieces = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
-    pieces.pop()
+    ended[:] = horizon
+    queue.clear()
+    events.clear()
+    pieces.clear()
     _start(st, iv, prm, pockets, vel, queue, pieces)
     status = _loop(st, iv, prm, pockets, queue, events, pieces, ended, horizon, max_events)
-    final = np.zeros((n, 4))
+    final[:] = 0.0
     for i in range(n):
         if iv[i, ALIVE] == 1:
             x, y, _ = state(st, prm, i, horizon)
             final[i, 0], final[i, 1], final[i, 2] = x, y, 1.0
         final[i, 3] = ended[i]
-    return events, pieces, final, status
+    return status
 
 
 @jit
