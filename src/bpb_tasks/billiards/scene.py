@@ -122,31 +122,32 @@ def check_geometry(scene: Scene) -> None:
     """Raise ValueError naming the ball when there is no cue ball (id 0), ids repeat, a centre
     is off the table or within a pocket circle (tangency included: such a ball would be pocketed
     at t = 0), or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
-    radius = scene.physics.ball_radius
-    if all(ball.id != 0 for ball in scene.balls):
+    radius, balls = scene.physics.ball_radius, scene.balls
+    if all(ball.id != 0 for ball in balls):
         raise ValueError("balls: no cue ball (a ball with id 0)")
+    x_lo, x_hi, y_lo, y_hi = table_box(scene.table, radius)
+    lo_x, hi_x = x_lo - TOUCH_TOLERANCE, x_hi + TOUCH_TOLERANCE
+    lo_y, hi_y = y_lo - TOUCH_TOLERANCE, y_hi + TOUCH_TOLERANCE
+    centers, pocket_radius = scene.pockets.centers, scene.pockets.radius
     seen: set[int] = set()
-    for i, ball in enumerate(scene.balls):
+    for i, ball in enumerate(balls):
         if ball.id in seen:
             raise ValueError(f"balls[{i}].id: duplicate ball id {ball.id}")
         seen.add(ball.id)
-        x, y = ball.pos
-        lo_x, hi_x, lo_y, hi_y = table_box(scene.table, radius)
-        if not (
-            lo_x - TOUCH_TOLERANCE <= x <= hi_x + TOUCH_TOLERANCE
-            and lo_y - TOUCH_TOLERANCE <= y <= hi_y + TOUCH_TOLERANCE
-        ):
-            raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} is off the table")
-        for k, centre in enumerate(scene.pockets.centers):
-            if math.dist(ball.pos, centre) <= scene.pockets.radius:
+        x, y = pos = ball.pos
+        if not (lo_x <= x <= hi_x and lo_y <= y <= hi_y):
+            raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(pos)} is off the table")
+        for k, centre in enumerate(centers):
+            if math.dist(pos, centre) <= pocket_radius:
                 raise ValueError(
-                    f"balls[{i}].pos: ball {ball.id} at {list(ball.pos)} starts inside pocket {k}"
+                    f"balls[{i}].pos: ball {ball.id} at {list(pos)} starts inside pocket {k}"
                 )
     min_gap = 2 * radius - TOUCH_TOLERANCE
-    for i, a in enumerate(scene.balls):
-        for b in scene.balls[i + 1 :]:
-            if math.dist(a.pos, b.pos) < min_gap:
-                raise ValueError(f"balls: ball {a.id} and ball {b.id} overlap")
+    places = [ball.pos for ball in balls]
+    for i, a in enumerate(places):
+        for j in range(i + 1, len(places)):
+            if math.dist(a, places[j]) < min_gap:
+                raise ValueError(f"balls: ball {balls[i].id} and ball {balls[j].id} overlap")
 
 
 def table_box(table: Table, radius: float) -> tuple[float, float, float, float]:
