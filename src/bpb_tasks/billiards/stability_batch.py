@@ -138,7 +138,7 @@ def kernel_margins(
     """:func:`kernel_pair_margins` and
     :func:`~bpb_tasks.billiards.stability_margins.pocket_gap` in one compiled call (the same
     values to the bit; a test compares): only the final ``math.hypot`` of each pocket pass runs
-    in Python, as numba's differs from it in the last bit."""
+    in Python, as numba's differs from it in the last bit now and then."""
     from bpb_tasks.billiards.stability_compiled import margin_arrays
 
     ids, rows, touched, moving = _segment_arrays(outcome)
