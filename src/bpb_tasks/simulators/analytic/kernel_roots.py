@@ -9,9 +9,13 @@ Python (slowly), which keeps the module importable and testable.
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import importlib
+import inspect
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -29,11 +33,77 @@ HAVE_NUMBA = _numba is not None
 
 
 def jit(func: F) -> F:
-    """Compile ``func`` with numba (cached on disk) when it is installed; else return it."""
+    """Compile ``func`` with numba (cached on disk) when it is installed; else return it.
+
+    numba checks a cached function against its own file only, yet the cached machine code
+    holds every compiled function it calls, from other files too: after an edit or upgrade of
+    a callee's file alone (``git pull`` on an editable install), the caller would go on running
+    the old callee. The cache of a function made here is therefore also stamped with
+    :func:`kernel_sources_stamp`, so a change to any compiled module it may call recompiles it.
+    """
     if _numba is None:
         return func
-    compiled: F = _numba.njit(cache=True)(func)
-    return compiled
+    compiled: Any = _numba.njit(cache=True)(func)
+    cache_class = _stamped_cache_class()
+    if cache_class is not None:
+        compiled._cache = cache_class(func)  # what Dispatcher.enable_caching sets, stamped
+    return compiled  # type: ignore[no-any-return]
+
+
+JIT_MARK = "@jit"
+"""How a module's compiled functions are marked; the modules holding it are stamped."""
+
+
+@functools.cache
+def _folder_stamp(folder: Path) -> bytes:
+    """SHA-256 over the names and contents of ``folder``'s Python files with compiled
+    functions (those holding :data:`JIT_MARK`), in name order."""
+    digest = hashlib.sha256()
+    for path in sorted(folder.glob("*.py")):
+        data = path.read_bytes()
+        if JIT_MARK.encode() in data:
+            digest.update(path.name.encode() + b"\0" + hashlib.sha256(data).digest())
+    return digest.digest()
+
+
+def kernel_sources_stamp(func: Callable[..., Any]) -> tuple[bytes, bytes]:
+    """What the cache of compiled ``func`` is also stamped with: the compiled modules of this
+    folder (the kernel every compiled function builds on) and of ``func``'s own folder."""
+    return _folder_stamp(Path(__file__).parent), _folder_stamp(Path(inspect.getfile(func)).parent)
+
+
+@functools.cache
+def _stamped_cache_class() -> type | None:
+    """numba's per-function cache with :func:`kernel_sources_stamp` added to the source stamp
+    it checks (``None`` where this numba's caching internals differ: plain caching then)."""
+    try:
+        from numba.core.caching import CompileResultCacheImpl, FunctionCache
+    except ImportError:  # pragma: no cover - other numba versions
+        return None
+
+    class Stamped:
+        """A cache locator giving its source stamp with the kernel sources' stamp."""
+
+        def __init__(self, inner: Any, extra: tuple[bytes, bytes]) -> None:
+            self._inner, self._extra = inner, extra
+
+        def get_source_stamp(self) -> Any:
+            return (self._inner.get_source_stamp(), self._extra)
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(self._inner, name)
+
+    class StampedImpl(CompileResultCacheImpl):
+        def __init__(self, py_func: Callable[..., Any]) -> None:
+            super().__init__(py_func)  # type: ignore[no-untyped-call]
+            self._locator = Stamped(self._locator, kernel_sources_stamp(py_func))
+
+    class StampedCache(FunctionCache):
+        _impl_class = StampedImpl
+
+    if not hasattr(CompileResultCacheImpl, "locator"):  # pragma: no cover
+        return None
+    return StampedCache
 
 
 Poly = tuple[float, float, float, float, float]
