@@ -72,15 +72,18 @@ def build_simulators(
     """The simulators of ``entries`` by spec, in order (``flag`` as in :func:`parse_contestant`).
 
     Raises:
-        BadInput: A simulator is unknown, simulates another family's scenes or does not take
-            an option.
+        BadInput: A simulator is unknown, simulates another family's scenes, or does not take
+            an option or refuses its value (``--contestant 'pymunk:dt=-1': --dt: ...``).
     """
     sims: dict[str, Simulator] = {}
     for entry in entries:
         simulates = registry.simulator_info(entry.name).family
         if simulates and simulates != family:
             raise BadInput(f"{flag} {entry.spec}: simulates {simulates} scenes, not {family} ones")
-        sims[entry.spec] = registry.simulator(entry.name, **entry.options)
+        try:
+            sims[entry.spec] = registry.simulator(entry.name, **entry.options)
+        except BadInput as exc:  # "--dt: must be ...": which of the specs given, and where
+            raise BadInput(f"{flag} {entry.spec!r}: {exc}") from None
     return sims
 
 

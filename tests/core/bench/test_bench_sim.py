@@ -438,6 +438,27 @@ def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -
 
 
 @pytest.mark.parametrize(
+    ("flag", "spec", "said"),
+    [
+        ("--contestant", "pymunk:dt=-1", "--dt: must be a positive finite number, got -1"),
+        ("--contestant", "pymunk:tunnel=alow", "tunnel: must be refuse or allow, got 'alow'"),
+        ("--reference", "pymunk:dt=-1", "--dt: must be a positive finite number, got -1"),
+        ("--simulate-with", "pymunk:tunnel=alow", "tunnel: must be refuse or allow, got 'alow'"),
+    ],
+)
+def test_a_contestant_s_bad_option_value_names_the_flag_and_spec(
+    bench: Callable[..., Any], flag: str, spec: str, said: str
+) -> None:
+    """The simulator's own refusal used to come alone ("error: --dt: must be ..."), naming no
+    spec: with several contestants the user could not tell which one it was about."""
+    args = ("sim", "--scenes", "100000", "--contestant", "analytic", "--simulate-scenes", "3")
+    done = bench(*args, flag, spec, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [f"error: {flag} {spec!r}: {said}"]
+    assert done.stdout == ""
+
+
+@pytest.mark.parametrize(
     ("option", "message"),
     [
         (("--reference-scenes", "-2"), "--reference-scenes: must be at least 1, got -2"),
