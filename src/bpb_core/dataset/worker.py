@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import shutil
 import signal
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -101,10 +102,18 @@ def run_job(job: Job) -> SceneResult:
 
 
 def calibrate_job(horizon: float) -> tuple[float, Any]:
-    """Calibrate one horizon with the process's setup (the family must be ``Calibrating``)."""
+    """Calibrate one horizon with the process's setup (the family must be ``Calibrating``).
+
+    Raises:
+        BadInput: The simulator cannot finish a calibration scene (an event cap overrun, a
+            step it refuses), naming the horizon.
+        PluginBug: The family's ``calibrate_horizon()`` raised anything else, naming its plugin.
+    """
     setup, family, simulator = _ready()
     assert isinstance(family, Calibrating), "checked before the pool starts"
-    return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
+    what = f"scene family {family.name!r}: calibrate_horizon({horizon:g})"
+    with _finishing(setup.origin, what, f"--calibrate: horizon {horizon:g} s"):
+        return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 
 def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
@@ -117,13 +126,8 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     """
     name = scene_id(job.horizon, job.index)
     what = f"scene family {family.name!r}: make_scene({name!r})"
-    try:
-        with blamed(setup.origin, what):
-            made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
-    except (BadInput, PluginBug):
-        raise
-    except BpbError as exc:  # e.g. an event budget overrun: the config makes unfinishable scenes
-        raise BadInput(f"config: scene {name}: {exc}; the simulator cannot finish it") from None
+    with _finishing(setup.origin, what, f"config: scene {name}"):
+        made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
     row = IndexRow(name, job.horizon, job.index, *_cells(setup.origin, what, name, family, made))
     if not job.keep_unstable and row.stable is False:
         return SceneResult(row, ())
@@ -135,6 +139,20 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
         (folder / file_name).write_bytes(data)
         files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
+
+
+@contextmanager
+def _finishing(origin: str, what: str, where: str) -> Iterator[None]:
+    """Plugin code under :func:`blamed`; a simulator's own error on a scene (a
+    :class:`BpbError` that is neither bad input nor a plugin bug: an event budget overrun, a
+    step it refuses) is bad input naming ``where``: the config makes scenes it cannot finish."""
+    try:
+        with blamed(origin, what):
+            yield
+    except (BadInput, PluginBug):
+        raise
+    except BpbError as exc:
+        raise BadInput(f"{where}: {exc}; the simulator cannot finish it") from None
 
 
 def _cells(

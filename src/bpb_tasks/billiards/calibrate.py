@@ -45,14 +45,23 @@ def collision_rate(
     simulator: Simulator,
 ) -> float:
     """Share of ``draws`` whose cue ball touches another ball by ``horizon`` with cue speeds
-    drawn from ``speeds``."""
+    drawn from ``speeds``.
+
+    Raises:
+        SimulationError: ``simulator`` cannot finish a draw (naming it and its cue speed).
+    """
+    from bpb_tasks.simulators.analytic.engine import SimulationError
+
     if _compiled(simulator):
         return _kernel_rate(draws, horizon, speeds, config)
     hits = 0
     for i, d in enumerate(draws):
         speed = speeds.low + d.u * (speeds.high - speeds.low)
         scene = build_scene(d, horizon, i, config, speed=speed)
-        hits += bool(simulator.run(scene).cue_contacts())
+        try:
+            hits += bool(simulator.run(scene).cue_contacts())
+        except SimulationError as exc:  # which scene of the sample, at what speed
+            raise SimulationError(f"calibration draw {i} (cue at {speed:.3g} m/s): {exc}") from None
     return hits / len(draws)
 
 
