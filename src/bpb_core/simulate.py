@@ -179,13 +179,15 @@ def prepare(
     files: Sequence[Path] = (),
 ) -> Prepared:
     """Resolve ``simulator`` (a name, an object, or ``None``: the simulator the scenes' dataset
-    was made with, else the default family's) and its scene family: for ``None`` the family of
-    that dataset (else the default one), which reads the scenes and makes their truth as it did
-    when the dataset was generated, whatever family the simulator itself is registered for.
+    was made with, else the default family's) and its scene family: the family of that
+    dataset, which reads the scenes and makes their truth as it did when the dataset was
+    generated, whatever family the simulator itself is registered for; for loose scene files
+    the simulator's family (else the default one).
 
     Raises:
         BadInput: A bad horizon, an unknown simulator (one the dataset names but that is not
-            installed: naming its ``dataset.json``) or an option it does not take.
+            installed: naming its ``dataset.json``), one registered for another family than
+            the dataset's (unless its config names it), or an option it does not take.
     """
     from bpb_core.registry import make_registry
 
@@ -200,9 +202,9 @@ def prepare(
         made = reg.simulator(simulator, **dict(options or {}))
         return Prepared(made, family, reg.origin("scene_family", family.name))
     if isinstance(simulator, str):
-        name = reg.simulator_info(simulator).family or reg.default_family()
+        family = _family_for(files, simulator, reg)
         made = reg.simulator(simulator, **dict(options or {}))
-        return Prepared(made, reg.scene_family(name), reg.origin("scene_family", name))
+        return Prepared(made, family, reg.origin("scene_family", family.name))
     name = reg.default_family()
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
 
@@ -210,12 +212,43 @@ def prepare(
 def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any, Path | None]:
     """The family, config and manifest of the dataset the first scene file belongs to (the
     default family, its default config and ``None`` for loose scene files)."""
-    for folder in list(files[0].parents)[:3] if files else []:
-        if (folder / MANIFEST).exists():  # a folder by that name is named as unreadable
-            family = dataset_family(None, folder, registry)
-            return family, dataset_config(folder, family), folder / MANIFEST
+    folder = _dataset_of(files)
+    if folder is not None:
+        family = dataset_family(None, folder, registry)
+        return family, dataset_config(folder, family), folder / MANIFEST
     family = registry.scene_family(registry.default_family())
     return family, family.load_config(None), None
+
+
+def _dataset_of(files: Sequence[Path]) -> Path | None:
+    """The dataset folder the first scene file belongs to (``None``: loose scene files)."""
+    for folder in list(files[0].parents)[:3] if files else []:
+        if (folder / MANIFEST).exists():  # a folder by that name is named as unreadable
+            return folder
+    return None
+
+
+def _family_for(files: Sequence[Path], simulator: str, registry: Registry) -> SceneFamily:
+    """The family that reads the scenes for ``--simulator``: their dataset's, when they belong
+    to one, else the one the simulator is registered for (else the default one).
+
+    Raises:
+        BadInput: The simulator is registered for another family than the dataset's, and is
+            not the one the dataset's config names (generation paired them).
+    """
+    simulates = registry.simulator_info(simulator).family
+    folder = _dataset_of(files)
+    if folder is None:
+        return registry.scene_family(simulates or registry.default_family())
+    family = dataset_family(None, folder, registry)
+    if not simulates or simulates == family.name:
+        return family
+    if family.simulator_name(dataset_config(folder, family)) != simulator:
+        raise BadInput(
+            f"--simulator {simulator}: simulates {simulates} scenes, but {folder} holds "
+            f"{family.name} scenes"
+        )
+    return family
 
 
 def simulate_paths(

@@ -9,9 +9,15 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
+from typing import Any
 
 import pytest
 
+import support.flawed_family
+from bpb_core import SimulatorInfo, hookimpl
+from bpb_core.dataset import generate_dataset
+from bpb_core.registry import PluginSource, make_registry
+from bpb_core.simulate import simulate_lines
 from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.scene import Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
@@ -152,6 +158,58 @@ def test_missing_path_and_unknown_simulator(
     assert "--precision" in one_line_error(bpb("simulate", str(scenes[0][0]), "--precision", "x"))
 
 
+FLAWED = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
+
+
+@pytest.fixture
+def flawed_data(install: Any, tmp_path: Path) -> Path:
+    """The ``flawed`` scene family (billiards renamed, with its simulator ``flawed-analytic``;
+    its config names ``analytic``) installed for ``run_bpb``, and two scenes it made."""
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    plugin = PluginSource("flawed", "bpb-flawed", "1.2", "flawed_family")
+    registry = make_registry([(support.flawed_family, plugin)])
+    return generate_dataset(tmp_path / "flawed", 2, (1.0,), 0, family="flawed", workers=1,
+                            images=False, registry=registry)  # fmt: skip
+
+
+def test_a_simulator_of_another_family_than_the_dataset_s_is_one_line(
+    run_bpb: Any, flawed_data: Path, small_dataset: Path
+) -> None:
+    """The simulator's family used to read the dataset's scenes, whatever family made them
+    (for unlike families: errors about fields of their scene files)."""
+    done = run_bpb("simulate", str(small_dataset), "--simulator", "flawed-analytic")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"error: --simulator flawed-analytic: simulates flawed scenes, but {small_dataset} holds "
+        "billiards scenes"
+    ]
+    assert done.stdout == ""
+    done = run_bpb("simulate", str(flawed_data), "--simulator", "pymunk")
+    assert done.returncode == 2 and done.stderr.strip().splitlines() == [
+        f"error: --simulator pymunk: simulates billiards scenes, but {flawed_data} holds flawed "
+        "scenes"
+    ]
+
+
+def test_the_simulator_a_dataset_s_config_names_simulates_with_the_dataset_s_family(
+    run_bpb: Any, flawed_data: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Generation paired the flawed family with analytic (a billiards simulator): that pairing
+    is taken, and the scenes are read and simulated by the dataset's family, as generated
+    (a truth_lines() one line short shows which family ran)."""
+    done = run_bpb("simulate", str(flawed_data), "--simulator", "analytic")
+    assert done.returncode == 0, done.stderr
+    assert [json.loads(line)["scene_id"] for line in done.stdout.splitlines()] == [
+        "h1_0000",
+        "h1_0001",
+    ]
+    monkeypatch.setenv("BPB_TEST_FLAW", "truth_lines_short")
+    done = run_bpb("simulate", str(flawed_data), "--simulator", "analytic")
+    assert done.returncode == 3
+    assert done.stderr.startswith(f"error: {FLAWED}: scene family 'flawed': truth_lines() ")
+
+
 @pytest.mark.parametrize(
     "args", [[], ["--workers", "2"], ["--stability"]], ids=["batch", "forked", "ordinary"]
 )
@@ -280,3 +338,21 @@ def test_ctrl_c_reaching_the_workers_is_left_to_the_parent(small_dataset: Path) 
             os.killpg(process.pid, signal.SIGKILL)  # no leftover pool when it failed
     assert process.returncode == 130, stderr
     assert stderr.strip() == "aborted"
+
+
+class FreeSimulator:
+    """A plugin's simulator registered for no family: any dataset may pair with it."""
+
+    @hookimpl
+    def bpb_simulators(self) -> list[SimulatorInfo]:
+        return [SimulatorInfo("free", lambda: AnalyticSimulator, "Analytic, for any family")]
+
+
+def test_a_simulator_registered_for_no_family_simulates_any_dataset(
+    flawed_data: Path, small_dataset: Path
+) -> None:
+    registry = make_registry([support.flawed_family, FreeSimulator()])
+    for data in (small_dataset, flawed_data):
+        finals = list(simulate_lines([data], simulator="free", workers=1, registry=registry))
+        ids = {json.loads(line)["scene_id"] for line in finals}
+        assert len(ids) == len(finals) == len(list(data.glob("h*/scene_*/init.json")))
