@@ -81,6 +81,22 @@ def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
     )
 
 
+def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
+    """``family.simulator_name(config)``, checked: a simulator's name (a non-empty str), which
+    is looked up in the registry next and recorded in the manifest.
+
+    Raises:
+        PluginBug: The family raised or returned something else, naming ``origin`` (who
+            supplied it) and the family.
+    """
+    what = f"{_family(family)}: simulator_name()"
+    with blamed(origin, what):
+        name = family.simulator_name(config)
+    if isinstance(name, str) and name:
+        return name
+    raise PluginBug(f"{origin}: {what} returned {name!r:.80}; expected a simulator's name (str)")
+
+
 def prompt_messages(
     task: Task, origin: str, scene: Any, image: bytes | None, options: PromptOptions
 ) -> tuple[Message, ...]:

@@ -22,11 +22,11 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_config, dataset_family
+from bpb_core.dataset.reader import dataset_family, dataset_simulator
 from bpb_core.dataset.worker import ignore_sigint
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
-from bpb_core.plugin_calls import simulated_truth
+from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
 from bpb_core.scored_units import object_origin
 from bpb_core.validated_files import read_model
 
@@ -195,8 +195,7 @@ def prepare(
         raise BadInput(f"--horizon: must be a positive finite number, got {horizon}")
     reg = registry if registry is not None else make_registry()
     if simulator is None:
-        family, config, manifest = _made_with(files, reg)
-        simulator = family.simulator_name(config)
+        family, simulator, manifest = _made_with(files, reg)
         if manifest is not None:
             check_simulator(manifest, simulator, reg, "; or choose one with --simulator")
         made = reg.simulator(simulator, **dict(options or {}))
@@ -209,15 +208,18 @@ def prepare(
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
 
 
-def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, Any, Path | None]:
-    """The family, config and manifest of the dataset the first scene file belongs to (the
-    default family, its default config and ``None`` for loose scene files)."""
+def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, str, Path | None]:
+    """The family of the dataset the first scene file belongs to, the simulator its config
+    names and its manifest (the default family, the simulator of its default config and
+    ``None`` for loose scene files)."""
     folder = _dataset_of(files)
     if folder is not None:
         family = dataset_family(None, folder, registry)
-        return family, dataset_config(folder, family), folder / MANIFEST
+        origin = registry.origin("scene_family", family.name)
+        return family, dataset_simulator(folder, family, origin), folder / MANIFEST
     family = registry.scene_family(registry.default_family())
-    return family, family.load_config(None), None
+    origin = registry.origin("scene_family", family.name)
+    return family, simulator_named(family, origin, loaded_config(family, origin, None)), None
 
 
 def _dataset_of(files: Sequence[Path]) -> Path | None:
@@ -243,7 +245,7 @@ def _family_for(files: Sequence[Path], simulator: str, registry: Registry) -> Sc
     family = dataset_family(None, folder, registry)
     if not simulates or simulates == family.name:
         return family
-    if family.simulator_name(dataset_config(folder, family)) != simulator:
+    if dataset_simulator(folder, family, registry.origin("scene_family", family.name)) != simulator:
         raise BadInput(
             f"--simulator {simulator}: simulates {simulates} scenes, but {folder} holds "
             f"{family.name} scenes"

@@ -222,6 +222,39 @@ def test_bpb_simulate_is_one_line_naming_the_family_plugin_and_exit_3(
     ]
 
 
+READ_BACK_FLAWS = [
+    ("load_config_raise", "load_config() raised ValueError: load_config exploded"),
+    ("load_config_type", "load_config() returned dict; expected DatasetConfig (the family's "
+     "config_model)"),
+    ("simulator_name_type", "simulator_name() returned None; expected a simulator's name (str)"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("command", ["simulate", "run"])
+@pytest.mark.parametrize(("flaw", "said"), READ_BACK_FLAWS)
+def test_reading_a_dataset_s_config_back_is_one_line_naming_the_family_plugin_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path,
+    tmp_path: Path, command: str, flaw: str, said: str,
+) -> None:  # fmt: skip
+    """bpb simulate and bpb run read the dataset's config back with the family's load_config()
+    and ask its simulator_name(), unchecked: "internal error: ValueError: ..." naming no plugin,
+    an AttributeError of the dict, or a dataset blamed for naming simulator None."""
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    out = str(tmp_path / "run")
+    args = {
+        "simulate": ["simulate", str(flawed_data)],
+        "run": ["run", "--data", str(flawed_data), "--adapter", "baseline:stasis", "--out", out],
+    }[command]
+    done = run_bpb(*args)
+    assert done.returncode == 3
+    assert done.stderr.strip().splitlines() == [
+        f"error: {ORIGIN}: {FAMILY}: {said} (set BPB_DEBUG=1 for a traceback)"
+    ]
+    assert done.stdout == ""
+
+
 def test_bpb_report_is_one_line_naming_the_family_plugin_and_exit_3(
     install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, wrong_run: Path, tmp_path: Path
 ) -> None:

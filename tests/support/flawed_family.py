@@ -9,7 +9,8 @@ ValueError of an unreadable image), ``perception_error_type`` (a list, not a dic
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
 line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
 ``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
-and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its config model),
+and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its config model)
+(these two and ``simulator_name_type``, None, also where a dataset is read back),
 ``make_scene_raise`` and ``make_scene_type`` (the scene's truth, not the scene), both from the
 second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
@@ -111,6 +112,9 @@ class FlawedFamily(BilliardsFamily):
             raise ValueError("load_config exploded")
         config = super().load_config(source).model_copy(update={"family": self.name})
         return config.model_dump() if _flaw() == "load_config_type" else config
+
+    def simulator_name(self, config: Any) -> Any:
+        return None if _flaw() == "simulator_name_type" else super().simulator_name(config)
 
     def make_scene(self, config: Any, simulator: Any, seed: int, horizon: float, index: int) -> Any:
         made = super().make_scene(config, simulator, seed, horizon, index)

@@ -23,6 +23,7 @@ from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
+from bpb_core.plugin_calls import loaded_config, simulator_named
 from bpb_core.validated_files import read_model, validate_mapping
 
 if TYPE_CHECKING:
@@ -330,24 +331,41 @@ def family_name(root: Path) -> str | None:
     return name if isinstance(name, str) and name else None
 
 
-def dataset_config(root: Path, family: SceneFamily) -> Any:
+def dataset_config(root: Path, family: SceneFamily, origin: str) -> Any:
     """The family's config the dataset at ``root`` was made with (its defaults for a folder of
-    scenes with no manifest, or a manifest without a config).
+    scenes with no manifest, or a manifest without a config). ``origin``: who supplied the
+    family (``Registered.origin``).
 
     Raises:
         BadInput: The manifest is invalid (:func:`manifest_data`) or its config is not valid
             for the family (names the file and the field).
+        PluginBug: The family's ``load_config()`` raised anything else or returned something
+            other than its ``config_model`` (:func:`~bpb_core.plugin_calls.loaded_config`).
     """
     path = root / MANIFEST
     data = manifest_data(root)
     config = data.get("config") if data is not None else None
     if not isinstance(config, dict):
-        return family.load_config(None)
+        return loaded_config(family, origin, None)
     fields = getattr(family.config_model, "model_fields", {})
     try:
-        return family.load_config({k: v for k, v in config.items() if k != "family" or k in fields})
+        return loaded_config(
+            family, origin, {k: v for k, v in config.items() if k != "family" or k in fields}
+        )
     except BadInput as exc:  # the family names the field ("config: balls: ..."), not the file
         raise BadInput(f"{path}: {exc}") from None
+
+
+def dataset_simulator(root: Path, family: SceneFamily, origin: str) -> str:
+    """The simulator the dataset at ``root`` was made with: the one its config names
+    (:func:`dataset_config`), checked (:func:`~bpb_core.plugin_calls.simulator_named`).
+
+    Raises:
+        BadInput: As :func:`dataset_config`.
+        PluginBug: The family's ``load_config()`` or ``simulator_name()`` raised or returned
+            the wrong type, naming ``origin``.
+    """
+    return simulator_named(family, origin, dataset_config(root, family, origin))
 
 
 def dataset_family(

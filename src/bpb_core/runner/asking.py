@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.dataset.reader import dataset_config, dataset_family
+from bpb_core.dataset.reader import dataset_family, dataset_simulator
 from bpb_core.errors import BadInput
 from bpb_core.runner.options import RunOptions, check_options
 from bpb_core.runner.scenes import SceneRef, check_manifest, check_truth, select_scenes
@@ -71,7 +71,7 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
     tasks = {name: registry.task(name) for name in names}
     scenes = _chosen(select_scenes(data, family, options.horizons, options.limit), options)
     check_truth(scenes)
-    simulator = family.simulator_name(dataset_config(data, family))
+    simulator = dataset_simulator(data, family, registry.origin("scene_family", family.name))
     check_manifest(data)  # after the checks that name a field, which say more
     return Asking(family, resolved, tasks, scenes, simulator)
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import NeedsSimulator
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_config
+from bpb_core.dataset.reader import dataset_simulator
 from bpb_core.errors import BadInput
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
@@ -95,7 +95,7 @@ def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: 
         return
     if (data / MANIFEST).is_file():  # without one, the family's default simulator (built in)
         family = data_family(data, registry)
-        name = family.simulator_name(dataset_config(data, family))
+        name = dataset_simulator(data, family, registry.origin("scene_family", family.name))
         check_simulator(data / MANIFEST, name, registry, f"; {spec} runs it")
 
 
