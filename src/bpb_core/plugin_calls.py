@@ -31,7 +31,7 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
         PluginBug: The family raised or returned something else, naming ``origin`` (who
             supplied it) and the family.
     """
-    what = f"{_family(family)}: predict({name!r})"
+    what = f"{family_label(family)}: predict({name!r})"
     with blamed(origin, what):
         truth = family.predict(name, scene, rng)
     return _checked_truth(family, origin, what, truth)
@@ -54,7 +54,7 @@ def simulated_truth(
         PluginBug: The family raised or returned something other than its ``truth_model``,
             naming ``origin`` and the family.
     """
-    what = f"{_family(family)}: ground_truth()"
+    what = f"{family_label(family)}: ground_truth()"
     with blamed(origin, what):
         truth = family.ground_truth(scene, simulator, horizon, stability=stability)
     return _checked_truth(family, origin, what, truth)
@@ -69,7 +69,7 @@ def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
         PluginBug: The family raised anything else or returned something else, naming
             ``origin`` (who supplied it) and the family.
     """
-    what = f"{_family(family)}: load_config()"
+    what = f"{family_label(family)}: load_config()"
     with blamed(origin, what):
         config = family.load_config(source)
     model = getattr(family, "config_model", None)
@@ -89,7 +89,7 @@ def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
         PluginBug: The family raised or returned something else, naming ``origin`` (who
             supplied it) and the family.
     """
-    what = f"{_family(family)}: simulator_name()"
+    what = f"{family_label(family)}: simulator_name()"
     with blamed(origin, what):
         name = family.simulator_name(config)
     if isinstance(name, str) and name:
@@ -163,7 +163,8 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
     )
 
 
-def _family(family: object) -> str:
+def family_label(family: object) -> str:
+    """``scene family 'billiards'``: how one-line plugin errors name a family."""
     return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
 
 

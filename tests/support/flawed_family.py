@@ -14,8 +14,12 @@ and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its c
 ``make_scene_raise`` and ``make_scene_type`` (the scene's truth, not the scene), both from the
 second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
-(a path it never wrote); and in ``bpb bench sim`` (whose reference and contestant are its own
-simulator) ``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
+(a path it never wrote), ``check_config_raise``, ``physics_raise``, ``physics_type`` (a NaN),
+``new_tally_raise``, ``new_tally_type`` (a dict), ``init_in_worker_raise`` (the constructor, in
+a pool's worker process only), and with ``--calibrate`` ``calibrate_horizon_raise``,
+``apply_calibration_raise`` and ``apply_calibration_type`` (the record and config swapped);
+and in ``bpb bench sim`` (whose reference and contestant are its own simulator)
+``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
 ``bench_scenes_raise``, ``bench_scenes_type`` (dicts, not scenes), ``compare_raise``,
 ``compare_no_error`` (no ``error`` key), ``compare_type`` (an ``error`` in words),
 ``events_type`` (a float), ``scaled_scene_raise`` and ``scaled_scene_type`` (a dict).
@@ -25,6 +29,8 @@ The module is self-contained: tests install its source as a real distribution.
 
 from __future__ import annotations
 
+import math
+import multiprocessing
 import os
 import random
 from collections.abc import Sequence
@@ -113,8 +119,40 @@ class FlawedFamily(BilliardsFamily):
         config = super().load_config(source).model_copy(update={"family": self.name})
         return config.model_dump() if _flaw() == "load_config_type" else config
 
+    def __init__(self) -> None:
+        if _flaw() == "init_in_worker_raise" and multiprocessing.parent_process() is not None:
+            raise RuntimeError("__init__ exploded in a worker")
+
+    def check_config(self, config: Any, horizons: Sequence[float]) -> None:
+        if _flaw() == "check_config_raise":
+            raise RuntimeError("check_config exploded")
+        super().check_config(config, horizons)
+
     def simulator_name(self, config: Any) -> Any:
         return None if _flaw() == "simulator_name_type" else super().simulator_name(config)
+
+    def physics(self, config: Any) -> Any:
+        if _flaw() == "physics_raise":
+            raise RuntimeError("physics exploded")
+        physics = super().physics(config)
+        return {**physics, "mu": math.nan} if _flaw() == "physics_type" else physics
+
+    def new_tally(self, config: Any, horizon: float) -> Any:
+        if _flaw() == "new_tally_raise":
+            raise RuntimeError("new_tally exploded")
+        tally = super().new_tally(config, horizon)
+        return tally.summary() if _flaw() == "new_tally_type" else tally
+
+    def calibrate_horizon(self, config: Any, simulator: Any, horizon: float) -> Any:
+        if _flaw() == "calibrate_horizon_raise":
+            raise RuntimeError("calibrate_horizon exploded")
+        return super().calibrate_horizon(config, simulator, horizon)
+
+    def apply_calibration(self, config: Any, results: Any) -> Any:
+        if _flaw() == "apply_calibration_raise":
+            raise RuntimeError("apply_calibration exploded")
+        config, record = super().apply_calibration(config, results)
+        return (record, config) if _flaw() == "apply_calibration_type" else (config, record)
 
     def make_scene(self, config: Any, simulator: Any, seed: int, horizon: float, index: int) -> Any:
         made = super().make_scene(config, simulator, seed, horizon, index)

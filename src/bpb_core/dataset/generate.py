@@ -18,7 +18,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Calibrating, DrawingStats, Tallying
+from bpb_core.capabilities import Calibrating, DrawingStats
+from bpb_core.dataset.family_checks import (
+    calibrated,
+    checked_config,
+    new_tallies,
+    recorded_physics,
+)
 from bpb_core.dataset.jobs import (
     GenerateProgress,
     NoProgress,
@@ -35,7 +41,7 @@ from bpb_core.errors import BadInput, PluginBug, UnknownName, blamed
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
-from bpb_core.plugin_calls import loaded_config
+from bpb_core.plugin_calls import loaded_config, simulator_named
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -92,14 +98,15 @@ def generate_dataset(
         registry = registry if registry is not None else _registry()
         name = family or registry.default_family()
         maker = registry.scene_family(name)
-        cfg = _config(maker, registry.origin("scene_family", name), config)
-        _check_simulator(registry, maker, cfg)
+        origin = registry.origin("scene_family", name)
+        cfg = _config(maker, origin, config)
+        _check_simulator(registry, maker, origin, cfg)
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
             raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
         # Fail before touching the disk; with --calibrate, before the slow calibration, without
         # the horizons (it gives them their settings; checked again on its result)
-        maker.check_config(cfg, () if calibrate else hs)
+        checked_config(maker, origin, cfg, () if calibrate else hs)
         progress = progress or NoProgress()
         target = Path(out)
         _check_target(target, overwrite)
@@ -111,12 +118,10 @@ def generate_dataset(
                 if isinstance(maker, Calibrating) and calibrate:
                     with make_pool(n_workers, setup) as pool:
                         results = run_calibration(pool, hs, progress)
-                    cfg, calibration = maker.apply_calibration(cfg, results)
-                    maker.check_config(cfg, hs)
+                    cfg, calibration = calibrated(maker, origin, cfg, results)
+                    checked_config(maker, origin, cfg, hs)
                     setup = replace(setup, config=cfg)
-                tallies = (
-                    {h: maker.new_tally(cfg, h) for h in hs} if isinstance(maker, Tallying) else {}
-                )
+                tallies = new_tallies(maker, origin, cfg, hs)
                 writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
                 try:
                     run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
@@ -163,9 +168,9 @@ def _naming_file(config: Any) -> Iterator[None]:
         raise
 
 
-def _check_simulator(registry: Registry, family: SceneFamily, cfg: Any) -> None:
+def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: Any) -> None:
     try:
-        registry.get("simulator", family.simulator_name(cfg))
+        registry.get("simulator", simulator_named(family, origin, cfg))
     except UnknownName as exc:  # before any worker starts, naming the field
         raise BadInput(f"config: simulator: {exc}") from None
 
@@ -237,7 +242,7 @@ def _manifest(
         scenes=sum(s.scenes for s in summary.values()),
         summary=summary,
         config=config,
-        physics=family.physics(setup.config),
+        physics=recorded_physics(family, setup.origin, setup.config),
         calibration=calibration,
         plugins=dict(setup.plugins),
         versions=versions(),

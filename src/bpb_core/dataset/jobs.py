@@ -26,6 +26,7 @@ from bpb_core.dataset.worker import (
 )
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
 from bpb_core.errors import BadInput
+from bpb_core.plugin_calls import simulator_named
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -97,8 +98,7 @@ def worker_setup(
 ) -> WorkerSetup:
     """Resolve the family and the simulator its config names into a picklable setup."""
     family_entry = registry.get("scene_family", family)
-    family_cls = family_entry.info.load()
-    simulator = family_cls().simulator_name(config)
+    simulator = simulator_named(registry.scene_family(family), family_entry.origin, config)
     simulator_entry = registry.get("simulator", simulator)
     plugins = (
         ("scene_family", plugin_label(family_entry)),
@@ -108,8 +108,8 @@ def worker_setup(
         root=root,
         seed=seed,
         config=config,
-        family_cls=family_cls,
-        simulator_cls=simulator_entry.info.load(),
+        family_cls=registry.load("scene_family", family),
+        simulator_cls=registry.load("simulator", simulator),
         images=images,
         origin=family_entry.origin,
         plugins=plugins,

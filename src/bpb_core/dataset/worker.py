@@ -68,10 +68,21 @@ _STATE: dict[str, Any] = {}
 
 
 def init_worker(setup: WorkerSetup) -> None:
-    """Pool initializer: build the family and simulator once per process."""
+    """Pool initializer: build the family and simulator once per process.
+
+    A family whose constructor raises is a :class:`PluginBug` naming its plugin, raised by the
+    process's first job (a pool initializer that raises only kills its process, which the pool
+    starts again, for ever)."""
     global _SETUP
     _SETUP = setup
-    _STATE["family"] = setup.family_cls()
+    _STATE.clear()
+    name = getattr(setup.family_cls, "name", setup.family_cls.__name__)
+    try:
+        with blamed(setup.origin, f"creating the scene family {name!r}"):
+            _STATE["family"] = setup.family_cls()
+    except BpbError as exc:
+        _STATE["broken"] = exc
+        return
     _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
 
 
@@ -92,6 +103,8 @@ def init_pool_worker(setup: WorkerSetup) -> None:
 def _ready() -> tuple[WorkerSetup, SceneFamily, Simulator]:
     if _SETUP is None:
         raise RuntimeError("init_worker was not called in this process")
+    if "broken" in _STATE:
+        raise _STATE["broken"]
     return _SETUP, _STATE["family"], _STATE["simulator"]
 
 

@@ -1,6 +1,8 @@
 """A scene family's load_config(), make_scene() (run in the pool's workers) or write_stats()
 that raises or returns the wrong type is one line naming the family's plugin and the hook, exit
-3, from ``bpb generate``; the dataset it was to overwrite is left as it was.
+3, from ``bpb generate``; the dataset it was to overwrite is left as it was. So are its
+check_config(), simulator_name(), physics(), new_tally(), calibrate_horizon() and
+apply_calibration(), and its constructor in the pool's workers.
 
 Before, each came out as "internal error: RuntimeError: ..." naming no plugin, or as an
 AttributeError or TypeError from the code that took the value next ("'FinalState' object has no
@@ -38,6 +40,21 @@ FLAWS = [
      "(str, relative to the dataset folder)"),
     ("write_stats_missing", "write_stats() returned 'stats/never.png', which is no file it wrote "
      "in the dataset folder"),
+    ("check_config_raise", "check_config() raised RuntimeError: check_config exploded"),
+    ("simulator_name_type", "simulator_name() returned None; expected a simulator's name (str)"),
+    ("physics_raise", "physics() raised RuntimeError: physics exploded"),
+    ("physics_type", "physics() returned what dataset.json cannot hold (a NaN or "
+     "infinity); expected a dict of JSON values"),
+    ("new_tally_raise", "new_tally(1) raised RuntimeError: new_tally exploded"),
+    ("new_tally_type", "new_tally(1) returned dict; expected a tally with add(row) and summary()"),
+]  # fmt: skip
+CALIBRATE_FLAWS = [
+    ("calibrate_horizon_raise", "calibrate_horizon(1) raised RuntimeError: calibrate_horizon "
+     "exploded"),
+    ("apply_calibration_raise", "apply_calibration() raised RuntimeError: apply_calibration "
+     "exploded"),
+    ("apply_calibration_type", "apply_calibration() returned (dict, DatasetConfig); expected "
+     "(DatasetConfig, a dict: the manifest's calibration record)"),
 ]  # fmt: skip
 
 
@@ -60,15 +77,48 @@ def test_bpb_generate_is_one_line_naming_the_family_plugin_and_exit_3(
     install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path,
     flaw: str, said: str,
 ) -> None:  # fmt: skip
+    _refused(install, run_bpb, monkeypatch, made, tmp_path, flaw, f"{FAMILY}: {said}")
+
+
+@pytest.mark.parametrize(("flaw", "said"), CALIBRATE_FLAWS)
+def test_bpb_generate_calibrate_is_one_line_naming_the_family_plugin_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path,
+    flaw: str, said: str,
+) -> None:  # fmt: skip
+    """calibrate_horizon() (in the pool's workers) and apply_calibration() were unchecked:
+    "internal error: RuntimeError: ..." naming no plugin, or a swapped pair written as the
+    config ("'dict' object has no attribute ...")."""
+    config = tmp_path / "quick.json"
+    config.write_text('{"calibration": {"samples": 20, "iterations": 4}}')
+    extra = ("--calibrate", "--config", str(config))
+    _refused(install, run_bpb, monkeypatch, made, tmp_path, flaw, f"{FAMILY}: {said}", extra)
+
+
+def test_a_family_that_cannot_be_created_in_a_worker_is_one_line_not_a_hang(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path
+) -> None:
+    """The family's constructor in the pool initializer was unchecked: each worker died of it
+    and the pool started another, for ever (bpb generate hung)."""
+    said = "creating the scene family 'flawed' raised RuntimeError: __init__ exploded in a worker"
+    _refused(install, run_bpb, monkeypatch, made, tmp_path, "init_in_worker_raise", said)
+
+
+def _refused(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path,
+    flaw: str, said: str, extra: tuple[str, ...] = (),
+) -> None:  # fmt: skip
+    """``bpb generate`` with ``flaw`` over a copy of ``made``: exit 3, one line naming the
+    plugin (``said`` after it), and the dataset it was to replace as it was."""
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
     out = shutil.copytree(made, tmp_path / "data")
     before = _files(out)
     monkeypatch.setenv("BPB_TEST_FLAW", flaw)
     done = run_bpb("generate", "--family", "flawed", "--out", str(out), "--per-horizon", "2",
-                   "--horizons", "1", "--workers", "2", "--no-images", "--overwrite")  # fmt: skip
+                   "--horizons", "1", "--workers", "2", "--no-images", "--overwrite",
+                   *extra)  # fmt: skip
     assert done.returncode == 3
     assert done.stderr.strip().splitlines() == [
-        f"error: {ORIGIN}: {FAMILY}: {said} (set BPB_DEBUG=1 for a traceback)"
+        f"error: {ORIGIN}: {said} (set BPB_DEBUG=1 for a traceback)"
     ]
-    assert _files(out) == before  # the dataset it was to replace is as it was
+    assert _files(out) == before

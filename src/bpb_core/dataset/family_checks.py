@@ -1,0 +1,106 @@
+"""A scene family's generation hooks, called checked as :mod:`bpb_core.plugin_calls` calls
+others: each runs under :func:`~bpb_core.errors.blamed` and checks what it returns, so a
+family's mistake is one line naming its plugin (:class:`~bpb_core.errors.PluginBug`, exit 3)
+instead of a traceback, or an error blamed on the manifest or the user's config. A
+:class:`~bpb_core.errors.BadInput` the family raises about the config passes through.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from bpb_core.capabilities import Calibrating, HorizonTally, Tallying
+from bpb_core.errors import PluginBug, blamed
+from bpb_core.interfaces import SceneFamily
+from bpb_core.plugin_calls import family_label
+
+
+def checked_config(
+    family: SceneFamily, origin: str, config: Any, horizons: Sequence[float]
+) -> None:
+    """``family.check_config(config, horizons)``: its ``BadInput`` passes through.
+
+    Raises:
+        PluginBug: It raised anything else, naming ``origin`` (who supplied the family).
+    """
+    with blamed(origin, f"{family_label(family)}: check_config()"):
+        family.check_config(config, horizons)
+
+
+def recorded_physics(family: SceneFamily, origin: str, config: Any) -> dict[str, Any]:
+    """``family.physics(config)``, checked: a dict that JSON can hold (the manifest records it).
+
+    Raises:
+        PluginBug: It raised or returned something else, naming ``origin``.
+    """
+    what = f"{family_label(family)}: physics()"
+    with blamed(origin, what):
+        physics = family.physics(config)
+    try:
+        if not isinstance(physics, dict):
+            raise TypeError(f"a {type(physics).__name__}, not a dict")
+        json.dumps(physics, allow_nan=False)
+    except TypeError as exc:
+        why = str(exc)
+    except ValueError:  # the wording of json's own message differs between Python versions
+        why = "a NaN or infinity"
+    else:
+        return physics
+    raise PluginBug(
+        f"{origin}: {what} returned what dataset.json cannot hold ({why}); expected a dict of "
+        "JSON values"
+    )
+
+
+def new_tallies(
+    family: SceneFamily, origin: str, config: Any, horizons: Sequence[float]
+) -> dict[float, HorizonTally]:
+    """A ``family.new_tally(config, h)`` per horizon (none when the family does not tally),
+    checked: each has ``add()`` and ``summary()``, which the writer calls next.
+
+    Raises:
+        PluginBug: ``new_tally()`` raised or returned something else, naming ``origin``.
+    """
+    if not isinstance(family, Tallying):
+        return {}
+    tallies = {}
+    for horizon in horizons:
+        what = f"{family_label(family)}: new_tally({horizon:g})"
+        with blamed(origin, what):
+            tally = family.new_tally(config, horizon)
+        if not all(callable(getattr(tally, name, None)) for name in ("add", "summary")):
+            raise PluginBug(
+                f"{origin}: {what} returned {type(tally).__name__}; expected a tally with "
+                "add(row) and summary()"
+            )
+        tallies[horizon] = tally
+    return tallies
+
+
+def calibrated(
+    family: Calibrating, origin: str, config: Any, results: Mapping[float, Any]
+) -> tuple[Any, dict[str, Any]]:
+    """``family.apply_calibration(config, results)``, checked: the calibrated config (an
+    instance of the family's ``config_model``) and the manifest's record (a dict).
+
+    Raises:
+        PluginBug: It raised or returned something else, naming ``origin``.
+    """
+    what = f"{family_label(family)}: apply_calibration()"
+    with blamed(origin, what):
+        applied = family.apply_calibration(config, results)
+    model = getattr(family, "config_model", None)
+    if isinstance(applied, tuple) and len(applied) == 2:
+        new, record = applied
+        if (not isinstance(model, type) or isinstance(new, model)) and isinstance(record, dict):
+            return new, record
+    got = type(applied).__name__
+    if isinstance(applied, tuple) and len(applied) == 2:
+        got = f"({', '.join(type(part).__name__ for part in applied)})"
+    expected = model.__name__ if isinstance(model, type) else "the config"
+    raise PluginBug(
+        f"{origin}: {what} returned {got}; expected ({expected}, a dict: the manifest's "
+        "calibration record)"
+    )
