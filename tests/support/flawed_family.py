@@ -16,7 +16,8 @@ second scene of a horizon on (the first is written), ``files_type`` (a list of n
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
 (a path it never wrote), ``check_config_raise``, ``physics_raise``, ``physics_type`` (a NaN),
 ``new_tally_raise``, ``new_tally_type`` (a dict), ``init_in_worker_raise`` (the constructor, in
-a pool's worker process only), and with ``--calibrate`` ``calibrate_horizon_raise``,
+a pool's worker process only), ``simulator_init_raise`` (its config names ``flawed-analytic``,
+whose constructor raises), and with ``--calibrate`` ``calibrate_horizon_raise``,
 ``apply_calibration_raise`` and ``apply_calibration_type`` (the record and config swapped);
 and in ``bpb bench sim`` (whose reference and contestant are its own simulator)
 ``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
@@ -51,6 +52,7 @@ from bpb_core import (
 from bpb_tasks.billiards.family import BilliardsFamily
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
 
 def _flaw() -> str:
@@ -129,6 +131,8 @@ class FlawedFamily(BilliardsFamily):
         super().check_config(config, horizons)
 
     def simulator_name(self, config: Any) -> Any:
+        if _flaw() == "simulator_init_raise":
+            return "flawed-analytic"
         return None if _flaw() == "simulator_name_type" else super().simulator_name(config)
 
     def physics(self, config: Any) -> Any:
@@ -254,11 +258,16 @@ def bpb_scene_families() -> list[SceneFamilyInfo]:
     return [SceneFamilyInfo("flawed", lambda: FlawedFamily, "Billiards with flaws on demand")]
 
 
+class FlawedSimulator(AnalyticSimulator):
+    def __init__(self, **options: Any) -> None:
+        if _flaw() == "simulator_init_raise":
+            raise RuntimeError("simulator __init__ exploded")
+        super().__init__(**options)
+
+
 @hookimpl
 def bpb_simulators() -> list[SimulatorInfo]:
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
-    info = SimulatorInfo("flawed-analytic", lambda: AnalyticSimulator, "Analytic", family="flawed")
+    info = SimulatorInfo("flawed-analytic", lambda: FlawedSimulator, "Analytic", family="flawed")
     return [info]
 
 

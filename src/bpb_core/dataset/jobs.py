@@ -113,6 +113,8 @@ def worker_setup(
         images=images,
         origin=family_entry.origin,
         plugins=plugins,
+        simulator=simulator,
+        simulator_origin=simulator_entry.origin,
     )
 
 

@@ -50,6 +50,8 @@ class WorkerSetup:
     Attributes:
         origin: Who supplied the family (a registry entry's origin), for one-line plugin errors.
         options: Keyword options the simulator is built with.
+        simulator: The simulator's registered name; ``simulator_origin`` who supplied it
+            (default: ``origin``).
     """
 
     root: Path
@@ -61,6 +63,8 @@ class WorkerSetup:
     origin: str
     plugins: tuple[tuple[str, str], ...] = ()
     options: tuple[tuple[str, Any], ...] = ()
+    simulator: str = ""
+    simulator_origin: str = ""
 
 
 _SETUP: WorkerSetup | None = None
@@ -70,20 +74,23 @@ _STATE: dict[str, Any] = {}
 def init_worker(setup: WorkerSetup) -> None:
     """Pool initializer: build the family and simulator once per process.
 
-    A family whose constructor raises is a :class:`PluginBug` naming its plugin, raised by the
-    process's first job (a pool initializer that raises only kills its process, which the pool
-    starts again, for ever)."""
+    A family or simulator whose constructor raises is a :class:`PluginBug` naming its plugin,
+    raised by the process's first job (a pool initializer that raises only kills its process,
+    which the pool starts again, for ever)."""
     global _SETUP
     _SETUP = setup
     _STATE.clear()
-    name = getattr(setup.family_cls, "name", setup.family_cls.__name__)
+    family = getattr(setup.family_cls, "name", setup.family_cls.__name__)
+    simulator = setup.simulator or setup.simulator_cls.__name__
     try:
-        with blamed(setup.origin, f"creating the scene family {name!r}"):
+        with blamed(setup.origin, f"creating the scene family {family!r}"):
             _STATE["family"] = setup.family_cls()
+        with blamed(
+            setup.simulator_origin or setup.origin, f"creating the simulator {simulator!r}"
+        ):
+            _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
     except BpbError as exc:
         _STATE["broken"] = exc
-        return
-    _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
 
 
 def ignore_sigint() -> None:

@@ -94,13 +94,23 @@ def test_bpb_generate_calibrate_is_one_line_naming_the_family_plugin_and_exit_3(
     _refused(install, run_bpb, monkeypatch, made, tmp_path, flaw, f"{FAMILY}: {said}", extra)
 
 
-def test_a_family_that_cannot_be_created_in_a_worker_is_one_line_not_a_hang(
-    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path
-) -> None:
-    """The family's constructor in the pool initializer was unchecked: each worker died of it
-    and the pool started another, for ever (bpb generate hung)."""
-    said = "creating the scene family 'flawed' raised RuntimeError: __init__ exploded in a worker"
-    _refused(install, run_bpb, monkeypatch, made, tmp_path, "init_in_worker_raise", said)
+@pytest.mark.parametrize(
+    ("flaw", "said", "extra"),
+    [
+        ("init_in_worker_raise", "creating the scene family 'flawed' raised RuntimeError: "
+         "__init__ exploded in a worker", ()),
+        # --stable-only starts the pool at once: this process never builds the simulator
+        ("simulator_init_raise", "creating the simulator 'flawed-analytic' raised "
+         "RuntimeError: simulator __init__ exploded", ("--stable-only",)),
+    ],
+)  # fmt: skip
+def test_a_family_or_simulator_that_cannot_be_created_in_a_worker_is_one_line_not_a_hang(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path,
+    flaw: str, said: str, extra: tuple[str, ...],
+) -> None:  # fmt: skip
+    """The family's and simulator's constructors in the pool initializer were unchecked: each
+    worker died of it and the pool started another, for ever (bpb generate hung)."""
+    _refused(install, run_bpb, monkeypatch, made, tmp_path, flaw, said, extra)
 
 
 def _refused(
