@@ -36,3 +36,17 @@ def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     while time.monotonic() < started + 0.5 and not all(map(ignores_sigint, workers)):
         time.sleep(0.01)
     return workers
+
+
+def group_members(pgid: int) -> list[int]:
+    """The processes (zombies aside) in process group ``pgid``: a command started with
+    ``start_new_session=True`` leaves none of its children behind when this is empty after it."""
+    members = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            state, _, group = stat.read_text().rsplit(")", 1)[1].split()[:3]
+        except (OSError, ValueError):
+            continue  # ended while listed
+        if int(group) == pgid and state != "Z":
+            members.append(int(stat.parent.name))
+    return members

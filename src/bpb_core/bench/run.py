@@ -15,6 +15,7 @@ against the server with no latency. :func:`bench_dataset` makes (or reuses) the 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -22,11 +23,12 @@ import sys
 import tempfile
 import time
 import urllib.request
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bpb_core.bench.children import child
 from bpb_core.bench.run_bare import CALL_TIMEOUT, input_mode
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
@@ -47,11 +49,9 @@ class Phase:
 
 
 class _Server:
-    def __init__(self, latency: float) -> None:
-        args = [sys.executable, "-m", "bpb_core.testing.fakeserver", "--latency", str(latency)]
-        self.process = subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
-        assert self.process.stdout is not None
-        self.port = int(self.process.stdout.readline().split()[1])
+    def __init__(self, process: subprocess.Popen[str]) -> None:
+        assert process.stdout is not None
+        self.port = int(process.stdout.readline().split()[1])
         self.url = f"http://127.0.0.1:{self.port}"
 
     def phase(self, name: str) -> None:
@@ -64,23 +64,25 @@ class _Server:
             data: dict[str, Any] = json.loads(response.read())
         return data
 
-    def close(self) -> None:
-        self.process.kill()
-        self.process.wait()
+
+@contextlib.contextmanager
+def _server(latency: float) -> Iterator[_Server]:
+    """The fake server, once it listens; stopped when the block ends (also when a signal
+    stops the bench while it starts)."""
+    args = [sys.executable, "-m", "bpb_core.testing.fakeserver", "--latency", str(latency)]
+    with child(args, stdout=subprocess.PIPE, text=True) as process:
+        yield _Server(process)
 
 
 def _child(args: list[str]) -> tuple[int, float, str]:
     """Run a child process; return its exit code, peak RSS in MB and, when it failed, the last
     line of its stderr (kept in a file: an unread pipe would block a chatty child)."""
     env = {**os.environ, "OPENAI_API_KEY": _DUMMY_KEY}
-    with tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace") as err:
-        process = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=err)
-        try:
-            _, status, usage = os.wait4(process.pid, 0)
-        except BaseException:  # interrupted: the client must not outlive the bench
-            process.kill()
-            process.wait()
-            raise
+    with (
+        tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace") as err,
+        child(args, env=env, stdout=subprocess.DEVNULL, stderr=err) as process,
+    ):  # interrupted, the client is stopped: it must not outlive the bench
+        _, status, usage = os.wait4(process.pid, 0)
         process.returncode = os.waitstatus_to_exitcode(status)
         err.seek(0)
         lines = [line.strip() for line in err if line.strip()] if process.returncode else []
@@ -176,11 +178,10 @@ def bench_throughput(
     machine load hits both alike; each result pools its rounds (total requests / total time).
     """
     calls = planned_calls(data, scenes_per_horizon)
-    server = _Server(latency)
     bare: list[Phase] = []
     ours: list[Phase] = []
-    api_base = f"{server.url}/v1"
-    try:
+    with _server(latency) as server:
+        api_base = f"{server.url}/v1"
         for round_no in range(rounds):
             bare_args = [
                 sys.executable,
@@ -195,27 +196,21 @@ def bench_throughput(
             with tempfile.TemporaryDirectory() as tmp:
                 args = _bpb(data, api_base, Path(tmp), concurrency, scenes_per_horizon)
                 ours.append(_measure(server, f"bpb{round_no}", args, latency))
-    finally:
-        server.close()
     return _combine("bare litellm loop", bare), _combine("bpb run", ours)
 
 
 def bench_memory(data: Path, scenes_per_horizon: int, concurrency: int = 64) -> Phase:
     """Peak RSS of a ``bpb run`` of ``tasks x scenes`` calls against a zero-latency server."""
-    server = _Server(0.0)
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            started = time.perf_counter()
-            args = _bpb(data, f"{server.url}/v1", Path(tmp), concurrency, scenes_per_horizon)
-            phase = _measure(server, "memory", args, 0.0)
-            return Phase(
-                "bpb run (memory)",
-                phase.requests,
-                time.perf_counter() - started,
-                phase.rate,
-                phase.peak_rss_mb,
-                phase.exit_code,
-                phase.error,
-            )
-    finally:
-        server.close()
+    with _server(0.0) as server, tempfile.TemporaryDirectory() as tmp:
+        started = time.perf_counter()
+        args = _bpb(data, f"{server.url}/v1", Path(tmp), concurrency, scenes_per_horizon)
+        phase = _measure(server, "memory", args, 0.0)
+        return Phase(
+            "bpb run (memory)",
+            phase.requests,
+            time.perf_counter() - started,
+            phase.rate,
+            phase.peak_rss_mb,
+            phase.exit_code,
+            phase.error,
+        )

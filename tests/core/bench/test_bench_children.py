@@ -1,0 +1,52 @@
+"""The bench's child processes never outlive it, even when a signal stops it as one starts."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from support.processes import HAS_PROC, group_members
+
+# A bench's main, stopped by a SIGTERM that arrives while its child starts: the child sends it
+# between its fork and its exec, while Popen waits for the exec, the window a busy machine
+# widens (bpb bench run's fake client used to be left running, measuring nothing, for ever).
+_STOPPED_WHILE_STARTING = """
+import os, signal, sys, time
+from bpb_core.bench.children import child
+
+def terminated(signum, frame):
+    raise SystemExit(128 + signum)
+
+signal.signal(signal.SIGTERM, terminated)
+sleeper = [sys.executable, "-c", "import time; time.sleep(300)"]
+with child(sleeper, preexec_fn=lambda: os.kill(os.getppid(), signal.SIGTERM)):
+    print("not stopped", flush=True)
+    time.sleep(300)
+"""
+
+
+@pytest.mark.skipif(not HAS_PROC, reason="lists the process group through /proc")
+def test_a_sigterm_while_a_child_starts_stops_the_bench_and_the_child(tmp_path: Path) -> None:
+    out, err = tmp_path / "out", tmp_path / "err"
+    with out.open("w") as stdout, err.open("w") as stderr:  # files: a leftover holds no pipe
+        process = subprocess.Popen(
+            [sys.executable, "-c", _STOPPED_WHILE_STARTING],
+            stdout=stdout,
+            stderr=stderr,
+            start_new_session=True,
+        )
+    try:
+        process.wait(timeout=120)
+        left = group_members(process.pid)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 128 + signal.SIGTERM, err.read_text()
+    assert out.read_text() == ""  # the held signal is acted on before the block's body runs
+    assert left == [], "the child outlived the bench"
