@@ -3,9 +3,14 @@ send a real Ctrl-C (SIGINT) to a ``bpb`` command and its pool."""
 
 from __future__ import annotations
 
+import contextlib
+import os
 import signal
+import subprocess
 import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 HAS_PROC = Path("/proc/self/task").is_dir()
 
@@ -38,15 +43,43 @@ def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     return workers
 
 
+def _state_and_group(pid: int) -> tuple[str, int] | None:
+    """Process ``pid``'s state letter and process group, None once it has gone."""
+    try:
+        state, _, group = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[:3]
+    except (OSError, ValueError):
+        return None
+    return state, int(group)
+
+
+def running(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie (ended, not yet reaped)."""
+    found = _state_and_group(pid)
+    return found is not None and found[0] != "Z"
+
+
 def group_members(pgid: int) -> list[int]:
-    """The processes (zombies aside) in process group ``pgid``: a command started with
+    """The running processes of process group ``pgid``: a command started with
     ``start_new_session=True`` leaves none of its children behind when this is empty after it."""
-    members = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
+    pids = [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()]
+    return [pid for pid in pids if running(pid) and (_state_and_group(pid) or ("", 0))[1] == pgid]
+
+
+def run_group(
+    args: Sequence[str], timeout: float, **popen: Any
+) -> subprocess.CompletedProcess[str]:
+    """``subprocess.run(args, capture_output=True, text=True, timeout=timeout)`` in a session
+    of its own, whose whole process group is killed when it times out or the test is stopped:
+    ``subprocess.run`` kills the command alone, and its children (a server, a client, a pool)
+    were left running for ever."""
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          start_new_session=True, **popen) as process:  # fmt: skip
         try:
-            state, _, group = stat.read_text().rsplit(")", 1)[1].split()[:3]
-        except (OSError, ValueError):
-            continue  # ended while listed
-        if int(group) == pgid and state != "Z":
-            members.append(int(stat.parent.name))
-    return members
+            stdout, stderr = process.communicate(timeout=timeout)
+        except BaseException as stopped:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            if isinstance(stopped, subprocess.TimeoutExpired):  # what it said, as run() does
+                stopped.output, stopped.stderr = process.communicate()
+            raise
+    return subprocess.CompletedProcess(args, process.returncode, stdout, stderr)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from support.processes import HAS_PROC, group_members
+from support.processes import HAS_PROC, group_members, run_group, running
 
 # A bench's main, stopped by a SIGTERM that arrives while its child starts: the child sends it
 # between its fork and its exec, while Popen waits for the exec, the window a busy machine
@@ -50,3 +50,25 @@ def test_a_sigterm_while_a_child_starts_stops_the_bench_and_the_child(tmp_path: 
     assert process.returncode == 128 + signal.SIGTERM, err.read_text()
     assert out.read_text() == ""  # the held signal is acted on before the block's body runs
     assert left == [], "the child outlived the bench"
+
+
+# A command whose child (a server, a client) runs until it is stopped, like bpb bench run's;
+# the child shares its stdout, so that output ends only when both have ended
+_PARENT_OF_A_SERVER = """
+import os, subprocess, sys, time
+server = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(300)"])
+print(server.pid, flush=True)
+time.sleep(300)
+"""
+
+
+@pytest.mark.skipif(not HAS_PROC, reason="lists the process group through /proc")
+def test_a_command_that_times_out_in_a_test_is_killed_with_its_children() -> None:
+    """subprocess.run's timeout killed the bench command alone: its server and client ran on."""
+    with pytest.raises(subprocess.TimeoutExpired) as timed_out:
+        run_group([sys.executable, "-c", _PARENT_OF_A_SERVER], timeout=10)
+    server = int(timed_out.value.stdout)
+    left = running(server)
+    if left:  # not to leave it running when the test fails
+        os.kill(server, signal.SIGKILL)
+    assert not left, "the command's child outlived it"

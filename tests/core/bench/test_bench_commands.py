@@ -94,7 +94,7 @@ def test_bench_run_counts_every_request_of_both_clients(
 ) -> None:
     args = ["--concurrency", "4", "--latency", "0.05", "--throughput-scenes", "1"]
     args += ["--memory-scenes", "1", "--rounds", "1", "--work", str(tmp_path)]
-    done = bench("run", *args, timeout=180)
+    done = bench("run", *args)
     assert done.returncode == 0, done.stderr + done.stdout
     assert re.search(r"generating 5 scenes with images in .*bench-run-data-1", done.stderr)
     calls = len(registry.tasks_for(registry.default_family(), default_only=True)) * 5
