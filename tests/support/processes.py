@@ -31,14 +31,14 @@ def ignores_sigint(pid: int) -> bool:
 
 
 def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
-    """``pid``'s children once there are ``count`` of them (or ``deadline`` has passed), after
-    waiting up to 0.5 s more for each to ignore SIGINT: one that gets it between its fork and its
-    pool initializer still dies of it (a window of milliseconds, not what the tests are about)."""
+    """``pid``'s children once there are ``count`` of them and each ignores SIGINT (or once
+    ``deadline`` has passed): one that gets it between its fork and its pool initializer still
+    dies of it, a window of milliseconds that a busy machine widens past a second (not what the
+    tests are about). A worker that never comes to ignore it is returned at the deadline."""
     while time.monotonic() < deadline and len(children(pid)) < count:
         time.sleep(0.02)
     workers = children(pid)
-    started = time.monotonic()
-    while time.monotonic() < started + 0.5 and not all(map(ignores_sigint, workers)):
+    while time.monotonic() < deadline and not all(map(ignores_sigint, workers)):
         time.sleep(0.01)
     return workers
 

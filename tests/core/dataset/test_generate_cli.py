@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import subprocess
 import sys
@@ -131,13 +132,16 @@ def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> 
 
     out = tmp_path / "ds"
     args = [BPB, "generate", "--out", str(out), "--per-horizon", "30", "--workers", "2"]
-    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    for pid in settled_workers(process.pid, 2, time.monotonic() + 60):  # what a terminal's
-        os.kill(pid, signal.SIGINT)  # Ctrl-C sends them
+    process = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
     try:
+        for pid in settled_workers(process.pid, 2, time.monotonic() + 120):
+            os.kill(pid, signal.SIGINT)  # what a terminal's Ctrl-C sends them
         _, stderr = process.communicate(timeout=120)  # a worker killed mid-scene hung it
     finally:
-        process.kill()  # no-op when it ended; else do not leave it and its pool behind
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)  # do not leave it and its pool behind
     assert process.returncode == 0 and "Traceback" not in stderr, stderr
     assert json.loads((out / "dataset.json").read_text())["scenes"] == 150
 

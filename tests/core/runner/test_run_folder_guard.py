@@ -43,12 +43,18 @@ def test_a_second_run_on_the_folder_exits_2_and_no_call_is_paid_twice(
         args = _args(dataset, tmp_path / "out", server.api_base, "--concurrency", "2")
         quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
         first = subprocess.Popen(args, env=_env(), **quiet)  # type: ignore[call-overload]
-        while not (tmp_path / "out" / RUN / "run.json").exists():
-            time.sleep(0.05)
-        second = subprocess.run(args, capture_output=True, text=True, env=_env(), timeout=120)
-        assert first.poll() is None  # the first run was still going (its calls are slow)
-        server.configure({"faults": {}, "latency": 0})
-        assert first.wait(timeout=120) == 0
+        try:
+            deadline = time.monotonic() + 120  # a condition: a failed first run ends the wait
+            while not (tmp_path / "out" / RUN / "run.json").exists() and first.poll() is None:
+                assert time.monotonic() < deadline, "the first run made no run folder"
+                time.sleep(0.05)
+            second = subprocess.run(args, capture_output=True, text=True, env=_env(), timeout=120)
+            assert first.poll() is None  # the first run was still going (its calls are slow)
+            server.configure({"faults": {}, "latency": 0})
+            assert first.wait(timeout=120) == 0
+        finally:
+            first.kill()  # no-op when it ended; not left running when the test failed
+            first.wait()
         counts = server.counts()
     assert second.returncode == 2
     line = second.stderr.strip()
