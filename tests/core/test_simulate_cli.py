@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import subprocess
@@ -22,7 +21,7 @@ from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.scene import Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from support.processes import HAS_PROC, settled_workers
+from support.processes import HAS_PROC, ctrl_c
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -319,23 +318,12 @@ def test_a_named_pipe_is_simulated_not_waited_on(
 @pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
 def test_ctrl_c_reaching_the_workers_is_left_to_the_parent(small_dataset: Path) -> None:
     """bpb simulate's forked workers printed a traceback each when Ctrl-C reached them."""
-    import signal
     import time
 
     args = [BPB, "simulate", *[str(small_dataset)] * 400, "--stability", "--workers", "2"]
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                text=True, start_new_session=True)  # fmt: skip
-    try:
-        # a terminal's Ctrl-C reaches the whole group; the workers first, so that one of them
-        # that does not ignore it has the time to print its traceback
-        for pid in settled_workers(process.pid, 2, time.monotonic() + 60):
-            os.kill(pid, signal.SIGINT)
-        time.sleep(0.5)
-        os.killpg(process.pid, signal.SIGINT)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)  # no leftover pool when it failed
+    stderr = ctrl_c(process, 2, time.monotonic() + 60)
     assert process.returncode == 130, stderr
     assert stderr.strip() == "aborted"
 

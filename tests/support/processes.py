@@ -8,7 +8,7 @@ import os
 import signal
 import subprocess
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +41,29 @@ def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     while time.monotonic() < deadline and not all(map(ignores_sigint, workers)):
         time.sleep(0.01)
     return workers
+
+
+def ctrl_c(
+    process: subprocess.Popen[str],
+    workers: int,
+    deadline: float,
+    before: Callable[[], None] = lambda: None,
+) -> str:
+    """What a terminal's Ctrl-C does to ``process`` (started in its own session) and its pool of
+    ``workers``, once ``before()`` has returned: SIGINT to each settled worker first, so that one
+    that does not ignore it has the time to print its traceback, then to the whole group.
+    Returns its stderr; the group is killed in any case (no pool left behind by a failure)."""
+    try:
+        before()
+        for pid in settled_workers(process.pid, workers, deadline):
+            os.kill(pid, signal.SIGINT)
+        time.sleep(0.5)
+        os.killpg(process.pid, signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    return stderr
 
 
 def _state_and_group(pid: int) -> tuple[str, int] | None:

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from bpb_core.registry import Registry
-from support.processes import HAS_PROC, children, group_members, settled_workers
+from support.processes import HAS_PROC, children, ctrl_c, group_members
 
 BENCHMARKS = ("extract", "generate", "run", "score", "sim", "startup")
 
@@ -178,7 +178,6 @@ def test_a_terminated_bench_run_stops_its_fake_server_and_client(tmp_path: Path)
 def test_ctrl_c_during_the_pillow_timing_is_left_to_the_parent(tmp_path: Path) -> None:
     """The Pillow pool's workers printed a traceback each when Ctrl-C reached them."""
     import os
-    import signal
     import time
 
     bpb = str(Path(sys.executable).with_name("bpb"))
@@ -186,21 +185,14 @@ def test_ctrl_c_during_the_pillow_timing_is_left_to_the_parent(tmp_path: Path) -
     env = {**os.environ, "TMPDIR": str(tmp_path)}  # the datasets' folder goes before Pillow's
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                text=True, env=env, start_new_session=True)  # fmt: skip
-    try:
-        deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 120
+
+    def made_and_gone() -> None:  # the datasets' folder is made, then removed before timing
         made = False
         while time.monotonic() < deadline and not (made and not any(tmp_path.iterdir())):
             made = made or any(tmp_path.iterdir())
             time.sleep(0.02)
-        # a terminal's Ctrl-C reaches the whole group; the workers first, so that one of them
-        # that does not ignore it has the time to print its traceback
-        for pid in settled_workers(process.pid, 2, deadline):
-            os.kill(pid, signal.SIGINT)
-        time.sleep(0.5)
-        os.killpg(process.pid, signal.SIGINT)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)  # no leftover pool when it failed
+
+    stderr = ctrl_c(process, 2, deadline, before=made_and_gone)
     assert process.returncode == 130, stderr
     assert stderr.strip() == "aborted"
