@@ -8,9 +8,10 @@ time from the first arrival until the last reply was due; the ideal is ``concurr
 Process start-up and litellm's import come before the first arrival and do not count.
 
 Both clients ask what ``bpb run`` asks by default: every default task of the dataset's scene
-family (image input when the family has images, else state). Memory: the peak resident set
-(``ru_maxrss`` from ``wait4``) of a ``bpb run`` subprocess making ``tasks x scenes`` calls
-against the server with no latency. :func:`bench_dataset` makes (or reuses) the dataset.
+family (image input when the family has images, else state). Memory: the peak resident set of
+a ``bpb run`` subprocess making ``tasks x scenes`` calls against the server with no latency.
+Each client's peak is its own (:mod:`bpb_core.bench.peak`), not the bench's that ``wait4``
+would add. :func:`bench_dataset` makes (or reuses) the dataset.
 """
 
 from __future__ import annotations
@@ -28,10 +29,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bpb_core.bench import peak
 from bpb_core.bench.children import child
 from bpb_core.bench.run_bare import CALL_TIMEOUT, input_mode
 
 _DUMMY_KEY = "sk-bench-local-not-a-secret"
+_BARE = "bpb_core.bench.run_bare:main"
+_BPB = "bpb_core.cli.main:main"
 
 
 @dataclass(frozen=True)
@@ -74,19 +78,25 @@ def _server(latency: float) -> Iterator[_Server]:
         yield _Server(process)
 
 
-def _child(args: list[str]) -> tuple[int, float, str]:
-    """Run a child process; return its exit code, peak RSS in MB and, when it failed, the last
-    line of its stderr (kept in a file: an unread pipe would block a chatty child)."""
+def run_client(entry: str, args: list[str]) -> tuple[int, float, str]:
+    """Run ``entry`` (``module:function``) with ``args`` in a child process; return its exit
+    code, its own peak RSS in MiB and, when it failed, the last line of its stderr (kept in a
+    file: an unread pipe would block a chatty child)."""
     env = {**os.environ, "OPENAI_API_KEY": _DUMMY_KEY}
     with (
+        tempfile.TemporaryDirectory(prefix="bpb-bench-peak-") as tmp,
         tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace") as err,
-        child(args, env=env, stdout=subprocess.DEVNULL, stderr=err) as process,
-    ):  # interrupted, the client is stopped: it must not outlive the bench
-        _, status, usage = os.wait4(process.pid, 0)
-        process.returncode = os.waitstatus_to_exitcode(status)
+    ):
+        report = Path(tmp) / "peak"
+        args = peak.command(report, entry, args)
+        with child(args, env=env, stdout=subprocess.DEVNULL, stderr=err) as process:
+            # interrupted, the client is stopped: it must not outlive the bench
+            _, status, usage = os.wait4(process.pid, 0)
+            process.returncode = os.waitstatus_to_exitcode(status)
         err.seek(0)
         lines = [line.strip() for line in err if line.strip()] if process.returncode else []
-    return process.returncode, usage.ru_maxrss / 1024, lines[-1] if lines else ""
+        rss = peak.peak_mib(report, usage.ru_maxrss)
+    return process.returncode, rss, lines[-1] if lines else ""
 
 
 def bench_dataset(
@@ -119,9 +129,6 @@ def planned_calls(data: Path, scenes_per_horizon: int) -> int:
 
 def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> list[str]:
     return [
-        sys.executable,
-        "-c",
-        "from bpb_core.cli.main import main; main()",
         "run",
         "--data",
         str(data),
@@ -142,9 +149,9 @@ def _bpb(data: Path, api_base: str, out: Path, concurrency: int, limit: int) -> 
     ]
 
 
-def _measure(server: _Server, name: str, args: list[str], latency: float) -> Phase:
+def _measure(server: _Server, name: str, entry: str, args: list[str], latency: float) -> Phase:
     server.phase(name)
-    code, rss, error = _child(args)
+    code, rss, error = run_client(entry, args)
     info = server.stats()["phases"].get(name, {"count": 0, "first": 0.0, "last": 0.0})
     span = info["last"] - info["first"] + latency
     rate = info["count"] / span if span > 0 else 0.0
@@ -183,19 +190,11 @@ def bench_throughput(
     with _server(latency) as server:
         api_base = f"{server.url}/v1"
         for round_no in range(rounds):
-            bare_args = [
-                sys.executable,
-                "-m",
-                "bpb_core.bench.run_bare",
-                api_base,
-                str(calls),
-                str(concurrency),
-                str(data),
-            ]
-            bare.append(_measure(server, f"bare{round_no}", bare_args, latency))
+            bare_args = [api_base, str(calls), str(concurrency), str(data)]
+            bare.append(_measure(server, f"bare{round_no}", _BARE, bare_args, latency))
             with tempfile.TemporaryDirectory() as tmp:
                 args = _bpb(data, api_base, Path(tmp), concurrency, scenes_per_horizon)
-                ours.append(_measure(server, f"bpb{round_no}", args, latency))
+                ours.append(_measure(server, f"bpb{round_no}", _BPB, args, latency))
     return _combine("bare litellm loop", bare), _combine("bpb run", ours)
 
 
@@ -204,7 +203,7 @@ def bench_memory(data: Path, scenes_per_horizon: int, concurrency: int = 64) -> 
     with _server(0.0) as server, tempfile.TemporaryDirectory() as tmp:
         started = time.perf_counter()
         args = _bpb(data, f"{server.url}/v1", Path(tmp), concurrency, scenes_per_horizon)
-        phase = _measure(server, "memory", args, 0.0)
+        phase = _measure(server, "memory", _BPB, args, 0.0)
         return Phase(
             "bpb run (memory)",
             phase.requests,
