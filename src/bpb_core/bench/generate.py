@@ -139,15 +139,19 @@ def measure_generate(
     )
 
 
+# The process's own peak: its ru_maxrss would start at the bench's (bpb_core.bench.peak). Its
+# workers are forked (start methods fork and forkserver), not exec'd, so theirs is their own
+# (pages shared with it included); with "spawn" it would start at this process's peak.
 _MEMORY_SCRIPT = """
 import json, resource, sys, time, warnings
 warnings.simplefilter("ignore")
+from bpb_core.bench.peak import own_peak_kib
 from bpb_core.dataset import generate_dataset
 out, per_horizon, workers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 started = time.perf_counter()
 generate_dataset(out, per_horizon, [1, 2, 3, 4, 5], 0, workers=workers)
 seconds = time.perf_counter() - started
-me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+me = own_peak_kib() or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
 print(json.dumps({"seconds": seconds, "parent_kib": me, "worker_kib": kids}))
 """

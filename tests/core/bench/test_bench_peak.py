@@ -1,4 +1,4 @@
-"""Peak memory figures of ``bpb bench run`` are the measured process's own.
+"""Peak memory figures of ``bpb bench run`` and ``bench generate`` are the measured process's own.
 
 On Linux a child's ``ru_maxrss`` starts at the high-water mark of the process that started it:
 a bench holding hundreds of MB used to report that much for every client it measured.
@@ -37,3 +37,10 @@ def test_bench_run_reports_each_client_s_own_peak_not_the_bench_s(tmp_path: Path
         assert phase.exit_code == 0, phase.error
         assert 10 < phase.peak_rss_mb < HOG_MIB / 2, phase  # own use: about 100-200 MB
 
+
+@pytest.mark.usefixtures("hog")
+def test_bench_generate_reports_the_generating_process_s_own_peak() -> None:
+    from bpb_core.bench.generate import measure_memory
+
+    used = measure_memory(1, workers=1)
+    assert 10 < used.parent_mib < HOG_MIB / 2, used
