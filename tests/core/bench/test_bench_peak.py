@@ -35,7 +35,7 @@ def test_bench_run_reports_each_client_s_own_peak_not_the_bench_s(tmp_path: Path
     bare, ours = bench_throughput(data, concurrency=4, latency=0.01, scenes_per_horizon=1, rounds=1)
     for phase in (bare, ours):
         assert phase.exit_code == 0, phase.error
-        assert 10 < phase.peak_rss_mb < HOG_MIB / 2, phase  # own use: about 100-200 MB
+        assert 10 < phase.peak_rss_mb < HOG_MIB / 2, phase  # own use: about 215 and 305 MB
 
 
 @pytest.mark.usefixtures("hog")
