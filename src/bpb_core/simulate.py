@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_family, dataset_simulator
-from bpb_core.dataset.worker import ignore_sigint
+from bpb_core.dataset.worker import worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
@@ -326,7 +326,7 @@ def simulate_lines(
         return
     import multiprocessing
 
-    with multiprocessing.get_context("fork").Pool(count, initializer=ignore_sigint) as pool:
+    with multiprocessing.get_context("fork").Pool(count, initializer=worker_signals) as pool:
         for result in pool.imap(_lines, _split(files, count)):
             yield from _emit(result)
 

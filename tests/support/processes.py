@@ -20,14 +20,25 @@ def children(pid: int) -> list[int]:
     return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
 
 
-def ignores_sigint(pid: int) -> bool:
-    """Whether process ``pid`` ignores SIGINT (its SigIgn mask)."""
+def _signal_mask(pid: int, field: str, signum: int) -> bool:
+    """Whether ``signum`` is in process ``pid``'s ``field`` mask of /proc/PID/status (False
+    once it has ended)."""
     try:
         status = Path(f"/proc/{pid}/status").read_text()
     except OSError:
         return False
-    (mask,) = [line.split()[1] for line in status.splitlines() if line.startswith("SigIgn:")]
-    return bool(int(mask, 16) & (1 << (signal.SIGINT - 1)))
+    (mask,) = [line.split()[1] for line in status.splitlines() if line.startswith(f"{field}:")]
+    return bool(int(mask, 16) & (1 << (signum - 1)))
+
+
+def ignores_sigint(pid: int) -> bool:
+    """Whether process ``pid`` ignores SIGINT (its SigIgn mask)."""
+    return _signal_mask(pid, "SigIgn", signal.SIGINT)
+
+
+def catches_sigterm(pid: int) -> bool:
+    """Whether process ``pid`` has a handler of its own for SIGTERM (its SigCgt mask)."""
+    return _signal_mask(pid, "SigCgt", signal.SIGTERM)
 
 
 def settled_workers(pid: int, count: int, deadline: float) -> list[int]:

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from PIL import Image
 
-from bpb_core.dataset.worker import ignore_sigint
+from bpb_core.dataset.worker import worker_signals
 
 SAMPLE_IMAGES = 24
 
@@ -85,7 +85,7 @@ def _encode_share(args: tuple[list[bytes], int, bool, int]) -> int:
 def _pillow_seconds(sources: list[bytes], count: int, workers: int, as_bpb: bool) -> float:
     shares = [count // workers + (1 if i < count % workers else 0) for i in range(workers)]
     jobs = [(sources, n, as_bpb, 1) for n in shares]
-    with Pool(workers, initializer=ignore_sigint) as pool:  # Ctrl-C: the parent stops them
+    with Pool(workers, initializer=worker_signals) as pool:  # Ctrl-C: the parent stops them
         started = time.perf_counter()
         pool.map(_encode_share, jobs)
         return time.perf_counter() - started

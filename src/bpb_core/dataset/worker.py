@@ -93,17 +93,25 @@ def init_worker(setup: WorkerSetup) -> None:
         _STATE["broken"] = exc
 
 
-def ignore_sigint() -> None:
-    """Initializer of a pool process that leaves Ctrl-C to its parent. Ctrl-C in a terminal
-    reaches the whole process group and the parent stops the pool; a worker dying of it
-    mid-job printed a traceback, and its job was never answered (the parent waited)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def worker_signals() -> None:
+    """Initializer of a pool process: Ctrl-C left to its parent, SIGTERM at its default.
+
+    Ctrl-C in a terminal reaches the whole process group and the parent stops the pool; a
+    worker dying of it mid-job printed a traceback, and its job was never answered (the parent
+    waited). SIGTERM is how ``Pool.terminate()`` stops its workers, and a worker must die of it
+    at once: a Python-level handler inherited from the parent (a library caller's, or ``bpb
+    bench run``'s) only sets a flag, and an idle worker that takes it just before blocking on
+    the task queue's lock (which the terminating parent holds) never runs it: the worker waits
+    for ever, and so does the parent joining it (1 in 5 paper-size datasets generated under
+    such a handler hung at the end).
+    """
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # last: once it is ignored, both are set
 
 
 def init_pool_worker(setup: WorkerSetup) -> None:
-    """Initializer of a pool process: :func:`init_worker`, and SIGINT ignored
-    (:func:`ignore_sigint`)."""
-    ignore_sigint()
+    """Initializer of a pool process: :func:`worker_signals`, then :func:`init_worker`."""
+    worker_signals()
     init_worker(setup)
 
 
