@@ -21,7 +21,7 @@ from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.scene import Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from support.processes import HAS_PROC, ctrl_c
+from support.processes import HAS_PROC, as_in_a_terminal, ctrl_c
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -322,7 +322,8 @@ def test_ctrl_c_reaching_the_workers_is_left_to_the_parent(small_dataset: Path) 
 
     args = [BPB, "simulate", *[str(small_dataset)] * 400, "--stability", "--workers", "2"]
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)  # fmt: skip
+                               text=True, start_new_session=True,
+                               preexec_fn=as_in_a_terminal)  # fmt: skip
     stderr = ctrl_c(process, 2, time.monotonic() + 60)
     assert process.returncode == 130, stderr
     assert stderr.strip() == "aborted"

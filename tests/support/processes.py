@@ -54,6 +54,23 @@ def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     return workers
 
 
+def as_in_a_terminal() -> None:
+    """``preexec_fn`` giving the command SIGINT at its default, as a shell gives a foreground
+    command: a suite started in the background without job control (``pytest &`` in a script,
+    as CI may run it) has SIGINT ignored, its commands inherit that, and Ctrl-C would never
+    reach them."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def ended(pid: int, within: float) -> bool:
+    """Whether process ``pid`` has ended (or is a zombie) within ``within`` seconds: a signal
+    is delivered asynchronously, and a busy machine can run the target on for a while."""
+    deadline = time.monotonic() + within
+    while running(pid) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    return not running(pid)
+
+
 def ctrl_c(
     process: subprocess.Popen[str],
     workers: int,

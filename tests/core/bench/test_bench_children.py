@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from support.processes import HAS_PROC, group_members, run_group, running
+from support.processes import HAS_PROC, ended, group_members, run_group
 
 # A bench's main, stopped by a SIGTERM that arrives while its child starts: the child sends it
 # between its fork and its exec, while Popen waits for the exec, the window a busy machine
@@ -68,7 +68,7 @@ def test_a_command_that_times_out_in_a_test_is_killed_with_its_children() -> Non
     with pytest.raises(subprocess.TimeoutExpired) as timed_out:
         run_group([sys.executable, "-c", _PARENT_OF_A_SERVER], timeout=10)
     server = int(timed_out.value.stdout)
-    left = running(server)
-    if left:  # not to leave it running when the test fails
+    gone = ended(server, within=30)  # SIGKILL is delivered asynchronously
+    if not gone:  # not to leave it running when the test fails
         os.kill(server, signal.SIGKILL)
-    assert not left, "the command's child outlived it"
+    assert gone, "the command's child outlived it"

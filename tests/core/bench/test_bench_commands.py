@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from bpb_core.registry import Registry
-from support.processes import HAS_PROC, children, ctrl_c, group_members
+from support.processes import HAS_PROC, as_in_a_terminal, children, ctrl_c, group_members
 
 BENCHMARKS = ("extract", "generate", "run", "score", "sim", "startup")
 
@@ -184,7 +184,8 @@ def test_ctrl_c_during_the_pillow_timing_is_left_to_the_parent(tmp_path: Path) -
     args = [bpb, "bench", "generate", "--per-horizon", "20", "--workers", "2"]
     env = {**os.environ, "TMPDIR": str(tmp_path)}  # the datasets' folder goes before Pillow's
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                               text=True, env=env, start_new_session=True)  # fmt: skip
+                               text=True, env=env, start_new_session=True,
+                               preexec_fn=as_in_a_terminal)  # fmt: skip
     deadline = time.monotonic() + 120
 
     def made_and_gone() -> None:  # the datasets' folder is made, then removed before timing
