@@ -215,6 +215,17 @@ def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
     assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
 
 
+def _stasis_runs(dataset: Path, folder: Path, **runs: list[str]) -> None:
+    """One ``baseline:stasis`` run of ``dataset`` per keyword, in ``folder/<keyword>``, with the
+    keyword's extra ``bpb run`` options."""
+    for name, more in runs.items():
+        out = str(folder / name)
+        ran = bpb(
+            "run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", out, *more
+        )
+        assert ran.returncode == 0, ran.stderr
+
+
 def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
     tmp_path: Path, dataset: Path
 ) -> None:
@@ -222,24 +233,14 @@ def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
     # no warning, while a run asked the same scenes twice (--epochs 2) was warned about as
     # asked "different numbers of scenes (12, 24 ...)".
     runs = tmp_path / "runs"
-    for name, more in (("a", ["--scenes", "h1_0000"]), ("b", ["--scenes", "h1_0001"])):
-        out = str(runs / name)
-        ran = bpb(
-            "run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", out, *more
-        )
-        assert ran.returncode == 0, ran.stderr
+    _stasis_runs(dataset, runs, a=["--scenes", "h1_0000"], b=["--scenes", "h1_0001"])
     summary = json.loads(bpb("report", str(runs / "a"), str(runs / "b"), "--json").stdout)
     assert summary["different_scenes"] == (
         "The runs were asked different scenes (3 scene-tasks each, not the same ones): "
         "their scores are means over different scenes; compare them in the paired comparisons."
     )
     again = tmp_path / "again"
-    for name, more in (("once", []), ("twice", ["--epochs", "2"])):
-        out = str(again / name)
-        ran = bpb(
-            "run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", out, *more
-        )
-        assert ran.returncode == 0, ran.stderr
+    _stasis_runs(dataset, again, once=[], twice=["--epochs", "2"])
     both = bpb("report", str(again / "once"), str(again / "twice"), "--json")
     assert json.loads(both.stdout)["different_scenes"] is None
 
@@ -252,12 +253,7 @@ def test_a_two_epoch_run_counts_its_scene_tasks_once_and_states_its_epochs(
     # accuracy's scenes; counts of answers (completeness cells, diagnostics) did not say that
     # they span two epochs.
     runs = tmp_path / "runs"
-    for name, more in (("once", []), ("twice", ["--epochs", "2"])):
-        out = str(runs / name)
-        ran = bpb(
-            "run", "--data", str(small_dataset), "--adapter", "baseline:stasis", "--out", out, *more
-        )
-        assert ran.returncode == 0, ran.stderr
+    _stasis_runs(small_dataset, runs, once=[], twice=["--epochs", "2"])
     folders = [str(runs / "once"), str(runs / "twice")]
     done = bpb("report", *folders, "--json", "--bootstrap", "20")
     once, twice = "once/baseline_stasis", "twice/baseline_stasis"
