@@ -81,6 +81,35 @@ def test_horizon_override_and_stability(scenes: list[tuple[Path, Scene]]) -> Non
     assert final.stability is not None and final.stability.delta == 1e-4
 
 
+def test_stability_of_a_scene_whose_second_past_the_horizon_crosses_the_event_cap(
+    tmp_path: Path,
+) -> None:
+    """A ball bouncing between two cushions 14 um further apart than its diameter: 70,729
+    events to its horizon of 1 s, within the analytic engine's cap of 100,000, while the
+    horizon gap's run to 1 s past the horizon is not. `bpb simulate --stability` failed on it
+    (exit 2, 'more than 100000 events before t=2.0') where `bpb simulate` succeeds; that run
+    now stops at the cap, and the first event after the horizon, which came before it, gives
+    the uncapped gap."""
+    pytest.importorskip("numba")  # the pure-Python engine takes about 100 s for it
+    from bpb_tasks.billiards.stability_batch import kernel_horizon_gap
+
+    radius, gap = 0.028575, 1.4e-5
+    narrow = Scene.model_validate(
+        {
+            "scene_id": "narrow",
+            "horizon": 1.0,
+            "table": {"width": 2.0, "height": 2 * radius + gap},
+            "pockets": {"radius": 0.06, "centers": []},
+            "balls": [{"id": 0, "pos": [0.5, radius + gap / 2], "vel": [0.0, 1.0]}],
+        }
+    )
+    path = write(tmp_path / "narrow.json", narrow)
+    (final,) = lines(bpb("simulate", str(path), "--stability"))
+    assert 90_000 > len(final.events) > 50_000
+    assert final.stability is not None and final.stability.horizon_gap is not None
+    assert final.stability.horizon_gap == kernel_horizon_gap(narrow, 1.0, 10**6)
+
+
 def test_pymunk_with_dt(scenes: list[tuple[Path, Scene]]) -> None:
     path, scene = scenes[1]
     (final,) = lines(bpb("simulate", str(path), "--simulator", "pymunk", "--dt", "0.01"))

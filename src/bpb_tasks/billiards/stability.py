@@ -16,7 +16,8 @@ deterministic. For each perturbation the labels are compared with the nominal on
 ``stable`` means no label flipped in any perturbation, the Q3 spread is within the bound and no
 two balls overlap in the nominal run (a pressing contact, which the event model does not
 resolve; the analytic engine only). The deterministic margins
-(:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside.
+(:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside; ``stable`` does not depend
+on them (a ``horizon_gap`` left unmeasured at the event cap included).
 Perturbed copies skip scene validation (a copy may touch a wall or another ball); with numba
 installed they run as one batch in the compiled kernel.
 """
@@ -43,6 +44,7 @@ from bpb_tasks.billiards.stability_batch import (
     kernel_tally,
 )
 from bpb_tasks.billiards.stability_margins import (
+    events_horizon_gap,
     horizon_gap,
     min_event_gap,
     min_graze_cos,
@@ -163,9 +165,16 @@ def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
 def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | None:
     """:func:`horizon_gap` of a run to ``horizon`` + 1 s: in one compiled call from the
     kernel's event rows (the same events; no outcome is built) when single runs take the
-    kernel, else from the outcome."""
+    kernel, else from the analytic engine's events or another simulator's outcome. The
+    analytic engine's run stops at its event cap instead of failing the scene, which ran to
+    its horizon within it: the gap is then measured on the events up to the cap
+    (:func:`~bpb_tasks.billiards.stability_margins.capped_horizon_gap`; ``None`` when they
+    do not decide it), on both paths alike."""
     if isinstance(simulator, AnalyticSimulator) and simulator.kernel_loaded():
         return kernel_horizon_gap(scene, horizon, simulator.max_events)
+    if isinstance(simulator, AnalyticSimulator):
+        events, finished = simulator.capped_events(scene, horizon + 1.0)
+        return events_horizon_gap(events, horizon, finished=finished)
     return horizon_gap(simulator.run(scene, horizon + 1.0), horizon)
 
 

@@ -23,8 +23,8 @@ import numpy as np
 
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import TOUCH_TOLERANCE, WALLS, Scene
+from bpb_tasks.billiards.stability_margins import capped_horizon_gap
 from bpb_tasks.billiards.truth import UNFINISHED
-from bpb_tasks.simulators.analytic.engine import SimulationError
 
 KERNEL_MAX_BALLS = 63  # one bit per ball index in an int64 mask, the sign bit unused
 
@@ -103,21 +103,21 @@ def _nominal(base: Outcome, ids: list[int]) -> tuple[int, int, int]:
 
 def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float | None:
     """:func:`~bpb_tasks.billiards.stability_margins.horizon_gap` of ``scene`` run to
-    ``horizon`` + 1 s by the kernel, in one compiled call (the same value to the bit).
-
-    Raises:
-        SimulationError: More than ``max_events`` events (as :meth:`AnalyticSimulator.run`).
-    """
+    ``horizon`` + 1 s by the kernel, in one compiled call (the same value to the bit). A run
+    past ``max_events`` events stops there, as
+    :meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.capped_events` does:
+    :func:`~bpb_tasks.billiards.stability_margins.capped_horizon_gap` of the events so far."""
     from bpb_tasks.billiards.stability_compiled import horizon_event_gap
     from bpb_tasks.simulators.analytic.compiled import scene_arrays, table_params
 
     _, pos, vel = scene_arrays(scene)
     prm, pockets = table_params(scene)
     end = float(horizon) + 1.0
-    gap, found, status = horizon_event_gap(pos, vel, prm, pockets, float(horizon), end, max_events)
-    if status:
-        raise SimulationError(f"more than {max_events} events before t={end}")
-    return float(gap) if found else None
+    gap, found, status, last = horizon_event_gap(
+        pos, vel, prm, pockets, float(horizon), end, max_events
+    )
+    best = float(gap) if found else None
+    return capped_horizon_gap(best, float(last), float(horizon)) if status else best
 
 
 def kernel_pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, float | None]:

@@ -90,19 +90,22 @@ def tally_copies(
 @jit
 def horizon_event_gap(
     pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, end: float, max_events: int
-) -> tuple[float, bool, int]:
+) -> tuple[float, bool, int, float]:
     """The smallest ``|t - horizon|`` over the ball, wall and pocket events (not stops) of the
-    balls ``pos``/``vel`` run to ``end``, whether there is such an event, and the run's status
-    (1: over ``max_events`` events)."""
+    balls ``pos``/``vel`` run to ``end``, whether there is such an event, the run's status
+    (1: stopped after ``max_events`` events, the events so far counted) and the time of the
+    last event processed (-inf without one)."""
     events, _, _, status = run_rows(pos, vel, prm, pockets, end, max_events)
     best = np.inf
     found = False
+    last = -np.inf
     for row in events:
+        last = row[0]
         if row[1] != STOP:
             gap = abs(row[0] - horizon)
             best = gap if not found or gap < best else best
             found = True
-    return best, found, status
+    return best, found, status, last
 
 
 @jit

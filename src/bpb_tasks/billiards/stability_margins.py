@@ -8,6 +8,10 @@
 * ``min_event_gap``: the smallest time between two consecutive events of one ball (stops ignored).
 * ``horizon_gap``: the time between the horizon and the nearest ball, wall or pocket event,
   looking up to one second past the horizon (an event just after it is as fragile as one before).
+  The run past the horizon has the simulator's event cap (counted from ``t = 0``); one that
+  reaches it stops there (:func:`capped_horizon_gap`) rather than fail a scene that ran to its
+  horizon: the gap is still exact when an event after the horizon came before the cap (nearly
+  always), and ``None`` (not measured) when no event up to the cap decides it.
 * ``pocket_gap``: the nearest pocket-edge pass: over moving balls and the pockets their centres
   pass without entering, the smallest ``closest distance - pocket radius``.
 * ``overlap``: the deepest overlap of two balls, ``2R - closest distance`` over every pair
@@ -24,7 +28,7 @@ import itertools
 import math
 from collections.abc import Sequence
 
-from bpb_tasks.billiards.outcome import Outcome, Segment
+from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import TOUCH_TOLERANCE
 from bpb_tasks.simulators.analytic.numeric import FLOAT64
 from bpb_tasks.simulators.analytic.roots import critical_points, horner
@@ -104,8 +108,28 @@ def min_event_gap(outcome: Outcome) -> float | None:
 
 def horizon_gap(outcome: Outcome, horizon: float) -> float | None:
     """Time between ``horizon`` and the nearest non-stop event of ``outcome``."""
-    gaps = [abs(e.t - horizon) for e in outcome.events if e.kind != "stop"]
-    return min(gaps) if gaps else None
+    return events_horizon_gap(outcome.events, horizon)
+
+
+def events_horizon_gap(
+    events: Sequence[Event], horizon: float, *, finished: bool = True
+) -> float | None:
+    """Time between ``horizon`` and the nearest non-stop event of ``events`` (in time order);
+    ``finished=False``: of a run stopped at its event cap after them (see
+    :func:`capped_horizon_gap`)."""
+    gaps = [abs(e.t - horizon) for e in events if e.kind != "stop"]
+    best = min(gaps) if gaps else None
+    if finished:
+        return best
+    return capped_horizon_gap(best, events[-1].t, horizon) if events else None
+
+
+def capped_horizon_gap(best: float | None, last: float, horizon: float) -> float | None:
+    """The horizon gap of a run stopped at its event cap: ``best``, the gap over the events it
+    processed, when no later event can be nearer (each is at or after ``last``, the time of the
+    last one processed; so always when a non-stop event after the horizon was processed), else
+    ``None``: not measured."""
+    return best if best is not None and best <= last - horizon else None
 
 
 def near_miss_gap(outcome: Outcome, radius: float) -> float | None:

@@ -68,7 +68,7 @@ class Stability(BaseModel):
 
     Attributes:
         stable: No label flipped in any of ``samples`` perturbations, the Q3 spread is at most
-            half a ball radius and ``overlap`` is null.
+            half a ball radius and ``overlap`` is null (the other margins do not count).
         delta: Perturbation size: metres for positions, a share of the cue speed for velocity.
         samples: Number of random perturbations.
         flip_rates: Share of perturbations flipping a Q1, a Q2 or a pocketed label.
@@ -81,7 +81,12 @@ class Stability(BaseModel):
             overlap, a collision the simulator missed; then ``overlap`` holds it too).
         min_graze_cos: Smallest |cos| of the approach angle over contacts (grazing near 0).
         min_event_gap: Smallest time (s) between two events sharing a ball.
-        horizon_gap: Time (s) between the horizon and the nearest event.
+        horizon_gap: Time (s) between the horizon and the nearest event, looking up to 1 s
+            past the horizon; null when there is none. The run past the horizon stops at the
+            simulator's event cap instead of failing the scene: the gap is still exact when
+            an event after the horizon came before the cap (almost always), and null (not
+            measured) when only stops did and the nearest event before the horizon is
+            farther than the last of them.
         pocket_gap: Nearest pocket-edge pass (m): closest distance of a moving centre to a pocket
             it does not enter, minus the pocket radius.
         overlap: Deepest overlap (m) of two balls in the nominal run, ``2R`` minus their closest

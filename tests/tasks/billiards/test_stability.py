@@ -32,6 +32,7 @@ from bpb_tasks.billiards.stability_batch import (
 )
 from bpb_tasks.billiards.stability_draws import random_draws, seed_key
 from bpb_tasks.billiards.stability_margins import (
+    events_horizon_gap,
     horizon_gap,
     near_miss_gap,
     pair_margins,
@@ -150,8 +151,8 @@ def test_scenes_with_more_balls_than_a_kernel_mask_holds_annotate_like_the_pytho
 def test_compiled_horizon_gap_is_the_reference_to_the_bit() -> None:
     """The kernel reads the horizon gap off its event rows in one call; it must equal the
     reference's gap of a run to the horizon + 1 s exactly, say so when there is no event, and
-    stop at the event budget as the engine does."""
-    gaps = []
+    stop at the event cap as the engine's capped run does, with the same gap or None."""
+    gaps, capped = [], []
     for i in range(60):
         s = random_scene(8, i, balls=2 + i % 9, speeds=(0.05, 3.0))
         expected = horizon_gap(PYTHON.run(s, s.horizon + 1.0), s.horizon)
@@ -160,12 +161,48 @@ def test_compiled_horizon_gap_is_the_reference_to_the_bit() -> None:
         if gap is not None and expected is not None:
             assert gap.hex() == expected.hex()
             gaps.append(gap)
-    assert len(gaps) > 50
+        nominal = len(PYTHON.run(s).events)
+        for cap in (nominal // 2, nominal, nominal + 1):
+            events, finished = PYTHON.with_max_events(cap).capped_events(s, s.horizon + 1.0)
+            reference = events_horizon_gap(events, s.horizon, finished=finished)
+            gap = kernel_horizon_gap(s, s.horizon, cap)
+            assert (gap is None) == (reference is None)
+            if gap is not None and reference is not None:
+                assert gap.hex() == reference.hex()
+                if not finished:
+                    assert reference == expected  # measured at the cap: the uncapped gap
+                    capped.append(gap)
+    assert len(gaps) > 50 and len(capped) > 20
     still = scene([(0.5, 0.5, 0.0, 0.0), (1.0, 0.5, 0.0, 0.0)])
     assert kernel_horizon_gap(still, 1.0, 100) is None
     bouncing = scene([(0.5, 0.5, 3.0, 0.0)], mu=0.0, horizon=5)
-    with pytest.raises(SimulationError, match=r"more than 3 events before t=6\.0"):
-        kernel_horizon_gap(bouncing, 5.0, 3)
+    assert kernel_horizon_gap(bouncing, 5.0, 3) is None  # the cap came before the horizon
+
+
+def test_the_horizon_gap_run_stops_at_the_event_cap_instead_of_failing_the_scene() -> None:
+    """The horizon gap looks 1 s past the horizon, under the simulator's event cap. A scene
+    whose run to its horizon fits the cap but whose extra second does not failed its
+    annotation ('more than 6 events before t=4.0': `bpb simulate --stability` and generation
+    stopped there). The run now stops at the cap. The first event after the horizon came
+    before it, so the gap is the uncapped one; when only a stop did, the events do not decide
+    it and it is None (not measured); `stable` does not depend on it. Python and kernel paths
+    agree."""
+    bouncing = scene([(0.5, 0.5, 0.0, 2.0), (1.5, 0.5, 0.0, 0.0)], horizon=3, pockets=[])
+    stopping = scene([(0.5, 0.5, 0.0, 1.0), (1.5, 0.5, 0.0, 0.0)], horizon=3, mu=0.032, pockets=[])
+    found = []
+    for s in (bouncing, stopping):
+        base = PYTHON.run(s)
+        cap = len(base.events)
+        later = PYTHON.run(s, 4.0)
+        assert len(later.events) > cap  # the extra second crosses the cap
+        python = annotate(s, base, simulator=PYTHON.with_max_events(cap), samples=8)
+        kernel = AnalyticSimulator(engine="kernel", max_events=cap)
+        assert python == annotate(s, base, simulator=kernel, samples=8)
+        assert python.stable and python.flip_rate == 0.0
+        found.append((python.horizon_gap, horizon_gap(later, 3.0), later.events[cap].kind))
+    (gap, uncapped, kind), (unmeasured, beyond, stop) = found
+    assert kind == "wall" and gap == uncapped and gap == pytest.approx(0.1117, abs=1e-4)
+    assert stop == "stop" and unmeasured is None and beyond == pytest.approx(0.883, abs=1e-3)
 
 
 def test_compiled_margins_with_the_pocket_gap_are_the_reference_to_the_bit() -> None:

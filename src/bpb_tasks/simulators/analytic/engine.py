@@ -124,6 +124,18 @@ class AnalyticSimulator:
                 raise SimulationError(str(exc)) from None
         return _Simulation(scene, self.numeric, self.max_events).run(end)
 
+    def capped_events(self, scene: Scene, horizon: float) -> tuple[tuple[Event, ...], bool]:
+        """The events of ``scene`` run to ``horizon`` by the pure-Python loop (any precision),
+        and whether the run finished. A run exceeding ``max_events`` stops there instead of
+        raising: the events are then those processed (the first ``max_events + 1``, in time
+        order), and every later one is at or after the last one's time."""
+        simulation = _Simulation(scene, self.numeric, self.max_events)
+        try:
+            simulation.run(horizon)
+        except SimulationError:
+            return tuple(simulation.events), False
+        return tuple(simulation.events), True
+
     def run_many(self, scenes: Sequence[Scene]) -> object:
         """Simulate scenes sharing one table to their own horizons: one compiled batch call
         (:func:`~bpb_tasks.simulators.analytic.compiled.simulate_many`, labels and final
