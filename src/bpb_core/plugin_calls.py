@@ -9,6 +9,7 @@ object no plugin registers).
 
 from __future__ import annotations
 
+import json
 import math
 import random
 from typing import TYPE_CHECKING, Any
@@ -192,21 +193,39 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
 
     if not isinstance(adapter, Describing):
         return None
-    import json
-
     what = f"{_adapter(adapter)}: settings()"
     with blamed(origin, what):
         settings = adapter.settings()
+    return json_values(origin, what, settings, "settings run.json")
+
+
+def json_values(origin: str, what: str, value: object, held_as: str) -> dict[str, Any]:
+    """``value`` as a JSON file holds it, if it is a dict that JSON can hold (a tuple comes back
+    a list, a key 1 the key "1", as a reader of the file finds them).
+
+    Args:
+        origin: Who supplied the plugin code that returned ``value``.
+        what: What returned it (``scene family 'x': physics()``).
+        value: What it returned.
+        held_as: What the message calls ``value`` and the file it is stored in
+            (``what dataset.json``).
+
+    Raises:
+        PluginBug: ``value`` is no dict, or JSON cannot hold it, naming ``origin`` and why.
+    """
     try:
-        if not isinstance(settings, dict):
-            raise TypeError(f"a {type(settings).__name__}, not a dict")
-        stored: dict[str, Any] = json.loads(json.dumps(settings, allow_nan=False))
-    except (TypeError, ValueError) as exc:
-        raise PluginBug(
-            f"{origin}: {what} returned settings run.json cannot hold ({exc}); expected a dict "
-            "of JSON values"
-        ) from exc
-    return stored
+        if not isinstance(value, dict):
+            raise TypeError(f"a {type(value).__name__}, not a dict")
+        held: dict[str, Any] = json.loads(json.dumps(value, allow_nan=False))
+    except TypeError as exc:
+        why = str(exc)
+    except ValueError as exc:  # the wording of json's own message differs between versions
+        why = str(exc) if str(exc).startswith("Circular") else "a NaN or infinity"
+    else:
+        return held
+    raise PluginBug(
+        f"{origin}: {what} returned {held_as} cannot hold ({why}); expected a dict of JSON values"
+    )
 
 
 def preflight_problem(adapter: object, origin: str) -> str | None:

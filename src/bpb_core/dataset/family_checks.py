@@ -7,14 +7,13 @@ instead of a traceback, or an error blamed on the manifest or the user's config.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from bpb_core.capabilities import Calibrating, HorizonTally, Tallying
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import SceneFamily
-from bpb_core.plugin_calls import family_label
+from bpb_core.plugin_calls import family_label, json_values
 
 
 def checked_config(
@@ -38,20 +37,7 @@ def recorded_physics(family: SceneFamily, origin: str, config: Any) -> dict[str,
     what = f"{family_label(family)}: physics()"
     with blamed(origin, what):
         physics = family.physics(config)
-    try:
-        if not isinstance(physics, dict):
-            raise TypeError(f"a {type(physics).__name__}, not a dict")
-        json.dumps(physics, allow_nan=False)
-    except TypeError as exc:
-        why = str(exc)
-    except ValueError:  # the wording of json's own message differs between Python versions
-        why = "a NaN or infinity"
-    else:
-        return physics
-    raise PluginBug(
-        f"{origin}: {what} returned what dataset.json cannot hold ({why}); expected a dict of "
-        "JSON values"
-    )
+    return json_values(origin, what, physics, "what dataset.json")
 
 
 def new_tallies(
