@@ -15,12 +15,14 @@ and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its c
 second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
 (a path it never wrote), ``check_config_raise``, ``physics_raise``, ``physics_type`` (a NaN),
-``new_tally_raise``, ``new_tally_type`` (a dict), ``init_in_worker_raise`` (the constructor, in
-a pool's worker process only), ``simulator_init_raise`` (its config names ``flawed-analytic``,
-whose constructor raises), and with ``--calibrate`` ``calibrate_horizon_raise``,
-``apply_calibration_raise`` and ``apply_calibration_type`` (the record and config swapped);
-and in ``bpb bench sim`` (whose reference and contestant are its own simulator)
-``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
+``new_tally_raise``, ``new_tally_type`` (a dict), the tally's ``tally_add_raise``,
+``tally_summary_raise``, ``tally_summary_type`` (a list), ``tally_summary_nan`` and
+``tally_summary_scenes`` (its own ``scenes``, a count bpb keeps), ``init_in_worker_raise``
+(the constructor, in a pool's worker process only), ``simulator_init_raise`` (its config names
+``flawed-analytic``, whose constructor raises), and with ``--calibrate``
+``calibrate_horizon_raise``, ``apply_calibration_raise`` and ``apply_calibration_type`` (the
+record and config swapped); and in ``bpb bench sim`` (whose reference and contestant are its
+own simulator) ``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
 ``bench_scenes_raise``, ``bench_scenes_type`` (dicts, not scenes), ``compare_raise``,
 ``compare_no_error`` (no ``error`` key), ``compare_type`` (an ``error`` in words),
 ``events_type`` (a float), ``scaled_scene_raise`` and ``scaled_scene_type`` (a dict).
@@ -49,7 +51,7 @@ from bpb_core import (
     UnitRow,
     hookimpl,
 )
-from bpb_tasks.billiards.family import BilliardsFamily
+from bpb_tasks.billiards.family import BilliardsFamily, BilliardsTally
 from bpb_tasks.billiards.truth import FinalState
 from bpb_tasks.questions.question import BilliardsQuestion
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
@@ -73,6 +75,24 @@ class FileNames:
 
     def files(self, images: bool) -> Any:
         return list(self._made.files(images))
+
+
+class FlawedTally(BilliardsTally):
+    def add(self, row: Any) -> None:
+        if _flaw() == "tally_add_raise":
+            raise RuntimeError("add exploded")
+        super().add(row)
+
+    def summary(self) -> Any:
+        if _flaw() == "tally_summary_raise":
+            raise RuntimeError("summary exploded")
+        summary = super().summary()
+        flawed = {
+            "tally_summary_type": list(summary),
+            "tally_summary_nan": {**summary, "collision_rate": math.nan},
+            "tally_summary_scenes": {**summary, "scenes": self.scenes},
+        }
+        return flawed.get(_flaw(), summary)
 
 
 class FlawedFamily(BilliardsFamily):
@@ -144,7 +164,7 @@ class FlawedFamily(BilliardsFamily):
     def new_tally(self, config: Any, horizon: float) -> Any:
         if _flaw() == "new_tally_raise":
             raise RuntimeError("new_tally exploded")
-        tally = super().new_tally(config, horizon)
+        tally = FlawedTally(**vars(super().new_tally(config, horizon)))
         return tally.summary() if _flaw() == "new_tally_type" else tally
 
     def calibrate_horizon(self, config: Any, simulator: Any, horizon: float) -> Any:

@@ -8,9 +8,11 @@ instead of a traceback, or an error blamed on the manifest or the user's config.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from bpb_core.capabilities import Calibrating, HorizonTally, Tallying
+from bpb_core.dataset.manifest import HorizonSummary
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import SceneFamily
 from bpb_core.plugin_calls import family_label, json_values
@@ -42,9 +44,9 @@ def recorded_physics(family: SceneFamily, origin: str, config: Any) -> dict[str,
 
 def new_tallies(
     family: SceneFamily, origin: str, config: Any, horizons: Sequence[float]
-) -> dict[float, HorizonTally]:
+) -> dict[float, CheckedTally]:
     """A ``family.new_tally(config, h)`` per horizon (none when the family does not tally),
-    checked: each has ``add()`` and ``summary()``, which the writer calls next.
+    checked: each has ``add()`` and ``summary()``, which the writer calls next, checked too.
 
     Raises:
         PluginBug: ``new_tally()`` raised or returned something else, naming ``origin``.
@@ -61,8 +63,52 @@ def new_tallies(
                 f"{origin}: {what} returned {type(tally).__name__}; expected a tally with "
                 "add(row) and summary()"
             )
-        tallies[horizon] = tally
+        tallies[horizon] = CheckedTally(tally, origin, f"{what}'s")
     return tallies
+
+
+@dataclass(frozen=True)
+class CheckedTally:
+    """A family's tally whose ``add()`` and ``summary()`` are called checked (the family's own
+    ``write_stats()`` takes ``tally`` back as it made it).
+
+    Attributes:
+        tally: What the family's ``new_tally()`` returned.
+        origin: Who supplied the family.
+        what: Whose tally it is (``scene family 'x': new_tally(3)'s``).
+    """
+
+    tally: HorizonTally
+    origin: str
+    what: str
+
+    def add(self, row: Mapping[str, object]) -> None:
+        """``tally.add(row)``.
+
+        Raises:
+            PluginBug: It raised, naming ``origin``.
+        """
+        with blamed(self.origin, f"{self.what} add()"):
+            self.tally.add(row)
+
+    def summary(self) -> dict[str, Any]:
+        """``tally.summary()``, checked: a dict that JSON can hold (the manifest records it)
+        whose fields are not the counts bpb keeps itself (``scenes``).
+
+        Raises:
+            PluginBug: It raised or returned something else, naming ``origin``.
+        """
+        what = f"{self.what} summary()"
+        with blamed(self.origin, what):
+            summary = self.tally.summary()
+        fields = json_values(self.origin, what, summary, "what dataset.json")
+        ours = sorted(set(fields) & set(HorizonSummary.model_fields))
+        if ours:
+            raise PluginBug(
+                f"{self.origin}: {what} returned {ours[0]!r}, which bpb counts itself; "
+                "expected the family's own fields"
+            )
+        return fields
 
 
 def calibrated(

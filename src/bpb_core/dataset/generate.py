@@ -12,7 +12,7 @@ import math
 import os
 import shutil
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating, DrawingStats
 from bpb_core.dataset.family_checks import (
+    CheckedTally,
     calibrated,
     checked_config,
     new_tallies,
@@ -125,7 +126,7 @@ def generate_dataset(
                 writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
                 try:
                     run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
-                    _write_stats(maker, setup, writer, progress)
+                    _write_stats(maker, setup, writer, tallies, progress)
                 finally:
                     writer.close()
                 writer.write_manifest(
@@ -198,14 +199,19 @@ def _check_target(target: Path, overwrite: bool) -> None:
 
 
 def _write_stats(
-    family: SceneFamily, setup: WorkerSetup, writer: DatasetWriter, progress: GenerateProgress
+    family: SceneFamily,
+    setup: WorkerSetup,
+    writer: DatasetWriter,
+    tallies: Mapping[float, CheckedTally],
+    progress: GenerateProgress,
 ) -> None:
     if not isinstance(family, DrawingStats):
         return
     progress.phase("stats", 1)
     what = f"scene family {family.name!r}: write_stats()"
     with blamed(setup.origin, what):
-        written = family.write_stats(setup.root, setup.config, writer.tallies)
+        own = {horizon: checked.tally for horizon, checked in tallies.items()}
+        written = family.write_stats(setup.root, setup.config, own)
     if not isinstance(written, list | tuple) or not all(isinstance(r, str) for r in written):
         raise PluginBug(
             f"{setup.origin}: {what} returned {type(written).__name__}; expected a list of "

@@ -1,14 +1,16 @@
 """A scene family's load_config(), make_scene() (run in the pool's workers) or write_stats()
 that raises or returns the wrong type is one line naming the family's plugin and the hook, exit
 3, from ``bpb generate``; the dataset it was to overwrite is left as it was. So are its
-check_config(), simulator_name(), physics(), new_tally(), calibrate_horizon() and
-apply_calibration(), and its constructor in the pool's workers.
+check_config(), simulator_name(), physics(), new_tally() and the add() and summary() of the
+tally it returns, calibrate_horizon() and apply_calibration(), and its constructor in the pool's
+workers.
 
 Before, each came out as "internal error: RuntimeError: ..." naming no plugin, or as an
 AttributeError or TypeError from the code that took the value next ("'FinalState' object has no
 attribute 'truth'", "'list' object has no attribute 'items'"); write_stats() returning a single
 path was read letter by letter (a FileNotFoundError for ``.data.partial/s``), and a path it
-never wrote was a FileNotFoundError too.
+never wrote was a FileNotFoundError too. A tally's summary() holding a NaN was written into
+dataset.json as is (exit 0, a file JSON parsers refuse).
 """
 
 from __future__ import annotations
@@ -47,6 +49,14 @@ FLAWS = [
      "infinity); expected a dict of JSON values"),
     ("new_tally_raise", "new_tally(1) raised RuntimeError: new_tally exploded"),
     ("new_tally_type", "new_tally(1) returned dict; expected a tally with add(row) and summary()"),
+    ("tally_add_raise", "new_tally(1)'s add() raised RuntimeError: add exploded"),
+    ("tally_summary_raise", "new_tally(1)'s summary() raised RuntimeError: summary exploded"),
+    ("tally_summary_type", "new_tally(1)'s summary() returned what dataset.json cannot hold (a "
+     "list, not a dict); expected a dict of JSON values"),
+    ("tally_summary_nan", "new_tally(1)'s summary() returned what dataset.json cannot hold (a "
+     "NaN or infinity); expected a dict of JSON values"),
+    ("tally_summary_scenes", "new_tally(1)'s summary() returned 'scenes', which bpb counts "
+     "itself; expected the family's own fields"),
 ]  # fmt: skip
 CALIBRATE_FLAWS = [
     ("calibrate_horizon_raise", "calibrate_horizon(1) raised RuntimeError: calibrate_horizon "
