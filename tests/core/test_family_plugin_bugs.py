@@ -11,10 +11,12 @@ picture() unchecked (a RuntimeError, or "AttributeError: 'bytes' object has no a
 baseline:vision blamed each of those flaws on itself (adapter 'baseline:vision': complete()
 raised ...). bpb simulate paired the lines of a truth_lines() one line short with the wrong scene
 files (exit 0), and turned a ground_truth() of the wrong type into bad input or an
-AttributeError."""
+AttributeError. The oracle and vision asked without a simulator called the family's
+load_config() and simulator_name() unchecked."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 from pathlib import Path
 from typing import Any
@@ -23,7 +25,7 @@ import pytest
 
 import support.flawed_family
 from bpb_adapters.baseline.adapter import BaselineAdapter
-from bpb_core import ModelResponse, Usage
+from bpb_core import ModelRequest, ModelResponse, Usage, build_messages, load_dataset
 from bpb_core.bench.score_sample import sample_units
 from bpb_core.dataset import generate_dataset
 from bpb_core.errors import PluginBug
@@ -228,6 +230,27 @@ READ_BACK_FLAWS = [
      "config_model)"),
     ("simulator_name_type", "simulator_name() returned None; expected a simulator's name (str)"),
 ]  # fmt: skip
+
+
+@pytest.mark.parametrize("model", ["oracle", "vision"])
+@pytest.mark.parametrize(("flaw", "said"), READ_BACK_FLAWS)
+def test_the_oracle_and_vision_asked_without_a_simulator_name_a_flawed_family(
+    monkeypatch: pytest.MonkeyPatch, flawed_data: Path, model: str, flaw: str, said: str
+) -> None:
+    """A request naming no simulator (an adapter asked from Python: ModelRequest's simulator is
+    optional) takes the family's default one. The oracle and vision asked the family's
+    load_config(None) and simulator_name() unchecked: the ValueError itself, an AttributeError of
+    the dict, or bad input ("unknown simulator None") blamed on the user."""
+    registry = _registry()
+    scene = next(iter(load_dataset(flawed_data, registry=registry)))
+    messages = build_messages("balls", scene, registry=registry)
+    request = ModelRequest(messages, "balls", scene=scene.state, family="flawed")
+    reply = asyncio.run(registry.adapter(f"baseline:{model}").complete(request))
+    assert json.loads(reply.text) == {"balls": len(scene.truth.predictions)}
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    with pytest.raises(PluginBug) as info:
+        asyncio.run(registry.adapter(f"baseline:{model}").complete(request))
+    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
 
 
 @pytest.mark.parametrize("command", ["simulate", "run"])

@@ -21,7 +21,7 @@ from bpb_core.capabilities import Perceiving, Predicting
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
-from bpb_core.plugin_calls import prediction, simulated_truth
+from bpb_core.plugin_calls import loaded_config, prediction, simulated_truth, simulator_named
 
 if TYPE_CHECKING:
     from bpb_adapters.baseline.vision import VisionAdapter
@@ -93,6 +93,15 @@ class PluginLookup:
             self._components[key] = build(self._plugins())
         return self._components[key]
 
+    def _simulator(self, request: ModelRequest, family: SceneFamily, origin: str) -> Simulator:
+        """The simulator the request names, else the one the family's default config names
+        (asked checked, blaming ``origin``: who supplied the family)."""
+        name = request.simulator or simulator_named(
+            family, origin, loaded_config(family, origin, None)
+        )
+        simulator: Simulator = self._component(f"s:{name}", lambda r: r.simulator(name))
+        return simulator
+
 
 @dataclass
 class BaselineAdapter(PluginLookup):
@@ -129,10 +138,7 @@ class BaselineAdapter(PluginLookup):
         family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
         origin = self._plugins().origin("scene_family", name)
         if self.model == ORACLE:
-            simulator_name = request.simulator or family.simulator_name(family.load_config(None))
-            simulator: Simulator = self._component(
-                f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
-            )
+            simulator = self._simulator(request, family, origin)
             return simulated_truth(family, origin, request.scene, simulator)
         why = self.cannot_answer(family)
         if why is not None:

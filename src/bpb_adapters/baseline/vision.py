@@ -141,10 +141,7 @@ class VisionAdapter(PluginLookup):
         perceived, reason = self._perceive(family, origin, image, prompt)
         if reason is not None:
             return f"unknown: the image could not be read: {reason}", {"perception_failed": reason}
-        simulator_name = request.simulator or family.simulator_name(family.load_config(None))
-        simulator: Simulator = self._component(
-            f"s:{simulator_name}", lambda r: r.simulator(simulator_name)
-        )
+        simulator = self._simulator(request, family, origin)
         truth = simulated_truth(family, origin, perceived, simulator)
         task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
         measured = self._measure(family, origin, image, prompt, perceived, request, simulator)
