@@ -38,6 +38,22 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
     return _checked_truth(family, origin, what, truth)
 
 
+def offered_predictors(family: Predicting, origin: str) -> tuple[str, ...]:
+    """``family.predictors``, checked: a tuple (or list) of names (a str would be taken letter
+    by letter, offering ``baseline:s``).
+
+    Raises:
+        PluginBug: Reading it raised, or it is something else, naming ``origin`` (who supplied
+            the family).
+    """
+    what = f"{family_label(family)}: predictors"
+    with blamed(origin, what):
+        names = family.predictors
+    if isinstance(names, tuple | list) and all(isinstance(name, str) for name in names):
+        return tuple(names)
+    raise PluginBug(f"{origin}: {what} is {names!r:.80}; expected a tuple of names (str)")
+
+
 def simulated_truth(
     family: SceneFamily,
     origin: str,

@@ -39,6 +39,7 @@ from bpb_core.web.viewer import Viewer
 ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
 FAMILY = "scene family 'flawed'"
 PREDICT_FLAWS = [
+    ("predictors_type", "predictors is 'stasis'; expected a tuple of names (str)"),
     ("predict_raise", "predict('stasis') raised RuntimeError: predict exploded"),
     ("predict_type", "predict('stasis') returned dict; expected FinalState (the family's "
      "truth_model)"),
@@ -276,6 +277,25 @@ def test_reading_a_dataset_s_config_back_is_one_line_naming_the_family_plugin_an
         f"error: {ORIGIN}: {FAMILY}: {said} (set BPB_DEBUG=1 for a traceback)"
     ]
     assert done.stdout == ""
+
+
+def test_bpb_run_with_a_baseline_is_one_line_naming_the_family_plugin_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path, tmp_path: Path
+) -> None:
+    """The baseline read the family's predictors unchecked: a str was offered letter by letter,
+    as bad input (exit 2: "offers no such prediction; known: baseline:oracle, baseline:s, ...")."""
+    flaw, said = PREDICT_FLAWS[0]
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
+    out = tmp_path / "run"
+    done = run_bpb("run", "--data", str(flawed_data), "--adapter", "baseline:stasis",
+                   "--out", str(out), "--tasks", "balls")  # fmt: skip
+    assert done.returncode == 3
+    assert done.stderr.strip().splitlines() == [
+        f"error: {ORIGIN}: {FAMILY}: {said} (set BPB_DEBUG=1 for a traceback)"
+    ]
+    assert not out.exists()
 
 
 def test_bpb_report_is_one_line_naming_the_family_plugin_and_exit_3(

@@ -2,10 +2,11 @@
 renamed ``flawed``, with one task and scorer about it.
 
 ``BPB_TEST_FLAW`` (read at each call, so a test sets it in its own environment or that of a
-``bpb`` subprocess) picks the flaw: ``predict_raise``, ``predict_type`` (a dict, not the
-family's truth model), ``truth_type`` (the same from ``ground_truth``), ``picture_raise``,
-``picture_type`` (PNG bytes, not a ScenePicture), ``perceive_raise`` (a RuntimeError, not the
-ValueError of an unreadable image), ``perception_error_type`` (a list, not a dict),
+``bpb`` subprocess) picks the flaw: ``predictors_type`` (one str, not a tuple), ``predict_raise``,
+``predict_type`` (a dict, not the family's truth model), ``truth_type`` (the same from
+``ground_truth``), ``picture_raise``, ``picture_type`` (PNG bytes, not a ScenePicture),
+``perceive_raise`` (a RuntimeError, not the ValueError of an unreadable image),
+``perception_error_type`` (a list, not a dict),
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
 line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
 ``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
@@ -130,6 +131,10 @@ class FlawedFamily(BilliardsFamily):
             raise RuntimeError("scaled_scene exploded")
         busy = super().scaled_scene(scene, factor)
         return busy.model_dump() if _flaw() == "scaled_scene_type" else busy
+
+    @property  # type: ignore[misc]
+    def predictors(self) -> Any:
+        return "stasis" if _flaw() == "predictors_type" else BilliardsFamily.predictors
 
     @property  # type: ignore[misc]
     def truth_model(self) -> Any:

@@ -18,10 +18,17 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Perceiving, Predicting
-from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, blamed
+from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, UnknownName, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import AdapterOptions, ModelRequest, ModelResponse, Usage
-from bpb_core.plugin_calls import loaded_config, prediction, simulated_truth, simulator_named
+from bpb_core.plugin_calls import (
+    loaded_config,
+    offered_predictors,
+    prediction,
+    simulated_truth,
+    simulator_named,
+)
+from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_adapters.baseline.vision import VisionAdapter
@@ -102,6 +109,13 @@ class PluginLookup:
         simulator: Simulator = self._component(f"s:{name}", lambda r: r.simulator(name))
         return simulator
 
+    def _family_origin(self, family: SceneFamily) -> str:
+        """Who supplied ``family``: its registry entry, else its module."""
+        try:
+            return self._plugins().origin("scene_family", family.name)
+        except UnknownName:
+            return object_origin(family)
+
 
 @dataclass
 class BaselineAdapter(PluginLookup):
@@ -122,7 +136,9 @@ class BaselineAdapter(PluginLookup):
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when ``family`` offers this prediction (every family has the oracle), else
         what it offers."""
-        offered = (ORACLE, *(family.predictors if isinstance(family, Predicting) else ()))
+        offered: tuple[str, ...] = (ORACLE,)
+        if isinstance(family, Predicting):
+            offered += offered_predictors(family, self._family_origin(family))
         offered += (VISION,) if isinstance(family, Perceiving) else ()
         if self.model in offered:
             return None

@@ -19,7 +19,7 @@ import pandas as pd
 
 from bpb_core.capabilities import Predicting
 from bpb_core.errors import BadInput, blamed
-from bpb_core.plugin_calls import prediction
+from bpb_core.plugin_calls import offered_predictors, prediction
 from bpb_core.scored_units import UnitRow, input_frame, scored_units, unit_rows
 
 if TYPE_CHECKING:
@@ -142,7 +142,8 @@ def _outcomes(family: Any, origin: str, scene: Any, truth: Any, rng: random.Rand
     """The truth, each predictor's guess and the truth again (to be corrupted)."""
     guesses = []
     if isinstance(family, Predicting):
-        guesses = [prediction(family, origin, name, scene, rng) for name in family.predictors]
+        names = offered_predictors(family, origin)
+        guesses = [prediction(family, origin, name, scene, rng) for name in names]
     return [truth, *guesses, truth]
 
 
