@@ -6,14 +6,35 @@ The CLI maps them to exit codes: :class:`BadInput` is 2, anything else unexpecte
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
+from typing import Self
 
 
 class BpbError(Exception):
     """Base class of every error bpb raises on purpose."""
 
     exit_code = 3
+    option: str | None = None
+    """The plugin option whose value the error is about (``dt``), as the plugin takes it; set by
+    :meth:`about` (a caller that adds context in front keeps it). The plugin cannot know where
+    its user set it (a flag, a config field, a library call): a caller that does names that
+    place (:meth:`naming`)."""
+
+    @classmethod
+    def about(cls, option: str, detail: str) -> Self:
+        """An error about the value of the plugin's ``option``: ``"dt: <detail>"``."""
+        error = cls(f"{option}: {detail}")
+        error.option = option
+        return error
+
+    def naming(self, names: Mapping[str, str]) -> str:
+        """The message with the option it starts with named as in ``names`` (``{"dt": "--dt"}``:
+        how the caller's user sets it); unchanged when it is about no option in ``names``."""
+        text, option = str(self), self.option
+        if option is None or option not in names or not text.startswith(f"{option}: "):
+            return text
+        return names[option] + text.removeprefix(option)
 
 
 class BadInput(BpbError):

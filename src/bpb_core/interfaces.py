@@ -158,7 +158,9 @@ class SceneFamily(Protocol):
         ...
 
     def simulator_name(self, config: Any) -> str:
-        """The simulator plugin the config asks for."""
+        """The simulator plugin the config asks for: its name, or ``name:key=value,...``
+        with the options it is built with (:mod:`bpb_core.simulator_spec`), which the
+        manifest's config should record."""
         ...
 
     def make_scene(

@@ -55,7 +55,8 @@ class ModelRequest:
         scene: The scene asked about. Only offline baselines may look at it; an adapter that
             talks to a model must send ``messages`` and nothing else.
         family: Name of the scene's family (offline baselines ask it for predictions).
-        simulator: The simulator the dataset's ground truth comes from (offline baselines).
+        simulator: The simulator the dataset's ground truth comes from, as its config names it
+            (a name, or ``name:key=value,...`` with its options; offline baselines).
         temperature: Sampling temperature (the paper's protocol uses 0).
         max_tokens: Output token cap, ``None`` for the provider default.
         timeout: Seconds before the call counts as timed out.

@@ -99,8 +99,9 @@ def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
 
 
 def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
-    """``family.simulator_name(config)``, checked: a simulator's name (a non-empty str), which
-    is looked up in the registry next and recorded in the manifest.
+    """``family.simulator_name(config)``, checked: a simulator's spec (a non-empty str: its name,
+    optionally with options, ``pymunk:dt=0.0005``), which is parsed and looked up in the
+    registry next and recorded in the manifest.
 
     Raises:
         PluginBug: The family raised or returned something else, naming ``origin`` (who

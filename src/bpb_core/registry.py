@@ -7,7 +7,7 @@ The registry is the only code that calls hook implementations.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from importlib import metadata
 from typing import TYPE_CHECKING, Any
@@ -131,11 +131,18 @@ class Registry:
         chosen = [i for i in infos if i.default] if default_only else infos
         return [i.name for i in (chosen or infos)]
 
-    def simulator(self, name: str, **options: Any) -> Simulator:
+    def simulator(
+        self, name: str, names: Mapping[str, str] | None = None, **options: Any
+    ) -> Simulator:
         """A fresh instance of the simulator ``name`` built with ``options``.
 
+        Args:
+            names: How the caller's user gives each option, for messages (``{"dt": "--dt"}``
+                for ``bpb simulate``'s flags; default: as the simulator takes it).
+
         Raises:
-            BadInput: The simulator does not take one of the options.
+            BadInput: The simulator does not take one of the options, or refuses a value: the
+                message starts with the option as ``names`` names it (``--dt: must be ...``).
         """
         factory = self.load("simulator", name)
         try:
@@ -144,9 +151,13 @@ class Registry:
         except PluginBug as exc:
             if not isinstance(exc.__cause__, TypeError) or not options:
                 raise
-            given = ", ".join(f"--{k}" for k in options)
+            given = ", ".join((names or {}).get(key, key) for key in options)
             why = exc.__cause__
             raise BadInput(f"simulator {name!r}: does not accept {given}: {why}") from None
+        except BadInput as exc:
+            if exc.option not in (names or {}):
+                raise
+            raise BadInput(exc.naming(names or {})) from None
         return simulator
 
     def simulator_info(self, name: str) -> SimulatorInfo:

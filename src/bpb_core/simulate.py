@@ -16,7 +16,7 @@ import math
 import os
 import stat
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -28,6 +28,7 @@ from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
 from bpb_core.scored_units import object_origin
+from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
@@ -169,6 +170,8 @@ class Prepared:
     simulator: Simulator
     family: SceneFamily
     origin: str
+    names: Mapping[str, str] = field(default_factory=dict)
+    """How the user set each simulator option, for messages (see :func:`prepare`)."""
 
 
 def prepare(
@@ -177,12 +180,15 @@ def prepare(
     registry: Registry | None,
     options: Mapping[str, Any] | None,
     files: Sequence[Path] = (),
+    names: Mapping[str, str] | None = None,
 ) -> Prepared:
     """Resolve ``simulator`` (a name, an object, or ``None``: the simulator the scenes' dataset
-    was made with, else the default family's) and its scene family: the family of that
-    dataset, which reads the scenes and makes their truth as it did when the dataset was
-    generated, whatever family the simulator itself is registered for; for loose scene files
-    the simulator's family (else the default one).
+    was made with, with the options its config gives it (``options`` win), else the default
+    family's) and its scene family: the family of that dataset, which reads the scenes and
+    makes their truth as it did when the dataset was generated, whatever family the simulator
+    itself is registered for; for loose scene files the simulator's family (else the default
+    one). ``names``: how the caller's user sets each option (``{"dt": "--dt"}``), for messages;
+    an option from the dataset's config is named there.
 
     Raises:
         BadInput: A bad horizon, an unknown simulator (one the dataset names but that is not
@@ -194,32 +200,42 @@ def prepare(
     if horizon is not None and not 0 < horizon < math.inf:
         raise BadInput(f"--horizon: must be a positive finite number, got {horizon}")
     reg = registry if registry is not None else make_registry()
+    given, names = dict(options or {}), dict(names or {})
     if simulator is None:
-        family, simulator, manifest = _made_with(files, reg)
+        family, spec, manifest = _made_with(files, reg)
         if manifest is not None:
-            check_simulator(manifest, simulator, reg, "; or choose one with --simulator")
-        made = reg.simulator(simulator, **dict(options or {}))
-        return Prepared(made, family, reg.origin("scene_family", family.name))
+            check_simulator(manifest, spec.name, reg, "; or choose one with --simulator")
+        where = f"{f'{manifest}: ' if manifest else ''}config: simulator {spec.spec!r}"
+        names.update({k: f"{where}: {k}" for k in spec.options if k not in given})
+        made = reg.simulator(spec.name, names, **{**spec.options, **given})
+        return Prepared(made, family, reg.origin("scene_family", family.name), names)
     if isinstance(simulator, str):
         family = _family_for(files, simulator, reg)
-        made = reg.simulator(simulator, **dict(options or {}))
-        return Prepared(made, family, reg.origin("scene_family", family.name))
+        made = reg.simulator(simulator, names, **given)
+        return Prepared(made, family, reg.origin("scene_family", family.name), names)
     name = reg.default_family()
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
 
 
-def _made_with(files: Sequence[Path], registry: Registry) -> tuple[SceneFamily, str, Path | None]:
+def _made_with(
+    files: Sequence[Path], registry: Registry
+) -> tuple[SceneFamily, SimulatorSpec, Path | None]:
     """The family of the dataset the first scene file belongs to, the simulator its config
-    names and its manifest (the default family, the simulator of its default config and
-    ``None`` for loose scene files)."""
+    names with its options and its manifest (the default family, the simulator of its default
+    config and ``None`` for loose scene files)."""
     folder = _dataset_of(files)
     if folder is not None:
         family = dataset_family(None, folder, registry)
         origin = registry.origin("scene_family", family.name)
-        return family, dataset_simulator(folder, family, origin), folder / MANIFEST
+        manifest = folder / MANIFEST
+        spec = parse_spec(
+            dataset_simulator(folder, family, origin), f"{manifest}: config: simulator"
+        )
+        return family, spec, manifest
     family = registry.scene_family(registry.default_family())
     origin = registry.origin("scene_family", family.name)
-    return family, simulator_named(family, origin, loaded_config(family, origin, None)), None
+    named = simulator_named(family, origin, loaded_config(family, origin, None))
+    return family, parse_spec(named, "config: simulator"), None
 
 
 def _dataset_of(files: Sequence[Path]) -> Path | None:
@@ -245,7 +261,8 @@ def _family_for(files: Sequence[Path], simulator: str, registry: Registry) -> Sc
     family = dataset_family(None, folder, registry)
     if not simulates or simulates == family.name:
         return family
-    if dataset_simulator(folder, family, registry.origin("scene_family", family.name)) != simulator:
+    named = dataset_simulator(folder, family, registry.origin("scene_family", family.name))
+    if parse_spec(named, f"{folder / MANIFEST}: config: simulator").name != simulator:
         raise BadInput(
             f"--simulator {simulator}: simulates {simulates} scenes, but {folder} holds "
             f"{family.name} scenes"
@@ -261,6 +278,7 @@ def simulate_paths(
     stability: bool = False,
     registry: Registry | None = None,
     options: Mapping[str, Any] | None = None,
+    names: Mapping[str, str] | None = None,
 ) -> Iterator[GroundTruth]:
     """Simulate every scene named by ``paths`` and yield their final states in input order.
 
@@ -272,15 +290,17 @@ def simulate_paths(
         stability: Also compute the stability annotation of each scene.
         registry: Registry to look the name up in (default: installed plugins).
         options: Options for the simulator (``dt`` for ``pymunk``, ``precision`` for analytic).
+        names: How the caller's user sets each option (``{"dt": "--dt"}``), for messages
+            (default: as the simulator takes it).
 
     Raises:
         BadInput: A path does not exist or a scene file is invalid (file and field named).
     """
     files = scene_files(paths)
-    job = prepare(horizon, simulator, registry, options, files)
+    job = prepare(horizon, simulator, registry, options, files, names)
     for path in files:
         scene = read_model(path, job.family.scene_model, _special_data(str(path)))
-        with _naming(path):
+        with _naming(path, job.names):
             truth = simulate_scene(
                 scene, job.simulator, job.family, horizon, stability=stability, origin=job.origin
             )
@@ -300,6 +320,7 @@ def simulate_lines(
     registry: Registry | None = None,
     options: Mapping[str, Any] | None = None,
     workers: int = 0,
+    names: Mapping[str, str] | None = None,
 ) -> Iterator[str]:
     """Like :func:`simulate_paths` but yields each ``final.json`` as one JSON line, in input
     order, using ``workers`` processes (0: all cores when there are at least
@@ -313,7 +334,7 @@ def simulate_lines(
     check_workers(workers, least=0)
     with _collector_paused():  # ten thousand names: see _collector_paused
         files = _scene_names(paths)
-    job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]])
+    job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]], names)
     count = _worker_count(workers, len(files))
     _JOB = (job, horizon, stability)
     if count > 1:  # forked workers share the pipes but not what one of them read
@@ -505,7 +526,7 @@ def _line(name: str, data: bytes | None = None) -> str:
     if data is None:
         data = _special_data(name)
     scene = read_model(path, job.family.scene_model, data)
-    with _naming(path):
+    with _naming(path, job.names):
         truth = simulate_scene(
             scene, job.simulator, job.family, horizon, stability=stability, origin=job.origin
         )
@@ -513,9 +534,10 @@ def _line(name: str, data: bytes | None = None) -> str:
 
 
 @contextlib.contextmanager
-def _naming(path: Path) -> Iterator[None]:
+def _naming(path: Path, names: Mapping[str, str]) -> Iterator[None]:
     """Turn a simulator's own error on a scene (an event cap overrun, a step budget) into bad
-    input naming the scene file (a plugin's bug stays one, naming the plugin)."""
+    input naming the scene file, and the option it is about as ``names`` do (``--dt``); a
+    plugin's bug stays one, naming the plugin."""
     try:
         yield
     except PluginBug:
@@ -523,6 +545,6 @@ def _naming(path: Path) -> Iterator[None]:
     except BadInput as exc:
         if str(path) in str(exc):
             raise
-        raise BadInput(f"{path}: {exc}") from None
+        raise BadInput(f"{path}: {exc.naming(names)}") from None
     except BpbError as exc:
-        raise BadInput(f"{path}: {exc}") from None
+        raise BadInput(f"{path}: {exc.naming(names)}") from None

@@ -29,6 +29,7 @@ from bpb_core.plugin_calls import (
     simulator_named,
 )
 from bpb_core.scored_units import object_origin
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_adapters.baseline.vision import VisionAdapter
@@ -69,6 +70,13 @@ def expected_text(
     return text
 
 
+def built_simulator(registry: Registry, spec: str) -> Simulator:
+    """The simulator the dataset's config names, built with the options it gives it
+    (``pymunk:dt=0.0005``), as generation built it."""
+    named = parse_spec(spec, "dataset.json: config: simulator")
+    return registry.simulator(named.name, **named.options)
+
+
 def _registry() -> Registry:
     from bpb_core.registry import PluginWarning, make_registry
 
@@ -102,11 +110,12 @@ class PluginLookup:
 
     def _simulator(self, request: ModelRequest, family: SceneFamily, origin: str) -> Simulator:
         """The simulator the request names, else the one the family's default config names
-        (asked checked, blaming ``origin``: who supplied the family)."""
+        (asked checked, blaming ``origin``: who supplied the family), built with the options
+        its spec gives (:func:`built_simulator`)."""
         name = request.simulator or simulator_named(
             family, origin, loaded_config(family, origin, None)
         )
-        simulator: Simulator = self._component(f"s:{name}", lambda r: r.simulator(name))
+        simulator: Simulator = self._component(f"s:{name}", lambda r: built_simulator(r, name))
         return simulator
 
     def _family_origin(self, family: SceneFamily) -> str:

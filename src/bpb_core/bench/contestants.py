@@ -8,50 +8,29 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Comparing
 from bpb_core.errors import BadInput
+from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
 
 
-@dataclass(frozen=True)
-class Contestant:
-    """A simulator name and its options, parsed from ``name:key=value,...``."""
-
-    spec: str
-    name: str
-    options: dict[str, Any]
+Contestant = SimulatorSpec
+"""A simulator name and its options, parsed from ``name:key=value,...``."""
 
 
 def parse_contestant(spec: str, flag: str = "--contestant") -> Contestant:
-    """Parse ``name`` or ``name:key=value,...``; values become int, float or str. ``flag``
-    names where the spec was given (``--contestant``, ``--reference``, ``--scaling``...).
+    """Parse ``name`` or ``name:key=value,...`` (:func:`~bpb_core.simulator_spec.parse_spec`);
+    ``flag`` names where the spec was given (``--contestant``, ``--reference``, ``--scaling``...).
 
     Raises:
         BadInput: An option is not ``key=value``.
     """
-    name, _, rest = spec.strip().partition(":")
-    options: dict[str, Any] = {}
-    for item in filter(None, (part.strip() for part in rest.split(","))):
-        key, eq, value = item.partition("=")
-        if not eq or not key.strip() or not name:
-            raise BadInput(f"{flag} {spec!r}: expected name or name:key=value,...")
-        options[key.strip()] = _value(value.strip())
-    return Contestant(spec.strip(), name, options)
-
-
-def _value(text: str) -> int | float | str:
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
+    return parse_spec(spec, flag)
 
 
 def comparing_family(registry: Registry, name: str) -> Comparing:
@@ -73,7 +52,7 @@ def build_simulators(
 
     Raises:
         BadInput: A simulator is unknown, simulates another family's scenes, or does not take
-            an option or refuses its value (``--contestant 'pymunk:dt=-1': --dt: ...``).
+            an option or refuses its value (``--contestant 'pymunk:dt=-1': dt: ...``).
     """
     sims: dict[str, Simulator] = {}
     for entry in entries:
@@ -82,7 +61,7 @@ def build_simulators(
             raise BadInput(f"{flag} {entry.spec}: simulates {simulates} scenes, not {family} ones")
         try:
             sims[entry.spec] = registry.simulator(entry.name, **entry.options)
-        except BadInput as exc:  # "--dt: must be ...": which of the specs given, and where
+        except BadInput as exc:  # "dt: must be ...": which of the specs given, and where
             raise BadInput(f"{flag} {entry.spec!r}: {exc}") from None
     return sims
 

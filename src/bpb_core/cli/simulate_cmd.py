@@ -23,8 +23,8 @@ class _Named(click.Path):
     "--simulator",
     "simulator",
     default=None,
-    help="Simulator [default: the one the dataset was made with; the default family's for loose "
-    "scene files].",
+    help="Simulator [default: the one the dataset was made with, with the options its config gives "
+    "it; the default family's for loose scene files].",
 )
 @click.option(
     "--dt",
@@ -78,6 +78,7 @@ def simulate(
             stability=stability,
             options=options,
             workers=workers,
+            names=FLAGS,
         ):
             chunk.append(line)
             if len(chunk) == _WRITE_EVERY:
@@ -87,6 +88,8 @@ def simulate(
 
 
 _WRITE_EVERY = 512
+FLAGS = {"dt": "--dt", "precision": "--precision", "engine": "--engine"}
+"""The simulator options these flags set, for messages (``--dt: 0.1 s is above ...``)."""
 
 
 def _write(out: Any, chunk: list[str]) -> None:

@@ -43,6 +43,7 @@ from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
 from bpb_core.plugin_calls import loaded_config, simulator_named
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -170,10 +171,19 @@ def _naming_file(config: Any) -> Iterator[None]:
 
 
 def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: Any) -> None:
+    """Refuse, before any worker starts and naming the field, a simulator spec (``name`` or
+    ``name:key=value,...``) that does not parse, an unknown simulator, or options it does
+    not take or whose values it refuses (it is built once here to see)."""
+    spec = parse_spec(simulator_named(family, origin, cfg), "config: simulator")
     try:
-        registry.get("simulator", simulator_named(family, origin, cfg))
-    except UnknownName as exc:  # before any worker starts, naming the field
+        registry.get("simulator", spec.name)
+    except UnknownName as exc:
         raise BadInput(f"config: simulator: {exc}") from None
+    if spec.options:
+        try:
+            registry.simulator(spec.name, **spec.options)
+        except BadInput as exc:
+            raise BadInput(f"config: simulator {spec.spec!r}: {exc}") from None
 
 
 def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:

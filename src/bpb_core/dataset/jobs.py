@@ -27,6 +27,7 @@ from bpb_core.dataset.worker import (
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
 from bpb_core.errors import BadInput
 from bpb_core.plugin_calls import simulator_named
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -96,9 +97,12 @@ class NoProgress:
 def worker_setup(
     registry: Registry, family: str, root: Path, seed: int, config: Any, images: bool
 ) -> WorkerSetup:
-    """Resolve the family and the simulator its config names into a picklable setup."""
+    """Resolve the family and the simulator its config names (with its options) into a
+    picklable setup."""
     family_entry = registry.get("scene_family", family)
-    simulator = simulator_named(registry.scene_family(family), family_entry.origin, config)
+    named = simulator_named(registry.scene_family(family), family_entry.origin, config)
+    spec = parse_spec(named, "config: simulator")
+    simulator = spec.name
     simulator_entry = registry.get("simulator", simulator)
     plugins = (
         ("scene_family", plugin_label(family_entry)),
@@ -113,8 +117,10 @@ def worker_setup(
         images=images,
         origin=family_entry.origin,
         plugins=plugins,
+        options=tuple(spec.options.items()),
         simulator=simulator,
         simulator_origin=simulator_entry.origin,
+        simulator_spec=spec.spec,
     )
 
 

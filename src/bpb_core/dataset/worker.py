@@ -51,7 +51,8 @@ class WorkerSetup:
         origin: Who supplied the family (a registry entry's origin), for one-line plugin errors.
         options: Keyword options the simulator is built with.
         simulator: The simulator's registered name; ``simulator_origin`` who supplied it
-            (default: ``origin``).
+            (default: ``origin``); ``simulator_spec`` how the config names it with its options
+            (``pymunk:dt=0.0005``), where a refused option's value is set.
     """
 
     root: Path
@@ -65,6 +66,7 @@ class WorkerSetup:
     options: tuple[tuple[str, Any], ...] = ()
     simulator: str = ""
     simulator_origin: str = ""
+    simulator_spec: str = ""
 
 
 _SETUP: WorkerSetup | None = None
@@ -140,7 +142,7 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
     setup, family, simulator = _ready()
     assert isinstance(family, Calibrating), "checked before the pool starts"
     what = f"scene family {family.name!r}: calibrate_horizon({horizon:g})"
-    with _finishing(setup.origin, what, f"--calibrate: horizon {horizon:g} s"):
+    with _finishing(setup, what, f"--calibrate: horizon {horizon:g} s"):
         return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 
@@ -154,7 +156,7 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     """
     name = scene_id(job.horizon, job.index)
     what = f"scene family {family.name!r}: make_scene({name!r})"
-    with _finishing(setup.origin, what, f"config: scene {name}"):
+    with _finishing(setup, what, f"config: scene {name}"):
         made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
     row = IndexRow(name, job.horizon, job.index, *_cells(setup.origin, what, name, family, made))
     if not job.keep_unstable and row.stable is False:
@@ -170,17 +172,25 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
 
 
 @contextmanager
-def _finishing(origin: str, what: str, where: str) -> Iterator[None]:
+def _finishing(setup: WorkerSetup, what: str, where: str) -> Iterator[None]:
     """Plugin code under :func:`blamed`; a simulator's own error on a scene (a
     :class:`BpbError` that is neither bad input nor a plugin bug: an event budget overrun, a
-    step it refuses) is bad input naming ``where``: the config makes scenes it cannot finish."""
+    step it refuses) is bad input naming ``where``: the config makes scenes it cannot finish.
+    One about an option's value (``dt``) says where that is set: in the simulator the config
+    names (``pymunk:dt=...``)."""
     try:
-        with blamed(origin, what):
+        with blamed(setup.origin, what):
             yield
     except (BadInput, PluginBug):
         raise
     except BpbError as exc:
-        raise BadInput(f"{where}: {exc}; the simulator cannot finish it") from None
+        said = f"{where}: {exc}; the simulator cannot finish it"
+        if exc.option is not None:
+            spec, name, option = setup.simulator_spec, setup.simulator, exc.option
+            said += (
+                f": set {option} in the config's simulator {spec or name!r} ({name}:{option}=...)"
+            )
+        raise BadInput(said) from None
 
 
 def _cells(

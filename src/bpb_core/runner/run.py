@@ -40,6 +40,7 @@ from bpb_core.runner.scenes import SceneRef, check_images
 from bpb_core.runner.state import RunState
 from bpb_core.runner.sync import run_sync
 from bpb_core.scored_units import object_origin
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
@@ -95,7 +96,8 @@ def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: 
         return
     if (data / MANIFEST).is_file():  # without one, the family's default simulator (built in)
         family = data_family(data, registry)
-        name = dataset_simulator(data, family, registry.origin("scene_family", family.name))
+        named = dataset_simulator(data, family, registry.origin("scene_family", family.name))
+        name = parse_spec(named, f"{data / MANIFEST}: config: simulator").name
         check_simulator(data / MANIFEST, name, registry, f"; {spec} runs it")
 
 

@@ -61,7 +61,9 @@ def collision_rate(
         try:
             hits += bool(simulator.run(scene).cue_contacts())
         except SimulationError as exc:  # which scene of the sample, at what speed
-            raise SimulationError(f"calibration draw {i} (cue at {speed:.3g} m/s): {exc}") from None
+            said = SimulationError(f"calibration draw {i} (cue at {speed:.3g} m/s): {exc}")
+            said.option = exc.option  # generation names where the option is set
+            raise said from None
     return hits / len(draws)
 
 

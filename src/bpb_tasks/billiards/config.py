@@ -121,7 +121,9 @@ class DatasetConfig(StrictModel):
 
     Attributes:
         family: Scene family plugin that samples the scenes.
-        simulator: Simulator plugin that computes the ground truth.
+        simulator: Simulator plugin that computes the ground truth: its name, or its name and
+            the options it is built with, as ``bpb bench sim`` takes contestants
+            (``pymunk:dt=0.0005``); recorded with the rest of the config in the manifest.
         table, physics, pockets: The scene's world (defaults of SPEC section 2).
         balls: Number of balls, ids ``0..balls-1``; ball 0 is the cue ball.
         min_gap: Smallest gap (m) between two balls and between a ball and a wall at t = 0.

@@ -19,6 +19,7 @@ from typing import Any
 
 from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
+from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards import bench_compare, card
 from bpb_tasks.billiards.calibrate import Calibration, calibrate_horizon
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping, horizon_key, load_config
@@ -144,7 +145,8 @@ class BilliardsFamily:
             config.speed_range(horizon)
 
     def simulator_name(self, config: DatasetConfig) -> str:
-        """The simulator the config names (``analytic`` by default)."""
+        """The simulator the config names (``analytic`` by default), with any options
+        (``pymunk:dt=0.0005``)."""
         return config.simulator
 
     def sample(
@@ -166,7 +168,7 @@ class BilliardsFamily:
 
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
         outcome: Outcome = simulator.run(scene)
-        final = final_state(scene, outcome, config.simulator)
+        final = final_state(scene, outcome, parse_spec(config.simulator, "simulator").name)
         stability = annotate(
             scene,
             outcome,

@@ -15,12 +15,16 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   up to ``dt``; the last step is shortened to land exactly on the horizon.
 * A step may carry no ball further than half its radius: ``dt`` above the scene's stability
   bound :func:`stable_dt` (half the ball radius over the fastest speed any ball can reach) is
-  refused, naming ``--dt`` and the bound, with
-  :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (``bpb simulate`` names the
-  scene file, ``bpb generate`` the config and the scene; a stability copy a hair faster than
-  its scene counts as unfinished). Beyond the bound pymunk tunnels: at three times it 26 of 60
-  random scenes (cue at 0.5-6 m/s) ended a ball off the table, and at twice it a ball squeezed
-  between a cushion and a fast stack of balls now and then went through.
+  refused with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError`, a message
+  starting ``dt:`` (its ``option``) and giving the bound; the caller names where ``dt`` was set
+  (``bpb simulate`` the scene file and ``--dt``, ``bpb generate`` the config, the scene and the
+  config's ``simulator``, e.g. ``pymunk:dt=0.0005``; a stability copy a hair faster than its
+  scene counts as unfinished). No ``dt`` is chosen from the bound instead: the step is part of
+  the truth (its events carry an error of up to ``dt``), so it is one number that the user
+  chose and the manifest records, the same for every scene and every stability copy.
+  Beyond the bound pymunk tunnels: at three times it 26 of 60 random scenes (cue at 0.5-6 m/s)
+  ended a ball off the table, and at twice it a ball squeezed between a cushion and a fast
+  stack of balls now and then went through.
 * Final positions lie on the table as a scene file's balls do, ``R`` from every cushion
   (:func:`bpb_tasks.billiards.scene.table_box`): a ball the horizon catches mid-bounce, sunk
   into a cushion by part of a step's travel that pymunk would push out over the next steps, is
@@ -62,27 +66,29 @@ class PymunkSimulator:
     name = "pymunk"
 
     def __init__(self, dt: float = 1e-3, tunnel: str = "refuse") -> None:
-        if not 0 < dt < math.inf:
-            raise BadInput(f"--dt: must be a positive finite number, got {dt}")
+        if isinstance(dt, bool) or not isinstance(dt, int | float) or not 0 < dt < math.inf:
+            raise BadInput.about("dt", f"must be a positive finite number of seconds, got {dt!r}")
         if tunnel not in TUNNEL:
-            raise BadInput(f"tunnel: must be {' or '.join(TUNNEL)}, got {tunnel!r}")
+            raise BadInput.about("tunnel", f"must be {' or '.join(TUNNEL)}, got {tunnel!r}")
         self.dt, self.tunnel = dt, tunnel
 
     def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon).
 
         Raises:
-            SimulationError: ``dt`` is above the scene's :func:`stable_dt`, or a ball left the
-                table all the same.
+            SimulationError: ``dt`` is above the scene's :func:`stable_dt` (its ``option`` is
+                ``"dt"``), or a ball left the table all the same.
             BadInput: The run would take more than :data:`MAX_STEPS` steps.
         """
         bound = stable_dt(scene)
         if self.tunnel == "refuse" and self.dt > bound:
             radius = scene.physics.ball_radius
-            raise SimulationError(
-                f"--dt: {self.dt:g} s is above this scene's stability bound, {_down(bound)} s "
+            raise SimulationError.about(
+                "dt",
+                f"{self.dt:g} s is above this scene's stability bound, {_down(bound)} s "
                 f"(half the ball radius, {radius / 2:g} m, over the fastest possible speed, "
-                f"{radius / (2 * bound):.4g} m/s): a longer step can carry a ball through a cushion"
+                f"{radius / (2 * bound):.4g} m/s): a longer step can carry a ball through a "
+                "cushion",
             )
         end = scene.horizon if horizon is None else horizon
         return _PymunkRun(scene, self.dt, on_table=self.tunnel == "refuse").run(end)
@@ -192,7 +198,7 @@ class _PymunkRun:
         if not math.isfinite(horizon / self.dt):  # the step count overflows a float
             raise BadInput(
                 f"pymunk: t={horizon:g} is more steps of {self.dt:g} s than can be counted; use "
-                f"a horizon under {sys.float_info.max * self.dt:.3g} s or a larger --dt"
+                f"a horizon under {sys.float_info.max * self.dt:.3g} s or a larger dt"
             )
         speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in self.scene.balls)))
         resting_by = speed / self.decel if self.decel > 0 else (0.0 if speed == 0 else math.inf)
@@ -200,7 +206,7 @@ class _PymunkRun:
         if steps > MAX_STEPS:
             raise BadInput(
                 f"pymunk: {steps:.3g} steps of {self.dt:g} s to reach t={horizon:g} with balls "
-                f"still moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger --dt"
+                f"still moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger dt"
             )
 
     def run(self, horizon: float) -> Outcome:
@@ -254,7 +260,7 @@ class _PymunkRun:
         """Fail the run: ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
         raise SimulationError(
             f"pymunk: ball {ball} went through a cushion by t={self.t:.6g} (centre at "
-            f"({x:.4g}, {y:.4g}), off the table); use a smaller --dt"
+            f"({x:.4g}, {y:.4g}), off the table); use a smaller dt"
         )
 
     def _new_segments(self) -> None:

@@ -419,7 +419,7 @@ def test_scaling_counts_a_simulator_s_refused_scenes_per_factor_and_keeps_the_re
     said = " ".join(done.stderr.split())
     assert said.count("warning:") == 1 and "failed" not in done.stdout.split("x1 ")[0]
     assert said.startswith("warning: --scaling pymunk: failed on 3 scaled scene(s) (x16: 1, ")
-    assert "x32: 2), left out of its figures; first: SimulationError: --dt: 0.001 s" in said
+    assert "x32: 2), left out of its figures; first: SimulationError: dt: 0.001 s" in said
     text = doc.read_text()
     assert "| pymunk ms/scene | analytic ms/scene |" in text and "| pymunk failed scenes |" in text
     assert "| 8 |" in text and " | 0 |\n| 16 |" in text and " | – | " in text
@@ -440,9 +440,10 @@ def test_bench_sim_command_rejects_a_bad_contestant(bench: Callable[..., Any]) -
 @pytest.mark.parametrize(
     ("flag", "spec", "said"),
     [
-        ("--contestant", "pymunk:dt=-1", "--dt: must be a positive finite number, got -1"),
+        # the spec's option dt, not a --dt flag the command does not have
+        ("--contestant", "pymunk:dt=-1", "dt: must be a positive finite number of seconds, got -1"),
         ("--contestant", "pymunk:tunnel=alow", "tunnel: must be refuse or allow, got 'alow'"),
-        ("--reference", "pymunk:dt=-1", "--dt: must be a positive finite number, got -1"),
+        ("--reference", "pymunk:dt=-1", "dt: must be a positive finite number of seconds, got -1"),
         ("--simulate-with", "pymunk:tunnel=alow", "tunnel: must be refuse or allow, got 'alow'"),
     ],
 )
@@ -468,7 +469,10 @@ def test_a_contestant_s_bad_option_value_names_the_flag_and_spec(
         (("--scaling", "nosuch"), "unknown simulator 'nosuch'"),
         (("--scaling", "pymunk:dt"), "--scaling 'pymunk:dt': expected name"),
         (("--simulate-scenes", "3", "--simulate-with", "nosuch"), "unknown simulator 'nosuch'"),
-        (("--simulate-scenes", "3", "--simulate-with", "pymunk:dt=-1"), "--dt: must be"),
+        (
+            ("--simulate-scenes", "3", "--simulate-with", "pymunk:dt=-1"),
+            "'pymunk:dt=-1': dt: must be",
+        ),
         (("--simulate-scenes", "-1"), "--simulate-scenes: must be at least 0"),
     ],
 )

@@ -209,9 +209,10 @@ def test_a_calibration_scene_the_simulator_cannot_finish_names_the_horizon_and_d
                "--no-images")  # fmt: skip
     assert done.returncode == 2, done.stderr
     assert done.stderr.strip().splitlines() == [
-        "error: --calibrate: horizon 0.05 s: calibration draw 6 (cue at 15.5 m/s): --dt: 0.001 s "
+        "error: --calibrate: horizon 0.05 s: calibration draw 6 (cue at 15.5 m/s): dt: 0.001 s "
         "is above this scene's stability bound, 0.00092 s (half the ball radius, 0.0142875 m, "
         "over the fastest possible speed, 15.52 m/s): a longer step can carry a ball through a "
-        "cushion; the simulator cannot finish it"
+        "cushion; the simulator cannot finish it: set dt in the config's simulator 'pymunk' "
+        "(pymunk:dt=...)"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pymunk.json"]

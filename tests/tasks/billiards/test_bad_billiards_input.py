@@ -44,9 +44,26 @@ CONFIGS = [
     ("pockets.toml", "[pockets]\nradius = 0.75\n",
      "balls: could not place ball 0 of 7 clear of the other balls and the pockets; use fewer or "
      "smaller balls, a smaller min_gap, or smaller pockets (pockets.radius, pocket_margin)"),
-    # pymunk's step (1e-3 s) would carry these balls through a cushion: the scene and bound
+    # pymunk's step (1e-3 s) would carry these balls through a cushion: the scene, the bound,
+    # and where dt is set (bpb generate has no --dt flag)
     ("pymunk.toml", 'simulator = "pymunk"\n[speed_ranges."1"]\nlow = 20\nhigh = 30\n',
-     "scene h1_0000: --dt: 0.001 s is above this scene's stability bound, 0.000559 s"),
+     "scene h1_0000: dt: 0.001 s is above this scene's stability bound, 0.000559 s"),
+    ("pymunk.json", '{"simulator": "pymunk:dt=0.002", "speed_ranges": {"1": {"low": 20, '
+     '"high": 30}}}', "scene h1_0000: dt: 0.002 s is above this scene's stability bound, 0.000559 "
+     "s (half the ball radius, 0.0142875 m, over the fastest possible speed, 25.52 m/s): a longer "
+     "step can carry a ball through a cushion; the simulator cannot finish it: set dt in the "
+     "config's simulator 'pymunk:dt=0.002' (pymunk:dt=...)"),
+    # the simulator's options, as bpb bench sim takes contestants: checked before any scene
+    ("spec.toml", 'simulator = "pymunk:dt"\n',
+     "simulator 'pymunk:dt': expected name or name:key=value,... (each key once)"),
+    ("twice.toml", 'simulator = "pymunk:dt=0.001,dt=0.002"\n',
+     "simulator 'pymunk:dt=0.001,dt=0.002': expected name or name:key=value,... (each key once)"),
+    ("dt.toml", 'simulator = "pymunk:dt=-1"\n',
+     "simulator 'pymunk:dt=-1': dt: must be a positive finite number of seconds, got -1"),
+    ("dt.json", '{"simulator": "pymunk:dt=fast"}',
+     "simulator 'pymunk:dt=fast': dt: must be a positive finite number of seconds, got 'fast'"),
+    ("option.toml", 'simulator = "analytic:dt=0.001"\n',
+     "simulator 'analytic:dt=0.001': simulator 'analytic': does not accept dt: "),
     ("wide.toml", "[table]\nwidth = 1e300\n", "table.width: 1e+300 m at image.px_per_m 600 makes "
      "a 6e+302 px image side (at most 20,000)"),
     # each side within 20,000 px, but 363 million pixels: gigabytes per image, minutes per scene
