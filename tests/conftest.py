@@ -12,6 +12,8 @@ here, because conftest modules share one name across folders and are never impor
 - ``small_dataset``: 6 scenes with images made by ``generate_dataset`` on 2 workers.
 - ``runs``: the oracle, stasis and model run folders of the hand-made report fixture.
 - ``secret_key``: an OpenAI key in the environment that must never reach a file.
+- ``compiled_code`` (every session): numba's cache of bpb's compiled code filled first, so that
+  no ``bpb`` command of a test builds it and says so on stderr.
 """
 
 from __future__ import annotations
@@ -32,6 +34,20 @@ from support.reports_fixture import write_runs
 from support.runner_scenes import make_dataset
 
 BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compiled_code() -> None:
+    """numba's cache filled before any test (:mod:`support.compiled_code`; about a second when
+    it is warm), in a process of its own: this one keeps numba unloaded."""
+    done = subprocess.run(
+        [sys.executable, "-m", "support.compiled_code"],
+        cwd=Path(__file__).parent,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert done.returncode == 0, done.stderr
 
 
 @pytest.fixture

@@ -2,6 +2,7 @@
 
 Every error a user can cause carries a one-line message that names the file or field at fault.
 The CLI maps them to exit codes: :class:`BadInput` is 2, anything else unexpected is 3.
+:class:`Notice` is the warning a plugin gives about slow work the user did not ask for.
 """
 
 from __future__ import annotations
@@ -83,6 +84,12 @@ class PluginBug(PluginError):
     input (exit code 3, like bpb's own bugs, but naming the plugin)."""
 
     exit_code = 3
+
+
+class Notice(UserWarning):
+    """A one-line note for the user, given with :func:`warnings.warn` before something slow
+    they did not ask for (a one-time build of a plugin's compiled code, say): the CLI prints it
+    as a ``note:`` line on stderr, a library caller sees or filters an ordinary warning."""
 
 
 @contextmanager

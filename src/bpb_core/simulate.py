@@ -326,7 +326,8 @@ def simulate_lines(
     order, using ``workers`` processes (0: all cores when there are at least
     :data:`PARALLEL_MIN` scenes; 1: this process only).
 
-    Workers are forked (POSIX only) and inherit the simulator; elsewhere this runs in-process.
+    Workers are forked (POSIX only) and inherit the simulator, and what the first part of the
+    scenes, simulated here before they start, loaded; elsewhere this runs in-process.
     """
     global _JOB
     if workers < 0:
@@ -347,8 +348,10 @@ def simulate_lines(
         return
     import multiprocessing
 
+    parts = _split(files, count)
+    yield from _emit(_lines(parts[0]))  # the workers inherit what it loaded (or built: once)
     with multiprocessing.get_context("fork").Pool(count, initializer=worker_signals) as pool:
-        for result in pool.imap(_lines, _split(files, count)):
+        for result in pool.imap(_lines, parts[1:]):
             yield from _emit(result)
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 import os
 import sys
-from typing import Any
+from typing import Any, TextIO
 
 import click
 
@@ -77,9 +77,41 @@ def single_threaded_blas() -> None:
         os.environ.setdefault(name, "1")
 
 
+def notes_on_stderr() -> None:
+    """Show each :class:`~bpb_core.errors.Notice` (a plugin's word before slow work) as one
+    ``note:`` line on stderr, in this process and the workers it forks; other warnings as
+    Python shows them."""
+    import warnings
+
+    shown = warnings.showwarning
+
+    def show(
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: TextIO | None = None,
+        line: str | None = None,
+    ) -> None:
+        from bpb_core.errors import Notice
+
+        if not issubclass(category, Notice):
+            shown(message, category, filename, lineno, file, line)
+            return
+        from rich.markup import escape
+
+        from bpb_core.cli.console import stderr
+
+        text = f"[yellow]note:[/] {escape(str(message))}"
+        stderr().print(text, highlight=False, soft_wrap=True)
+
+    warnings.showwarning = show
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the CLI and exit with bpb's exit codes."""
     single_threaded_blas()
+    notes_on_stderr()
     try:
         code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
     except click.exceptions.Abort:

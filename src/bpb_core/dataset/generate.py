@@ -30,7 +30,6 @@ from bpb_core.dataset.jobs import (
     GenerateProgress,
     NoProgress,
     check_per_horizon,
-    make_pool,
     run_calibration,
     run_scenes,
     worker_setup,
@@ -118,8 +117,7 @@ def generate_dataset(
                 setup = worker_setup(registry, name, partial, seed, cfg, images)
                 calibration = None
                 if isinstance(maker, Calibrating) and calibrate:
-                    with make_pool(n_workers, setup) as pool:
-                        results = run_calibration(pool, hs, progress)
+                    results = run_calibration(n_workers, setup, hs, progress)
                     cfg, calibration = calibrated(maker, origin, cfg, results)
                     checked_config(maker, origin, cfg, hs)
                     setup = replace(setup, config=cfg)

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from bpb_core.dataset.worker import (
     Job,
+    SceneResult,
     WorkerSetup,
     calibrate_job,
     init_pool_worker,
@@ -142,6 +143,12 @@ class InProcess:
         return None
 
 
+def forking(n_workers: int) -> bool:
+    """Whether a pool of ``n_workers`` forks its workers from this process (inheriting what it
+    has loaded)."""
+    return n_workers > 1 and multiprocessing.get_start_method() == "fork"
+
+
 def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
     """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1).
 
@@ -161,14 +168,21 @@ def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
 
 
 def run_calibration(
-    pool: Pool | InProcess, hs: list[float], progress: GenerateProgress
+    n_workers: int, setup: WorkerSetup, hs: list[float], progress: GenerateProgress
 ) -> dict[float, Any]:
-    """Calibrate each horizon, one horizon per job; results keyed by horizon."""
+    """Calibrate each horizon on ``n_workers`` processes, one horizon per job; results keyed by
+    horizon. Where workers are forked, the first horizon is calibrated in this process before
+    the pool starts, as :func:`run_scenes` makes its first scene."""
     progress.phase("calibrate", len(hs))
     found: dict[float, Any] = {}
-    for horizon, result in pool.imap(calibrate_job, hs):
-        found[horizon] = result
+    ahead = hs[:1] if forking(n_workers) else []
+    if ahead:
+        found.update(InProcess(setup).imap(calibrate_job, ahead))
         progress.advance()
+    with make_pool(n_workers, setup) as pool:
+        for horizon, result in pool.imap(calibrate_job, hs[len(ahead) :]):
+            found[horizon] = result
+            progress.advance()
     return found
 
 
@@ -187,16 +201,21 @@ def run_scenes(
     Where workers are forked (the default on Linux up to Python 3.13), the first scene is made
     in this process before the pool starts, so that the workers inherit what making it loaded
     (imports, compiled code, image caches) instead of each loading it again (docs/benchmarks.md:
-    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time).
+    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time), or building
+    it (a plugin's compiled code on first use: once, and its notice given once).
     """
     progress.phase("scenes", per_horizon * len(hs))
     if stable_only:
+        first = None
+        if forking(n_workers):
+            first = next(InProcess(setup).imap(run_job, [Job(hs[0], 0, keep_unstable=False)]))
         with make_pool(n_workers, setup) as pool:
             for h in hs:
-                _run_stable(pool, setup, writer, h, per_horizon, progress)
+                _run_stable(pool, setup, writer, h, per_horizon, progress, first)
+                first = None
         return
     jobs = (Job(h, i) for h in hs for i in range(per_horizon))
-    if n_workers > 1 and multiprocessing.get_start_method() == "fork":
+    if forking(n_workers):
         _stream(InProcess(setup), itertools.islice(jobs, 1), writer, progress)
     with make_pool(n_workers, setup) as pool:
         _stream(pool, jobs, writer, progress)
@@ -218,8 +237,10 @@ def _run_stable(
     h: float,
     per_horizon: int,
     progress: GenerateProgress,
+    first: SceneResult | None = None,
 ) -> None:
-    """Keep the first ``per_horizon`` stable indices of horizon ``h`` (drawn in batches)."""
+    """Keep the first ``per_horizon`` stable indices of horizon ``h`` (drawn in batches);
+    ``first``: index 0's result, made before the pool started."""
     kept, start = 0, 0
     while kept < per_horizon:
         if start > MAX_DRAWS_FACTOR * per_horizon + 100:
@@ -231,7 +252,9 @@ def _run_stable(
         size = max(8, 2 * (per_horizon - kept))
         batch = [Job(h, i, keep_unstable=False) for i in range(start, start + size)]
         start += size
-        for result in pool.imap(run_job, batch, chunksize=CHUNK):
+        ahead, first = [] if first is None else [first], None
+        made = pool.imap(run_job, batch[len(ahead) :], chunksize=CHUNK)
+        for result in itertools.chain(ahead, made):
             if kept >= per_horizon:
                 if result.written:
                     remove_scene(setup.root, h, result.row.index)

@@ -54,3 +54,31 @@ def test_a_callers_cached_code_follows_an_edit_of_its_callee_s_file(tmp_path: Pa
     assert index.stat().st_mtime_ns == written  # nothing changed: loaded from the cache
     (tmp_path / "callee.py").write_text(CALLEE.format(value=2))  # caller.py untouched
     assert _total(tmp_path) == "12"
+
+
+NOTE = "compiling the physics kernel for this machine, once"
+
+
+def _generate(out: Path, cache: Path) -> subprocess.CompletedProcess[str]:
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    args = ["generate", "--out", str(out), "--per-horizon", "2", "--horizons", "1",
+            "--workers", "2", "--stable-only", "--no-images"]  # fmt: skip
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    return subprocess.run([bpb, *args], capture_output=True, text=True, env=env, timeout=600)
+
+
+def test_bpb_says_once_that_it_compiles_the_kernel_and_nothing_once_it_is_cached(
+    tmp_path: Path,
+) -> None:
+    """A first command on a machine compiles for about 20 s: one line on stderr says so, not
+    one per worker (--stable-only starts its pool before any scene is made; the first one is
+    made, and the code built, in the parent). The next command loads the cache silently."""
+    cache = tmp_path / "numba-cache"
+    cache.mkdir()
+    cold = _generate(tmp_path / "cold", cache)
+    assert cold.returncode == 0, cold.stderr
+    (line,) = [line for line in cold.stderr.splitlines() if NOTE in line]
+    assert line.startswith("note: ") and line.endswith(f"cached in {cache}")
+    warm = _generate(tmp_path / "warm", cache)
+    assert warm.returncode == 0, warm.stderr
+    assert warm.stderr == ""

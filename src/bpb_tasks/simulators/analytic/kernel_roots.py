@@ -9,14 +9,18 @@ Python (slowly), which keeps the module importable and testable.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib
 import inspect
 import math
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
+
+from bpb_core.errors import Notice
 
 F = TypeVar("F", bound=Callable[..., Any])
 TIME_TOL = 1e-15  # FLOAT64.time_tol
@@ -101,9 +105,39 @@ def _stamped_cache_class() -> type | None:
     class StampedCache(FunctionCache):
         _impl_class = StampedImpl
 
+        def load_overload(self, sig: Any, target_context: Any) -> Any:
+            """numba's lookup, which the dispatcher makes before it compiles: nothing loaded
+            means it compiles now (see :func:`note_compiling`)."""
+            loaded = super().load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+            if loaded is None and self._enabled:
+                note_compiling(self._cache_path)
+            return loaded
+
     if not hasattr(CompileResultCacheImpl, "locator"):  # pragma: no cover
         return None
     return StampedCache
+
+
+class CompileNotice(Notice):
+    """The compiled kernel is about to be built: numba's cache holds no code for this machine
+    and these sources (a first use, or after an upgrade or edit)."""
+
+
+COMPILE_NOTE = "compiling the physics kernel for this machine, once (about 20 s); cached in {}"
+_noted = False  # one note per process; workers forked after it inherit it
+
+
+def note_compiling(cache_path: str) -> None:
+    """Warn once per process (:class:`CompileNotice`) that compiled code is being built, naming
+    where numba caches it (``NUMBA_CACHE_DIR`` when set, else ``cache_path``): the first build
+    of the kernel and the stability code costs about 20 s of CPU, silent otherwise."""
+    global _noted
+    if _noted:
+        return
+    _noted = True
+    where = getattr(getattr(_numba, "config", None), "CACHE_DIR", "") or cache_path
+    with contextlib.suppress(CompileNotice):  # warnings made errors: a note must not stop it
+        warnings.warn(COMPILE_NOTE.format(where), CompileNotice, stacklevel=2)
 
 
 Poly = tuple[float, float, float, float, float]
