@@ -16,10 +16,11 @@ h2_0001   {}           {}               0
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bpb_core.layout import scene_dir
+from bpb_core.layout import scene_dir, scene_id
 from bpb_tasks.billiards.scene import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth import BallPosition, FinalState, Q1Label, Q2Label, Stability
 from support.questions import questions
@@ -48,11 +49,11 @@ _TASKS = questions()
 
 def make_scene(horizon: float, index: int) -> Scene:
     balls = [Ball(id=k, pos=START[k], vel=(1.0, 0.0) if k == 0 else (0.0, 0.0)) for k in START]
-    return Scene(scene_id=f"h{horizon:g}_{index:04d}", horizon=horizon, balls=balls)
+    return Scene(scene_id=scene_id(horizon, index), horizon=horizon, balls=balls)
 
 
-def make_final(scene: Scene) -> FinalState:
-    spec = TRUTH[scene.scene_id]
+def make_final(scene: Scene, truth: dict[str, dict[str, Any]] = TRUTH) -> FinalState:
+    spec = truth[scene.scene_id]
     positions = {k: spec["moves"].get(k, START[k]) for k in START}
     return FinalState(
         scene_id=scene.scene_id,
@@ -64,13 +65,18 @@ def make_final(scene: Scene) -> FinalState:
     )
 
 
-def write_dataset(root: Path) -> Path:
-    for horizon, index in SCENES:
+def write_dataset(
+    root: Path,
+    scenes: Sequence[tuple[float, int]] = SCENES,
+    truth: dict[str, dict[str, Any]] = TRUTH,
+) -> Path:
+    """The dataset of ``scenes`` (horizon, index), ground truth from ``truth[scene_id]``."""
+    for horizon, index in scenes:
         folder = scene_dir(root, horizon, index)
         folder.mkdir(parents=True)
         scene = make_scene(horizon, index)
         (folder / "init.json").write_text(scene.model_dump_json())
-        (folder / "final.json").write_text(make_final(scene).model_dump_json())
+        (folder / "final.json").write_text(make_final(scene, truth).model_dump_json())
     (root / "dataset.json").write_text(json.dumps({"name": "hand-made"}))
     return root
 
@@ -81,15 +87,16 @@ def write_run(
     dataset: Path,
     answers: dict[tuple[str, str], dict[str, Any] | None],
     tasks: tuple[str, ...] = ("q1", "q2", "q3"),
+    scenes: Sequence[tuple[float, int]] = SCENES,
 ) -> Path:
     """``answers[(scene_id, task)]`` is the record to write (None: no file, i.e. missing);
-    ``tasks``: the tasks the run was asked."""
+    ``tasks``: the tasks the run was asked; ``scenes``: the dataset's (horizon, index)."""
     root.mkdir(parents=True)
     manifest = {"adapter": adapter, "model_id": adapter, "tasks": list(tasks)}
     manifest["data"] = str(dataset)
     (root / "run.json").write_text(json.dumps(manifest))
-    for horizon, index in SCENES:
-        sid = f"h{horizon:g}_{index:04d}"
+    for horizon, index in scenes:
+        sid = scene_id(horizon, index)
         for task in tasks:
             record = answers.get((sid, task), {"status": "missing"})
             if record.get("status") == "missing":

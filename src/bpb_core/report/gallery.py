@@ -51,9 +51,12 @@ def worst_cases(
 
     Runs take turns (models before baselines, each run's worst scene first), so one bad run
     does not fill the gallery; only scenes answered in every task and not fully right qualify.
+    Equal scores keep scene order (horizon, then index).
     """
     wide = scene_totals(units, suites)
-    wide = wide[wide[SCORE] < 1.0].sort_values([SCORE, "scene_id"], kind="stable")
+    # ties in scene order, (horizon, index): the id's numbers as numbers (h3_9999 before
+    # h3_10000, h3 before h10), not the id's text
+    wide = wide[wide[SCORE] < 1.0].sort_values([SCORE, "horizon", "index"], kind="stable")
     wide["turn"] = wide.groupby("run", observed=True).cumcount()
     ranked = wide.sort_values(["turn", "baseline", SCORE, "run"], kind="stable")
     return ranked.head(count).drop(columns="turn").reset_index(drop=True)

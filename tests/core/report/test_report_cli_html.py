@@ -346,3 +346,26 @@ def test_the_reports_gallery_names_tasks_by_their_titles(report_dir: Path) -> No
     page = re.sub(r"\s+", " ", (report_dir / "out" / "report.html").read_text())
     assert "<span>Q1 ball collisions wrong:</span>" in page
     assert not re.search(r"<span>Q\d wrong:", page)
+
+
+def test_gallery_ties_follow_scene_ids_with_numbers_read_as_numbers(tmp_path: Path) -> None:
+    """Equal scores keep the scenes in id order, numbers compared as numbers: h3_9999 before
+    h3_10000, h3 before h10 (sorted as text, h10_0000 came first and h3_10000 before
+    h3_9999)."""
+    from support.reports_fixture import stasis_answer, write_dataset, write_run
+
+    scenes = [(10.0, 0), (3.0, 10000), (3.0, 9999)]
+    ids = ["h3_9999", "h3_10000", "h10_0000"]
+    same = {"q1": set(), "q2": set(), "moves": {0: (1.9, 0.9)}}  # stasis misses only ball 0
+    data = write_dataset(tmp_path / "data", scenes, dict.fromkeys(ids, same))
+    answers = {(s, t): {"answer": stasis_answer(s, t)} for s in ids for t in ("q1", "q2", "q3")}
+    run = write_run(tmp_path / "runs" / "stasis", "baseline:stasis", data, answers, scenes=scenes)
+    done = bpb("report", str(run), "--out", str(tmp_path / "out"), "--bootstrap", "10")
+    assert done.returncode == 0, done.stderr
+    files = sorted(p.name for p in (tmp_path / "out" / "gallery").iterdir())
+    assert files == [f"{i:02d}_stasis_{sid}.png" for i, sid in enumerate(ids)]
+    page = (tmp_path / "out" / "report.html").read_text()
+    shown = re.findall(r"<h3>stasis &middot;\s*(\S+)</h3>", page)
+    assert shown == ids
+    units = pd.read_csv(tmp_path / "out" / "units.csv")
+    assert units["scene_id"].drop_duplicates().tolist() == ids  # the tables' order too
