@@ -4,7 +4,7 @@
 raises in that wait leaves ``Popen`` with an exception and the child running, with no process
 object to stop it (a window of milliseconds that a busy machine widens to tens). :func:`child`
 holds the two signals while ``Popen`` runs and delivers a held one only once the process is in
-the ``try`` that stops it.
+the ``try`` that stops it; :func:`run_child` is ``subprocess.run`` through it.
 """
 
 from __future__ import annotations
@@ -34,6 +34,20 @@ def child(args: list[str], **popen: Any) -> Iterator[subprocess.Popen[Any]]:
         process.kill()
         with process:  # closes its pipes and reaps it
             pass
+
+
+def run_child(args: list[str], **popen: Any) -> subprocess.CompletedProcess[Any]:
+    """``subprocess.run(args, check=True, **popen)`` started by :func:`child`: the process is
+    waited for, and killed if the bench is stopped meanwhile or as it starts.
+
+    Raises:
+        subprocess.CalledProcessError: It exited non-zero (its output attached).
+    """
+    with child(args, **popen) as process:
+        stdout, stderr = process.communicate()
+    if process.returncode:
+        raise subprocess.CalledProcessError(process.returncode, args, stdout, stderr)
+    return subprocess.CompletedProcess(args, process.returncode, stdout, stderr)
 
 
 @contextlib.contextmanager

@@ -30,6 +30,7 @@ from pathlib import Path
 
 from PIL import Image
 
+from bpb_core.bench.children import run_child
 from bpb_core.dataset.worker import worker_signals
 
 SAMPLE_IMAGES = 24
@@ -161,7 +162,7 @@ def measure_memory(per_horizon: int, workers: int | None = None) -> MemoryUse:
     """Peak RSS of the generating process and of its largest worker, in a fresh interpreter."""
     n_workers = workers or os.cpu_count() or 1
     with tempfile.TemporaryDirectory(prefix="bpb-bench-mem-") as tmp:
-        done = subprocess.run(
+        done = run_child(
             [
                 sys.executable,
                 "-c",
@@ -170,8 +171,8 @@ def measure_memory(per_horizon: int, workers: int | None = None) -> MemoryUse:
                 str(per_horizon),
                 str(n_workers),
             ],
-            check=True,
-            capture_output=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
             text=True,
         )
     data = json.loads(done.stdout.strip().splitlines()[-1])

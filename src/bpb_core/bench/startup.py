@@ -9,6 +9,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from bpb_core.bench.children import run_child
+
 
 @dataclass(frozen=True)
 class StartupResult:
@@ -27,7 +29,7 @@ class StartupResult:
 
 def _time(argv: list[str]) -> float:
     started = time.perf_counter()
-    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    run_child(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return (time.perf_counter() - started) * 1000.0
 
 

@@ -72,3 +72,54 @@ def test_a_command_that_times_out_in_a_test_is_killed_with_its_children() -> Non
     if not gone:  # not to leave it running when the test fails
         os.kill(server, signal.SIGKILL)
     assert gone, "the command's child outlived it"
+
+
+# bpb bench startup's and bench generate --memory's measurement, stopped as above: the patched
+# Popen (the standard library's, not ours) gives every child the SIGTERM-sending preexec_fn, and
+# the child then sleeps before its exec, so that one left behind is still there to be seen
+_MEASUREMENT_STOPPED_WHILE_STARTING = """
+import os, signal, subprocess, time
+
+def terminated(signum, frame):
+    raise SystemExit(128 + signum)
+
+def stop_the_bench():
+    os.kill(os.getppid(), signal.SIGTERM)
+    time.sleep(5)
+
+class Starting(subprocess.Popen):
+    def __init__(self, args, **popen):
+        super().__init__(args, **popen, preexec_fn=stop_the_bench)
+
+subprocess.Popen = Starting
+signal.signal(signal.SIGTERM, terminated)
+from bpb_core.bench.{module} import {function}
+{function}({args})
+print("not stopped", flush=True)
+"""
+
+
+@pytest.mark.skipif(not HAS_PROC, reason="lists the process group through /proc")
+@pytest.mark.parametrize(
+    ("module", "function", "args"),
+    [("startup", "measure_startup", "1"), ("generate", "measure_memory", "1, 1")],
+)
+def test_bench_startup_and_memory_leave_no_child_when_stopped_as_one_starts(
+    tmp_path: Path, module: str, function: str, args: str
+) -> None:
+    """They ran their children with subprocess.run, whose Popen left the child running."""
+    script = _MEASUREMENT_STOPPED_WHILE_STARTING.format(module=module, function=function, args=args)
+    out, err = tmp_path / "out", tmp_path / "err"
+    with out.open("w") as stdout, err.open("w") as stderr:
+        process = subprocess.Popen(
+            [sys.executable, "-c", script], stdout=stdout, stderr=stderr, start_new_session=True
+        )
+    try:
+        process.wait(timeout=120)
+        left = group_members(process.pid)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 128 + signal.SIGTERM, err.read_text()
+    assert out.read_text() == ""
+    assert left == [], "the measured command outlived the bench"
