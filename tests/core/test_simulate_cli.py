@@ -18,7 +18,7 @@ from bpb_core.dataset import generate_dataset
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.simulate import simulate_lines
 from bpb_tasks.billiards.bench_compare import random_scene
-from bpb_tasks.billiards.scene import Scene, table_box
+from bpb_tasks.billiards.scene import DEFAULT_RADIUS, Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from support.processes import HAS_PROC, as_in_a_terminal, ctrl_c
@@ -108,6 +108,33 @@ def test_stability_of_a_scene_whose_second_past_the_horizon_crosses_the_event_ca
     assert 90_000 > len(final.events) > 50_000
     assert final.stability is not None and final.stability.horizon_gap is not None
     assert final.stability.horizon_gap == kernel_horizon_gap(narrow, 1.0, 10**6)
+
+
+def test_pymunk_stability_of_a_scene_whose_second_past_the_horizon_is_over_the_step_budget(
+    tmp_path: Path,
+) -> None:
+    """A ball against the right cushion rolling into it at 1 cm/s, stopped by friction within
+    1 ms. At --dt 9e-8 its 0.5 s horizon is within pymunk's budget of 10,000,000 steps, the
+    horizon gap's run to 1.5 s is not (the budget allows for balls moving until a second after
+    they surely rest): `bpb simulate --stability` exited 2 ('1.11e+07 steps of 9e-08 s to
+    reach t=1.5') where `bpb simulate` succeeds. That run now stops where the budget would
+    have refused it; the ball rested long before, so the gap is the exact one."""
+    radius = DEFAULT_RADIUS
+    touching = Scene.model_validate(
+        {
+            "scene_id": "touching",
+            "horizon": 0.5,
+            "physics": {"mu": 1.0},
+            "pockets": {"radius": 0.06, "centers": []},
+            "balls": [{"id": 0, "pos": [2.0 - radius, 0.5], "vel": [0.01, 0.0]}],
+        }
+    )
+    path = write(tmp_path / "touching.json", touching)
+    args = ("simulate", str(path), "--simulator", "pymunk", "--dt", "9e-8")
+    (plain,) = lines(bpb(*args))
+    (final,) = lines(bpb(*args, "--stability"))
+    assert final.events == plain.events and [e.kind for e in final.events] == ["wall", "stop"]
+    assert final.stability is not None and final.stability.horizon_gap == 0.5 - 9e-8
 
 
 def test_pymunk_with_dt(scenes: list[tuple[Path, Scene]]) -> None:

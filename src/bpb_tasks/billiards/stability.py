@@ -17,7 +17,8 @@ deterministic. For each perturbation the labels are compared with the nominal on
 two balls overlap in the nominal run (a pressing contact, which the event model does not
 resolve; the analytic engine only). The deterministic margins
 (:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside; ``stable`` does not depend
-on them (a ``horizon_gap`` left unmeasured at the event cap included).
+on them (a ``horizon_gap`` left unmeasured at the event cap, or where pymunk's run past the
+horizon stopped, included).
 Perturbed copies skip scene validation (a copy may touch a wall or another ball); with numba
 installed they run as one batch in the compiled kernel.
 """
@@ -44,6 +45,7 @@ from bpb_tasks.billiards.stability_batch import (
     kernel_tally,
 )
 from bpb_tasks.billiards.stability_margins import (
+    capped_horizon_gap,
     events_horizon_gap,
     horizon_gap,
     min_event_gap,
@@ -53,6 +55,7 @@ from bpb_tasks.billiards.stability_margins import (
 )
 from bpb_tasks.billiards.truth import Stability
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
+from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
 
 Labels = tuple[frozenset[int], frozenset[str], frozenset[int]]
 Positions = dict[int, tuple[float, float] | None]
@@ -169,12 +172,17 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
     analytic engine's run stops at its event cap instead of failing the scene, which ran to
     its horizon within it: the gap is then measured on the events up to the cap
     (:func:`~bpb_tasks.billiards.stability_margins.capped_horizon_gap`; ``None`` when they
-    do not decide it), on both paths alike."""
+    do not decide it), on both paths alike. pymunk's run stops, by the same rule, where it
+    would fail: a ball through a cushion, its step budget."""
     if isinstance(simulator, AnalyticSimulator) and simulator.kernel_loaded():
         return kernel_horizon_gap(scene, horizon, simulator.max_events)
     if isinstance(simulator, AnalyticSimulator):
         events, finished = simulator.capped_events(scene, horizon + 1.0)
         return events_horizon_gap(events, horizon, finished=finished)
+    if isinstance(simulator, PymunkSimulator):
+        events, stopped = simulator.events_until_failure(scene, horizon + 1.0)
+        gap = events_horizon_gap(events, horizon)
+        return gap if stopped is None else capped_horizon_gap(gap, stopped, horizon)
     return horizon_gap(simulator.run(scene, horizon + 1.0), horizon)
 
 

@@ -11,7 +11,8 @@
   The run past the horizon has the simulator's event cap (counted from ``t = 0``); one that
   reaches it stops there (:func:`capped_horizon_gap`) rather than fail a scene that ran to its
   horizon: the gap is still exact when an event after the horizon came before the cap (nearly
-  always), and ``None`` (not measured) when no event up to the cap decides it.
+  always), and ``None`` (not measured) when no event up to the cap decides it. pymunk's run
+  stops the same way where it would fail (a ball through a cushion, its step budget).
 * ``pocket_gap``: the nearest pocket-edge pass: over moving balls and the pockets their centres
   pass without entering, the smallest ``closest distance - pocket radius``.
 * ``overlap``: the deepest overlap of two balls, ``2R - closest distance`` over every pair
@@ -125,10 +126,11 @@ def events_horizon_gap(
 
 
 def capped_horizon_gap(best: float | None, last: float, horizon: float) -> float | None:
-    """The horizon gap of a run stopped at its event cap: ``best``, the gap over the events it
-    processed, when no later event can be nearer (each is at or after ``last``, the time of the
-    last one processed; so always when a non-stop event after the horizon was processed), else
-    ``None``: not measured."""
+    """The horizon gap of a run stopped early, at its event cap or where pymunk's run would
+    fail: ``best``, the gap over the events it processed, when no later event can be nearer
+    (each is at or after ``last``, the time of the last one processed or of pymunk's last
+    step; so always when a non-stop event after the horizon was processed), else ``None``:
+    not measured."""
     return best if best is not None and best <= last - horizon else None
 
 

@@ -83,8 +83,9 @@ class Stability(BaseModel):
         min_event_gap: Smallest time (s) between two events sharing a ball.
         horizon_gap: Time (s) between the horizon and the nearest event, looking up to 1 s
             past the horizon; null when there is none. The run past the horizon stops at the
-            simulator's event cap instead of failing the scene: the gap is still exact when
-            an event after the horizon came before the cap (almost always), and null (not
+            simulator's event cap (pymunk's: where its run would fail, a ball through a
+            cushion or its step budget) instead of failing the scene: the gap is still exact
+            when an event after the horizon came before the cap (almost always), and null (not
             measured) when only stops did and the nearest event before the horizon is
             farther than the last of them.
         pocket_gap: Nearest pocket-edge pass (m): closest distance of a moving centre to a pocket

@@ -30,7 +30,9 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   into a cushion by part of a step's travel that pymunk would push out over the next steps, is
   put back against it. A ball whose centre crosses a cushion has left the table: the run fails
   with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (``bpb simulate`` names the
-  scene file) rather than give that position as the truth.
+  scene file) rather than give that position as the truth. The stability annotation's run
+  1 s past the horizon stops there instead, as at the step budget
+  (:meth:`PymunkSimulator.events_until_failure`): the scene ran to its horizon.
 * ``tunnel="allow"`` (``pymunk:dt=0.01,tunnel=allow`` as a ``bpb bench sim`` contestant) turns
   the last two points off: any ``dt`` is taken and the final positions are pymunk's own, a ball
   that went through a cushion included. That is what ``bpb bench sim`` measures (speed against
@@ -80,6 +82,26 @@ class PymunkSimulator:
                 ``"dt"``), or a ball left the table all the same.
             BadInput: The run would take more than :data:`MAX_STEPS` steps.
         """
+        end = scene.horizon if horizon is None else horizon
+        return self._started(scene).run(end)
+
+    def events_until_failure(
+        self, scene: Scene, end: float
+    ) -> tuple[tuple[Event, ...], float | None]:
+        """The events of ``scene`` run to ``end`` as :meth:`run` runs it, stopped where that run
+        would fail instead of failing: at the step where a ball went through a cushion, or
+        where the :data:`MAX_STEPS` budget runs out. Returns the events and ``None`` when the
+        run reached ``end`` (or nothing moves any more), else the time it stopped at: every
+        later event is at or after it. The stability annotation's run past the horizon, like
+        :meth:`~bpb_tasks.simulators.analytic.AnalyticSimulator.capped_events`.
+
+        Raises:
+            SimulationError: ``dt`` is above the scene's :func:`stable_dt`, as in :meth:`run`.
+        """
+        return self._started(scene).events_until_failure(end)
+
+    def _started(self, scene: Scene) -> _PymunkRun:
+        """A run of ``scene``, once ``dt`` is within its bound (see :meth:`run`)."""
         bound = stable_dt(scene)
         if self.tunnel == "refuse" and self.dt > bound:
             radius = scene.physics.ball_radius
@@ -90,8 +112,7 @@ class PymunkSimulator:
                 f"{radius / (2 * bound):.4g} m/s): a longer step can carry a ball through a "
                 "cushion",
             )
-        end = scene.horizon if horizon is None else horizon
-        return _PymunkRun(scene, self.dt, on_table=self.tunnel == "refuse").run(end)
+        return _PymunkRun(scene, self.dt, on_table=self.tunnel == "refuse")
 
 
 def stable_dt(scene: Scene) -> float:
@@ -200,17 +221,38 @@ class _PymunkRun:
                 f"pymunk: t={horizon:g} is more steps of {self.dt:g} s than can be counted; use "
                 f"a horizon under {sys.float_info.max * self.dt:.3g} s or a larger dt"
             )
-        speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in self.scene.balls)))
-        resting_by = speed / self.decel if self.decel > 0 else (0.0 if speed == 0 else math.inf)
-        steps = min(horizon, resting_by + 1.0) / self.dt
+        steps = min(horizon, self._moving_for()) / self.dt
         if steps > MAX_STEPS:
             raise BadInput(
                 f"pymunk: {steps:.3g} steps of {self.dt:g} s to reach t={horizon:g} with balls "
                 f"still moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger dt"
             )
 
+    def _moving_for(self) -> float:
+        """A time by which every ball rests, plus a second (see :meth:`_check_budget`)."""
+        speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in self.scene.balls)))
+        resting_by = speed / self.decel if self.decel > 0 else (0.0 if speed == 0 else math.inf)
+        return resting_by + 1.0
+
     def run(self, horizon: float) -> Outcome:
         self._check_budget(horizon)
+        self._step_to(horizon)
+        return self._outcome(horizon)
+
+    def events_until_failure(self, end: float) -> tuple[tuple[Event, ...], float | None]:
+        """See :meth:`PymunkSimulator.events_until_failure`. A ball through a cushion stops
+        the run at the end of the step that moved it (events of that step not yet logged, a
+        pocket, are at that time), the step budget at the last step it allows
+        (:data:`MAX_STEPS` of them, when balls may still move then)."""
+        reach = end if self._moving_for() / self.dt <= MAX_STEPS else min(end, MAX_STEPS * self.dt)
+        try:
+            self._step_to(reach)
+        except SimulationError:
+            return tuple(self.events), self.t
+        return tuple(self.events), None if reach == end or not self.active else reach
+
+    def _step_to(self, horizon: float) -> None:
+        """Step from ``t = 0`` to ``horizon``, the last step shortened to land on it."""
         steps = max(math.floor(horizon / self.dt + 1e-9), 0)
         last = horizon - steps * self.dt
         for index in range(steps + 1):
@@ -225,7 +267,6 @@ class _PymunkRun:
             self._friction(size)
             self._pockets()
             self._new_segments()
-        return self._outcome(horizon)
 
     def _friction(self, size: float) -> None:
         drop = self.decel * size

@@ -12,7 +12,11 @@ from bpb_core.registry import make_registry
 from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
 from bpb_tasks.billiards.scene import table_box
 from bpb_tasks.billiards.stability import annotate
-from bpb_tasks.billiards.stability_margins import pair_margins
+from bpb_tasks.billiards.stability_margins import (
+    capped_horizon_gap,
+    events_horizon_gap,
+    pair_margins,
+)
 from bpb_tasks.billiards.truth import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
@@ -92,6 +96,27 @@ def test_pymunk_fails_a_run_whose_ball_went_through_a_cushion() -> None:
     s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
     with pytest.raises(SimulationError, match=r"^pymunk: ball 0 went through a cushion by t="):
         _PymunkRun(s, 30 * stable_dt(s)).run(1.0)
+
+
+def test_pymunk_run_past_the_horizon_stops_where_a_ball_goes_through_a_cushion() -> None:
+    """The stability annotation's run 1 s past the horizon stops where the run would fail, at
+    the step that carried a ball through a cushion (forced past the bound here: the cue ball
+    crosses the right one between 0.29 s and 0.36 s), and the horizon gap is measured as at
+    the analytic engine's event cap: exact when an event after the horizon came first (ball
+    1 meets the top cushion at 0.07 s), not measured when the nearest event lies before the
+    horizon, farther than where the run stopped."""
+    s = scene([(0.2, 0.5, 6.0, 0.0), (0.5, 0.96, 0.0, 0.3)], horizon=1.0, mu=0.0, pockets=[])
+    dt = 30 * stable_dt(s)
+    (top,), stopped = _PymunkRun(s, dt).events_until_failure(1.3)
+    assert top.kind == "wall" and top.wall == "TOP" and top.t == pytest.approx(dt)
+    assert stopped == pytest.approx(5 * dt)
+    with pytest.raises(SimulationError, match="ball 0 went through a cushion"):
+        _PymunkRun(s, dt).run(1.3)
+    for horizon, gap in ((0.05, top.t - 0.05), (0.3, None)):
+        _PymunkRun(s, dt).run(horizon)  # the scene runs to its horizon
+        events, stopped = _PymunkRun(s, dt).events_until_failure(horizon + 1.0)
+        assert stopped is not None
+        assert capped_horizon_gap(events_horizon_gap(events, horizon), stopped, horizon) == gap
 
 
 def test_pymunk_with_tunnel_allowed_gives_its_own_positions_as_bench_sim_measures_them() -> None:
