@@ -29,9 +29,9 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   (:func:`bpb_tasks.billiards.scene.table_box`): a ball the horizon catches mid-bounce, sunk
   into a cushion by part of a step's travel that pymunk would push out over the next steps, is
   put back against it. A ball whose centre crosses a cushion has left the table: the run fails
-  with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (``bpb simulate`` names the
-  scene file) rather than give that position as the truth. The stability annotation's run
-  1 s past the horizon stops there instead, as at the step budget
+  with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (about ``dt``, named by
+  the caller as the bound refusal is) rather than give that position as the truth. The
+  stability annotation's run 1 s past the horizon stops there instead, as at the step budget
   (:meth:`PymunkSimulator.events_until_failure`): the scene ran to its horizon.
 * ``tunnel="allow"`` (``pymunk:dt=0.01,tunnel=allow`` as a ``bpb bench sim`` contestant) turns
   the last two points off: any ``dt`` is taken and the final positions are pymunk's own, a ball
@@ -78,9 +78,10 @@ class PymunkSimulator:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon).
 
         Raises:
-            SimulationError: ``dt`` is above the scene's :func:`stable_dt` (its ``option`` is
-                ``"dt"``), or a ball left the table all the same.
-            BadInput: The run would take more than :data:`MAX_STEPS` steps.
+            SimulationError: ``dt`` is above the scene's :func:`stable_dt`, a ball left the
+                table all the same, or the run would take more than :data:`MAX_STEPS` steps;
+                each message starts ``dt:`` (its ``option``), for the caller to name where
+                ``dt`` is set.
         """
         end = scene.horizon if horizon is None else horizon
         return self._started(scene).run(end)
@@ -217,15 +218,17 @@ class _PymunkRun:
         ``sqrt(sum v^2) / (mu g)``; stepping stops then. Without friction they never rest.
         """
         if not math.isfinite(horizon / self.dt):  # the step count overflows a float
-            raise BadInput(
-                f"pymunk: t={horizon:g} is more steps of {self.dt:g} s than can be counted; use "
-                f"a horizon under {sys.float_info.max * self.dt:.3g} s or a larger dt"
+            raise SimulationError.about(
+                "dt",
+                f"t={horizon:g} is more steps of {self.dt:g} s than can be counted; use a "
+                f"horizon under {sys.float_info.max * self.dt:.3g} s or a larger dt",
             )
         steps = min(horizon, self._moving_for()) / self.dt
         if steps > MAX_STEPS:
-            raise BadInput(
-                f"pymunk: {steps:.3g} steps of {self.dt:g} s to reach t={horizon:g} with balls "
-                f"still moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger dt"
+            raise SimulationError.about(
+                "dt",
+                f"{steps:.3g} steps of {self.dt:g} s to reach t={horizon:g} with balls still "
+                f"moving (at most {MAX_STEPS:,}); use a shorter horizon or a larger dt",
             )
 
     def _moving_for(self) -> float:
@@ -299,9 +302,10 @@ class _PymunkRun:
 
     def _through(self, ball: int, x: float, y: float) -> None:
         """Fail the run: ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
-        raise SimulationError(
-            f"pymunk: ball {ball} went through a cushion by t={self.t:.6g} (centre at "
-            f"({x:.4g}, {y:.4g}), off the table); use a smaller dt"
+        raise SimulationError.about(
+            "dt",
+            f"{self.dt:g} s let ball {ball} go through a cushion by t={self.t:.6g} (centre at "
+            f"({x:.4g}, {y:.4g}), off the table); use a smaller dt",
         )
 
     def _new_segments(self) -> None:

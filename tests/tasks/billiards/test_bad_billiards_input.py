@@ -144,12 +144,16 @@ SCENES = [
     *[(f"huge-mu{'-'.join(['', *args])}", lambda: _scene(physics={"mu": 1e308}), args,
        "physics: mu*g = 1e+308 * 9.8 overflows (not a finite deceleration in m/s^2)")
       for args in ([], ["--engine", "kernel"], ["--engine", "python"], ["--simulator", "pymunk"])],
+    # pymunk's step budget names where dt is set, as its bound refusal does
     ("pymunk-mu0", _bouncer, ["--simulator", "pymunk", "--horizon", "1e9"],
-     "pymunk: 1e+12 steps of 0.001 s to reach t=1e+09 with balls still moving"),
+     "--dt: 1e+12 steps of 0.001 s to reach t=1e+09 with balls still moving"),
+    ("pymunk-small-dt", _bouncer, ["--simulator", "pymunk", "--dt", "5e-8"],
+     "--dt: 2e+07 steps of 5e-08 s to reach t=1 with balls still moving (at most 10,000,000); "
+     "use a shorter horizon or a larger dt"),
     ("pymunk-huge-horizon", _scene, ["--simulator", "pymunk", "--horizon", "1e308"],
-     "pymunk: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
+     "--dt: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
     ("pymunk-huge-horizon-in-file", lambda: _scene(horizon=1e308), ["--simulator", "pymunk"],
-     "pymunk: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
+     "--dt: t=1e+308 is more steps of 0.001 s than can be counted; use a horizon under"),
     ("event-cap", _bouncer, ["--horizon", "1e9"], "more than 100000 events before t=1000000000"),
     # no coercion: "0" is no ball id, so this scene has no cue ball
     ("text-id", lambda: _scene(balls=[{"id": "0", "pos": [1.0, 0.5], "vel": [1.0, 0.0]}]), [],

@@ -46,6 +46,25 @@ def test_a_step_too_long_names_the_config_s_simulator_not_a_flag(tmp_path: Path)
     assert not (tmp_path / "ds").exists()
 
 
+def test_a_step_over_pymunk_s_budget_names_the_config_s_simulator(tmp_path: Path) -> None:
+    # it was the bare "pymunk: 2e+07 steps of 1e-07 s to reach t=2 ...; use a shorter horizon
+    # or a larger dt", naming neither the config file nor the scene nor where dt is set
+    config = tmp_path / "small_dt.json"
+    config.write_text(json.dumps({"simulator": "pymunk:dt=1e-7"}))
+    done = subprocess.run(
+        [BPB, "generate", "--out", str(tmp_path / "ds"), "--config", str(config),
+         "--horizons", "2", "--per-horizon", "1", "--workers", "1", "--no-images"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        f"error: {config}: scene h2_0000: dt: 2e+07 steps of 1e-07 s to reach t=2 with balls "
+        "still moving (at most 10,000,000); use a shorter horizon or a larger dt; the simulator "
+        "cannot finish it: set dt in the config's simulator 'pymunk:dt=1e-7' (pymunk:dt=...)\n"
+    )
+    assert not (tmp_path / "ds").exists()
+
+
 def test_a_step_set_in_the_config_makes_a_recorded_reproducible_dataset(tmp_path: Path) -> None:
     config = _config(tmp_path, "pymunk:dt=0.0005")
     first, again = tmp_path / "first", tmp_path / "again"

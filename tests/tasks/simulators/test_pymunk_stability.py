@@ -94,8 +94,12 @@ def test_pymunk_fails_a_run_whose_ball_went_through_a_cushion() -> None:
     # the refusal above keeps bpb from such steps; the run itself still never returns a ball
     # off the table (here forced past the bound: the cue ball tunnels on the first bounce)
     s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
-    with pytest.raises(SimulationError, match=r"^pymunk: ball 0 went through a cushion by t="):
+    # about dt, as the bound refusal is: bpb simulate and generate name where it is set
+    with pytest.raises(SimulationError, match=r"^dt: .* s let ball 0 go through a cushion by t="):
         _PymunkRun(s, 30 * stable_dt(s)).run(1.0)
+    with pytest.raises(SimulationError) as failed:
+        _PymunkRun(s, 30 * stable_dt(s)).run(1.0)
+    assert failed.value.naming({"dt": "--dt"}).startswith("--dt: ")
 
 
 def test_pymunk_run_past_the_horizon_stops_where_a_ball_goes_through_a_cushion() -> None:
@@ -110,7 +114,7 @@ def test_pymunk_run_past_the_horizon_stops_where_a_ball_goes_through_a_cushion()
     (top,), stopped = _PymunkRun(s, dt).events_until_failure(1.3)
     assert top.kind == "wall" and top.wall == "TOP" and top.t == pytest.approx(dt)
     assert stopped == pytest.approx(5 * dt)
-    with pytest.raises(SimulationError, match="ball 0 went through a cushion"):
+    with pytest.raises(SimulationError, match="let ball 0 go through a cushion"):
         _PymunkRun(s, dt).run(1.3)
     for horizon, gap in ((0.05, top.t - 0.05), (0.3, None)):
         _PymunkRun(s, dt).run(horizon)  # the scene runs to its horizon

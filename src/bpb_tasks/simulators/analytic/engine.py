@@ -74,7 +74,8 @@ DEFAULT_MAX_EVENTS = 100_000
 
 class SimulationError(BpbError):
     """A scene the simulator cannot finish: the analytic engine exceeded its event budget, or
-    a pymunk ball went through a cushion."""
+    pymunk's step refused its scene, let a ball through a cushion or would exceed its budget
+    of steps (those three about ``dt``: :meth:`~bpb_core.errors.BpbError.about`)."""
 
 
 class AnalyticSimulator:
