@@ -136,13 +136,14 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
 
     Raises:
         BadInput: The simulator cannot finish a calibration scene (an event cap overrun, a
-            step it refuses), naming the horizon.
+            step it refuses), naming the config (its file, once generation adds it), the
+            horizon and, for an option's value, where the config sets it.
         PluginBug: The family's ``calibrate_horizon()`` raised anything else, naming its plugin.
     """
     setup, family, simulator = _ready()
     assert isinstance(family, Calibrating), "checked before the pool starts"
     what = f"scene family {family.name!r}: calibrate_horizon({horizon:g})"
-    with _finishing(setup, what, f"--calibrate: horizon {horizon:g} s"):
+    with _finishing(setup, what, f"config: --calibrate: horizon {horizon:g} s"):
         return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 

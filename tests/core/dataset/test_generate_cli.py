@@ -201,7 +201,9 @@ def test_a_calibration_scene_the_simulator_cannot_finish_names_the_horizon_and_d
 ) -> None:
     """A simulator's own refusal during --calibrate (pymunk's step too long for the fast cue
     of a short horizon) used to be "error: --dt: ..." with exit 3, as if bpb had a bug, naming
-    neither the horizon nor the scene; generation says which scene it cannot finish."""
+    neither the horizon nor the scene; generation says which scene it cannot finish. It then
+    started "--calibrate: horizon ...", naming no file, where the same refusal of a dataset
+    scene names the config file that sets the simulator; now it names it too."""
     config = tmp_path / "pymunk.json"
     config.write_text('{"simulator": "pymunk", "calibration": {"samples": 20, "iterations": 4}}')
     done = bpb("generate", "--out", str(tmp_path / "ds"), "--per-horizon", "1", "--workers", "2",
@@ -209,10 +211,10 @@ def test_a_calibration_scene_the_simulator_cannot_finish_names_the_horizon_and_d
                "--no-images")  # fmt: skip
     assert done.returncode == 2, done.stderr
     assert done.stderr.strip().splitlines() == [
-        "error: --calibrate: horizon 0.05 s: calibration draw 6 (cue at 15.5 m/s): dt: 0.001 s "
-        "is above this scene's stability bound, 0.00092 s (half the ball radius, 0.0142875 m, "
-        "over the fastest possible speed, 15.52 m/s): a longer step can carry a ball through a "
-        "cushion; the simulator cannot finish it: set dt in the config's simulator 'pymunk' "
-        "(pymunk:dt=...)"
+        f"error: {config}: --calibrate: horizon 0.05 s: calibration draw 6 (cue at 15.5 m/s): "
+        "dt: 0.001 s is above this scene's stability bound, 0.00092 s (half the ball radius, "
+        "0.0142875 m, over the fastest possible speed, 15.52 m/s): a longer step can carry a "
+        "ball through a cushion; the simulator cannot finish it: set dt in the config's "
+        "simulator 'pymunk' (pymunk:dt=...)"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pymunk.json"]
