@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import gc
 import itertools
-import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.pool import Pool
@@ -143,10 +142,13 @@ class InProcess:
         return None
 
 
-def forking(n_workers: int) -> bool:
-    """Whether a pool of ``n_workers`` forks its workers from this process (inheriting what it
-    has loaded)."""
-    return n_workers > 1 and multiprocessing.get_start_method() == "fork"
+def pooled(n_workers: int) -> bool:
+    """Whether ``n_workers`` run in a pool of worker processes, whose first job this process
+    does itself before the pool starts: forked workers (the default on Linux up to Python
+    3.13) inherit what it loaded; spawned ones (macOS, and Linux's forkserver from 3.14) load
+    from the disk caches it filled, such as a plugin's compiled code, instead of each building
+    it at once (and giving its notice once each)."""
+    return n_workers > 1
 
 
 def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
@@ -171,11 +173,11 @@ def run_calibration(
     n_workers: int, setup: WorkerSetup, hs: list[float], progress: GenerateProgress
 ) -> dict[float, Any]:
     """Calibrate each horizon on ``n_workers`` processes, one horizon per job; results keyed by
-    horizon. Where workers are forked, the first horizon is calibrated in this process before
-    the pool starts, as :func:`run_scenes` makes its first scene."""
+    horizon. With a pool, the first horizon is calibrated in this process before the pool
+    starts (:func:`pooled`), as :func:`run_scenes` makes its first scene."""
     progress.phase("calibrate", len(hs))
     found: dict[float, Any] = {}
-    ahead = hs[:1] if forking(n_workers) else []
+    ahead = hs[:1] if pooled(n_workers) else []
     if ahead:
         found.update(InProcess(setup).imap(calibrate_job, ahead))
         progress.advance()
@@ -198,16 +200,16 @@ def run_scenes(
     """Produce every scene on ``n_workers`` processes and stream the results to ``writer`` in
     scene order.
 
-    Where workers are forked (the default on Linux up to Python 3.13), the first scene is made
-    in this process before the pool starts, so that the workers inherit what making it loaded
-    (imports, compiled code, image caches) instead of each loading it again (docs/benchmarks.md:
-    about 6% less CPU for the paper-size dataset on 2 workers, the same wall time), or building
-    it (a plugin's compiled code on first use: once, and its notice given once).
+    With a pool, the first scene is made in this process before the pool starts (:func:`pooled`),
+    so that forked workers inherit what making it loaded (imports, compiled code, image caches)
+    instead of each loading it again (docs/benchmarks.md: about 6% less CPU for the paper-size
+    dataset on 2 workers, the same wall time), and no worker builds what it built (a plugin's
+    compiled code on first use: once, and its notice given once).
     """
     progress.phase("scenes", per_horizon * len(hs))
     if stable_only:
         first = None
-        if forking(n_workers):
+        if pooled(n_workers):
             first = next(InProcess(setup).imap(run_job, [Job(hs[0], 0, keep_unstable=False)]))
         with make_pool(n_workers, setup) as pool:
             for h in hs:
@@ -215,7 +217,7 @@ def run_scenes(
                 first = None
         return
     jobs = (Job(h, i) for h in hs for i in range(per_horizon))
-    if forking(n_workers):
+    if pooled(n_workers):
         _stream(InProcess(setup), itertools.islice(jobs, 1), writer, progress)
     with make_pool(n_workers, setup) as pool:
         _stream(pool, jobs, writer, progress)

@@ -82,3 +82,26 @@ def test_bpb_says_once_that_it_compiles_the_kernel_and_nothing_once_it_is_cached
     warm = _generate(tmp_path / "warm", cache)
     assert warm.returncode == 0, warm.stderr
     assert warm.stderr == ""
+
+
+SPAWNED_BPB = """import multiprocessing, sys
+multiprocessing.set_start_method("spawn")
+from bpb_core.cli.main import main
+main(sys.argv[1:])
+"""
+
+
+def test_workers_that_are_not_forked_load_the_kernel_the_parent_built(tmp_path: Path) -> None:
+    """macOS starts a pool's workers with spawn, Linux from Python 3.14 with forkserver: they
+    inherit nothing from bpb. On a cold cache each worker built the kernel itself (twice the
+    CPU on 2 workers) and gave the note as a raw Python warning, with the file and line of
+    bpb's code. The parent builds it first there too; the workers load it from numba's cache."""
+    cache = tmp_path / "numba-cache"
+    cache.mkdir()
+    args = ["generate", "--out", str(tmp_path / "ds"), "--per-horizon", "2", "--horizons", "1",
+            "--workers", "2", "--no-images"]  # fmt: skip
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    done = subprocess.run([sys.executable, "-c", SPAWNED_BPB, *args], capture_output=True,
+                          text=True, env=env, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == f"note: {NOTE} (about 20 s); cached in {cache}\n"
