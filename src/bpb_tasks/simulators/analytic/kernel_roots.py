@@ -123,7 +123,11 @@ class CompileNotice(Notice):
     and these sources (a first use, or after an upgrade or edit)."""
 
 
-COMPILE_NOTE = "compiling the physics kernel for this machine, once (about 20 s); cached in {}"
+COMPILE_NOTE = (
+    "compiling the physics kernel for this machine (about 20 s); cached in {} for later commands"
+)
+"""Each part is built on its first use: a command that runs code no earlier one did (``bpb
+simulate``'s fast path after ``bpb generate``, say) builds that part then, and says so again."""
 _noted = False  # one note per process; workers forked after it inherit it
 
 
