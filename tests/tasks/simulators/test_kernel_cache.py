@@ -117,3 +117,30 @@ def test_workers_that_are_not_forked_load_the_kernel_the_parent_built(tmp_path: 
                           text=True, env=env, timeout=600)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert done.stderr == f"note: {NOTE} (about 20 s); cached in {cache} for later commands\n"
+
+
+def test_the_note_names_where_numba_caches_all_of_it_without_numba_cache_dir(
+    tmp_path: Path,
+) -> None:
+    """Without NUMBA_CACHE_DIR numba caches each compiled module's code in the ``__pycache__``
+    beside it: the stability code's and the kernel's in two folders. The note named the first
+    one to compile only (``.../billiards/__pycache__``), half of what was built."""
+    import shutil
+
+    import bpb_tasks
+
+    copy = tmp_path / "bpb_tasks"  # sources numba has never seen: a cold cache beside them
+    shutil.copytree(
+        Path(bpb_tasks.__file__).parent, copy, ignore=shutil.ignore_patterns("__pycache__")
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(tmp_path), env.get("PYTHONPATH")]))
+    args = ["generate", "--out", str(tmp_path / "ds"), "--per-horizon", "1", "--horizons", "1",
+            "--workers", "1", "--no-images"]  # fmt: skip
+    bpb = str(Path(sys.executable).with_name("bpb"))
+    done = subprocess.run([bpb, *args], capture_output=True, text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    where = f"the __pycache__ folders under {copy}"
+    assert done.stderr == f"note: {NOTE} (about 20 s); cached in {where} for later commands\n"
+    for folder in ("billiards", "simulators/analytic"):
+        assert list((copy / folder / "__pycache__").glob("*.nbi")), folder

@@ -15,6 +15,7 @@ import hashlib
 import importlib
 import inspect
 import math
+import os
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -110,7 +111,7 @@ def _stamped_cache_class() -> type | None:
             means it compiles now (see :func:`note_compiling`)."""
             loaded = super().load_overload(sig, target_context)  # type: ignore[no-untyped-call]
             if loaded is None and self._enabled:
-                note_compiling(self._cache_path)
+                note_compiling(cache_root(self._cache_path, Path(inspect.getfile(self._py_func))))
             return loaded
 
     if not hasattr(CompileResultCacheImpl, "locator"):  # pragma: no cover
@@ -131,10 +132,23 @@ simulate``'s fast path after ``bpb generate``, say) builds that part then, and s
 _noted = False  # one note per process; workers forked after it inherit it
 
 
+def cache_root(cache_path: str, source: Path) -> str:
+    """Where numba caches the code of every compiled module, from ``cache_path``, where it caches
+    ``source``'s: beside each module (its ``__pycache__``; the compiled modules are in this
+    folder and ``source``'s), or in one folder per module folder under a cache folder
+    (``NUMBA_CACHE_DIR``, else a user-wide one where the package's is not writable)."""
+    path = Path(cache_path)
+    if path.name != "__pycache__":
+        return str(path.parent)
+    common = os.path.commonpath([source.parent, Path(__file__).parent])
+    return f"the __pycache__ folders under {common}"
+
+
 def note_compiling(cache_path: str) -> None:
     """Warn once per process (:class:`CompileNotice`) that compiled code is being built, naming
-    where numba caches it (``NUMBA_CACHE_DIR`` when set, else ``cache_path``): the first build
-    of the kernel and the stability code costs about 20 s of CPU, silent otherwise."""
+    where numba caches it (``NUMBA_CACHE_DIR`` when set, else ``cache_path``: see
+    :func:`cache_root`): the first build of the kernel and the stability code costs about 20 s
+    of CPU, silent otherwise."""
     global _noted
     if _noted:
         return
