@@ -33,23 +33,27 @@ with child(sleeper, preexec_fn=lambda: os.kill(os.getppid(), signal.SIGTERM)):
 
 @pytest.mark.skipif(not HAS_PROC, reason="lists the process group through /proc")
 def test_a_sigterm_while_a_child_starts_stops_the_bench_and_the_child(tmp_path: Path) -> None:
+    returncode, out, err, left = _run_in_own_group(tmp_path, _STOPPED_WHILE_STARTING)
+    assert returncode == 128 + signal.SIGTERM, err
+    assert out == ""  # the held signal is acted on before the block's body runs
+    assert left == [], "the child outlived the bench"
+
+
+def _run_in_own_group(tmp_path: Path, script: str) -> tuple[int, str, str, list[int]]:
+    """Run ``script`` in its own process group until it ends: its exit code, stdout, stderr and
+    the group's members still running then (killed afterwards)."""
     out, err = tmp_path / "out", tmp_path / "err"
     with out.open("w") as stdout, err.open("w") as stderr:  # files: a leftover holds no pipe
         process = subprocess.Popen(
-            [sys.executable, "-c", _STOPPED_WHILE_STARTING],
-            stdout=stdout,
-            stderr=stderr,
-            start_new_session=True,
+            [sys.executable, "-c", script], stdout=stdout, stderr=stderr, start_new_session=True
         )
     try:
-        process.wait(timeout=120)
+        returncode = process.wait(timeout=120)
         left = group_members(process.pid)
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(process.pid, signal.SIGKILL)
-    assert process.returncode == 128 + signal.SIGTERM, err.read_text()
-    assert out.read_text() == ""  # the held signal is acted on before the block's body runs
-    assert left == [], "the child outlived the bench"
+    return returncode, out.read_text(), err.read_text(), left
 
 
 # A command whose child (a server, a client) runs until it is stopped, like bpb bench run's;
@@ -109,17 +113,7 @@ def test_bench_startup_and_memory_leave_no_child_when_stopped_as_one_starts(
 ) -> None:
     """They ran their children with subprocess.run, whose Popen left the child running."""
     script = _MEASUREMENT_STOPPED_WHILE_STARTING.format(module=module, function=function, args=args)
-    out, err = tmp_path / "out", tmp_path / "err"
-    with out.open("w") as stdout, err.open("w") as stderr:
-        process = subprocess.Popen(
-            [sys.executable, "-c", script], stdout=stdout, stderr=stderr, start_new_session=True
-        )
-    try:
-        process.wait(timeout=120)
-        left = group_members(process.pid)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
-    assert process.returncode == 128 + signal.SIGTERM, err.read_text()
-    assert out.read_text() == ""
+    returncode, out, err, left = _run_in_own_group(tmp_path, script)
+    assert returncode == 128 + signal.SIGTERM, err
+    assert out == ""
     assert left == [], "the measured command outlived the bench"
