@@ -182,7 +182,8 @@ def prepare(
     files: Sequence[Path] = (),
     names: Mapping[str, str] | None = None,
 ) -> Prepared:
-    """Resolve ``simulator`` (a name, an object, or ``None``: the simulator the scenes' dataset
+    """Resolve ``simulator`` (a name or spec with options, ``pymunk:dt=0.0005``, where
+    ``options`` win; an object; or ``None``: the simulator the scenes' dataset
     was made with, with the options its config gives it (``options`` win), else the default
     family's) and its scene family: the family of that dataset, which reads the scenes and
     makes their truth as it did when the dataset was generated, whatever family the simulator
@@ -210,8 +211,10 @@ def prepare(
         made = reg.simulator(spec.name, names, **{**spec.options, **given})
         return Prepared(made, family, reg.origin("scene_family", family.name), names)
     if isinstance(simulator, str):
-        family = _family_for(files, simulator, reg)
-        made = reg.simulator(simulator, names, **given)
+        spec = parse_spec(simulator, "--simulator")
+        family = _family_for(files, spec.name, reg)
+        names.update({k: f"--simulator {spec.spec!r}: {k}" for k in spec.options if k not in given})
+        made = reg.simulator(spec.name, names, **{**spec.options, **given})
         return Prepared(made, family, reg.origin("scene_family", family.name), names)
     name = reg.default_family()
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))

@@ -23,8 +23,9 @@ class _Named(click.Path):
     "--simulator",
     "simulator",
     default=None,
-    help="Simulator [default: the one the dataset was made with, with the options its config gives "
-    "it; the default family's for loose scene files].",
+    help="Simulator, optionally with options as in a dataset config (pymunk:dt=0.0005; a flag "
+    "such as --dt wins) [default: the one the dataset was made with, with the options its config "
+    "gives it; the default family's for loose scene files].",
 )
 @click.option(
     "--dt",

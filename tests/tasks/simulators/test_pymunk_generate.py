@@ -89,6 +89,22 @@ def test_a_step_set_in_the_config_makes_a_recorded_reproducible_dataset(tmp_path
     done = subprocess.run([BPB, "simulate", str(first), "--simulator", "pymunk"],
                           capture_output=True, text=True, timeout=300)  # fmt: skip
     assert done.returncode == 2 and ": --dt: 0.001 s is above this scene's" in done.stderr
+    # --simulator takes the spec a config takes (it was "unknown simulator 'pymunk:dt=0.0005'"):
+    # the same truth; a step in it that is too long is named there; --dt wins over it
+    done = subprocess.run([BPB, "simulate", str(first), "--simulator", "pymunk:dt=0.0005"],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert [json.loads(line) for line in done.stdout.splitlines()] == [
+        {**final, "stability": None} for final in finals
+    ]
+    done = subprocess.run([BPB, "simulate", str(first), "--simulator", "pymunk:dt=0.001"],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 2
+    assert ": --simulator 'pymunk:dt=0.001': dt: 0.001 s is above this scene's" in done.stderr
+    flags = ["--simulator", "pymunk:dt=0.001", "--dt", "0.0005"]
+    done = subprocess.run([BPB, "simulate", str(first), *flags], capture_output=True, text=True,
+                          timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr
 
 
 def test_the_oracle_runs_the_dataset_s_simulator_with_its_options(tmp_path: Path) -> None:
