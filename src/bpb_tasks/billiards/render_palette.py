@@ -6,16 +6,26 @@ are composed in RGB once, mapped to the palette, and pasted with a binary mask; 
 (:mod:`bpb_tasks.billiards.render_text`) give the same pixels as text drawn in RGB and mapped
 here. The palette holds every flat colour exactly, plus median-cut colours for the
 antialiased edges; it depends only on the canvas, so it is identical in every process.
+
+Computing it costs about 0.1 s of CPU in every process that draws (the sample image and its
+median cut), so the default canvas's palette ships in ``render_palette.json``, stored with the
+:func:`palette_key` of everything it was computed from; a process whose key differs (another
+canvas, an edited style, other Pillow or font files) computes it. ``scripts/refresh_palette.py``
+writes the file again.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
-from PIL import Image, ImageDraw
+import PIL
+from PIL import Image, ImageDraw, ImageFont
 
-from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards import render_canvas, render_style as st
 from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
 
 FLAT: tuple[st.RGB, ...] = (
@@ -24,6 +34,7 @@ FLAT: tuple[st.RGB, ...] = (
 )  # fmt: skip
 MAX_IDS = 16  # sprites of ids 0..15 shape the palette (the config allows up to 16 balls)
 GHOST_ALPHA = 110
+SHIPPED = Path(__file__).with_name("render_palette.json")
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,14 +75,54 @@ def _sample(spec: CanvasSpec) -> Image.Image:
 
 @functools.cache
 def palette_for(spec: CanvasSpec) -> Palette:
-    """The canvas's palette (computed once per process)."""
+    """The canvas's palette (read from the shipped file when its key matches, else computed;
+    once per process)."""
+    flat = list(dict.fromkeys(FLAT))
+    image = Image.new("P", (1, 1))
+    image.putpalette(_shipped(spec) or computed_colours(spec))
+    return Palette(image, {rgb: i for i, rgb in enumerate(flat)})
+
+
+def computed_colours(spec: CanvasSpec) -> list[int]:
+    """The palette's 768 channel values: the flat colours, then the sample's median cut."""
     flat = list(dict.fromkeys(FLAT))
     extra = _sample(spec).quantize(256 - len(flat), method=Image.Quantize.MEDIANCUT)
     colours = [c for rgb in flat for c in rgb] + (extra.getpalette() or [])[: 3 * (256 - len(flat))]
-    colours += [0] * (768 - len(colours))
-    image = Image.new("P", (1, 1))
-    image.putpalette(colours)
-    return Palette(image, {rgb: i for i, rgb in enumerate(flat)})
+    return colours + [0] * (768 - len(colours))
+
+
+def palette_key(spec: CanvasSpec) -> str:
+    """A digest of what :func:`computed_colours` depends on: the canvas, the source of the
+    modules that draw the sample (colours, sprites, background), the font files and the
+    versions of Pillow and the libraries it draws text with."""
+    digest = hashlib.sha256(repr(spec).encode())
+    for source in (__file__, st.__file__, render_canvas.__file__):
+        digest.update(Path(source or "").read_bytes())
+    for bold in (False, True):
+        font_path = getattr(st.font(17, bold), "path", None)
+        digest.update(Path(font_path).read_bytes() if font_path else b"builtin font")
+    core = ImageFont.core
+    libraries = ("freetype2_version", "raqm_version", "harfbuzz_version", "fribidi_version")
+    versions = [PIL.__version__, *(str(getattr(core, name, None)) for name in libraries)]
+    digest.update(repr(versions).encode())
+    return digest.hexdigest()
+
+
+def _shipped(spec: CanvasSpec) -> list[int] | None:
+    """The shipped palette if it was computed from exactly what ``spec`` would compute from."""
+    try:
+        stored = json.loads(SHIPPED.read_text())
+        if stored["key"] == palette_key(spec):
+            return list(bytes.fromhex(stored["colours"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        pass  # no usable file (or no module source to key): computing gives the same palette
+    return None
+
+
+def ship(spec: CanvasSpec) -> None:
+    """Write ``spec``'s computed palette and key as the shipped palette."""
+    colours = bytes(computed_colours(spec)).hex()
+    SHIPPED.write_text(json.dumps({"key": palette_key(spec), "colours": colours}) + "\n")
 
 
 @functools.cache
