@@ -7,6 +7,7 @@ in-process for ``workers=1``). Each call writes one scene folder and returns a s
 
 from __future__ import annotations
 
+import os
 import shutil
 import signal
 from collections.abc import Iterator, Mapping
@@ -163,13 +164,30 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     if not job.keep_unstable and row.stable is False:
         return SceneResult(row, ())
     folder = scene_dir(setup.root, job.horizon, job.index)
-    folder.mkdir(parents=True, exist_ok=True)
+    os.makedirs(folder, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
     for file_name, data in _files(setup, what, made).items():
-        (folder / file_name).write_bytes(data)
+        write_file(os.path.join(folder, file_name), data)
         files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
+
+
+_WRITING = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
+
+
+def write_file(path: str, data: bytes) -> None:
+    """``Path(path).write_bytes(data)`` without the buffered file object around the descriptor
+    (a third of the 0.17 ms five scene files cost): the same mode (0o666 less the umask),
+    replacing a file there, and the same ``OSError`` for a full disk or a refused folder; a
+    short write (a file size limit reached) goes on, to fail as the file object's would."""
+    fd = os.open(path, _WRITING, 0o666)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view) :]
+    finally:
+        os.close(fd)
 
 
 @contextmanager
