@@ -8,9 +8,7 @@ manifest's canonical JSON without that field; it changes whenever any file of th
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -145,13 +143,6 @@ def cell(value: object) -> str:
     if isinstance(value, float):
         return f"{value:.6g}" if value == int(value) else f"{value:.6f}"
     return str(value)
-
-
-def csv_line(cells: list[str]) -> str:
-    """One CSV line with ``\\n`` line ending."""
-    buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerow(cells)
-    return buf.getvalue()
 
 
 def sha256_bytes(data: bytes) -> str:

@@ -164,7 +164,10 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     if not job.keep_unstable and row.stable is False:
         return SceneResult(row, ())
     folder = scene_dir(setup.root, job.horizon, job.index)
-    os.makedirs(folder, exist_ok=True)
+    try:
+        os.mkdir(folder)  # one call once the horizon's folder is there
+    except OSError:  # not yet, or already there, or refused: as Path.mkdir(parents=True) does
+        os.makedirs(folder, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
     for file_name, data in _files(setup, what, made).items():

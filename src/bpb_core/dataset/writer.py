@@ -6,6 +6,7 @@ whatever the scene family's tallies keep) stay in memory.
 
 from __future__ import annotations
 
+import csv
 import platform
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -19,7 +20,6 @@ from bpb_core.dataset.manifest import (
     DatasetManifest,
     HorizonSummary,
     IndexRow,
-    csv_line,
     sha256_bytes,
 )
 from bpb_core.dataset.worker import SceneResult
@@ -56,7 +56,8 @@ class DatasetWriter:
         self.tallies = dict(tallies or {})
         self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
         self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
-        self._index.write(csv_line(IndexRow.header(columns)))
+        self._rows = csv.writer(self._index, lineterminator="\n")
+        self._rows.writerow(IndexRow.header(columns))
 
     def add(self, result: SceneResult) -> None:
         """Record a kept scene."""
@@ -66,9 +67,8 @@ class DatasetWriter:
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
             self.tallies[row.horizon].add(dict(row.values))
-        self._index.write(csv_line(row.cells()))
-        for rel, digest in result.files:
-            self._sums.write(f"{digest}  {rel}\n")
+        self._rows.writerow(row.cells())
+        self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
