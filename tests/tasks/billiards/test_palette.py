@@ -11,7 +11,11 @@ import dataclasses
 import json
 import subprocess
 import sys
+from pathlib import Path
 
+import pytest
+
+from bpb_tasks.billiards import render_palette
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_palette import SHIPPED, computed_colours, palette_for, palette_key
@@ -52,3 +56,19 @@ def test_another_canvas_computes_its_own_palette() -> None:
     assert palette_key(other) != palette_key(SPEC)
     assert palette_for(other).image.getpalette() == computed_colours(other)
     assert palette_for(other).image.getpalette() != palette_for(SPEC).image.getpalette()
+
+
+@pytest.mark.parametrize("damage", ["stale key", "short palette", "not json"])
+def test_a_shipped_file_that_does_not_fit_is_ignored(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, damage: str
+) -> None:
+    stored = json.loads(SHIPPED.read_text())
+    if damage == "stale key":
+        stored["key"] = "0" * 64
+    elif damage == "short palette":
+        stored["colours"] = stored["colours"][:-6]
+    text = "{" if damage == "not json" else json.dumps(stored)
+    (tmp_path / "palette.json").write_text(text)
+    monkeypatch.setattr(render_palette, "SHIPPED", tmp_path / "palette.json")
+    computed = palette_for.__wrapped__(SPEC).image.getpalette()  # past the per-process cache
+    assert computed == computed_colours(SPEC)
