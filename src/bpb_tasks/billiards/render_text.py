@@ -87,9 +87,8 @@ def _mapped_patch(
     size = (mask.size[0] + 2 * pad, mask.size[1] + 2 * pad)
     coverage = Image.new("L", size, 0)
     coverage.im.paste(mask, (pad, pad, pad + mask.size[0], pad + mask.size[1]))
-    indices = coverage._new(coverage.im.point(_table(spec, colour, back), None))  # no re-rounding
-    patch = Image.frombytes("P", size, indices.tobytes())
-    patch.putpalette(_palette_bytes(spec))
+    patch = coverage._new(coverage.im.point(_table(spec, colour, back), None))  # no re-rounding
+    patch.putpalette(_palette_bytes(spec))  # makes the "L" image of indices a "P" one in place
     return patch
 
 
