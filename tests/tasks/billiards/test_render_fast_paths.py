@@ -133,3 +133,53 @@ def test_scene_texts_are_put_together_from_pieces_not_rendered_whole(
         text = f"cue ball 0 speed {speed:.3f} m/s"
         _coverage(font, text)
         assert text not in rendered
+
+
+def test_a_scene_text_is_laid_out_from_its_pieces_without_measuring_it_whole(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Measuring a whole text (its advance, its box) costs as much as a layout: per scene it is
+    done at most once for a new pen fraction of the last piece, never for each text."""
+    measured: list[str] = []
+    for name in ("getlength", "getbbox"):
+        real = getattr(ImageFont.FreeTypeFont, name)
+
+        def spy(self: ImageFont.FreeTypeFont, text: str, *a: Any, _real: Any = real,
+                **k: Any) -> Any:  # fmt: skip
+            measured.append(text)
+            return _real(self, text, *a, **k)
+
+        monkeypatch.setattr(ImageFont.FreeTypeFont, name, spy)
+    font = style.font(round(16 * SPEC.scale))
+    assert isinstance(font, ImageFont.FreeTypeFont)
+    texts = [f"cue ball 0 speed {k / 997:.3f} m/s" for k in range(1, 3000, 7)]
+    for text in texts:
+        _coverage(font, text)
+    wholes = [t for t in measured if t in texts]
+    assert len(wholes) <= 64  # at most once per pen fraction of " m/s"
+    for text in texts:  # once seen, never again
+        _coverage(font, text)
+    assert [t for t in measured if t in texts] == wholes
+
+
+KERNED = "AFHOPRTVWYforvwy"  # letters DejaVu kerns before a point ("r.", "T.", ...)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    text=st.text(st.sampled_from(KERNED + "0123456789. ,:/msabl"), min_size=1, max_size=24),
+    size=st.integers(8, 40), bold=st.booleans(),
+)  # fmt: skip
+@example(text="Vr.5 T.1", size=16, bold=False)
+@example(text="1.5f.r.", size=17, bold=True)
+def test_texts_with_kerned_boundaries_put_together_from_pieces_are_the_whole_text(
+    text: str, size: int, bold: bool
+) -> None:
+    """Where neighbouring pieces kern (the whole text is laid out differently) or a piece's box
+    is not known, the mask is still FreeType's mask of the whole text, at every canvas scale."""
+    font = style.font(size, bold)
+    assert isinstance(font, ImageFont.FreeTypeFont)
+    whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
+    got = _coverage(font, text)
+    assert got.size == whole.size
+    assert bytes(got) == bytes(whole)
