@@ -2,8 +2,9 @@
 
 The front matter is what the Hub and ``datasets`` read: license, one config whose splits are
 the horizons (``data/h3-*``), the features and the rows per split. The body says what a row is,
-how to load it, how the data was generated (config and seed, from ``dataset.json``) and what to
-cite; the family's words come from its :class:`~bpb_core.capabilities.DescribesDataset`.
+how to load it, how the data was generated (config and seed, from ``dataset.json``), which
+simulator made the ground truth and what to cite; the family's words come from its
+:class:`~bpb_core.capabilities.DescribesDataset`.
 YAML is written by hand with JSON scalars (valid YAML), so the export needs no YAML library.
 """
 
@@ -14,10 +15,14 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import DescribesDataset
+from bpb_core.dataset.reader import dataset_simulator
+from bpb_core.errors import UnknownName
+from bpb_core.simulator_spec import parse_spec
 from bpb_core.version import __version__
 
 if TYPE_CHECKING:
     from bpb_core.dataset.reader import Dataset
+    from bpb_core.registry import Registry
 
 _FEATURE_NAMES = {"Image": "image"}
 
@@ -27,6 +32,7 @@ def card_text(
     features: Mapping[str, Mapping[str, str]],
     splits: Mapping[str, tuple[int, int]],
     tasks: Sequence[str],
+    registry: Registry,
 ) -> str:
     """The whole README.md of the export."""
     words = dataset.family.dataset_card() if isinstance(dataset.family, DescribesDataset) else {}
@@ -36,9 +42,23 @@ def card_text(
             *_front_matter(dataset, words, features, splits),
             "---",
             "",
-            *_body(dataset, words, splits, tasks),
+            *_body(dataset, words, splits, tasks, _truth(dataset, registry)),
         ]
     )
+
+
+def _truth(dataset: Dataset, registry: Registry) -> list[str]:
+    """Which simulator made the ground truth, as the config names it, and what it is (its
+    registered summary): the family's words hold for every simulator, and only the simulator
+    knows whether its truth is exact or stepped."""
+    origin = registry.origin("scene_family", dataset.family.name)
+    spec = parse_spec(dataset_simulator(dataset.root, dataset.family, origin), "config: simulator")
+    try:
+        summary = registry.get("simulator", spec.name).info.summary
+    except UnknownName:
+        summary = ""
+    what = f": {summary.rstrip('.')}." if summary else "."
+    return ["## Ground truth", "", f"Computed by the simulator `{spec.spec}`{what}", ""]
 
 
 def _front_matter(
@@ -73,11 +93,12 @@ def _body(
     words: Mapping[str, Any],
     splits: Mapping[str, tuple[int, int]],
     tasks: Sequence[str],
+    truth: list[str],
 ) -> list[str]:
     manifest = dataset.manifest
     title = words.get("pretty_name") or dataset.family.name
     counts = ", ".join(f"{split}: {rows}" for split, (rows, _) in splits.items())
-    lines = [f"# {title}", "", str(words.get("description") or "").strip(), ""]
+    lines = [f"# {title}", "", str(words.get("description") or "").strip(), "", *truth]
     lines += [
         "## Rows",
         "",

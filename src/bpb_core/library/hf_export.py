@@ -148,7 +148,8 @@ def _write_export(
         written, sizes[split] = _write_split(out, split, rows, shard_rows)
         files += written
     _write_side_files(dataset, out)
-    card = card_text(dataset, FEATURES, {s: (splits[s], sizes[s]) for s in splits}, names)
+    sized = {s: (splits[s], sizes[s]) for s in splits}
+    card = card_text(dataset, FEATURES, sized, names, registry)
     return splits, files, card
 
 

@@ -102,8 +102,8 @@ def _kernel_rate(
     )
     if status.any():
         raise BadInput(
-            f"--calibrate: horizon {horizon:g} s: a calibration scene needs more than 100,000 "
-            f"events at cue speeds up to {speeds.high:g} m/s; choose a shorter horizon"
+            f"config: --calibrate: horizon {horizon:g} s: a calibration scene needs more than "
+            f"100,000 events at cue speeds up to {speeds.high:g} m/s; choose a shorter horizon"
         )
     cue = (events[:, 2] == 0) & ((events[:, 3] == 0) | (events[:, 4] == 0))
     return float(len(np.unique(events[cue, 0])) / count)
@@ -131,7 +131,9 @@ def calibrate_horizon(
 
     Raises:
         BadInput: The target is not reached even at :data:`MAX_HIGH` m/s (the horizon is too
-            short for it), or a calibration scene exceeds the event budget.
+            short for it), or a calibration scene exceeds the event budget; starting
+            ``config: `` as the config's other refusals do, which generation turns into the
+            config's file.
     """
     cal = config.calibration
     draws = calibration_draws(horizon, config)
@@ -147,8 +149,8 @@ def calibrate_horizon(
     while (reached := rate(hi)) < cal.target:
         if hi * 2 > MAX_HIGH:
             raise BadInput(
-                f"--calibrate: horizon {horizon:g} s: the cue ball hits another ball in only "
-                f"{reached:.1%} of calibration scenes even at {hi:g} m/s, below the "
+                f"config: --calibrate: horizon {horizon:g} s: the cue ball hits another ball in "
+                f"only {reached:.1%} of calibration scenes even at {hi:g} m/s, below the "
                 f"calibration.target {cal.target:g}; choose a longer horizon or a lower target"
             )
         lo, hi = hi, hi * 2

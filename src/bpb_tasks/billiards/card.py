@@ -7,7 +7,7 @@ from typing import Any
 PRETTY_NAME = "BilliardPhys-Bench scenes"
 
 DESCRIPTION = """\
-Billiards scenes with exact physics ground truth, for testing whether multimodal models can
+Billiards scenes with physics ground truth, for testing whether multimodal models can
 predict what happens on a table: seven balls at rest, the cue ball (ball 0) struck with a
 given velocity, rolling friction, elastic collisions, six pockets. For each scene and horizon
 `t` there are three questions: **q1** which object balls the cue ball touches in `[0, t]`,

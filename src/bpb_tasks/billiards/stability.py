@@ -26,6 +26,7 @@ installed they run as one batch in the compiled kernel.
 from __future__ import annotations
 
 import functools
+import importlib
 import itertools
 import math
 import random
@@ -158,6 +159,15 @@ def _margins(
         gap, overlap = pair_margins(base, radius)
         pocket = pocket_gap(base, pockets.centers, pockets.radius)
     return gap, overlap if isinstance(simulator, AnalyticSimulator) else None, pocket
+
+
+def load_kernel(simulator: Simulator) -> None:
+    """Load the compiled kernel before a scene's own run when its annotation will run it
+    (:func:`_runs_kernel`): ``auto`` single runs take the kernel only once numba is loaded, so
+    each process ran its first scene in Python and compiled the kernel's single-scene entry on
+    its second; a pool's workers each built it, which the parent's first scene never had."""
+    if _runs_kernel(simulator):
+        importlib.import_module("bpb_tasks.simulators.analytic.kernel")
 
 
 def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:

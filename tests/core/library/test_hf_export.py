@@ -342,3 +342,31 @@ def test_scene_folders_unlike_the_index_are_not_exported(
         "the dataset no longer matches its index.csv; restore it or generate it again"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["broken"]
+
+
+@pytest.mark.parametrize(
+    ("simulator", "said"),
+    [
+        ("analytic", "`analytic`: Exact event-driven billiards"),
+        ("pymunk:dt=0.0005", "`pymunk:dt=0.0005`: Fixed-step Chipmunk2D (pymunk)"),
+    ],
+)
+def test_the_card_names_the_simulator_that_made_the_truth(
+    simulator: str,
+    said: str,
+    tmp_path: Path,
+    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    """The card said "exact physics ground truth" whatever made it, a fixed-step pymunk run
+    too; it now names the simulator the dataset's config names, with its own summary."""
+    config = tmp_path / "cfg.json"
+    config.write_text(json.dumps({"simulator": simulator, "stability_samples": 2}))
+    data, out = tmp_path / "ds", tmp_path / "hf"
+    made = run_bpb("generate", "--out", str(data), "--config", str(config), "--per-horizon", "1",
+                   "--horizons", "1", "--workers", "1", "--no-images")  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    done = run_bpb("export", str(data), "--format", "hf", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    card = DatasetCard.load(out / "README.md").text
+    assert f"## Ground truth\n\nComputed by the simulator {said}" in card
+    assert "exact physics" not in card  # the family's words claim nothing of the simulator

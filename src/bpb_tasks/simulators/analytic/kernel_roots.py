@@ -135,12 +135,14 @@ _noted = False  # one note per process; workers forked after it inherit it
 def cache_root(cache_path: str, source: Path) -> str:
     """Where numba caches the code of every compiled module, from ``cache_path``, where it caches
     ``source``'s: beside each module (its ``__pycache__``; the compiled modules are in this
-    folder and ``source``'s), or in one folder per module folder under a cache folder
-    (``NUMBA_CACHE_DIR``, else a user-wide one where the package's is not writable)."""
+    package, ``bpb_tasks``, and ``source``'s folder: the note comes with the first function
+    built, which may be the kernel's or the stability code's), or in one folder per module
+    folder under a cache folder (``NUMBA_CACHE_DIR``, else a user-wide one where the package's
+    is not writable)."""
     path = Path(cache_path)
     if path.name != "__pycache__":
         return str(path.parent)
-    common = os.path.commonpath([source.parent, Path(__file__).parent])
+    common = os.path.commonpath([source.parent, Path(__file__).parents[2]])
     return f"the __pycache__ folders under {common}"
 
 
