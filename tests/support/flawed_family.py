@@ -6,7 +6,8 @@ renamed ``flawed``, with one task and scorer about it.
 ``predict_type`` (a dict, not the family's truth model), ``truth_type`` (the same from
 ``ground_truth``), ``picture_raise``, ``picture_type`` (PNG bytes, not a ScenePicture),
 ``perceive_raise`` (a RuntimeError, not the ValueError of an unreadable image),
-``perception_error_type`` (a list, not a dict),
+``perceive_type`` (the scene read as a dict, not its scene model), ``perception_error_type``
+(a list, not a dict),
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
 line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
 ``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
@@ -226,7 +227,8 @@ class FlawedFamily(BilliardsFamily):
     def perceive(self, image: bytes, prompt: str) -> Any:
         if _flaw() == "perceive_raise":
             raise RuntimeError("perceive exploded")
-        return super().perceive(image, prompt)
+        scene = super().perceive(image, prompt)
+        return scene.model_dump() if _flaw() == "perceive_type" else scene
 
     def perception_error(self, perceived: Any, scene: Any) -> Any:
         if _flaw() == "perception_error_type":
