@@ -43,9 +43,9 @@ def catches_sigterm(pid: int) -> bool:
 
 def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     """``pid``'s children once there are ``count`` of them and each ignores SIGINT (or once
-    ``deadline`` has passed): one that gets it between its fork and its pool initializer still
-    dies of it, a window of milliseconds that a busy machine widens past a second (not what the
-    tests are about). A worker that never comes to ignore it is returned at the deadline."""
+    ``deadline`` has passed): the tests that use it are about workers at work (the start-up
+    window is :func:`ctrl_c_at_worker_start`'s). A worker that never comes to ignore it is
+    returned at the deadline."""
     while time.monotonic() < deadline and len(children(pid)) < count:
         time.sleep(0.02)
     workers = children(pid)
