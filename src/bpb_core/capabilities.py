@@ -31,7 +31,12 @@ from __future__ import annotations
 import random
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any
+
+# typing_extensions' Protocol reads members as Python 3.12's does (inspect.getattr_static): on
+# 3.11 typing's isinstance() ran a plugin's properties (hasattr), so one that raised escaped the
+# check itself as a traceback, before bpb could read it under blamed() and name the plugin
+from typing_extensions import Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     import pandas as pd

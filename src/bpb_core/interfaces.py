@@ -17,7 +17,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Literal
+
+# isinstance() never runs a plugin's properties, as on Python 3.12 (see bpb_core.capabilities)
+from typing_extensions import Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -18,7 +18,7 @@ from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 
 if TYPE_CHECKING:
-    from bpb_core.capabilities import Estimating, Predicting, PublishesSchema
+    from bpb_core.capabilities import Estimating, Perceiving, Predicting, PublishesSchema
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.model_calls import Message
 
@@ -35,7 +35,7 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
     what = f"{family_label(family)}: predict({name!r})"
     with blamed(origin, what):
         truth = family.predict(name, scene, rng)
-    return _checked_truth(family, origin, what, truth)
+    return _checked_model(family, origin, what, truth, "truth_model")
 
 
 def offered_predictors(family: Predicting, origin: str) -> tuple[str, ...]:
@@ -74,7 +74,28 @@ def simulated_truth(
     what = f"{family_label(family)}: ground_truth()"
     with blamed(origin, what):
         truth = family.ground_truth(scene, simulator, horizon, stability=stability)
-    return _checked_truth(family, origin, what, truth)
+    return _checked_model(family, origin, what, truth, "truth_model")
+
+
+def perception(
+    family: Perceiving, origin: str, image: bytes, prompt: str
+) -> tuple[Any, str | None]:
+    """``family.perceive(image, prompt)``, checked: an instance of the family's ``scene_model``
+    (its ``ground_truth()`` runs on it next and would be blamed for anything else) and
+    ``None``; or, when it raises ``ValueError`` (how it says the image cannot be read), ``None``
+    and why.
+
+    Raises:
+        PluginBug: The family raised anything else or returned something else, naming
+            ``origin`` (who supplied it) and the family.
+    """
+    what = f"{family_label(family)}: perceive()"
+    with blamed(origin, what):
+        try:
+            scene = family.perceive(image, prompt)
+        except ValueError as exc:
+            return None, str(exc) or type(exc).__name__
+    return _checked_model(family, origin, what, scene, "scene_model"), None
 
 
 def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
@@ -89,13 +110,7 @@ def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
     what = f"{family_label(family)}: load_config()"
     with blamed(origin, what):
         config = family.load_config(source)
-    model = getattr(family, "config_model", None)
-    if not isinstance(model, type) or isinstance(config, model):
-        return config
-    raise PluginBug(
-        f"{origin}: {what} returned {type(config).__name__}; expected {model.__name__} "
-        "(the family's config_model)"
-    )
+    return _checked_model(family, origin, what, config, "config_model")
 
 
 def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
@@ -186,15 +201,16 @@ def family_label(family: object) -> str:
     return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
 
 
-def _checked_truth(family: object, origin: str, what: str, truth: Any) -> Any:
-    """``truth`` if it is an instance of the family's ``truth_model`` (what takes it next, a
-    task's ``expected``, would fail on anything else and be blamed for it)."""
-    model = getattr(family, "truth_model", None)
-    if not isinstance(model, type) or isinstance(truth, model):
-        return truth
+def _checked_model(family: object, origin: str, what: str, value: Any, attribute: str) -> Any:
+    """``value`` if it is an instance of the family's model named ``attribute`` (e.g. its
+    ``truth_model``: what takes it next, a task's ``expected``, would fail on anything else and
+    be blamed for it)."""
+    model = getattr(family, attribute, None)
+    if not isinstance(model, type) or isinstance(value, model):
+        return value
     raise PluginBug(
-        f"{origin}: {what} returned {type(truth).__name__}; expected {model.__name__} "
-        "(the family's truth_model)"
+        f"{origin}: {what} returned {type(value).__name__}; expected {model.__name__} "
+        f"(the family's {attribute})"
     )
 
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_family, dataset_simulator
-from bpb_core.dataset.worker import worker_signals
+from bpb_core.dataset.worker import started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
@@ -353,7 +353,8 @@ def simulate_lines(
 
     parts = _split(files, count)
     yield from _emit(_lines(parts[0]))  # the workers inherit what it loaded (or built: once)
-    with multiprocessing.get_context("fork").Pool(count, initializer=worker_signals) as pool:
+    fork = multiprocessing.get_context("fork")
+    with started_pool(lambda: fork.Pool(count, initializer=worker_signals)) as pool:
         for result in pool.imap(_lines, parts[1:]):
             yield from _emit(result)
 

@@ -40,6 +40,7 @@ ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
 FAMILY = "scene family 'flawed'"
 PREDICT_FLAWS = [
     ("predictors_type", "predictors is 'stasis'; expected a tuple of names (str)"),
+    ("predictors_raise", "predictors raised RuntimeError: predictors exploded"),
     ("predict_raise", "predict('stasis') raised RuntimeError: predict exploded"),
     ("predict_type", "predict('stasis') returned dict; expected FinalState (the family's "
      "truth_model)"),
@@ -105,6 +106,7 @@ def test_the_baseline_names_a_flawed_predict(
 
 
 TRUTH_TYPE = "ground_truth() returned dict; expected FinalState (the family's truth_model)"
+PERCEIVE_TYPE = "perceive() returned dict; expected Scene (the family's scene_model)"
 
 
 @pytest.mark.parametrize(
@@ -113,6 +115,7 @@ TRUTH_TYPE = "ground_truth() returned dict; expected FinalState (the family's tr
         ("oracle", "truth_type", TRUTH_TYPE),
         ("vision", "truth_type", TRUTH_TYPE),
         ("vision", "perceive_raise", "perceive() raised RuntimeError: perceive exploded"),
+        ("vision", "perceive_type", PERCEIVE_TYPE),
         ("vision", "perception_error_type", "perception_error() returned list; expected a dict "
          "of named values"),
     ],
@@ -279,12 +282,15 @@ def test_reading_a_dataset_s_config_back_is_one_line_naming_the_family_plugin_an
     assert done.stdout == ""
 
 
+@pytest.mark.parametrize(("flaw", "said"), PREDICT_FLAWS[:2])
 def test_bpb_run_with_a_baseline_is_one_line_naming_the_family_plugin_and_exit_3(
-    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path, tmp_path: Path
-) -> None:
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path,
+    tmp_path: Path, flaw: str, said: str,
+) -> None:  # fmt: skip
     """The baseline read the family's predictors unchecked: a str was offered letter by letter,
-    as bad input (exit 2: "offers no such prediction; known: baseline:oracle, baseline:s, ...")."""
-    flaw, said = PREDICT_FLAWS[0]
+    as bad input (exit 2: "offers no such prediction; known: baseline:oracle, baseline:s, ...").
+    A predictors property that raised escaped isinstance(family, Predicting) itself on Python
+    3.11 (whose runtime protocols read data members with hasattr): a raw traceback."""
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
     monkeypatch.setenv("BPB_TEST_FLAW", flaw)
@@ -296,6 +302,23 @@ def test_bpb_run_with_a_baseline_is_one_line_naming_the_family_plugin_and_exit_3
         f"error: {ORIGIN}: {FAMILY}: {said} (set BPB_DEBUG=1 for a traceback)"
     ]
     assert not out.exists()
+
+
+def test_bpb_run_with_vision_names_a_perceive_of_the_wrong_type_and_exit_3(
+    install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, flawed_data: Path, tmp_path: Path
+) -> None:
+    """baseline:vision ran the family's ground_truth() on whatever perceive() returned: a dict
+    was blamed on ground_truth() ("raised AttributeError: 'dict' object has no attribute ...")."""
+    source = Path(support.flawed_family.__file__).read_text()
+    install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
+    monkeypatch.setenv("BPB_TEST_FLAW", "perceive_type")
+    done = run_bpb("run", "--data", str(flawed_data), "--adapter", "baseline:vision",
+                   "--out", str(tmp_path / "run"), "--tasks", "balls", "--limit", "1")  # fmt: skip
+    assert done.returncode == 3
+    assert "Traceback" not in done.stderr  # above the error: the progress line only
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"error: {ORIGIN}: {FAMILY}: {PERCEIVE_TYPE} (set BPB_DEBUG=1 for a traceback)"
+    )
 
 
 def test_bpb_report_is_one_line_naming_the_family_plugin_and_exit_3(

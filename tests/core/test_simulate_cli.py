@@ -21,7 +21,7 @@ from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.scene import DEFAULT_RADIUS, Scene, table_box
 from bpb_tasks.billiards.truth import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from support.processes import HAS_PROC, as_in_a_terminal, ctrl_c
+from support.processes import HAS_PROC, as_in_a_terminal, ctrl_c, ctrl_c_at_worker_start
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -383,6 +383,15 @@ def test_ctrl_c_reaching_the_workers_is_left_to_the_parent(small_dataset: Path) 
     stderr = ctrl_c(process, 2, time.monotonic() + 60)
     assert process.returncode == 130, stderr
     assert stderr.strip() == "aborted"
+
+
+def test_a_ctrl_c_while_the_workers_start_is_aborted_without_a_traceback(
+    small_dataset: Path, tmp_path: Path
+) -> None:
+    """A worker that Ctrl-C reached before its pool initializer died of it with a traceback."""
+    args = [BPB, "simulate", *[str(small_dataset)] * 400, "--stability", "--workers", "2"]
+    code, stderr = ctrl_c_at_worker_start(args, 2, tmp_path)
+    assert (code, stderr.strip()) == (130, "aborted")
 
 
 class FreeSimulator:

@@ -2,11 +2,13 @@
 renamed ``flawed``, with one task and scorer about it.
 
 ``BPB_TEST_FLAW`` (read at each call, so a test sets it in its own environment or that of a
-``bpb`` subprocess) picks the flaw: ``predictors_type`` (one str, not a tuple), ``predict_raise``,
-``predict_type`` (a dict, not the family's truth model), ``truth_type`` (the same from
-``ground_truth``), ``picture_raise``, ``picture_type`` (PNG bytes, not a ScenePicture),
+``bpb`` subprocess) picks the flaw: ``predictors_type`` (one str, not a tuple),
+``predictors_raise`` (reading it raises), ``predict_raise``, ``predict_type`` (a dict, not
+the family's truth model), ``truth_type`` (the same from ``ground_truth``), ``picture_raise``,
+``picture_type`` (PNG bytes, not a ScenePicture),
 ``perceive_raise`` (a RuntimeError, not the ValueError of an unreadable image),
-``perception_error_type`` (a list, not a dict),
+``perceive_type`` (the scene read as a dict, not its scene model), ``perception_error_type``
+(a list, not a dict),
 ``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
 line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
 ``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
@@ -23,7 +25,8 @@ second scene of a horizon on (the first is written), ``files_type`` (a list of n
 ``flawed-analytic``, whose constructor raises), and with ``--calibrate``
 ``calibrate_horizon_raise``, ``apply_calibration_raise`` and ``apply_calibration_type`` (the
 record and config swapped); and in ``bpb bench sim`` (whose reference and contestant are its
-own simulator) ``bench_reference_type`` (None), ``bench_contestants_type`` (one str, not a tuple),
+own simulator) ``bench_reference_type`` (None), ``bench_reference_raise`` (reading it raises),
+``bench_contestants_type`` (one str, not a tuple),
 ``bench_scenes_raise``, ``bench_scenes_type`` (dicts, not scenes), ``compare_raise``,
 ``compare_no_error`` (no ``error`` key), ``compare_type`` (an ``error`` in words),
 ``events_type`` (a float), ``scaled_scene_raise`` and ``scaled_scene_type`` (a dict).
@@ -102,6 +105,8 @@ class FlawedFamily(BilliardsFamily):
 
     @property  # type: ignore[misc]
     def bench_reference(self) -> Any:
+        if _flaw() == "bench_reference_raise":
+            raise RuntimeError("bench_reference exploded")
         return None if _flaw() == "bench_reference_type" else "flawed-analytic:precision=50"
 
     @property  # type: ignore[misc]
@@ -134,6 +139,8 @@ class FlawedFamily(BilliardsFamily):
 
     @property  # type: ignore[misc]
     def predictors(self) -> Any:
+        if _flaw() == "predictors_raise":
+            raise RuntimeError("predictors exploded")
         return "stasis" if _flaw() == "predictors_type" else BilliardsFamily.predictors
 
     @property  # type: ignore[misc]
@@ -226,7 +233,8 @@ class FlawedFamily(BilliardsFamily):
     def perceive(self, image: bytes, prompt: str) -> Any:
         if _flaw() == "perceive_raise":
             raise RuntimeError("perceive exploded")
-        return super().perceive(image, prompt)
+        scene = super().perceive(image, prompt)
+        return scene.model_dump() if _flaw() == "perceive_type" else scene
 
     def perception_error(self, perceived: Any, scene: Any) -> Any:
         if _flaw() == "perception_error_type":

@@ -43,9 +43,9 @@ def catches_sigterm(pid: int) -> bool:
 
 def settled_workers(pid: int, count: int, deadline: float) -> list[int]:
     """``pid``'s children once there are ``count`` of them and each ignores SIGINT (or once
-    ``deadline`` has passed): one that gets it between its fork and its pool initializer still
-    dies of it, a window of milliseconds that a busy machine widens past a second (not what the
-    tests are about). A worker that never comes to ignore it is returned at the deadline."""
+    ``deadline`` has passed): the tests that use it are about workers at work (the start-up
+    window is :func:`ctrl_c_at_worker_start`'s). A worker that never comes to ignore it is
+    returned at the deadline."""
     while time.monotonic() < deadline and len(children(pid)) < count:
         time.sleep(0.02)
     workers = children(pid)
@@ -134,3 +134,44 @@ def run_group(
                 stopped.output, stopped.stderr = process.communicate()
             raise
     return subprocess.CompletedProcess(args, process.returncode, stdout, stderr)
+
+
+SLOW_START = """\
+import multiprocessing.util, os, pathlib, time
+
+class _Start:
+    pass
+
+def _late(start):
+    # in the forked worker, before its pool initializer: say so, then linger
+    pathlib.Path(os.environ["BPB_TEST_STARTED"], str(os.getpid())).touch()
+    time.sleep(1.0)
+
+_START = _Start()
+multiprocessing.util.register_after_fork(_START, _late)
+"""
+
+
+def ctrl_c_at_worker_start(args: Sequence[str], workers: int, scratch: Path) -> tuple[int, str]:
+    """Run ``args`` (a ``bpb`` command with a pool of ``workers``) in a session of its own and
+    send Ctrl-C to its group while every worker is between its fork and its pool initializer (a
+    window of milliseconds, held open for a second by a ``sitecustomize`` of ``scratch``).
+    Returns the exit code and stderr; the group is killed in any case."""
+    started = scratch / "started"
+    started.mkdir()
+    (scratch / "sitecustomize.py").write_text(SLOW_START)
+    path = os.pathsep.join(filter(None, [str(scratch), os.environ.get("PYTHONPATH")]))
+    env = {**os.environ, "PYTHONPATH": path, "BPB_TEST_STARTED": str(started)}
+    process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True, preexec_fn=as_in_a_terminal,
+                               env=env)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(started.iterdir())) < workers and time.monotonic() < deadline:
+            time.sleep(0.01)
+        os.killpg(process.pid, signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    return process.returncode, stderr

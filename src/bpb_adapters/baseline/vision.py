@@ -29,7 +29,7 @@ from bpb_adapters.baseline.adapter import PluginLookup, expected_text
 from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import PluginBug, RequestRejected, blamed
 from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
-from bpb_core.plugin_calls import simulated_truth
+from bpb_core.plugin_calls import perception, simulated_truth
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily, Simulator, Task
@@ -97,14 +97,8 @@ class VisionAdapter(PluginLookup):
     def _perceive(
         self, family: Perceiving, origin: str, image: bytes, prompt: str
     ) -> tuple[Any, str | None]:
-        def read() -> tuple[Any, str | None]:
-            with blamed(origin, f"scene family {_name(family)!r}: perceive()"):
-                try:
-                    return family.perceive(image, prompt), None
-                except ValueError as exc:  # what it raises on purpose: this image is unreadable
-                    return None, str(exc) or type(exc).__name__
-
-        return _cached(self._seen, _key(image, prompt), read)
+        key = _key(image, prompt)
+        return _cached(self._seen, key, lambda: perception(family, origin, image, prompt))
 
     def _measure(
         self, family: Perceiving, origin: str, image: bytes, prompt: str, seen: Any,

@@ -23,6 +23,7 @@ from bpb_core.dataset.worker import (
     init_worker,
     remove_scene,
     run_job,
+    started_pool,
 )
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
 from bpb_core.errors import BadInput
@@ -163,7 +164,7 @@ def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
     host_froze = gc.get_freeze_count() > 0
     gc.freeze()
     try:
-        return Pool(n_workers, initializer=init_pool_worker, initargs=(setup,))
+        return started_pool(lambda: Pool(n_workers, init_pool_worker, (setup,)))
     finally:
         if not host_froze:
             gc.unfreeze()

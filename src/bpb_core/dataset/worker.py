@@ -10,17 +10,20 @@ from __future__ import annotations
 import os
 import shutil
 import signal
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
+
+if TYPE_CHECKING:
+    from multiprocessing.pool import Pool
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,32 @@ def worker_signals() -> None:
     """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # last: once it is ignored, both are set
+    if hasattr(signal, "pthread_sigmask"):  # held since the fork (started_pool); now discarded
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def started_pool(start: Callable[[], Pool]) -> Pool:
+    """``start()``, a pool whose initializer is :func:`worker_signals`, with Ctrl-C held back
+    (blocked) while it starts its workers, and its threads that start any later ones.
+
+    A worker inherits the block, so from its fork until its initializer ignores Ctrl-C it can
+    only hold one back, not die of it with a traceback. A Ctrl-C meanwhile reaches this
+    process once the pool has started (``KeyboardInterrupt``), and the pool is terminated.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        return start()
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        pool = start()
+    except BaseException:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        raise
+    try:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)  # raises a Ctrl-C that came meanwhile
+    except BaseException:
+        pool.terminate()
+        raise
+    return pool
 
 
 def init_pool_worker(setup: WorkerSetup) -> None:

@@ -7,7 +7,8 @@ every simulator (exit 1, figures written, the simulators blamed); a compare() wi
 "error" was "error: scene family: compare() returned no 'error'" (exit 2, naming no plugin); an
 events() of floats went into the µs/event figure (exit 0); a bench_contestants string was read
 letter by letter ("unknown simulator 'f'", exit 2); the others were internal errors (an
-AttributeError, a TypeError) naming no plugin.
+AttributeError, a TypeError) naming no plugin. A bench_reference property that raised escaped
+isinstance(family, Comparing) itself on Python 3.11 ("internal error: RuntimeError: ...").
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ FAMILY = "scene family 'flawed'"
 SCALING = ["--scaling", "flawed-analytic", "--scaling-scenes", "1"]
 FLAWS = [
     ("bench_reference_type", [], "bench_reference is NoneType; expected a str"),
+    ("bench_reference_raise", [], "reading bench_reference raised RuntimeError: "
+     "bench_reference exploded"),
     ("bench_contestants_type", [], "bench_contestants is str; expected a tuple of simulator "
      "specs (str)"),
     ("bench_scenes_raise", [], "bench_scenes(2, 0) raised RuntimeError: bench_scenes exploded"),

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from support.processes import HAS_PROC, catches_sigterm, settled_workers
+from support.processes import HAS_PROC, catches_sigterm, ctrl_c_at_worker_start, settled_workers
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -149,6 +149,19 @@ def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> 
             os.killpg(process.pid, signal.SIGKILL)  # do not leave it and its pool behind
     assert process.returncode == 0 and "Traceback" not in stderr, stderr
     assert json.loads((out / "dataset.json").read_text())["scenes"] == 150
+
+
+def test_a_ctrl_c_while_the_workers_start_is_aborted_without_a_traceback(tmp_path: Path) -> None:
+    """A worker that Ctrl-C reached after its fork but before its pool initializer (which
+    ignores it) died of it with a traceback ("Process ForkPoolWorker-1: ... KeyboardInterrupt")."""
+    for attempt in range(2):
+        scratch = tmp_path / str(attempt)
+        scratch.mkdir()
+        args = [BPB, "generate", "--out", str(scratch / "ds"), "--per-horizon", "30",
+                "--workers", "2", "--no-images"]  # fmt: skip
+        code, stderr = ctrl_c_at_worker_start(args, 2, scratch)
+        assert (code, stderr.strip()) == (130, "aborted")
+        assert not (scratch / "ds").exists()
 
 
 @pytest.mark.skipif(not HAS_PROC, reason="reads signal dispositions through /proc")
