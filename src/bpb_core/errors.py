@@ -1,12 +1,14 @@
 """Exception types shared by the core, the plugins and the CLI.
 
 Every error a user can cause carries a one-line message that names the file or field at fault.
-The CLI maps them to exit codes: :class:`BadInput` is 2, anything else unexpected is 3.
+The CLI maps them to exit codes: :class:`BadInput` and :class:`WriteRefused` are 2, anything
+else unexpected is 3.
 :class:`Notice` is the warning a plugin gives about slow work the user did not ask for.
 """
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Self
@@ -42,6 +44,39 @@ class BadInput(BpbError):
     """The user gave something bpb cannot use: a file, a field, an option (exit code 2)."""
 
     exit_code = 2
+
+
+class WriteRefused(BpbError):
+    """The system refused to write a file bpb was making (a full disk, a quota, a file size
+    limit): the user's environment, not a bug in bpb, so exit code 2, as for an ``--out`` found
+    not writable before the work starts. Not a :class:`BadInput`: code that drops or blames the
+    work on bad input (a config whose scenes cannot be made) must not take it for that."""
+
+    exit_code = 2
+
+
+NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+"""The ``errno`` of a write refused for want of room: a full disk, a quota, a file size limit."""
+
+
+def write_refused(path: object, exc: OSError) -> WriteRefused:
+    """``PATH: cannot write: [Errno 28] No space left on device`` for ``exc`` raised writing
+    ``path`` (or the file ``exc`` names, when a write under the folder ``path`` raised it)."""
+    named = exc.filename if exc.filename is not None else path
+    reason = f"[Errno {exc.errno}] {exc.strerror}" if exc.errno is not None else str(exc)
+    return WriteRefused(f"{named}: cannot write: {reason}")
+
+
+@contextmanager
+def writing(path: object) -> Iterator[None]:
+    """Write ``path`` in the block; an ``OSError`` leaves as :func:`write_refused`'s one line.
+
+    A failed ``write()`` names no file (``[Errno 27] File too large``); only its caller knows
+    which one it was writing."""
+    try:
+        yield
+    except OSError as exc:
+        raise write_refused(path, exc) from None
 
 
 class UnknownName(BadInput):
@@ -99,7 +134,9 @@ def blamed(origin: str, what: str, passing: tuple[type[Exception], ...] = ()) ->
 
     bpb's own errors (:class:`BpbError`: a ``BadInput``, a ``ParseFailure``, a model error)
     pass through unchanged: raising them is part of a plugin's contract, as raising the
-    ``passing`` types is for some hooks (a ``ValueError`` naming a field).
+    ``passing`` types is for some hooks (a ``ValueError`` naming a field). A write the system
+    refused for want of room (a full disk, a quota, a file size limit) is no bug of the plugin:
+    it leaves as :class:`WriteRefused`, naming the file when the error does.
     """
     try:
         yield
@@ -108,6 +145,8 @@ def blamed(origin: str, what: str, passing: tuple[type[Exception], ...] = ()) ->
     except Exception as exc:
         if isinstance(exc, passing):
             raise
+        if isinstance(exc, OSError) and exc.errno in NO_ROOM:
+            raise write_refused(f"{origin}: {what}", exc) from None
         raise PluginBug(f"{origin}: {what} raised {type(exc).__name__}: {exc}") from exc
 
 

@@ -37,7 +37,7 @@ from bpb_core.dataset.jobs import (
 from bpb_core.dataset.manifest import DatasetManifest
 from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
-from bpb_core.errors import BadInput, PluginBug, UnknownName, blamed
+from bpb_core.errors import BadInput, PluginBug, UnknownName, WriteRefused, blamed
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
@@ -68,7 +68,8 @@ def generate_dataset(
 
     The folder is built beside ``out`` under a hidden ``.NAME.partial`` name and renamed at the
     end, so an interrupted generation never leaves a folder that looks complete. A generation
-    stopped by bad input (a config whose scenes cannot be made) removes that folder, and leaves
+    stopped by bad input (a config whose scenes cannot be made) removes that folder; one the
+    system refused to write (a full disk) keeps it, as Ctrl-C does, and says so. Either leaves
     a dataset it was to overwrite as it was.
 
     Args:
@@ -94,6 +95,7 @@ def generate_dataset(
 
     Raises:
         BadInput: Bad arguments or config (the message names the file or field).
+        WriteRefused: The system refused a write (names the file, and what is left where).
     """
     with _naming_file(config):
         registry = registry if registry is not None else _registry()
@@ -134,10 +136,21 @@ def generate_dataset(
             except BadInput:  # the message says what to change; a half-built folder is of no use
                 shutil.rmtree(partial, ignore_errors=True)
                 raise
+            except WriteRefused as exc:  # left as Ctrl-C leaves it; the user may need the space
+                raise WriteRefused(f"{exc}; {_left(target, partial)}") from None
             if target.exists():
                 shutil.rmtree(target)
             partial.rename(target)
         return target
+
+
+def _left(target: Path, partial: Path) -> str:
+    """What a generation the system refused to write leaves, and where."""
+    kept = f"{target} is as it was, " if target.exists() else ""
+    return (
+        f"{kept}the unfinished dataset is left in {partial} (delete it to free its space; "
+        "running the command again starts it afresh)"
+    )
 
 
 def _registry() -> Registry:

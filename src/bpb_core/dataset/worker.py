@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, write_refused, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -182,6 +182,7 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
 
     Raises:
         BadInput: The config makes a scene the simulator cannot finish.
+        WriteRefused: The system refused to write a scene file (names it).
         PluginBug: The family's ``make_scene()`` (or its scene's ``files()``) raised or
             returned something else than it should, naming the family's plugin.
     """
@@ -196,11 +197,16 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     try:
         os.mkdir(folder)  # one call once the horizon's folder is there
     except OSError:  # not yet, or already there, or refused: as Path.mkdir(parents=True) does
-        os.makedirs(folder, exist_ok=True)
+        with writing(folder):
+            os.makedirs(folder, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
     files = []
     for file_name, data in _files(setup, what, made).items():
-        write_file(os.path.join(folder, file_name), data)
+        path = os.path.join(folder, file_name)
+        try:
+            write_file(path, data)
+        except OSError as exc:  # a full disk, a file size limit: the user's to fix
+            raise write_refused(path, exc) from None
         files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
 

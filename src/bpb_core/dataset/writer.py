@@ -23,6 +23,7 @@ from bpb_core.dataset.manifest import (
     sha256_bytes,
 )
 from bpb_core.dataset.worker import SceneResult
+from bpb_core.errors import write_refused, writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")
@@ -54,10 +55,12 @@ class DatasetWriter:
         self.root = root
         self.counts = {h: HorizonCounts() for h in horizons}
         self.tallies = dict(tallies or {})
-        self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
-        self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
+        with writing(root):
+            self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
+            self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
         self._rows = csv.writer(self._index, lineterminator="\n")
-        self._rows.writerow(IndexRow.header(columns))
+        with writing(root / INDEX):
+            self._rows.writerow(IndexRow.header(columns))
 
     def add(self, result: SceneResult) -> None:
         """Record a kept scene."""
@@ -67,8 +70,14 @@ class DatasetWriter:
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
             self.tallies[row.horizon].add(dict(row.values))
-        self._rows.writerow(row.cells())
-        self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
+        try:
+            self._rows.writerow(row.cells())
+        except OSError as exc:  # the buffer reaching the disk: a full disk, a file size limit
+            raise write_refused(self.root / INDEX, exc) from None
+        try:
+            self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
+        except OSError as exc:
+            raise write_refused(self.root / CHECKSUMS, exc) from None
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
@@ -76,12 +85,18 @@ class DatasetWriter:
 
     def add_file(self, rel: str) -> None:
         """Checksum an extra file (a stats figure) written under the root."""
-        self._sums.write(f"{sha256_bytes((self.root / rel).read_bytes())}  {rel}\n")
+        digest = sha256_bytes((self.root / rel).read_bytes())
+        with writing(self.root / CHECKSUMS):
+            self._sums.write(f"{digest}  {rel}\n")
 
     def close(self) -> None:
-        """Flush and close the streamed files."""
-        self._index.close()
-        self._sums.close()
+        """Flush and close the streamed files (both, even when the first cannot be)."""
+        try:
+            with writing(self.root / INDEX):
+                self._index.close()
+        finally:
+            with writing(self.root / CHECKSUMS):
+                self._sums.close()
 
     def summary(self) -> dict[str, HorizonSummary]:
         """Per-horizon counts (with the family's fields) keyed by horizon label (``h3``)."""
@@ -97,7 +112,8 @@ class DatasetWriter:
         """Add the descriptive files' hashes, seal and write ``dataset.json``."""
         files = {name: sha256_bytes((self.root / name).read_bytes()) for name in (INDEX, CHECKSUMS)}
         sealed = manifest.model_copy(update={"files": files}).sealed()
-        (self.root / MANIFEST).write_text(sealed.to_json(), encoding="utf-8")
+        with writing(self.root / MANIFEST):
+            (self.root / MANIFEST).write_text(sealed.to_json(), encoding="utf-8")
         return sealed
 
 
