@@ -20,7 +20,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, write_refused, writing
 from bpb_core.layout import (
     ATTEMPTS,
     RUN_LOCK,
@@ -93,14 +93,23 @@ def make_run_folder(run_dir: Path) -> None:
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename, so a reader (or a run
-    killed half-way) sees the old file or the new one, never a torn one."""
+    killed half-way) sees the old file or the new one, never a torn one.
+
+    Raises:
+        WriteRefused: The system refused the write (a full disk): names ``path``, which is left
+            as it was (the temporary file is removed).
+    """
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        tmp.write_bytes(data)
-    except FileNotFoundError:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp.write_bytes(data)
-    os.replace(tmp, path)
+        try:
+            tmp.write_bytes(data)
+        except FileNotFoundError:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp.write_bytes(data)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_refused(path, exc) from None
 
 
 def write_json_atomic(path: Path, data: Any) -> None:
@@ -165,10 +174,11 @@ class AttemptLog:
     """Append-only JSON-lines log of every model call, flushed after each line."""
 
     def __init__(self, run_dir: Path) -> None:
-        run_dir.mkdir(parents=True, exist_ok=True)
         self.path = run_dir / ATTEMPTS
-        self._file = self.path.open("a+b")
-        self._close_torn_line()
+        with writing(self.path):
+            run_dir.mkdir(parents=True, exist_ok=True)
+            self._file = self.path.open("a+b")
+            self._close_torn_line()
 
     def _close_torn_line(self) -> None:
         size = self._file.seek(0, os.SEEK_END)
@@ -184,12 +194,14 @@ class AttemptLog:
         A lone surrogate (a reply whose JSON carried ``"\\udc80"``) has no UTF-8 form: it is
         written as its JSON escape, so the line stays valid UTF-8 and reads back the same."""
         line = json.dumps(entry, ensure_ascii=False).encode("utf-8", "backslashreplace")
-        self._file.write(line + b"\n")
-        self._file.flush()
+        with writing(self.path):  # a line the disk cut short is torn: readers skip it
+            self._file.write(line + b"\n")
+            self._file.flush()
 
     def close(self) -> None:
         """Close the file."""
-        self._file.close()
+        with writing(self.path):
+            self._file.close()
 
 
 def read_attempts(run_dir: Path) -> Iterator[dict[str, Any]]:

@@ -11,6 +11,7 @@ the dataset.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import random
 import re
 from collections import Counter
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import NeedsSimulator
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_simulator
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, WriteRefused
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
@@ -199,6 +200,7 @@ async def _session(
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
     state.origins = _origins(registry, spec, model, asked.tasks)
     state.config_hash, state.history = manifest["config_hash"], history
+    ended = False
     try:
         done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
         plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
@@ -206,11 +208,26 @@ async def _session(
         plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
         _announce(state, refs, plan, done)
         await drive(state, plan)
+        ended = True
+    except WriteRefused as exc:
+        state.stop("write-refused")  # run.json says why, when there is room for it
+        raise WriteRefused(
+            f"{exc}; the run stopped, and {run_dir} keeps every answer written so far: "
+            "make room, then re-run the same command to resume"
+        ) from None
     finally:
         state.io.shutdown(wait=True)
-        state.log.close()
-        finish_manifest(run_dir, manifest, state)
+        with _kept_quiet(not ended):  # the disk that refused the run refuses these too
+            state.log.close()
+        with _kept_quiet(not ended):
+            finish_manifest(run_dir, manifest, state)
     return _result(state, refs, done)
+
+
+def _kept_quiet(failing: bool) -> contextlib.AbstractContextManager[None]:
+    """While the run is failing, a write it refuses as well is left unsaid: the first error
+    is the one to report."""
+    return contextlib.suppress(WriteRefused) if failing else contextlib.nullcontext()
 
 
 def _opening(

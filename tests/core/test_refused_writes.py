@@ -1,0 +1,58 @@
+"""A disk that fills up (here: a file size limit) part-way through a command that writes
+results: one line naming the file and what is kept where, exit 2, nothing already done lost."""
+
+from __future__ import annotations
+
+import resource
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BPB = str(Path(sys.executable).with_name("bpb"))
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="rlimits are POSIX")
+
+
+def bpb(*args: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
+    """``bpb ARGS``; with ``limit``, no file it writes may grow past ``limit`` bytes (a write
+    past it fails with EFBIG, as one on a full disk fails with ENOSPC)."""
+
+    def limited() -> None:
+        if limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return subprocess.run(
+        [BPB, *args], capture_output=True, text=True, timeout=300, preexec_fn=limited
+    )
+
+
+def answers(run_dir: Path) -> dict[str, bytes]:
+    return {p.relative_to(run_dir).as_posix(): p.read_bytes() for p in run_dir.glob("h*/*/*.json")}
+
+
+def test_a_run_the_disk_cuts_short_keeps_its_answers_and_says_how_to_resume(
+    dataset: Path, tmp_path: Path
+) -> None:
+    """It was "internal error: OSError: [Errno 27] File too large" (exit 3), naming no file."""
+    run = ["run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", str(tmp_path)]
+    run_dir = tmp_path / "baseline_stasis"
+    first = bpb(*run, "--limit", "1")  # 6 of 18 pairs; its attempts log: about 6 kB
+    assert first.returncode == 0, first.stderr
+    before = answers(run_dir)
+    done = bpb(*run, limit=12_000)
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"error: {run_dir / 'attempts.jsonl'}: cannot write: [Errno 27] File too large; the run "
+        f"stopped, and {run_dir} keeps every answer written so far: make room, then re-run the "
+        "same command to resume"
+    )
+    kept = answers(run_dir)
+    assert len(before) == 6 and len(before) < len(kept) < 18
+    assert {name: kept[name] for name in before} == before
+    resumed = bpb(*run)
+    assert resumed.returncode == 0, resumed.stderr
+    assert answers(run_dir).items() >= kept.items() and len(answers(run_dir)) == 18
