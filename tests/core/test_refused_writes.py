@@ -56,3 +56,24 @@ def test_a_run_the_disk_cuts_short_keeps_its_answers_and_says_how_to_resume(
     resumed = bpb(*run)
     assert resumed.returncode == 0, resumed.stderr
     assert answers(run_dir).items() >= kept.items() and len(answers(run_dir)) == 18
+
+
+def tree(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def test_a_report_the_disk_cuts_short_names_the_file_and_leaves_the_runs_alone(
+    runs: Path, tmp_path: Path
+) -> None:
+    """report.html (about 550 kB) over a 200,000-byte limit, after the charts (under 120 kB)."""
+    before = tree(runs)
+    out = tmp_path / "report"
+    done = bpb("report", str(runs), "--out", str(out), limit=200_000)
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        f"error: {out / 'report.html'}: cannot write: [Errno 27] File too large; the report in "
+        f"{out} is incomplete (the runs it reads are untouched): make room, then run it again"
+    )
+    assert (out / "charts" / "leaderboards.png").stat().st_size > 50_000
+    assert tree(runs) == before

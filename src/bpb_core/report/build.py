@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, WriteRefused, writing
 from bpb_core.report import gallery, html
 from bpb_core.report.exports import part_json, write_exports
 from bpb_core.report.figures import chart_notes, chart_pngs
@@ -105,6 +105,7 @@ def build_report(
 
     Raises:
         BadInput: No run folder found, or a run, answer or ground-truth file cannot be read.
+        WriteRefused: The system refused to write a file of the report (names it).
     """
     from bpb_core.registry import make_registry
 
@@ -115,7 +116,13 @@ def build_report(
     report = Report(parts, completeness=rule)
     if out is None:
         return report
-    files = write_report(report, Path(out), registry, gallery_size=gallery_size)
+    try:
+        files = write_report(report, Path(out), registry, gallery_size=gallery_size)
+    except WriteRefused as exc:
+        raise WriteRefused(
+            f"{exc}; the report in {out} is incomplete (the runs it reads are untouched): "
+            "make room, then run it again"
+        ) from None
     return Report(parts, files, rule)
 
 
@@ -131,10 +138,15 @@ def titles(results: Results, registry: Registry) -> dict[str, str]:
 def write_report(
     report: Report, out: Path, registry: Registry, *, gallery_size: int = 8
 ) -> dict[str, Path]:
-    """Write charts, gallery images, exports and ``report.html`` under ``out``."""
+    """Write charts, gallery images, exports and ``report.html`` under ``out``.
+
+    Raises:
+        WriteRefused: The system refused a write (a full disk): names the file.
+    """
     files: dict[str, Path] = {}
     for sub in ("charts", "gallery", "tables"):
-        (out / sub).mkdir(parents=True, exist_ok=True)
+        with writing(out / sub):
+            (out / sub).mkdir(parents=True, exist_ok=True)
     several = len(report.parts) > 1
     pages, cases = [], []
     names: dict[str, str] = {}  # display titles of the tasks, for the gallery
@@ -194,7 +206,8 @@ def run_items(part: ReportPart) -> list[dict[str, Any]]:
 
 
 def _write(path: Path, data: bytes) -> Path:
-    path.write_bytes(data)
+    with writing(path):
+        path.write_bytes(data)
     return path
 
 
@@ -208,7 +221,9 @@ def _export_frames(report: Report, out: Path) -> dict[str, Path]:
         frames = [getattr(p.results, name) for p in report.parts]
         frame = frames[0] if len(frames) == 1 else pd.concat(frames, ignore_index=True)
         files[f"{name}.csv"] = out / f"{name}.csv"
-        frame.to_csv(files[f"{name}.csv"], index=False)
+        with writing(files[f"{name}.csv"]):
+            frame.to_csv(files[f"{name}.csv"], index=False)
         files[f"{name}.parquet"] = out / f"{name}.parquet"
-        frame.to_parquet(files[f"{name}.parquet"], index=False)
+        with writing(files[f"{name}.parquet"]):
+            frame.to_parquet(files[f"{name}.parquet"], index=False)
     return files

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from bpb_core.errors import writing
 from bpb_core.report.html import Cell, plain
 from bpb_core.report.sections import (
     Rows,
@@ -99,7 +100,8 @@ def write_exports(part: ReportPart, out: Path, prefix: str, rule: Completeness) 
     files: dict[str, Path] = {}
     for name, frame in part.tables.items():
         path = out / "tables" / f"{prefix}{name}.csv"
-        frame.to_csv(path, index=False)
+        with writing(path):
+            frame.to_csv(path, index=False)
         files[f"table:{prefix}{name}"] = path
     captions = {
         "leaderboard": "Leaderboard: mean accuracy over horizons, answered only (strict beside).",
@@ -108,9 +110,11 @@ def write_exports(part: ReportPart, out: Path, prefix: str, rule: Completeness) 
     for name, frame in paper_tables(part, rule).items():
         captions.setdefault(name, f"{name.replace('_', ' ')}, answered only.")
         md = out / "tables" / f"{prefix}{name}.md"
-        md.write_text(markdown(frame), encoding="utf-8")
+        with writing(md):
+            md.write_text(markdown(frame), encoding="utf-8")
         tex = out / "tables" / f"{prefix}{name}.tex"
-        tex.write_text(latex(frame, captions[name]), encoding="utf-8")
+        with writing(tex):
+            tex.write_text(latex(frame, captions[name]), encoding="utf-8")
         files[f"markdown:{prefix}{name}"], files[f"latex:{prefix}{name}"] = md, tex
     return files
 
