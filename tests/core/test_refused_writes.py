@@ -77,3 +77,25 @@ def test_a_report_the_disk_cuts_short_names_the_file_and_leaves_the_runs_alone(
     )
     assert (out / "charts" / "leaderboards.png").stat().st_size > 50_000
     assert tree(runs) == before
+
+
+def test_an_export_the_disk_cuts_short_names_the_shard_and_keeps_the_earlier_export(
+    small_dataset: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "export"
+    first = bpb("export", str(small_dataset), "--out", str(out))
+    assert first.returncode == 0, first.stderr
+    before = tree(out)
+    done = bpb("export", str(small_dataset), "--out", str(out), limit=50_000)  # shards: ~100 kB
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    partial = tmp_path / ".export.partial"
+    [line] = done.stderr.strip().splitlines()
+    assert line.startswith(
+        f"error: {partial}/data/h1-00000-of-00001.parquet: cannot write: [Errno 27] "
+    )  # then pyarrow's words, naming the error
+    assert line.endswith(
+        f"File too large; nothing was exported (the unfinished export in {partial} is "
+        f"removed); {out} is as it was"
+    )
+    assert tree(out) == before and not partial.exists()

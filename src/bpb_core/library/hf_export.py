@@ -23,7 +23,7 @@ from bpb_core.dataset.checksums import read_scene_file
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset
-from bpb_core.errors import BadInput
+from bpb_core.errors import NO_ROOM, BadInput, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
 from bpb_core.library.answers import build_messages
@@ -98,6 +98,7 @@ def export_hf(
         BadInput: ``data`` is not a dataset, its scene folders do not match its ``index.csv``,
             a task is unknown, a scene file is missing or damaged, or ``out`` holds other files
             or cannot be a folder (a file, or under one).
+        WriteRefused: The system refused a write (a full disk): names the file.
     """
     from bpb_core.registry import make_registry
 
@@ -110,13 +111,20 @@ def export_hf(
     _check_out(target)
     with partial_folder(target, "bpb export") as partial:
         try:
-            (partial / DATA).mkdir()
-            (partial / SIDE).mkdir()
+            with writing(partial):
+                (partial / DATA).mkdir()
+                (partial / SIDE).mkdir()
             splits, files, card = _write_export(
                 dataset, partial, objects, names, shard_rows, registry
             )
-            (partial / "README.md").write_text(card, encoding="utf-8")
+            with writing(partial / "README.md"):
+                (partial / "README.md").write_text(card, encoding="utf-8")
             _swap_in(partial, target)
+        except WriteRefused as exc:
+            kept = f"; {target} is as it was" if target.exists() else ""
+            raise WriteRefused(
+                f"{exc}; nothing was exported (the unfinished export in {partial} is removed){kept}"
+            ) from None
         finally:
             shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
     return HfExport(target, splits, tuple(files), names)
@@ -253,13 +261,14 @@ def _write_split(
         columns = {name: [row[name] for row in chunk] for name in FEATURES}
         table = pa.table(columns, schema=schema.with_metadata(metadata))
         name = shard_name(split, number, len(chunks))
-        pq.write_table(
-            table,
-            out / name,
-            compression="zstd",
-            row_group_size=ROW_GROUP,
-            dictionary_pagesize_limit=DICTIONARY_BYTES,
-        )
+        with writing(out / name):
+            pq.write_table(
+                table,
+                out / name,
+                compression="zstd",
+                row_group_size=ROW_GROUP,
+                dictionary_pagesize_limit=DICTIONARY_BYTES,
+            )
         names.append(name)
         nbytes += table.nbytes
     return names, nbytes
@@ -278,6 +287,8 @@ def _write_side_files(dataset: Dataset, out: Path) -> None:
         try:
             shutil.copyfile(dataset.root / name, out / SIDE / name)
         except OSError as exc:
+            if exc.errno in NO_ROOM:  # the copy, not the dataset
+                raise write_refused(out / SIDE / name, exc) from None
             raise BadInput(
                 f"{dataset.root / name}: cannot read: {exc.strerror or exc}; the dataset is "
                 "damaged: load_dataset(...).verify() lists what changed"
