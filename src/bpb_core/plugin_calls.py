@@ -298,6 +298,26 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
     return _checked_line(origin, what, why)
 
 
+def price_known(adapter: object, origin: str) -> bool | None:
+    """The adapter's :attr:`Pricing.priced` (``None`` without it), checked: a bool (``--max-cost``
+    refuses the adapter when it is false, and would take any other value's truth for it).
+
+    Raises:
+        PluginBug: Reading ``priced`` raised or gave something else, naming ``origin`` (who
+            supplied the adapter).
+    """
+    from bpb_core.capabilities import Pricing
+
+    what = f"{_adapter(adapter)}: priced"
+    with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
+        if not isinstance(adapter, Pricing):
+            return None
+        priced = adapter.priced
+    if isinstance(priced, bool):
+        return priced
+    raise PluginBug(f"{origin}: {what} is {priced!r:.80}; expected a bool")
+
+
 def estimated_input(
     adapter: Estimating, origin: str, messages: tuple[Message, ...]
 ) -> tuple[int, float | None]:
