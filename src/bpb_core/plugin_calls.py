@@ -201,12 +201,19 @@ def family_label(family: object) -> str:
     return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
 
 
+def family_model(family: object, attribute: str) -> type | None:
+    """The family's model named ``attribute`` (``truth_model``, ``config_model``), or ``None``
+    when it declares none: then what its hooks return is not checked against one."""
+    model = getattr(family, attribute, None)
+    return model if isinstance(model, type) else None
+
+
 def _checked_model(family: object, origin: str, what: str, value: Any, attribute: str) -> Any:
     """``value`` if it is an instance of the family's model named ``attribute`` (e.g. its
     ``truth_model``: what takes it next, a task's ``expected``, would fail on anything else and
     be blamed for it)."""
-    model = getattr(family, attribute, None)
-    if not isinstance(model, type) or isinstance(value, model):
+    model = family_model(family, attribute)
+    if model is None or isinstance(value, model):
         return value
     raise PluginBug(
         f"{origin}: {what} returned {type(value).__name__}; expected {model.__name__} "
