@@ -201,12 +201,19 @@ def family_label(family: object) -> str:
     return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
 
 
+def family_model(family: object, attribute: str) -> type | None:
+    """The family's model named ``attribute`` (``truth_model``, ``config_model``), or ``None``
+    when it declares none: then what its hooks return is not checked against one."""
+    model = getattr(family, attribute, None)
+    return model if isinstance(model, type) else None
+
+
 def _checked_model(family: object, origin: str, what: str, value: Any, attribute: str) -> Any:
     """``value`` if it is an instance of the family's model named ``attribute`` (e.g. its
     ``truth_model``: what takes it next, a task's ``expected``, would fail on anything else and
     be blamed for it)."""
-    model = getattr(family, attribute, None)
-    if not isinstance(model, type) or isinstance(value, model):
+    model = family_model(family, attribute)
+    if model is None or isinstance(value, model):
         return value
     raise PluginBug(
         f"{origin}: {what} returned {type(value).__name__}; expected {model.__name__} "
@@ -296,6 +303,26 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
     with blamed(origin, what):
         why = adapter.cannot_answer(family)
     return _checked_line(origin, what, why)
+
+
+def price_known(adapter: object, origin: str) -> bool | None:
+    """The adapter's :attr:`Pricing.priced` (``None`` without it), checked: a bool (``--max-cost``
+    refuses the adapter when it is false, and would take any other value's truth for it).
+
+    Raises:
+        PluginBug: Reading ``priced`` raised or gave something else, naming ``origin`` (who
+            supplied the adapter).
+    """
+    from bpb_core.capabilities import Pricing
+
+    what = f"{_adapter(adapter)}: priced"
+    with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
+        if not isinstance(adapter, Pricing):
+            return None
+        priced = adapter.priced
+    if isinstance(priced, bool):
+        return priced
+    raise PluginBug(f"{origin}: {what} is {priced!r:.80}; expected a bool")
 
 
 def estimated_input(

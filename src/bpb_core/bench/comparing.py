@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.bench.contestants import comparing_family
 from bpb_core.capabilities import CountsEvents
 from bpb_core.errors import PluginBug, blamed
+from bpb_core.plugin_calls import family_model
 
 if TYPE_CHECKING:
     from bpb_core.capabilities import Comparing
@@ -78,8 +79,7 @@ class BenchFamily:
         what = f"bench_scenes({count}, {seed})"
         with blamed(self.origin, f"{self._label()}: {what}"):
             scenes = self.family.bench_scenes(count, seed)
-        model = getattr(self.family, "scene_model", None)
-        kind = model if isinstance(model, type) else object
+        kind = family_model(self.family, "scene_model") or object
         if not isinstance(scenes, list | tuple):
             raise self._bug(f"{what} returned {type(scenes).__name__}; expected a list of scenes")
         stray = next((s for s in scenes if not isinstance(s, kind)), None)

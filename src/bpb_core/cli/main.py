@@ -60,7 +60,7 @@ class LazyGroup(click.Group):
 @click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="bpb")
 def cli() -> None:
-    """bpb: generate scenes with exact physics ground truth,
+    """bpb: generate scenes with simulated ground truth,
     ask multimodal LLMs what happens, score them and report where they fail."""
 
 

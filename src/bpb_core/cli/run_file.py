@@ -260,10 +260,11 @@ def refuse_unpriced(ready: list[Prepared]) -> None:
 
     Raises:
         BadInput: Names every adapter without a price and the ways out.
+        PluginBug: An adapter's ``priced`` raised or is no bool, naming its plugin.
     """
-    from bpb_core.capabilities import Pricing
+    from bpb_core.plugin_calls import price_known
 
-    unpriced = [p.name for p in ready if isinstance(p.adapter, Pricing) and not p.adapter.priced]
+    unpriced = [p.name for p in ready if price_known(p.adapter, p.origin) is False]
     if unpriced:
         raise BadInput(
             f"--max-cost: no price known for {', '.join(unpriced)}; give one (--prices, or "

@@ -15,7 +15,7 @@ from bpb_core.capabilities import Calibrating, HorizonTally, Tallying
 from bpb_core.dataset.manifest import HorizonSummary
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import SceneFamily
-from bpb_core.plugin_calls import family_label, json_values
+from bpb_core.plugin_calls import family_label, family_model, json_values
 
 
 def checked_config(
@@ -123,15 +123,15 @@ def calibrated(
     what = f"{family_label(family)}: apply_calibration()"
     with blamed(origin, what):
         applied = family.apply_calibration(config, results)
-    model = getattr(family, "config_model", None)
+    model = family_model(family, "config_model")
     if isinstance(applied, tuple) and len(applied) == 2:
         new, record = applied
-        if (not isinstance(model, type) or isinstance(new, model)) and isinstance(record, dict):
+        if (model is None or isinstance(new, model)) and isinstance(record, dict):
             return new, record
     got = type(applied).__name__
     if isinstance(applied, tuple) and len(applied) == 2:
         got = f"({', '.join(type(part).__name__ for part in applied)})"
-    expected = model.__name__ if isinstance(model, type) else "the config"
+    expected = "the config" if model is None else model.__name__
     raise PluginBug(
         f"{origin}: {what} returned {got}; expected ({expected}, a dict: the manifest's "
         "calibration record)"

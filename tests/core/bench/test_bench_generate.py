@@ -1,4 +1,5 @@
-"""``bpb bench generate``'s timed figures leave out the compiled code's one-off build."""
+"""``bpb bench generate``'s timed and memory figures leave out the compiled code's one-off
+build."""
 
 from __future__ import annotations
 
@@ -45,3 +46,43 @@ def test_a_cold_compile_cache_is_not_counted_in_the_generation_time(tmp_path: Pa
     seen = json.loads(done.stdout.splitlines()[-1])
     assert seen["generations"] == 3  # the untimed one, then the timed with and without images
     assert seen["builds_in"] == [0]  # every build in the untimed first one
+
+
+MEMORY_SCRIPT = """
+import json, os, pathlib
+import bpb_core.bench.generate as bench
+from bpb_tasks.simulators.analytic import kernel_roots
+
+cache = pathlib.Path(os.environ["NUMBA_CACHE_DIR"])
+events = []  # builds in this process, then what the measured fresh interpreter did
+note, run_child = kernel_roots.note_compiling, bench.run_child
+
+def counted_note(*args, **kwargs):
+    events.append("build")
+    return note(*args, **kwargs)
+
+def files():
+    return sorted((str(p), p.stat().st_mtime_ns) for p in cache.rglob("*") if p.is_file())
+
+def counted_child(*args, **kwargs):
+    before = files()
+    done = run_child(*args, **kwargs)
+    events.append("child built" if files() != before else "child loaded")
+    return done
+
+kernel_roots.note_compiling, bench.run_child = counted_note, counted_child
+bench.measure_memory(1, workers=1)
+print(json.dumps(sorted(set(events), key=events.index)))
+"""
+
+
+@pytest.mark.slow
+def test_a_cold_compile_cache_is_not_counted_in_the_memory_figures(tmp_path: Path) -> None:
+    """The memory figure's fresh interpreter built the physics kernel (20-60 s, and the
+    compiler's memory in its peak) on a cold cache; it now loads what the bench built first.
+    numba writes the cache files of what it builds, so an unchanged cache means no build."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cold")}
+    done = subprocess.run([sys.executable, "-c", MEMORY_SCRIPT], capture_output=True, text=True,
+                          env=env, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.splitlines()[-1]) == ["build", "child loaded"]

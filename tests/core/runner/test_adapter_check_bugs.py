@@ -1,11 +1,12 @@
-"""An adapter whose preflight(), cannot_answer() or estimate() raises or returns the wrong type
-is one PluginBug naming its plugin (exit 3 in the CLI), before any call is sent.
+"""An adapter whose preflight(), cannot_answer(), estimate() or priced raises or returns the wrong
+type is one PluginBug naming its plugin (exit 3 in the CLI), before any call is sent.
 
 Before, a raise in any of them left ``bpb run`` as "internal error: RuntimeError" naming no
 plugin; a preflight() or cannot_answer() returning a list or True was shown to the user as what
 to fix (exit 2, "--adapter careless:x: True"), and without --adapter such an offline adapter was
 silently left out; an estimate() of text tokens was "internal error: TypeError" and a negative
-one was added into the dry run's figures.
+one was added into the dry run's figures. A ``priced`` that raised (read by --max-cost) was a raw
+"internal error: RuntimeError"; one of "yes" was taken as priced.
 """
 
 from __future__ import annotations
@@ -49,6 +50,12 @@ class Careless:
             raise KeyError(family.name)
         return True if _flaw() == "cannot_answer_type" else None
 
+    @property
+    def priced(self):
+        if _flaw() == "priced_raise":
+            raise RuntimeError("no price list")
+        return "yes" if _flaw() == "priced_type" else True
+
     def estimate(self, messages):
         if _flaw() == "estimate_raise":
             raise RuntimeError("estimate exploded")
@@ -72,6 +79,8 @@ FLAWS = [
     ("estimate_raise", ["--dry-run"], "estimate() raised RuntimeError: estimate exploded"),
     ("estimate_type", ["--dry-run"], ESTIMATE.format("('12', None)")),
     ("estimate_negative", ["--dry-run"], ESTIMATE.format("(-5, 0.1)")),
+    ("priced_raise", ["--max-cost", "1"], "priced raised RuntimeError: no price list"),
+    ("priced_type", ["--max-cost", "1"], "priced is 'yes'; expected a bool"),
 ]
 
 
