@@ -81,11 +81,21 @@ def ctrl_c(
     ``workers``, once ``before()`` has returned: SIGINT to each settled worker first, so that one
     that does not ignore it has the time to print its traceback, then to the whole group.
     Returns its stderr; the group is killed in any case (no pool left behind by a failure)."""
-    try:
+
+    def workers_first() -> None:
         before()
         for pid in settled_workers(process.pid, workers, deadline):
             os.kill(pid, signal.SIGINT)
         time.sleep(0.5)
+
+    return _group_ctrl_c(process, workers_first)
+
+
+def _group_ctrl_c(process: subprocess.Popen[str], prepare: Callable[[], None]) -> str:
+    """SIGINT to ``process``'s group once ``prepare()`` has returned; its stderr. The group is
+    killed in any case (no pool left behind by a failure)."""
+    try:
+        prepare()
         os.killpg(process.pid, signal.SIGINT)
         _, stderr = process.communicate(timeout=60)
     finally:
@@ -165,13 +175,11 @@ def ctrl_c_at_worker_start(args: Sequence[str], workers: int, scratch: Path) -> 
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                start_new_session=True, preexec_fn=as_in_a_terminal,
                                env=env)  # fmt: skip
-    try:
+
+    def workers_held() -> None:
         deadline = time.monotonic() + 120
         while len(list(started.iterdir())) < workers and time.monotonic() < deadline:
             time.sleep(0.01)
-        os.killpg(process.pid, signal.SIGINT)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
+
+    stderr = _group_ctrl_c(process, workers_held)
     return process.returncode, stderr
