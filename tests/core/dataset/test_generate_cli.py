@@ -10,7 +10,13 @@ from pathlib import Path
 
 import pytest
 
-from support.processes import HAS_PROC, catches_sigterm, ctrl_c_at_worker_start, settled_workers
+from support.processes import (
+    HAS_PROC,
+    as_in_a_terminal,
+    catches_sigterm,
+    ctrl_c_at_worker_start,
+    settled_workers,
+)
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -137,9 +143,8 @@ def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> 
 
     out = tmp_path / "ds"
     args = [BPB, "generate", "--out", str(out), "--per-horizon", "30", "--workers", "2"]
-    process = subprocess.Popen(
-        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
-    )
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True, preexec_fn=as_in_a_terminal)  # fmt: skip
     try:
         for pid in settled_workers(process.pid, 2, time.monotonic() + 120):
             os.kill(pid, signal.SIGINT)  # what a terminal's Ctrl-C sends them
@@ -186,6 +191,7 @@ def test_pool_workers_die_of_sigterm_whatever_handler_the_caller_set(tmp_path: P
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        preexec_fn=as_in_a_terminal,  # SIGINT ignored marks a worker past its initializer
     )
     try:
         workers = settled_workers(process.pid, 2, time.monotonic() + 120)
