@@ -242,3 +242,27 @@ def test_a_calibration_scene_the_simulator_cannot_finish_names_the_horizon_and_d
         "simulator 'pymunk' (pymunk:dt=...)"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pymunk.json"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="runs bpb in a pseudo-terminal")
+def test_the_progress_bar_shows_in_a_terminal_and_not_in_a_pipe(tmp_path: Path) -> None:
+    """In a terminal the scenes' bar is drawn to the end; in a pipe or a log nothing is (and
+    no bar is made at all: its cost showed in generation's CPU)."""
+    import os
+    import pty
+
+    args = ["--per-horizon", "3", "--no-images", "--workers", "1"]
+    leader, follower = pty.openpty()
+    env = {**os.environ, "TERM": "xterm", "COLUMNS": "120"}
+    command = [BPB, "generate", "--out", str(tmp_path / "tty"), *args]
+    process = subprocess.Popen(command, stdin=follower, stdout=follower, stderr=follower, env=env)
+    os.close(follower)
+    shown = b""
+    with contextlib.suppress(OSError):  # EIO once bpb has closed the terminal
+        while chunk := os.read(leader, 65536):
+            shown += chunk
+    os.close(leader)
+    assert process.wait(timeout=300) == 0, shown
+    assert "15/15" in shown.decode(errors="replace")  # the bar, at its end
+    piped = bpb("generate", "--out", str(tmp_path / "pipe"), *args)
+    assert piped.returncode == 0 and piped.stderr == "", piped.stderr
