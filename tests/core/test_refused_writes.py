@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
+from typing import IO
 
 import pytest
 
@@ -15,9 +16,12 @@ BPB = str(Path(sys.executable).with_name("bpb"))
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="rlimits are POSIX")
 
 
-def bpb(*args: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
+def bpb(
+    *args: str, limit: int | None = None, stdout: IO[bytes] | None = None
+) -> subprocess.CompletedProcess[str]:
     """``bpb ARGS``; with ``limit``, no file it writes may grow past ``limit`` bytes (a write
-    past it fails with EFBIG, as one on a full disk fails with ENOSPC)."""
+    past it fails with EFBIG, as one on a full disk fails with ENOSPC); its output goes to
+    ``stdout`` when given (as with ``> file``), else is captured."""
 
     def limited() -> None:
         if limit is not None:
@@ -25,7 +29,12 @@ def bpb(*args: str, limit: int | None = None) -> subprocess.CompletedProcess[str
             resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
     return subprocess.run(
-        [BPB, *args], capture_output=True, text=True, timeout=300, preexec_fn=limited
+        [BPB, *args],
+        stdout=subprocess.PIPE if stdout is None else stdout,
+        stderr=subprocess.PIPE,
+        text=True,
+        timeout=300,
+        preexec_fn=limited,
     )
 
 
@@ -99,3 +108,27 @@ def test_an_export_the_disk_cuts_short_names_the_shard_and_keeps_the_earlier_exp
         f"removed); {out} is as it was"
     )
     assert tree(out) == before and not partial.exists()
+
+
+def test_simulate_output_the_disk_cuts_short_keeps_whole_lines_and_says_how_many(
+    dataset: Path, tmp_path: Path
+) -> None:
+    """``bpb simulate ... > finals.jsonl`` was "internal error: OSError: [Errno 27] File too
+    large" (exit 3), naming no file and not saying which scenes' lines were written."""
+    scenes = sorted(str(p) for p in dataset.glob("h*/scene_*/init.json")) * 100  # 600 lines
+    full = bpb("simulate", "--workers", "2", *scenes)
+    assert full.returncode == 0, full.stderr
+    lines = full.stdout.splitlines(keepends=True)
+    assert len(lines) == 600
+    limit = len("".join(lines[:515]).encode()) + 10  # in the second write (512 lines each)
+    out = tmp_path / "finals.jsonl"
+    with out.open("wb") as file:
+        done = bpb("simulate", "--workers", "2", *scenes, limit=limit, stdout=file)
+    assert done.returncode == 2, done.stderr
+    [line] = done.stderr.strip().splitlines()
+    assert line == (
+        f"error: {out}: cannot write: [Errno 27] File too large; it holds the first 515 lines "
+        "whole and the start of the next (one a scene, in input order): make room, then "
+        "simulate the rest"
+    )
+    assert out.read_text() == "".join(lines[:515]) + lines[515][:10]

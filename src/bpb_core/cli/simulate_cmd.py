@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import io
+import os
 import sys
 from typing import Any
 
 import click
+
+from bpb_core.errors import NO_ROOM, WriteRefused, write_refused
 
 
 class _Named(click.Path):
@@ -69,7 +73,7 @@ def simulate(
         options["precision"] = precision
     if engine is not None:
         options["engine"] = engine
-    out = sys.stdout
+    out = _Output()
     chunk: list[str] = []  # written a few hundred lines at a time, not one write per line
     try:
         for line in simulate_lines(
@@ -83,9 +87,9 @@ def simulate(
         ):
             chunk.append(line)
             if len(chunk) == _WRITE_EVERY:
-                _write(out, chunk)
+                out.write(chunk)
     finally:  # the lines before a bad file are written before its error
-        _write(out, chunk)
+        out.write(chunk)
 
 
 _WRITE_EVERY = 512
@@ -93,8 +97,55 @@ FLAGS = {"dt": "--dt", "precision": "--precision", "engine": "--engine"}
 """The simulator options these flags set, for messages (``--dt: 0.1 s is above ...``)."""
 
 
-def _write(out: Any, chunk: list[str]) -> None:
-    if chunk:
-        out.write("\n".join(chunk))
-        out.write("\n")
+class _Output:
+    """Standard output, written straight to its file descriptor so that a write the system
+    refuses (a full disk, a file size limit) can say how many lines reached the file whole:
+    the user knows which scenes are done and which to simulate again."""
+
+    def __init__(self) -> None:
+        self.lines = 0  # whole lines written so far
+        try:
+            sys.stdout.flush()
+            self.fd: int | None = sys.stdout.fileno()
+        except (AttributeError, ValueError, io.UnsupportedOperation):
+            self.fd = None  # a stream with no file behind it (click's CliRunner)
+
+    def write(self, chunk: list[str]) -> None:
+        """Write ``chunk``'s lines and empty it (first: a refused write is not tried twice)."""
+        if not chunk:
+            return
+        text, count = "\n".join(chunk) + "\n", len(chunk)
         chunk.clear()
+        if self.fd is None:
+            sys.stdout.write(text)
+        else:
+            encoding, errors = sys.stdout.encoding, sys.stdout.errors or "strict"
+            self._write_all(self.fd, text.encode(encoding, errors))
+        self.lines += count
+
+    def _write_all(self, fd: int, data: bytes) -> None:
+        left = memoryview(data)
+        while left:
+            try:
+                left = left[os.write(fd, left) :]
+            except OSError as exc:  # others (a reader gone: EPIPE) leave as before
+                if exc.errno not in NO_ROOM:
+                    raise
+                raise self._refused(fd, exc, data[: len(data) - len(left)]) from None
+
+    def _refused(self, fd: int, exc: OSError, landed: bytes) -> WriteRefused:
+        whole = self.lines + landed.count(b"\n")
+        cut = " and the start of the next" if landed and not landed.endswith(b"\n") else ""
+        return WriteRefused(
+            f"{write_refused(_name(fd), exc)}; it holds the first {whole} lines whole{cut} "
+            "(one a scene, in input order): make room, then simulate the rest"
+        )
+
+
+def _name(fd: int) -> str:
+    """The file standard output goes to, where the system tells (Linux), for messages."""
+    try:
+        target = os.readlink(f"/proc/self/fd/{fd}")
+    except OSError:
+        return "standard output"
+    return target if target.startswith("/") else "standard output"
