@@ -3,13 +3,11 @@ build."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from support.compiled_code import on_a_cold_cache
 
 SCRIPT = """
 import json
@@ -38,12 +36,7 @@ print(json.dumps({"generations": len(calls), "builds_in": sorted(set(builds))}))
 def test_a_cold_compile_cache_is_not_counted_in_the_generation_time(tmp_path: Path) -> None:
     """On a cold cache the first generation built the physics kernel (20-60 s) inside the timed
     figure; the build now happens in an untimed generation before the timed ones."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cold")}
-    done = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
-                          env=env, timeout=600)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert any((tmp_path / "cold").rglob("*.nbi"))  # the cache was cold: it was built here
-    seen = json.loads(done.stdout.splitlines()[-1])
+    seen = on_a_cold_cache(SCRIPT, tmp_path)
     assert seen["generations"] == 3  # the untimed one, then the timed with and without images
     assert seen["builds_in"] == [0]  # every build in the untimed first one
 
@@ -81,8 +74,4 @@ def test_a_cold_compile_cache_is_not_counted_in_the_memory_figures(tmp_path: Pat
     """The memory figure's fresh interpreter built the physics kernel (20-60 s, and the
     compiler's memory in its peak) on a cold cache; it now loads what the bench built first.
     numba writes the cache files of what it builds, so an unchanged cache means no build."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cold")}
-    done = subprocess.run([sys.executable, "-c", MEMORY_SCRIPT], capture_output=True, text=True,
-                          env=env, timeout=600)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout.splitlines()[-1]) == ["build", "child loaded"]
+    assert on_a_cold_cache(MEMORY_SCRIPT, tmp_path) == ["build", "child loaded"]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import subprocess
@@ -25,6 +24,7 @@ from bpb_core.registration import SceneFamilyInfo, SimulatorInfo
 from bpb_core.registry import Registry, make_registry
 from bpb_core.simulate import simulate_lines
 from bpb_tasks.billiards.bench_compare import random_scenes
+from support.compiled_code import on_a_cold_cache
 
 
 def test_parse_contestant_reads_typed_options() -> None:
@@ -278,8 +278,6 @@ def test_notes_below_the_generated_part_survive_a_rerun(tmp_path: Path, registry
 
 
 def test_a_reader_never_sees_benchmarks_md_half_written(tmp_path: Path, registry: Registry) -> None:
-    import subprocess
-    import sys
 
     doc = tmp_path / "benchmarks.md"
     section = sim_report.markdown(bench_simulators(1, 0, ("analytic",), registry=registry), None)
@@ -368,7 +366,6 @@ def bpb_simulators():
 def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
     tmp_path: Path, bench: Callable[..., Any]
 ) -> None:
-    import os
 
     from support.plugin_dist import install_fake_dist
 
@@ -570,11 +567,6 @@ def test_a_cold_compile_cache_is_not_counted_in_the_simulate_time(tmp_path: Path
     """The warm-up simulated one file, which takes the ordinary path (the compiled batch path
     is for 256 scenes or more), so the kernel was built (20-60 s on a cold cache) or loaded
     inside the first timed round; the warm-up now takes the timed rounds' input."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cold")}
-    done = subprocess.run([sys.executable, "-c", WARM_SCRIPT], capture_output=True, text=True,
-                          env=env, timeout=600)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert any((tmp_path / "cold").rglob("*.nbi"))  # the cache was cold: it was built here
-    seen = json.loads(done.stdout.splitlines()[-1])
+    seen = on_a_cold_cache(WARM_SCRIPT, tmp_path)
     assert seen["calls"] == [300, 300, 300, 300]  # the untimed one, then three timed rounds
     assert seen["builds_in"] == [0]  # every build in the untimed first one
