@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, write_refused, writing
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -203,10 +203,8 @@ def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: 
     files = []
     for file_name, data in _files(setup, what, made).items():
         path = os.path.join(folder, file_name)
-        try:
+        with writing(path):  # a full disk, a file size limit: the user's to fix
             write_file(path, data)
-        except OSError as exc:  # a full disk, a file size limit: the user's to fix
-            raise write_refused(path, exc) from None
         files.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return SceneResult(row, tuple(files))
 

@@ -23,7 +23,7 @@ from bpb_core.dataset.manifest import (
     sha256_bytes,
 )
 from bpb_core.dataset.worker import SceneResult
-from bpb_core.errors import write_refused, writing
+from bpb_core.errors import writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")
@@ -70,14 +70,10 @@ class DatasetWriter:
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
             self.tallies[row.horizon].add(dict(row.values))
-        try:
+        with writing(self.root / INDEX):  # the buffer reaching the disk, which may be full
             self._rows.writerow(row.cells())
-        except OSError as exc:  # the buffer reaching the disk: a full disk, a file size limit
-            raise write_refused(self.root / INDEX, exc) from None
-        try:
+        with writing(self.root / CHECKSUMS):
             self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
-        except OSError as exc:
-            raise write_refused(self.root / CHECKSUMS, exc) from None
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
