@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_family, dataset_simulator
+from bpb_core.dataset.reader import dataset_family, dataset_simulator_spec
 from bpb_core.dataset.worker import started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
@@ -230,11 +230,7 @@ def _made_with(
     if folder is not None:
         family = dataset_family(None, folder, registry)
         origin = registry.origin("scene_family", family.name)
-        manifest = folder / MANIFEST
-        spec = parse_spec(
-            dataset_simulator(folder, family, origin), f"{manifest}: config: simulator"
-        )
-        return family, spec, manifest
+        return family, dataset_simulator_spec(folder, family, origin), folder / MANIFEST
     family = registry.scene_family(registry.default_family())
     origin = registry.origin("scene_family", family.name)
     named = simulator_named(family, origin, loaded_config(family, origin, None))
@@ -264,8 +260,8 @@ def _family_for(files: Sequence[Path], simulator: str, registry: Registry) -> Sc
     family = dataset_family(None, folder, registry)
     if not simulates or simulates == family.name:
         return family
-    named = dataset_simulator(folder, family, registry.origin("scene_family", family.name))
-    if parse_spec(named, f"{folder / MANIFEST}: config: simulator").name != simulator:
+    made_with = dataset_simulator_spec(folder, family, registry.origin("scene_family", family.name))
+    if made_with.name != simulator:
         raise BadInput(
             f"--simulator {simulator}: simulates {simulates} scenes, but {folder} holds "
             f"{family.name} scenes"
