@@ -206,18 +206,28 @@ def prepare(
         family, spec, manifest = _made_with(files, reg)
         if manifest is not None:
             check_simulator(manifest, spec.name, reg, "; or choose one with --simulator")
-        where = f"{f'{manifest}: ' if manifest else ''}config: simulator {spec.spec!r}"
-        names.update({k: f"{where}: {k}" for k in spec.options if k not in given})
-        made = reg.simulator(spec.name, names, **{**spec.options, **given})
-        return Prepared(made, family, reg.origin("scene_family", family.name), names)
+        where = f"{f'{manifest}: ' if manifest else ''}config: simulator"
+        return _built(reg, family, spec, where, given, names)
     if isinstance(simulator, str):
         spec = parse_spec(simulator, "--simulator")
-        family = _family_for(files, spec.name, reg)
-        names.update({k: f"--simulator {spec.spec!r}: {k}" for k in spec.options if k not in given})
-        made = reg.simulator(spec.name, names, **{**spec.options, **given})
-        return Prepared(made, family, reg.origin("scene_family", family.name), names)
+        return _built(reg, _family_for(files, spec.name, reg), spec, "--simulator", given, names)
     name = reg.default_family()
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
+
+
+def _built(
+    reg: Registry,
+    family: SceneFamily,
+    spec: SimulatorSpec,
+    where: str,
+    given: dict[str, Any],
+    names: dict[str, str],
+) -> Prepared:
+    """``spec``'s simulator built with its options and ``given`` (which win), each option of the
+    spec named in messages as ``where`` sets it (``--simulator 'pymunk:dt=0.5': dt``)."""
+    names.update({k: f"{where} {spec.spec!r}: {k}" for k in spec.options if k not in given})
+    made = reg.simulator(spec.name, names, **{**spec.options, **given})
+    return Prepared(made, family, reg.origin("scene_family", family.name), names)
 
 
 def _made_with(
