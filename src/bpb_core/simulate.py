@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_family, dataset_simulator
+from bpb_core.dataset.reader import dataset_family, dataset_simulator_spec
 from bpb_core.dataset.worker import started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
@@ -206,18 +206,28 @@ def prepare(
         family, spec, manifest = _made_with(files, reg)
         if manifest is not None:
             check_simulator(manifest, spec.name, reg, "; or choose one with --simulator")
-        where = f"{f'{manifest}: ' if manifest else ''}config: simulator {spec.spec!r}"
-        names.update({k: f"{where}: {k}" for k in spec.options if k not in given})
-        made = reg.simulator(spec.name, names, **{**spec.options, **given})
-        return Prepared(made, family, reg.origin("scene_family", family.name), names)
+        where = f"{f'{manifest}: ' if manifest else ''}config: simulator"
+        return _built(reg, family, spec, where, given, names)
     if isinstance(simulator, str):
         spec = parse_spec(simulator, "--simulator")
-        family = _family_for(files, spec.name, reg)
-        names.update({k: f"--simulator {spec.spec!r}: {k}" for k in spec.options if k not in given})
-        made = reg.simulator(spec.name, names, **{**spec.options, **given})
-        return Prepared(made, family, reg.origin("scene_family", family.name), names)
+        return _built(reg, _family_for(files, spec.name, reg), spec, "--simulator", given, names)
     name = reg.default_family()
     return Prepared(simulator, reg.scene_family(name), reg.origin("scene_family", name))
+
+
+def _built(
+    reg: Registry,
+    family: SceneFamily,
+    spec: SimulatorSpec,
+    where: str,
+    given: dict[str, Any],
+    names: dict[str, str],
+) -> Prepared:
+    """``spec``'s simulator built with its options and ``given`` (which win), each option of the
+    spec named in messages as ``where`` sets it (``--simulator 'pymunk:dt=0.5': dt``)."""
+    names.update({k: f"{where} {spec.spec!r}: {k}" for k in spec.options if k not in given})
+    made = reg.simulator(spec.name, names, **{**spec.options, **given})
+    return Prepared(made, family, reg.origin("scene_family", family.name), names)
 
 
 def _made_with(
@@ -230,11 +240,7 @@ def _made_with(
     if folder is not None:
         family = dataset_family(None, folder, registry)
         origin = registry.origin("scene_family", family.name)
-        manifest = folder / MANIFEST
-        spec = parse_spec(
-            dataset_simulator(folder, family, origin), f"{manifest}: config: simulator"
-        )
-        return family, spec, manifest
+        return family, dataset_simulator_spec(folder, family, origin), folder / MANIFEST
     family = registry.scene_family(registry.default_family())
     origin = registry.origin("scene_family", family.name)
     named = simulator_named(family, origin, loaded_config(family, origin, None))
@@ -264,8 +270,8 @@ def _family_for(files: Sequence[Path], simulator: str, registry: Registry) -> Sc
     family = dataset_family(None, folder, registry)
     if not simulates or simulates == family.name:
         return family
-    named = dataset_simulator(folder, family, registry.origin("scene_family", family.name))
-    if parse_spec(named, f"{folder / MANIFEST}: config: simulator").name != simulator:
+    made_with = dataset_simulator_spec(folder, family, registry.origin("scene_family", family.name))
+    if made_with.name != simulator:
         raise BadInput(
             f"--simulator {simulator}: simulates {simulates} scenes, but {folder} holds "
             f"{family.name} scenes"

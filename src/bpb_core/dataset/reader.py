@@ -24,6 +24,7 @@ from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.plugin_calls import loaded_config, simulator_named
+from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 from bpb_core.validated_files import read_model, validate_mapping
 
 if TYPE_CHECKING:
@@ -366,6 +367,18 @@ def dataset_simulator(root: Path, family: SceneFamily, origin: str) -> str:
             the wrong type, naming ``origin``.
     """
     return simulator_named(family, origin, dataset_config(root, family, origin))
+
+
+def dataset_simulator_spec(root: Path, family: SceneFamily, origin: str) -> SimulatorSpec:
+    """:func:`dataset_simulator` parsed into its name and options (``pymunk:dt=0.0005``).
+
+    Raises:
+        BadInput: As :func:`dataset_simulator`, or the spec does not parse (names the manifest's
+            ``config: simulator``).
+    """
+    return parse_spec(
+        dataset_simulator(root, family, origin), f"{root / MANIFEST}: config: simulator"
+    )
 
 
 def dataset_family(

@@ -15,9 +15,8 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import DescribesDataset
-from bpb_core.dataset.reader import dataset_simulator
+from bpb_core.dataset.reader import dataset_simulator_spec
 from bpb_core.errors import UnknownName
-from bpb_core.simulator_spec import parse_spec
 from bpb_core.version import __version__
 
 if TYPE_CHECKING:
@@ -52,7 +51,7 @@ def _truth(dataset: Dataset, registry: Registry) -> list[str]:
     registered summary): the family's words hold for every simulator, and only the simulator
     knows whether its truth is exact or stepped."""
     origin = registry.origin("scene_family", dataset.family.name)
-    spec = parse_spec(dataset_simulator(dataset.root, dataset.family, origin), "config: simulator")
+    spec = dataset_simulator_spec(dataset.root, dataset.family, origin)
     try:
         summary = registry.get("simulator", spec.name).info.summary
     except UnknownName:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import NeedsSimulator
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_simulator
+from bpb_core.dataset.reader import dataset_simulator_spec
 from bpb_core.errors import BadInput, WriteRefused
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
@@ -41,7 +41,6 @@ from bpb_core.runner.scenes import SceneRef, check_images
 from bpb_core.runner.state import RunState
 from bpb_core.runner.sync import run_sync
 from bpb_core.scored_units import object_origin
-from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
@@ -97,9 +96,10 @@ def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: 
         return
     if (data / MANIFEST).is_file():  # without one, the family's default simulator (built in)
         family = data_family(data, registry)
-        named = dataset_simulator(data, family, registry.origin("scene_family", family.name))
-        name = parse_spec(named, f"{data / MANIFEST}: config: simulator").name
-        check_simulator(data / MANIFEST, name, registry, f"; {spec} runs it")
+        made_with = dataset_simulator_spec(
+            data, family, registry.origin("scene_family", family.name)
+        )
+        check_simulator(data / MANIFEST, made_with.name, registry, f"; {spec} runs it")
 
 
 def _state(
