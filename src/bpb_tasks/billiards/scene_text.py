@@ -18,7 +18,7 @@ is wrong.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from itertools import chain
 from typing import Annotated, Any, NamedTuple
@@ -206,9 +206,12 @@ def scene_groups(scenes: Sequence[Any], *, checks: bool) -> list[SceneGroup]:
     return groups
 
 
-def checked(group: SceneGroup) -> SceneGroup:
-    """``group`` without the scenes that are not plainly valid."""
-    ok = _plain(group)
+def checked(
+    group: SceneGroup, plain: Callable[[SceneGroup], np.ndarray] | None = None
+) -> SceneGroup:
+    """``group`` without the scenes that are not plainly valid: per scene, ``plain(group)``
+    (default :func:`plain_mask`; the scan path passes its compiled twin, which decides alike)."""
+    ok = (plain or plain_mask)(group)
     if ok.all():
         return group
     keep = np.flatnonzero(ok).tolist()
@@ -257,12 +260,42 @@ def json_text(value: str) -> str:
     return to_json(value).decode()
 
 
-def _plain(group: SceneGroup) -> np.ndarray:
-    """Per scene of ``group``: ids, numbers and geometry plainly valid (squared distances, with
-    :data:`_MARGIN` far above their rounding error). Coordinates are copied to contiguous
-    ``(k, n)`` arrays first and pockets are taken one at a time: broadcasting strided views
-    against every pocket at once cost four times as much."""
+def plain_limits(group: SceneGroup) -> PlainLimits:
+    """The bounds :func:`plain_mask` compares with, worked out once per group."""
     table, physics, pockets = group.parts
+    radius = physics.ball_radius
+    fastest, reach = MAX_SPEED - _MARGIN, pockets.radius + _MARGIN
+    least = 2 * radius - TOUCH_TOLERANCE + _MARGIN
+    return PlainLimits(
+        fastest * fastest,
+        radius,
+        table.width - radius,
+        table.height - radius,
+        reach * reach,
+        least * least,
+        np.array(pockets.centers, dtype=float).reshape(-1, 2),
+    )
+
+
+class PlainLimits(NamedTuple):
+    """Squared speed limit, the table span a centre may take, squared pocket reach and squared
+    least distance of two centres, and the pocket centres, as ``(p, 2)``."""
+
+    speed2: float
+    low: float
+    x_high: float
+    y_high: float
+    reach2: float
+    least2: float
+    centres: np.ndarray
+
+
+def plain_mask(group: SceneGroup) -> np.ndarray:
+    """Per scene of ``group``: ids, numbers and geometry plainly valid (squared distances, with
+    :data:`_MARGIN` far above their rounding error; bounds from :func:`plain_limits`).
+    Coordinates are copied to contiguous ``(k, n)`` arrays first and pockets are taken one at a
+    time: broadcasting strided views against every pocket at once cost four times as much."""
+    lim = plain_limits(group)
     ids = group.ids
     n = ids.shape[1]
     x, y, vx, vy = (np.ascontiguousarray(a[..., c]) for a in (group.pos, group.vel) for c in (0, 1))
@@ -274,20 +307,16 @@ def _plain(group: SceneGroup) -> np.ndarray:
     # No separate finiteness test of positions and velocities: a NaN fails every comparison
     # below and an infinity fails the speed or the table bounds.
     with np.errstate(invalid="ignore", over="ignore"):  # float products overflow to inf
-        fastest = MAX_SPEED - _MARGIN
-        good &= (vx * vx + vy * vy < fastest * fastest).all(axis=1)
-        radius = physics.ball_radius
-        good &= ((x >= radius) & (x <= table.width - radius)).all(axis=1)
-        good &= ((y >= radius) & (y <= table.height - radius)).all(axis=1)
-        reach = pockets.radius + _MARGIN
-        for cx, cy in pockets.centers:
+        good &= (vx * vx + vy * vy < lim.speed2).all(axis=1)
+        good &= ((x >= lim.low) & (x <= lim.x_high)).all(axis=1)
+        good &= ((y >= lim.low) & (y <= lim.y_high)).all(axis=1)
+        for cx, cy in lim.centres.tolist():
             dx, dy = x - cx, y - cy
-            good &= (dx * dx + dy * dy > reach * reach).all(axis=1)
+            good &= (dx * dx + dy * dy > lim.reach2).all(axis=1)
         if n > 1:
             i, j = _pairs(n)
             dx, dy = x[:, i] - x[:, j], y[:, i] - y[:, j]
-            least = 2 * radius - TOUCH_TOLERANCE + _MARGIN
-            good &= (dx * dx + dy * dy >= least * least).all(axis=1)
+            good &= (dx * dx + dy * dy >= lim.least2).all(axis=1)
     return np.asarray(good, dtype=bool)
 
 

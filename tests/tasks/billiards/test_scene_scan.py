@@ -125,3 +125,73 @@ def test_arbitrary_edits_of_a_text_give_the_decoded_values() -> None:
         _same_as_decoded([texts[0], bytes(text), texts[1]])
 
     check()
+
+
+def test_the_compiled_plain_check_decides_every_scene_as_the_array_one() -> None:
+    """The scan path's compiled check keeps and drops exactly the scenes the numpy check does:
+    valid scenes with a ball moved onto, or one step of a double beside, a bound (table span,
+    pocket reach, a touching ball, the speed limit), NaN, infinities, bad horizons, and ids out
+    of order or not starting at 0."""
+    from hypothesis import given, settings, strategies as st
+
+    from bpb_tasks.billiards.scene_scan import compiled_plain
+    from bpb_tasks.billiards.scene_text import SceneGroup, plain_limits, plain_mask
+
+    scenes = [random_scene(41, i, speeds=(0.1, 6.0)) for i in range(6)]
+    parts = (scenes[0].table, scenes[0].physics, scenes[0].pockets)
+    lim = plain_limits(SceneGroup([], np.zeros(0), [], parts, *[np.zeros((0, 1, 2))] * 3))
+    reach, least = float(np.sqrt(lim.reach2)), float(np.sqrt(lim.least2))
+
+    def beside(v: float, step: int) -> float:
+        return float(v if step == 0 else np.nextafter(v, np.inf if step > 0 else -np.inf))
+
+    edit = st.tuples(
+        st.sampled_from(["low", "x_high", "y_high", "pocket", "touch", "speed", "nan", "inf"]),
+        st.integers(0, 6),  # the ball
+        st.integers(-1, 1),  # on the bound, or one double below or above it
+        st.integers(0, 5),  # a pocket, or the ball touched
+    )
+
+    @settings(max_examples=300, deadline=None)
+    @given(
+        st.lists(
+            st.tuples(
+                st.integers(0, 5),
+                st.lists(edit, max_size=2),
+                st.sampled_from(["ok", "ok", "shuffled", "from 1", 0.0, np.nan, -np.inf]),
+            ),
+            min_size=1,
+            max_size=6,
+        )
+    )
+    def check(rows: list[tuple[int, list[tuple[str, int, int, int]], object]]) -> None:
+        k, n = len(rows), len(scenes[0].balls)
+        ids = np.tile(np.arange(n), (k, 1))
+        pos = np.array([[b.pos for b in scenes[s].balls] for s, _, _ in rows], dtype=float)
+        vel = np.array([[b.vel for b in scenes[s].balls] for s, _, _ in rows], dtype=float)
+        horizons = np.ones(k)
+        for r, (_, edits, how) in enumerate(rows):
+            if how == "shuffled":
+                ids[r] = ids[r][::-1]
+            elif how == "from 1":
+                ids[r] += 1
+            elif isinstance(how, float):
+                horizons[r] = how
+            for kind, b, step, other in edits:
+                if kind in ("low", "x_high", "y_high"):  # mid-side, away from pockets
+                    axis = int(kind == "y_high" or (kind == "low" and other % 2 == 1))
+                    pos[r, b] = (0.5, 0.5) if axis else (1.0, 0.5)
+                    pos[r, b, axis] = beside(getattr(lim, kind), step)
+                elif kind == "pocket":  # into the table: at a side pocket of y = 0, exactly
+                    cx, cy = lim.centres[other]
+                    pos[r, b] = (cx, beside(cy + reach if cy < 0.5 else cy - reach, step))
+                elif kind == "touch" and other != b:  # near, not on: sums round
+                    pos[r, b] = (beside(pos[r, other, 0] + least, step), pos[r, other, 1])
+                elif kind == "speed":
+                    vel[r, b] = (beside(float(np.sqrt(lim.speed2)), step), 0.0)
+                else:
+                    pos[r, b, step & 1] = np.nan if kind == "nan" else np.inf * (step or 1)
+        group = SceneGroup(list(range(k)), horizons, ["x"] * k, parts, ids, pos, vel)
+        assert compiled_plain(group).tolist() == plain_mask(group).tolist()
+
+    check()
