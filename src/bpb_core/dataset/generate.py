@@ -192,7 +192,7 @@ def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: 
         raise BadInput(f"config: simulator: {exc}") from None
     if spec.options:
         try:
-            registry.simulator(spec.name, **spec.options)
+            registry.simulator(spec.name, spec.options)
         except BadInput as exc:
             raise BadInput(f"config: simulator {spec.spec!r}: {exc}") from None
 
