@@ -59,6 +59,12 @@ NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 """The ``errno`` of a write refused for want of room: a full disk, a quota, a file size limit."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a command that leaves something behind; the message says what is left
+    where (``bpb`` prints ``aborted; <message>`` and exits 130). A ``KeyboardInterrupt``, so a
+    library caller that catches Ctrl-C catches this too."""
+
+
 def write_refused(path: object, exc: OSError) -> WriteRefused:
     """``PATH: cannot write: [Errno 28] No space left on device`` for ``exc`` raised writing
     ``path`` (or the file ``exc`` names, when a write under the folder ``path`` raised it)."""

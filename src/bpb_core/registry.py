@@ -132,11 +132,17 @@ class Registry:
         return [i.name for i in (chosen or infos)]
 
     def simulator(
-        self, name: str, names: Mapping[str, str] | None = None, **options: Any
+        self,
+        name: str,
+        options: Mapping[str, Any] | None = None,
+        *,
+        names: Mapping[str, str] | None = None,
     ) -> Simulator:
         """A fresh instance of the simulator ``name`` built with ``options``.
 
         Args:
+            options: Keyword arguments for the simulator's factory; a mapping, so that a
+                simulator may take options of any name (``name``, ``names``).
             names: How the caller's user gives each option, for messages (``{"dt": "--dt"}``
                 for ``bpb simulate``'s flags; default: as the simulator takes it).
 
@@ -144,20 +150,21 @@ class Registry:
             BadInput: The simulator does not take one of the options, or refuses a value: the
                 message starts with the option as ``names`` names it (``--dt: must be ...``).
         """
+        given, named = dict(options or {}), names or {}
         factory = self.load("simulator", name)
         try:
             with blamed(self.origin("simulator", name), f"creating the simulator {name!r}"):
-                simulator: Simulator = factory(**options)
+                simulator: Simulator = factory(**given)
         except PluginBug as exc:
-            if not isinstance(exc.__cause__, TypeError) or not options:
+            if not isinstance(exc.__cause__, TypeError) or not given:
                 raise
-            given = ", ".join((names or {}).get(key, key) for key in options)
+            shown = ", ".join(named.get(key, key) for key in given)
             why = exc.__cause__
-            raise BadInput(f"simulator {name!r}: does not accept {given}: {why}") from None
+            raise BadInput(f"simulator {name!r}: does not accept {shown}: {why}") from None
         except BadInput as exc:
-            if exc.option not in (names or {}):
+            if exc.option not in named:
                 raise
-            raise BadInput(exc.naming(names or {})) from None
+            raise BadInput(exc.naming(named)) from None
         return simulator
 
     def simulator_info(self, name: str) -> SimulatorInfo:

@@ -226,7 +226,7 @@ def _built(
     """``spec``'s simulator built with its options and ``given`` (which win), each option of the
     spec named in messages as ``where`` sets it (``--simulator 'pymunk:dt=0.5': dt``)."""
     names.update({k: f"{where} {spec.spec!r}: {k}" for k in spec.options if k not in given})
-    made = reg.simulator(spec.name, names, **{**spec.options, **given})
+    made = reg.simulator(spec.name, {**spec.options, **given}, names=names)
     return Prepared(made, family, reg.origin("scene_family", family.name), names)
 
 

@@ -410,3 +410,49 @@ def test_a_simulator_registered_for_no_family_simulates_any_dataset(
         finals = list(simulate_lines([data], simulator="free", workers=1, registry=registry))
         ids = {json.loads(line)["scene_id"] for line in finals}
         assert len(ids) == len(finals) == len(list(data.glob("h*/scene_*/init.json")))
+
+
+LABELLED = '''
+import json
+from pathlib import Path
+
+from bpb_core import SimulatorInfo, hookimpl
+from bpb_core.errors import BadInput
+from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
+
+
+class Labelled(AnalyticSimulator):
+    """Analytic, under a label: its options are called name and names."""
+
+    def __init__(self, name: str = "", names: str = "", record: str = "") -> None:
+        if not name:
+            raise BadInput.about("name", "must not be empty")
+        super().__init__()
+        Path(record).write_text(json.dumps({"name": name, "names": names}))
+
+
+@hookimpl
+def bpb_simulators() -> list[SimulatorInfo]:
+    return [SimulatorInfo("labelled", lambda: Labelled, "Analytic, labelled", family="billiards")]
+'''
+
+
+def test_a_plugin_simulator_may_take_options_called_name_and_names(
+    install: Any, run_bpb: Any, scenes: list[tuple[Path, Scene]], tmp_path: Path
+) -> None:
+    """The registry's own parameters were called name and names, so a simulator taking options
+    of those names could not be built (Python: got multiple values for argument 'name')."""
+    install("bpb-labelled", "0.1", {"labelled_sim": LABELLED}, {"labelled": "labelled_sim"})
+    path, scene = scenes[0]
+    record = tmp_path / "record.json"
+    spec = f"labelled:name=cue,names=left|right,record={record}"
+    done = run_bpb("simulate", str(path), "--simulator", spec)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(record.read_text()) == {"name": "cue", "names": "left|right"}
+    (final,) = lines(done)
+    assert final == final_state(scene, AnalyticSimulator().run(scene))
+    refused = run_bpb("simulate", str(path), "--simulator", "labelled:name=,names=x")
+    assert refused.returncode == 2
+    assert refused.stderr.strip().splitlines() == [
+        "error: --simulator 'labelled:name=,names=x': name: must not be empty"
+    ]

@@ -74,7 +74,7 @@ def built_simulator(registry: Registry, spec: str) -> Simulator:
     """The simulator the dataset's config names, built with the options it gives it
     (``pymunk:dt=0.0005``), as generation built it."""
     named = parse_spec(spec, "dataset.json: config: simulator")
-    return registry.simulator(named.name, **named.options)
+    return registry.simulator(named.name, named.options)
 
 
 def _registry() -> Registry:

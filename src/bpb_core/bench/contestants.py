@@ -60,7 +60,7 @@ def build_simulators(
         if simulates and simulates != family:
             raise BadInput(f"{flag} {entry.spec}: simulates {simulates} scenes, not {family} ones")
         try:
-            sims[entry.spec] = registry.simulator(entry.name, **entry.options)
+            sims[entry.spec] = registry.simulator(entry.name, entry.options)
         except BadInput as exc:  # "dt: must be ...": which of the specs given, and where
             raise BadInput(f"{flag} {entry.spec!r}: {exc}") from None
     return sims

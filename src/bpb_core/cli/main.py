@@ -114,8 +114,8 @@ def main(argv: list[str] | None = None) -> None:
     notes_on_stderr()
     try:
         code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("aborted", err=True)
+    except click.exceptions.Abort as exc:
+        click.echo(_aborted(exc.__cause__), err=True)
         code = 130
     except click.UsageError as exc:  # one line, like every other bad input
         where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
@@ -129,6 +129,13 @@ def main(argv: list[str] | None = None) -> None:
     except Exception as exc:  # every failure leaves as one line and an exit code
         code = _report_error(exc)
     sys.exit(code if isinstance(code, int) else 0)
+
+
+def _aborted(cause: BaseException | None) -> str:
+    """``aborted``, followed by what the interrupted command left where, when it says."""
+    from bpb_core.errors import Interrupted
+
+    return f"aborted; {cause}" if isinstance(cause, Interrupted) and str(cause) else "aborted"
 
 
 def _report_error(exc: BaseException) -> int:

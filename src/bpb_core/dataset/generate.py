@@ -37,7 +37,14 @@ from bpb_core.dataset.jobs import (
 from bpb_core.dataset.manifest import DatasetManifest
 from bpb_core.dataset.worker import WorkerSetup
 from bpb_core.dataset.writer import DatasetWriter, versions
-from bpb_core.errors import BadInput, PluginBug, UnknownName, WriteRefused, blamed
+from bpb_core.errors import (
+    BadInput,
+    Interrupted,
+    PluginBug,
+    UnknownName,
+    WriteRefused,
+    blamed,
+)
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import MANIFEST, check_writable_folder
 from bpb_core.partial import partial_folder
@@ -96,6 +103,8 @@ def generate_dataset(
     Raises:
         BadInput: Bad arguments or config (the message names the file or field).
         WriteRefused: The system refused a write (names the file, and what is left where).
+        Interrupted: Ctrl-C stopped it (a ``KeyboardInterrupt`` saying what is left where: the
+            scenes listed so far, whole, in the partial folder; an existing ``out`` as it was).
     """
     with _naming_file(config):
         registry = registry if registry is not None else _registry()
@@ -138,6 +147,8 @@ def generate_dataset(
                 raise
             except WriteRefused as exc:  # left as Ctrl-C leaves it; the user may need the space
                 raise WriteRefused(f"{exc}; {_left(target, partial)}") from None
+            except KeyboardInterrupt:  # the scenes listed so far are whole; say where they are
+                raise Interrupted(_left(target, partial)) from None
             if target.exists():
                 shutil.rmtree(target)
             partial.rename(target)
@@ -145,7 +156,7 @@ def generate_dataset(
 
 
 def _left(target: Path, partial: Path) -> str:
-    """What a generation the system refused to write leaves, and where."""
+    """What an unfinished generation (a write the system refused, a Ctrl-C) leaves, and where."""
     kept = f"{target} is as it was, " if target.exists() else ""
     return (
         f"{kept}the unfinished dataset is left in {partial} (delete it to free its space; "
@@ -192,7 +203,7 @@ def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: 
         raise BadInput(f"config: simulator: {exc}") from None
     if spec.options:
         try:
-            registry.simulator(spec.name, **spec.options)
+            registry.simulator(spec.name, spec.options)
         except BadInput as exc:
             raise BadInput(f"config: simulator {spec.spec!r}: {exc}") from None
 

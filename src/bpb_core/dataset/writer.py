@@ -70,10 +70,11 @@ class DatasetWriter:
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
             self.tallies[row.horizon].add(dict(row.values))
-        with writing(self.root / INDEX):  # the buffer reaching the disk, which may be full
-            self._rows.writerow(row.cells())
-        with writing(self.root / CHECKSUMS):
+        # Checksums first: a Ctrl-C between the two leaves no index row whose files are unlisted
+        with writing(self.root / CHECKSUMS):  # the buffer reaching the disk, which may be full
             self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
+        with writing(self.root / INDEX):
+            self._rows.writerow(row.cells())
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""

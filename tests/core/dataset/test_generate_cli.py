@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,7 @@ from support.processes import (
     HAS_PROC,
     as_in_a_terminal,
     catches_sigterm,
+    ctrl_c,
     ctrl_c_at_worker_start,
     settled_workers,
 )
@@ -165,8 +168,59 @@ def test_a_ctrl_c_while_the_workers_start_is_aborted_without_a_traceback(tmp_pat
         args = [BPB, "generate", "--out", str(scratch / "ds"), "--per-horizon", "30",
                 "--workers", "2", "--no-images"]  # fmt: skip
         code, stderr = ctrl_c_at_worker_start(args, 2, scratch)
-        assert (code, stderr.strip()) == (130, "aborted")
+        partial = scratch / ".ds.partial"
+        assert (code, stderr.strip()) == (130, f"aborted; {left_in(partial)}")
         assert not (scratch / "ds").exists()
+
+
+def left_in(partial: Path) -> str:
+    return (
+        f"the unfinished dataset is left in {partial} (delete it to free its space; running the "
+        "command again starts it afresh)"
+    )
+
+
+def tree(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+@pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
+def test_ctrl_c_keeps_the_whole_scenes_made_and_leaves_the_dataset_it_was_to_overwrite(
+    tmp_path: Path,
+) -> None:
+    """A terminal's Ctrl-C mid-run: exit 130 with a bare "aborted", saying nothing of the
+    unfinished dataset it kept in a hidden folder. It now says where it is, as a write the
+    system refused does; the scenes it lists there are whole, and --overwrite's dataset is
+    untouched."""
+    out, partial = tmp_path / "ds", tmp_path / ".ds.partial"
+    args = [BPB, "generate", "--out", str(out), "--horizons", "1,2", "--no-images"]
+    assert bpb(*args[1:], "--per-horizon", "2", "--workers", "1").returncode == 0
+    before = tree(out)
+    args += ["--per-horizon", "5000", "--workers", "2", "--overwrite"]  # about 20 s to finish
+    process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True,
+                               preexec_fn=as_in_a_terminal)  # fmt: skip
+    deadline = time.monotonic() + 120
+
+    def scenes_on_disk() -> None:
+        while len(list(partial.glob("h1/scene_*"))) < 50 and time.monotonic() < deadline:
+            time.sleep(0.02)
+
+    stderr = ctrl_c(process, 2, deadline, before=scenes_on_disk)
+    assert process.returncode == 130, stderr  # 0: it finished before the Ctrl-C
+    assert stderr.strip().splitlines() == [f"aborted; {out} is as it was, {left_in(partial)}"]
+    assert tree(out) == before
+    sums = [line.split("  ") for line in (partial / "checksums.sha256").read_text().splitlines()]
+    for digest, rel in sums:
+        assert hashlib.sha256((partial / rel).read_bytes()).hexdigest() == digest, rel
+    listed = {rel for _, rel in sums}
+    rows = (partial / "index.csv").read_text().splitlines()[1:]
+    assert len(rows) >= 50
+    scene_files = {rel.rpartition("/")[2] for rel in before if rel.startswith("h1/scene_0000/")}
+    assert scene_files
+    for row in rows:  # each scene it lists holds what a finished dataset's scene holds
+        label, index = row.split(",")[0].split("_")
+        assert {f"{label}/scene_{index}/{name}" for name in scene_files} <= listed, row
 
 
 @pytest.mark.skipif(not HAS_PROC, reason="reads signal dispositions through /proc")

@@ -29,12 +29,12 @@ EXACT = AnalyticSimulator()
 def test_registry_builds_both_simulators_with_options() -> None:
     registry = make_registry()
     assert registry.simulator("analytic").name == "analytic"
-    assert registry.simulator("pymunk", dt=1e-2).dt == 1e-2
+    assert registry.simulator("pymunk", {"dt": 1e-2}).dt == 1e-2
     # the library names its option; a caller that knows where it was set names that instead
     with pytest.raises(BadInput, match=r"^dt: must be a positive finite number of seconds, got 0$"):
         PymunkSimulator(dt=0)
     with pytest.raises(BadInput, match=r"^--dt: must be a positive .*, got '0.01'$"):
-        registry.simulator("pymunk", {"dt": "--dt"}, dt="0.01")  # a string is no number
+        registry.simulator("pymunk", {"dt": "0.01"}, names={"dt": "--dt"})  # a string is no number
 
 
 def test_pymunk_head_on_close_to_exact() -> None:
@@ -128,7 +128,7 @@ def test_pymunk_with_tunnel_allowed_gives_its_own_positions_as_bench_sim_measure
     # default pymunk:dt=0.01 failed most scenes and --scaling pymunk stopped the whole benchmark
     s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
     coarse = parse_contestant(f"pymunk:dt={30 * stable_dt(s)!r},tunnel=allow")
-    allowed = make_registry().simulator(coarse.name, **coarse.options)
+    allowed = make_registry().simulator(coarse.name, coarse.options)
     with pytest.raises(SimulationError, match="above this scene's stability bound"):
         PymunkSimulator(dt=coarse.options["dt"]).run(s)
     out = allowed.run(s)  # straight through the right cushion, as pymunk steps it
@@ -141,7 +141,7 @@ def test_pymunk_with_tunnel_allowed_gives_its_own_positions_as_bench_sim_measure
     assert raw[1][0] > right + 5e-4 and kept[1] == (right, raw[1][1])
     assert {b: p for b, p in raw.items() if b != 1} == {b: p for b, p in kept.items() if b != 1}
     with pytest.raises(BadInput, match=r"^tunnel: must be refuse or allow, got 'alow'$"):
-        make_registry().simulator("pymunk", dt=0.01, tunnel="alow")
+        make_registry().simulator("pymunk", {"dt": 0.01, "tunnel": "alow"})
 
 
 def test_isolated_roll_is_stable_with_margins() -> None:
