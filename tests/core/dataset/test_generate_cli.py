@@ -5,9 +5,12 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import os
+import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -184,14 +187,29 @@ def tree(root: Path) -> dict[str, bytes]:
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
+def _sigterm_to_the_group(process: subprocess.Popen[str], before: Callable[[], None]) -> str:
+    """What a ``kill -TERM`` of the process group (a cancelled CI job) does; its stderr."""
+    try:
+        before()
+        os.killpg(process.pid, signal.SIGTERM)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    return stderr
+
+
 @pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
+@pytest.mark.parametrize("stop", ["ctrl-c", "sigterm"])
 def test_ctrl_c_keeps_the_whole_scenes_made_and_leaves_the_dataset_it_was_to_overwrite(
-    tmp_path: Path,
+    tmp_path: Path, stop: str
 ) -> None:
     """A terminal's Ctrl-C mid-run: exit 130 with a bare "aborted", saying nothing of the
     unfinished dataset it kept in a hidden folder. It now says where it is, as a write the
     system refused does; the scenes it lists there are whole, and --overwrite's dataset is
-    untouched."""
+    untouched. A SIGTERM to the group (a kill, a cancelled CI job) killed it at once, silent,
+    with index.csv and checksums.sha256 cut at different scenes; it now stops as Ctrl-C does,
+    exit 143."""
     out, partial = tmp_path / "ds", tmp_path / ".ds.partial"
     args = [BPB, "generate", "--out", str(out), "--horizons", "1,2", "--no-images"]
     assert bpb(*args[1:], "--per-horizon", "2", "--workers", "1").returncode == 0
@@ -206,8 +224,12 @@ def test_ctrl_c_keeps_the_whole_scenes_made_and_leaves_the_dataset_it_was_to_ove
         while len(list(partial.glob("h1/scene_*"))) < 50 and time.monotonic() < deadline:
             time.sleep(0.02)
 
-    stderr = ctrl_c(process, 2, deadline, before=scenes_on_disk)
-    assert process.returncode == 130, stderr  # 0: it finished before the Ctrl-C
+    if stop == "ctrl-c":
+        stderr = ctrl_c(process, 2, deadline, before=scenes_on_disk)
+    else:
+        stderr = _sigterm_to_the_group(process, scenes_on_disk)
+    code = 130 if stop == "ctrl-c" else 143
+    assert process.returncode == code, stderr  # 0: it finished before the signal
     assert stderr.strip().splitlines() == [f"aborted; {out} is as it was, {left_in(partial)}"]
     assert tree(out) == before
     sums = [line.split("  ") for line in (partial / "checksums.sha256").read_text().splitlines()]
