@@ -94,9 +94,18 @@ def ctrl_c(
 def _group_ctrl_c(process: subprocess.Popen[str], prepare: Callable[[], None]) -> str:
     """SIGINT to ``process``'s group once ``prepare()`` has returned; its stderr. The group is
     killed in any case (no pool left behind by a failure)."""
+    return signal_the_group(process, signal.SIGINT, prepare)
+
+
+def signal_the_group(
+    process: subprocess.Popen[str], signum: int, prepare: Callable[[], None] = lambda: None
+) -> str:
+    """``signum`` to ``process``'s group (started in its own session) once ``prepare()`` has
+    returned, as a terminal's Ctrl-C (SIGINT) or ``kill -TERM -PGID`` (a cancelled CI job)
+    sends it; its stderr. The group is killed in any case (no pool left behind by a failure)."""
     try:
         prepare()
-        os.killpg(process.pid, signal.SIGINT)
+        os.killpg(process.pid, signum)
         _, stderr = process.communicate(timeout=60)
     finally:
         with contextlib.suppress(ProcessLookupError):

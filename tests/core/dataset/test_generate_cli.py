@@ -10,7 +10,6 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -22,6 +21,7 @@ from support.processes import (
     ctrl_c,
     ctrl_c_at_worker_start,
     settled_workers,
+    signal_the_group,
 )
 
 BPB = str(Path(sys.executable).with_name("bpb"))
@@ -143,7 +143,6 @@ def test_stable_only_that_finds_too_few_stable_scenes_exits_2_and_writes_nothing
 
 @pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
 def test_a_ctrl_c_reaching_the_workers_is_left_to_the_parent(tmp_path: Path) -> None:
-    import os
     import signal
     import time
 
@@ -187,18 +186,6 @@ def tree(root: Path) -> dict[str, bytes]:
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
-def _sigterm_to_the_group(process: subprocess.Popen[str], before: Callable[[], None]) -> str:
-    """What a ``kill -TERM`` of the process group (a cancelled CI job) does; its stderr."""
-    try:
-        before()
-        os.killpg(process.pid, signal.SIGTERM)
-        _, stderr = process.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
-    return stderr
-
-
 @pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")
 @pytest.mark.parametrize("stop", ["ctrl-c", "sigterm"])
 def test_ctrl_c_keeps_the_whole_scenes_made_and_leaves_the_dataset_it_was_to_overwrite(
@@ -227,7 +214,7 @@ def test_ctrl_c_keeps_the_whole_scenes_made_and_leaves_the_dataset_it_was_to_ove
     if stop == "ctrl-c":
         stderr = ctrl_c(process, 2, deadline, before=scenes_on_disk)
     else:
-        stderr = _sigterm_to_the_group(process, scenes_on_disk)
+        stderr = signal_the_group(process, signal.SIGTERM, scenes_on_disk)
     code = 130 if stop == "ctrl-c" else 143
     assert process.returncode == code, stderr  # 0: it finished before the signal
     assert stderr.strip().splitlines() == [f"aborted; {out} is as it was, {left_in(partial)}"]
@@ -251,7 +238,6 @@ def test_pool_workers_die_of_sigterm_whatever_handler_the_caller_set(tmp_path: P
     library caller's, bpb bench run's) was inherited by the workers, and one that took the
     signal just before blocking on the task queue never ran it: the generation hung at its end,
     1 in 5 paper-size datasets. Workers now have SIGTERM at its default."""
-    import os
     import signal
     import time
 
@@ -324,7 +310,6 @@ def test_a_calibration_scene_the_simulator_cannot_finish_names_the_horizon_and_d
 def test_the_progress_bar_shows_in_a_terminal_and_not_in_a_pipe(tmp_path: Path) -> None:
     """In a terminal the scenes' bar is drawn to the end; in a pipe or a log nothing is (and
     no bar is made at all: its cost showed in generation's CPU)."""
-    import os
     import pty
 
     args = ["--per-horizon", "3", "--no-images", "--workers", "1"]
