@@ -9,7 +9,6 @@ else unexpected is 3.
 from __future__ import annotations
 
 import errno
-import signal
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Self
@@ -61,21 +60,9 @@ NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 
 
 class Interrupted(KeyboardInterrupt):
-    """Ctrl-C (or a SIGTERM a command takes as one) stopped a command that leaves something
-    behind; the message says what is left where (``bpb`` prints ``aborted; <message>`` and
-    exits 128 + ``signum``: 130 for Ctrl-C, 143 for SIGTERM). A ``KeyboardInterrupt``, so a
+    """Ctrl-C stopped a command that leaves something behind; the message says what is left
+    where (``bpb`` prints ``aborted; <message>`` and exits 130). A ``KeyboardInterrupt``, so a
     library caller that catches Ctrl-C catches this too."""
-
-    def __init__(self, message: str = "", signum: int = signal.SIGINT) -> None:
-        super().__init__(message)
-        self.signum = int(signum)
-
-
-def terminated_as_interrupted(signum: int, frame: object) -> None:
-    """A SIGTERM handler (a ``kill``, a cancelled CI job) that unwinds like Ctrl-C: raises
-    :class:`Interrupted` with ``signum``, so what the command leaves is left as Ctrl-C leaves it
-    and said the same way."""
-    raise Interrupted("", signum)
 
 
 def write_refused(path: object, exc: OSError) -> WriteRefused:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import signal
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 from types import TracebackType
@@ -11,7 +10,7 @@ from typing import TYPE_CHECKING
 import click
 
 from bpb_core.cli import console
-from bpb_core.errors import BadInput, terminated_as_interrupted
+from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
@@ -161,9 +160,6 @@ def generate(
     registry = console.load_registry()
     if family is not None:
         registry.get("scene_family", family)  # unknown names fail before anything starts
-    # SIGTERM (a kill, a cancelled CI job) stops it as Ctrl-C does: the dataset to overwrite as
-    # it was, the unfinished one's listed scenes whole in its partial folder, and both said
-    signal.signal(signal.SIGTERM, terminated_as_interrupted)
     with _progress() as progress:
         root = generate_dataset(
             out,

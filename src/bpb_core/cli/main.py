@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import importlib
 import os
-import signal
 import sys
 from typing import Any, TextIO
 
 import click
 
-from bpb_core.errors import Interrupted
 from bpb_core.version import __version__
 
 # name -> (module, attribute, one-line help); the help is here so listing needs no import.
@@ -118,8 +116,7 @@ def main(argv: list[str] | None = None) -> None:
         code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
     except click.exceptions.Abort as exc:
         click.echo(_aborted(exc.__cause__), err=True)
-        cause = exc.__cause__
-        code = 128 + (cause.signum if isinstance(cause, Interrupted) else signal.SIGINT)
+        code = 130
     except click.UsageError as exc:  # one line, like every other bad input
         where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
         click.echo(f"error: {exc.format_message()}{where}", err=True)
@@ -136,6 +133,8 @@ def main(argv: list[str] | None = None) -> None:
 
 def _aborted(cause: BaseException | None) -> str:
     """``aborted``, followed by what the interrupted command left where, when it says."""
+    from bpb_core.errors import Interrupted
+
     return f"aborted; {cause}" if isinstance(cause, Interrupted) and str(cause) else "aborted"
 
 

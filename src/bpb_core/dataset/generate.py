@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import signal
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -104,9 +103,8 @@ def generate_dataset(
     Raises:
         BadInput: Bad arguments or config (the message names the file or field).
         WriteRefused: The system refused a write (names the file, and what is left where).
-        Interrupted: Ctrl-C (or a SIGTERM raising one) stopped it (a ``KeyboardInterrupt``
-            saying what is left where: the scenes listed so far, whole, in the partial folder;
-            an existing ``out`` as it was).
+        Interrupted: Ctrl-C stopped it (a ``KeyboardInterrupt`` saying what is left where: the
+            scenes listed so far, whole, in the partial folder; an existing ``out`` as it was).
     """
     with _naming_file(config):
         registry = registry if registry is not None else _registry()
@@ -149,9 +147,8 @@ def generate_dataset(
                 raise
             except WriteRefused as exc:  # left as Ctrl-C leaves it; the user may need the space
                 raise WriteRefused(f"{exc}; {_left(target, partial)}") from None
-            except KeyboardInterrupt as exc:  # the scenes listed so far are whole; say where
-                signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
-                raise Interrupted(_left(target, partial), signum) from None
+            except KeyboardInterrupt:  # the scenes listed so far are whole; say where they are
+                raise Interrupted(_left(target, partial)) from None
             if target.exists():
                 shutil.rmtree(target)
             partial.rename(target)

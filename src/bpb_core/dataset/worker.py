@@ -99,11 +99,6 @@ def init_worker(setup: WorkerSetup) -> None:
         _STATE["broken"] = exc
 
 
-_HELD = {signal.SIGINT, signal.SIGTERM}
-"""What :func:`started_pool` holds back while workers start, and :func:`worker_signals` lets
-through once they are set."""
-
-
 def worker_signals() -> None:
     """Initializer of a pool process: Ctrl-C left to its parent, SIGTERM at its default.
 
@@ -118,23 +113,21 @@ def worker_signals() -> None:
     """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # last: once it is ignored, both are set
-    if hasattr(signal, "pthread_sigmask"):  # held since the fork (started_pool): a Ctrl-C is
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD)  # now discarded, a SIGTERM ends it
+    if hasattr(signal, "pthread_sigmask"):  # held since the fork (started_pool); now discarded
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def started_pool(start: Callable[[], Pool]) -> Pool:
-    """``start()``, a pool whose initializer is :func:`worker_signals`, with Ctrl-C and SIGTERM
-    held back (blocked) while it starts its workers, and its threads that start any later ones.
+    """``start()``, a pool whose initializer is :func:`worker_signals`, with Ctrl-C held back
+    (blocked) while it starts its workers, and its threads that start any later ones.
 
-    A worker inherits the block, so from its fork until its initializer ignores Ctrl-C and
-    puts SIGTERM at its default it can only hold one back, not die of it with a traceback (nor
-    run a SIGTERM handler of this process's, such as ``bpb generate``'s, which raises). A Ctrl-C
-    or SIGTERM meanwhile reaches this process once the pool has started, and the pool is
-    terminated.
+    A worker inherits the block, so from its fork until its initializer ignores Ctrl-C it can
+    only hold one back, not die of it with a traceback. A Ctrl-C meanwhile reaches this
+    process once the pool has started (``KeyboardInterrupt``), and the pool is terminated.
     """
     if not hasattr(signal, "pthread_sigmask"):
         return start()
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         pool = start()
     except BaseException:
