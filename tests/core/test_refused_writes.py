@@ -12,6 +12,8 @@ from typing import IO
 
 import pytest
 
+from support.paths import tree
+
 BPB = str(Path(sys.executable).with_name("bpb"))
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="rlimits are POSIX")
 
@@ -65,10 +67,6 @@ def test_a_run_the_disk_cuts_short_keeps_its_answers_and_says_how_to_resume(
     resumed = bpb(*run)
     assert resumed.returncode == 0, resumed.stderr
     assert answers(run_dir).items() >= kept.items() and len(answers(run_dir)) == 18
-
-
-def tree(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
 def test_a_report_the_disk_cuts_short_names_the_file_and_leaves_the_runs_alone(

@@ -29,6 +29,7 @@ from bpb_core.interfaces import PromptOptions, SceneFamily
 from bpb_core.registry import make_registry
 from bpb_core.results.frames import load_results
 from support.fake_openai import fake_server
+from support.paths import tree
 from support.tiny_plugin import TinyInstall, install_tiny
 
 
@@ -72,11 +73,6 @@ def report(tiny: TinyInstall, runs: Path, tmp_path_factory: pytest.TempPathFacto
     out = tmp_path_factory.mktemp("report") / "X"
     printed = tiny.ok("report", runs, "--json", "--out", out, "--bootstrap", "50")
     return Report(json.loads(printed), out)
-
-
-def files_of(root: Path) -> dict[str, bytes]:
-    """Every file under ``root`` by relative path."""
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
 def scenes(data: Path) -> list[tuple[dict[str, Any], dict[str, Any]]]:
@@ -132,9 +128,9 @@ def test_generation_is_byte_identical_across_reruns_and_worker_counts(
 ) -> None:
     tiny.ok("generate", "--out", tmp_path / "again", *GENERATE, "--workers", "2")
     tiny.ok("generate", "--out", tmp_path / "one", *GENERATE, "--workers", "1")
-    made = files_of(data)
-    assert files_of(tmp_path / "again") == made
-    assert files_of(tmp_path / "one") == made
+    made = tree(data)
+    assert tree(tmp_path / "again") == made
+    assert tree(tmp_path / "one") == made
     for folder in data.glob("h*/scene_*"):
         assert {p.name for p in folder.iterdir()} == {"init.json", "final.json", "init.png"}
         assert (folder / "init.png").read_bytes().startswith(b"\x89PNG")

@@ -18,12 +18,9 @@ from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry
 from bpb_tasks.billiards.config import DatasetConfig
 from support.dataset_small import SMALL
+from support.paths import tree
 
 SCENE_FILES = {"init.json", "final.json", "init.png", "final.png", "trajectory.png"}
-
-
-def tree(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
 def test_layout_index_and_manifest(small_dataset: Path) -> None:

@@ -19,6 +19,7 @@ from PIL import Image
 from bpb_core.dataset import load_dataset
 from bpb_core.errors import BadInput
 from bpb_core.results import load_results
+from support.paths import tree
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
@@ -326,10 +327,6 @@ def test_edited_files_are_used_once_checksums_are_removed(copy: Path, tmp_path: 
     assert done.returncode == 0, done.stderr
 
 
-def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
-
-
 @pytest.mark.parametrize(
     ("content", "problem"),
     [
@@ -345,7 +342,7 @@ def test_a_run_on_a_damaged_ground_truth_exits_2_before_any_call(
     # bpb run sent every call, then only warned "could not score the run" at the end.
     first = _run_h1(copy, tmp_path)
     assert first.returncode == 0, first.stderr
-    before = _files(tmp_path / "r")
+    before = tree(tmp_path / "r")
     final = copy / "h1" / "scene_0001" / "final.json"
     final.write_text(content)
     for out in ("r", "fresh"):  # an earlier run's folder, and a new one
@@ -353,7 +350,7 @@ def test_a_run_on_a_damaged_ground_truth_exits_2_before_any_call(
         assert done.returncode == 2, done.stderr
         [line] = done.stderr.strip().splitlines()
         assert line.startswith(f"error: {final}: {problem}")
-    assert _files(tmp_path / "r") == before
+    assert tree(tmp_path / "r") == before
     assert not (tmp_path / "fresh").exists()
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from support.paths import tree
 from support.processes import (
     HAS_PROC,
     as_in_a_terminal,
@@ -178,10 +179,6 @@ def left_in(partial: Path) -> str:
         f"the unfinished dataset is left in {partial} (delete it to free its space; running the "
         "command again starts it afresh)"
     )
-
-
-def tree(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
 @pytest.mark.skipif(not HAS_PROC, reason="lists children through /proc")

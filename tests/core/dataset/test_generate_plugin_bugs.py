@@ -24,6 +24,7 @@ import pytest
 import support.flawed_family
 from bpb_core.dataset import generate_dataset
 from bpb_core.registry import PluginSource, make_registry
+from support.paths import tree
 
 ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
 FAMILY = "scene family 'flawed'"
@@ -78,10 +79,6 @@ def made(tmp_path_factory: pytest.TempPathFactory) -> Path:
                             registry=registry)  # fmt: skip
 
 
-def _files(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
-
-
 @pytest.mark.parametrize(("flaw", "said"), FLAWS)
 def test_bpb_generate_is_one_line_naming_the_family_plugin_and_exit_3(
     install: Any, run_bpb: Any, monkeypatch: pytest.MonkeyPatch, made: Path, tmp_path: Path,
@@ -132,7 +129,7 @@ def _refused(
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
     out = shutil.copytree(made, tmp_path / "data")
-    before = _files(out)
+    before = tree(out)
     monkeypatch.setenv("BPB_TEST_FLAW", flaw)
     done = run_bpb("generate", "--family", "flawed", "--out", str(out), "--per-horizon", "2",
                    "--horizons", "1", "--workers", "2", "--no-images", "--overwrite",
@@ -141,4 +138,4 @@ def _refused(
     assert done.stderr.strip().splitlines() == [
         f"error: {ORIGIN}: {said} (set BPB_DEBUG=1 for a traceback)"
     ]
-    assert _files(out) == before
+    assert tree(out) == before
