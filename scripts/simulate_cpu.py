@@ -1,5 +1,6 @@
 """CPU per scene of ``bpb simulate``, start-up excluded: the command runs twice in one process
-over the same scene files (output to ``/dev/null``) and only the second run is counted.
+over the same scene files and only the second run is counted: the first counts the lines
+(scenes), the second writes them to ``/dev/null`` through file descriptor 1, as into a file.
 
 Usage: ``python scripts/simulate_cpu.py PATH_LIST [ROUNDS]``, where ``PATH_LIST`` names what to
 give ``bpb simulate``, one per line: scene files, or a dataset folder. Scenes are counted from
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import sys
 import time
 from pathlib import Path
@@ -29,27 +31,43 @@ class _Counting(io.TextIOBase):
         return len(text)
 
 
-def run_once(paths: list[str]) -> tuple[float, int]:
-    """CPU seconds and scenes of one ``bpb simulate --workers 1 PATHS`` inside this process."""
+def run_once(paths: list[str], *, counted: bool = True) -> tuple[float, int]:
+    """CPU seconds and scenes of one ``bpb simulate --workers 1 PATHS`` inside this process:
+    its lines counted (``counted``), or written to ``/dev/null`` through standard output's file
+    descriptor, as into a file a user redirects them to (scenes then 0)."""
     from bpb_core.cli.main import main
 
     sink = _Counting()
-    started = time.process_time()
-    with contextlib.redirect_stdout(sink):
-        try:
-            main(["simulate", "--workers", "1", *paths])
-        except SystemExit as exc:
-            if exc.code not in (0, None):
-                raise
-    return time.process_time() - started, sink.lines
+    sys.stdout.flush()
+    saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        with contextlib.ExitStack() as stack:
+            if counted:
+                stack.enter_context(contextlib.redirect_stdout(sink))
+            else:
+                os.dup2(null, 1)
+            started = time.process_time()
+            try:
+                main(["simulate", "--workers", "1", *paths])
+            except SystemExit as exc:
+                if exc.code not in (0, None):
+                    raise
+            took = time.process_time() - started
+            sys.stdout.flush()
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
+    return took, sink.lines
 
 
 def main(listing: str, rounds: int) -> None:
     """Print the warm CPU per scene of each round."""
     paths = Path(listing).read_text().split()
-    first, _ = run_once(paths)
+    first, scenes = run_once(paths)
     for r in range(rounds):
-        took, scenes = run_once(paths)
+        took, _ = run_once(paths, counted=False)
         print(
             f"round {r + 1}: {scenes} scenes, first run {first:.2f} s, counted run "
             f"{took:.2f} s CPU, {took / scenes * 1e6:.1f} us per scene",

@@ -197,11 +197,13 @@ class WritesTruthLines(Protocol):
 
     def truth_lines(
         self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
-    ) -> list[str | None] | None:
+    ) -> list[str | None] | bytes | None:
         """One JSON line per scene file's text, equal in content to the ground truth's JSON, in
         order; ``None`` for a text the fast path does not take (core reads that file the
         ordinary way, which reports bad input), or as a whole when this simulator (or its
-        options) has no fast path."""
+        options) has no fast path. When it takes every text it may return all the lines as one
+        block instead: UTF-8 bytes, the lines joined by newlines, none after the last (core
+        writes the block as it is, with no decoding and splitting)."""
         ...
 
 

@@ -11,6 +11,7 @@ one ground truth (the family's ``final.json`` model) per scene. Every user mista
 from __future__ import annotations
 
 import contextlib
+import errno
 import gc
 import math
 import os
@@ -53,17 +54,24 @@ and ``/dev/fd/0``) is read once and its content stands for each naming, as a fil
 gives the same scene twice."""
 
 
-def _scene_names(paths: Iterable[str | Path]) -> list[str]:
+def _scene_names(paths: Iterable[str | Path], *, ahead: bool = False) -> list[str]:
     """:func:`scene_files` as strings, with no path objects and the kind of each named path
     found from its folder's listing when many names share that folder (see :func:`_kinds`),
     else with one ``stat``: with ten thousand files named on the command line, a ``stat`` each
-    was a tenth of ``bpb simulate``'s time per scene."""
+    was a tenth of ``bpb simulate``'s time per scene. ``ahead``: find the kind of a path the
+    listing does not settle by reading it instead (:func:`_probe`), keeping the bytes of a
+    regular file for :func:`_read_all` (:data:`_AHEAD`)."""
     names = [os.fspath(raw) for raw in paths]
     _PIPED.clear()  # a pipe of an earlier call is not this call's
+    _AHEAD.clear()
     kinds = _kinds(names)
     found: list[str] = []
+    room = AHEAD_MAX if ahead else 0
     for name in names:
         mode = kinds.get(name)
+        if mode is None and room > 0:
+            mode = _probe(name)
+            room -= len(_AHEAD.get(name, b""))
         if mode is None:
             try:
                 mode = os.stat(name).st_mode
@@ -78,6 +86,69 @@ def _scene_names(paths: Iterable[str | Path]) -> list[str]:
         else:
             found.append(name)
     return found
+
+
+_AHEAD: dict[str, bytes] = {}
+"""The bytes of the regular files :func:`_probe` read while listing, by name, for one call;
+:func:`_read_all` and :func:`_line` take them out."""
+
+AHEAD_MAX = 1 << 26
+"""Bytes of scene files read while listing at most (64 MiB, about 40,000 scenes): past that,
+the rest are ``stat``-ed and read later, so a huge list does not sit in memory."""
+
+_OPEN = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_BINARY", 0) | getattr(os, "O_CLOEXEC", 0)
+
+
+def _probe(name: str) -> int | None:
+    """The type bits of ``name`` found by opening and reading it, which costs one path lookup
+    where a ``stat`` then an open cost two (most of the time of listing and reading a scene
+    file): ``S_IFREG`` with its bytes kept in :data:`_AHEAD`, ``S_IFDIR``, 0 for a pipe read to
+    its end (kept in :data:`_PIPED`), or ``None`` when ``stat`` is to decide.
+
+    The open does not wait (``O_NONBLOCK``): a named pipe with no writer yet opens at once, reads
+    empty and is left to ``stat`` and the blocking open of :func:`_special_data`, which waits
+    for one. A pipe that has a writer, or one whose writer waited in its own open (which this
+    open let through), is read to its end here: closing it unread would leave that writer
+    writing into a pipe nobody reads."""
+    try:
+        fd = os.open(name, _OPEN)
+    except (OSError, ValueError):
+        return None
+    try:
+        try:
+            data = os.pread(fd, _READ, 0)
+        except IsADirectoryError:
+            return stat.S_IFDIR
+        except OSError as exc:
+            return _probed_pipe(fd) if exc.errno == errno.ESPIPE else None
+        while len(data) % _READ == 0 and data:  # a full read: there may be more
+            more = os.pread(fd, _READ, len(data))
+            if not more:
+                break
+            data += more
+        _AHEAD[name] = data
+        return stat.S_IFREG
+    except OSError:
+        _AHEAD.pop(name, None)
+        return None
+    finally:
+        os.close(fd)
+
+
+def _probed_pipe(fd: int) -> int | None:
+    """0 for the pipe (or other unseekable file) open at ``fd`` once its data is in
+    :data:`_PIPED`, read here to its end unless a naming of the same pipe read it before;
+    ``None`` when it held nothing (no writer yet: see :func:`_probe`)."""
+    info = os.fstat(fd)
+    key = (info.st_dev, info.st_ino)
+    if key in _PIPED:
+        return 0
+    os.set_blocking(fd, True)
+    data = b"".join(iter(lambda: os.read(fd, _READ), b""))
+    if not data:
+        return None
+    _PIPED[key] = data
+    return 0
 
 
 LISTED_MIN = 32
@@ -338,31 +409,60 @@ def simulate_lines(
     Workers are forked (POSIX only) and inherit the simulator, and what the first part of the
     scenes, simulated here before they start, loaded; elsewhere this runs in-process.
     """
+    for block in simulate_blocks(
+        paths,
+        horizon=horizon,
+        simulator=simulator,
+        stability=stability,
+        registry=registry,
+        options=options,
+        workers=workers,
+        names=names,
+    ):
+        yield from block.decode().split("\n")[:-1]  # JSON text holds no newline
+
+
+def simulate_blocks(
+    paths: Iterable[str | Path],
+    *,
+    horizon: float | None = None,
+    simulator: str | Simulator | None = None,
+    stability: bool = False,
+    registry: Registry | None = None,
+    options: Mapping[str, Any] | None = None,
+    workers: int = 0,
+    names: Mapping[str, str] | None = None,
+) -> Iterator[bytes]:
+    """:func:`simulate_lines`'s lines in blocks of up to :data:`CHUNK` lines, as they are to
+    be written: UTF-8, each line ended by a newline (what ``bpb simulate`` prints). A bad
+    file's error is raised after the block of the lines before it."""
     global _JOB
     if workers < 0:
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
     check_workers(workers, least=0)
-    with _collector_paused():  # ten thousand names: see _collector_paused
-        files = _scene_names(paths)
-    job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]], names)
-    count = _worker_count(workers, len(files))
-    _JOB = (job, horizon, stability)
-    if count > 1:  # forked workers share the pipes but not what one of them read
-        for name in files:
-            _special_data(name)
-    chunks = [files[i : i + CHUNK] for i in range(0, len(files), CHUNK)]
-    if count <= 1:
-        for chunk in chunks:
-            yield from _emit(_lines(chunk))
-        return
-    import multiprocessing
+    try:
+        with _collector_paused():  # ten thousand names: see _collector_paused
+            files = _scene_names(paths, ahead=True)
+        job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]], names)
+        count = _worker_count(workers, len(files))
+        _JOB = (job, horizon, stability)
+        if count > 1:  # forked workers share the pipes but not what one of them read
+            for name in files:
+                _special_data(name)
+        if count <= 1:
+            for at in range(0, len(files), CHUNK):
+                yield from _emit(_lines(files[at : at + CHUNK]))
+            return
+        import multiprocessing
 
-    parts = _split(files, count)
-    yield from _emit(_lines(parts[0]))  # the workers inherit what it loaded (or built: once)
-    fork = multiprocessing.get_context("fork")
-    with started_pool(lambda: fork.Pool(count, initializer=worker_signals)) as pool:
-        for result in pool.imap(_lines, parts[1:]):
-            yield from _emit(result)
+        parts = _split(files, count)
+        yield from _emit(_lines(parts[0]))  # the workers inherit what it loaded (or built: once)
+        fork = multiprocessing.get_context("fork")
+        with started_pool(lambda: fork.Pool(count, initializer=worker_signals)) as pool:
+            for result in pool.imap(_lines, parts[1:]):
+                yield from _emit(result)
+    finally:
+        _AHEAD.clear()  # what was read ahead for files a bad one stopped short of
 
 
 CHUNK = 512  # scenes handed to a family's batch path at once
@@ -373,17 +473,19 @@ def _split(files: Sequence[str], count: int) -> list[Sequence[str]]:
     return [files[i : i + size] for i in range(0, len(files), size)]
 
 
-def _emit(result: tuple[list[str], BadInput | None]) -> Iterator[str]:
+def _emit(result: tuple[list[str] | bytes, BadInput | None]) -> Iterator[bytes]:
     lines, error = result
-    yield from lines
+    if lines:
+        yield lines + b"\n" if isinstance(lines, bytes) else ("\n".join(lines) + "\n").encode()
     if error is not None:
         raise error
 
 
-def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:
+def _lines(files: Sequence[str]) -> tuple[list[str] | bytes, BadInput | None]:
     """JSON lines of ``files``: the family's batch path (:class:`WritesTruthLines`) when it has
     one for this simulator and no stability is asked, else one ground truth model per scene.
-    A bad file ends the chunk: the lines before it come back with the error."""
+    A bad file ends the chunk: the lines before it come back with the error. The lines come
+    as a list, or as the family's block of them all (bytes, joined by newlines)."""
     from bpb_core.capabilities import WritesTruthLines
 
     assert _JOB is not None
@@ -405,9 +507,10 @@ def _lines(files: Sequence[str]) -> tuple[list[str], BadInput | None]:
 
 def _truth_lines(
     job: Prepared, family: WritesTruthLines, texts: Sequence[bytes], horizon: float | None
-) -> list[str | None] | None:
-    """The family's ``truth_lines`` of ``texts``, checked: ``None``, or a list with one line
-    (``str``) or ``None`` per text, since each line is paired with its file by position.
+) -> list[str | None] | bytes | None:
+    """The family's ``truth_lines`` of ``texts``, checked: ``None``, a list with one line
+    (``str``) or ``None`` per text, since each line is paired with its file by position, or a
+    block (UTF-8 bytes) of one line per text joined by newlines.
 
     Raises:
         PluginBug: The family raised or returned something else, naming its plugin.
@@ -417,11 +520,13 @@ def _truth_lines(
         lines = family.truth_lines(texts, job.simulator, horizon)
     if lines is None:
         return None
+    if isinstance(lines, bytes):
+        return _checked_block(lines, len(texts), f"{job.origin}: {what}")
     if not isinstance(lines, list) or len(lines) != len(texts):
         got = f"a list of {len(lines)}" if isinstance(lines, list) else type(lines).__name__
         raise PluginBug(
             f"{job.origin}: {what} returned {got} for {len(texts)} scene files; expected a list "
-            "with one line or None per file"
+            "with one line or None per file, or a block of one line per file"
         )
     wrong = next((line for line in lines if line is not None and not isinstance(line, str)), None)
     if wrong is not None:
@@ -430,6 +535,22 @@ def _truth_lines(
             "JSON line (str) or None per file"
         )
     return lines
+
+
+def _checked_block(block: bytes, files: int, who: str) -> bytes:
+    """``block`` when it holds ``files`` lines of UTF-8 (non-ASCII is decoded to check)."""
+    lines = block.count(b"\n") + 1
+    if lines != files:
+        raise PluginBug(
+            f"{who} returned a block of {lines} lines for {files} scene files; expected one "
+            "line per file"
+        )
+    if not block.isascii():
+        try:
+            block.decode()
+        except UnicodeDecodeError as exc:
+            raise PluginBug(f"{who} returned a block that is not UTF-8 ({exc.reason})") from None
+    return block
 
 
 @contextlib.contextmanager
@@ -457,7 +578,12 @@ def _read_all(files: Sequence[str]) -> list[bytes]:
     again and names the error): ``os.open`` and ``os.read``, no file object per scene."""
     texts: list[bytes] = []
     flags = os.O_RDONLY | getattr(os, "O_BINARY", 0)
+    ahead = _AHEAD
     for path in files:
+        read = ahead.pop(path, None)
+        if read is not None:
+            texts.append(read)
+            continue
         if path in _SPECIAL:
             data = _special_data(path)
             if data is None:
@@ -502,11 +628,16 @@ def _special_data(path: str) -> bytes | None:
 
 
 def _fill(
-    files: Sequence[str], fast: list[str | None], texts: Sequence[bytes]
-) -> tuple[list[str], BadInput | None]:
+    files: Sequence[str], fast: list[str | None] | bytes, texts: Sequence[bytes]
+) -> tuple[list[str] | bytes, BadInput | None]:
     """The fast lines, with the files the fast path left (``None``) and those after the texts
     it got done the ordinary way, from the bytes already read (``texts``, a prefix of
     ``files``) where there are some; a bad file ends the chunk."""
+    if isinstance(fast, bytes):  # a line for every text read
+        if len(texts) == len(files):
+            return fast, None
+        split: list[str | None] = [*fast.decode().split("\n")]
+        fast = split
     if len(fast) == len(files) and None not in fast:  # the usual case: every file taken
         return fast, None  # type: ignore[return-value]  # no None in it
     lines: list[str] = []
@@ -536,6 +667,8 @@ def _line(name: str, data: bytes | None = None) -> str:
     assert _JOB is not None
     job, horizon, stability = _JOB
     path = Path(name)
+    if data is None:
+        data = _AHEAD.pop(name, None)
     if data is None:
         data = _special_data(name)
     scene = read_model(path, job.family.scene_model, data)

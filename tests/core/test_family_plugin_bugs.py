@@ -138,7 +138,11 @@ def test_the_oracle_and_vision_name_a_flawed_family(
 
 SIMULATE_FLAWS = [
     ("truth_lines_short", False, "truth_lines() returned a list of 1 for 2 scene files; "
-     "expected a list with one line or None per file"),
+     "expected a list with one line or None per file, or a block of one line per file"),
+    ("truth_lines_block_short", False, "truth_lines() returned a block of 1 lines for 2 scene "
+     "files; expected one line per file"),
+    ("truth_lines_block_utf8", False, "truth_lines() returned a block that is not UTF-8 "
+     "(invalid start byte)"),
     ("truth_lines_type", False, "truth_lines() returned a list holding bytes; expected a JSON "
      "line (str) or None per file"),
     ("truth_type", True, TRUTH_TYPE),

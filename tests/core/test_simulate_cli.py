@@ -456,3 +456,54 @@ def test_a_plugin_simulator_may_take_options_called_name_and_names(
     assert refused.stderr.strip().splitlines() == [
         "error: --simulator 'labelled:name=,names=x': name: must not be empty"
     ]
+
+
+def test_paths_and_options_parse_as_click_parses_them() -> None:
+    # bpb simulate hands click's parser long runs of paths folded into stand-ins (its parser
+    # took time in the square of their number); what the command gets must not change
+    import click
+    from hypothesis import given, settings, strategies as st
+
+    from bpb_core.cli.simulate_cmd import simulate as command
+
+    plain = click.Command("simulate", params=command.params)
+    fixed = ["a.json", "b/c.json", "-", "--", "", "x y", "--stability", "--horizon", "2",
+             "-1", "--workers=1", "--workers", "--dt", "0.01", "--simulator", "pymunk",
+             "--no"]  # fmt: skip
+    token = st.one_of(st.sampled_from(fixed), st.text(alphabet="ab-./ 0", max_size=4))
+
+    def parse(cmd: click.Command, args: list[str]) -> tuple[Any, ...]:
+        try:
+            with cmd.make_context("simulate", list(args)) as ctx:
+                return "ok", ctx.params, ctx.args
+        except click.ClickException as exc:
+            return "error", exc.format_message()
+
+    @settings(max_examples=400, deadline=None)
+    @given(st.lists(token, max_size=40))
+    def check(args: list[str]) -> None:
+        assert parse(command, args) == parse(plain, args)
+
+    check()
+    many = [f"s{i}.json" for i in range(5000)]
+    assert parse(command, [*many, "--horizon", "2", *many])[1]["paths"] == (*many, *many)
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "latin-1"])
+def test_the_batch_path_prints_in_the_encoding_of_standard_output(
+    tmp_path: Path, encoding: str
+) -> None:
+    # the batch path's lines come as UTF-8 bytes, written as they are only when standard
+    # output is UTF-8
+    paths = []
+    for i in range(300):  # past BATCH_MIN: the compiled batch path
+        scene = random_scene(31, i)
+        if i % 7 == 3:
+            scene = scene.model_copy(update={"scene_id": f"schön {i}"})
+        paths.append(write(tmp_path / f"s{i:03d}.json", scene))
+    expected = list(simulate_lines(paths, workers=1))
+    env = {**os.environ, "PYTHONIOENCODING": encoding}
+    done = subprocess.run([BPB, "simulate", *map(str, paths)], capture_output=True, env=env,
+                          timeout=120, check=True)  # fmt: skip
+    assert done.stdout == "".join(f"{line}\n" for line in expected).encode(encoding)
+    assert any("schön" in line for line in expected)

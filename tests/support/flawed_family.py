@@ -228,6 +228,10 @@ class FlawedFamily(BilliardsFamily):
         scenes = [self.scene_model.model_validate_json(text) for text in texts]
         truths = [self.ground_truth(s, simulator, horizon, stability=False) for s in scenes]
         lines = [truth.model_dump_json() for truth in truths]
+        if _flaw() == "truth_lines_block_short":
+            return "\n".join(lines[1:]).encode()
+        if _flaw() == "truth_lines_block_utf8":
+            return "\n".join(lines).encode().replace(b'"scene_id":', b'"scene_id":\xff', 1)
         return lines[1:] if _flaw() == "truth_lines_short" else [line.encode() for line in lines]
 
     def perceive(self, image: bytes, prompt: str) -> Any:

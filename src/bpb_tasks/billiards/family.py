@@ -208,13 +208,14 @@ class BilliardsFamily:
 
     def truth_lines(
         self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
-    ) -> list[str | None] | None:
+    ) -> list[str | None] | bytes | None:
         """``final.json`` lines of many ``init.json`` texts from the compiled kernel, read
         without scene models (``None`` for a text left to the ordinary path, or as a whole when
-        ``simulator`` has none); see :mod:`bpb_tasks.billiards.truth_lines`."""
+        ``simulator`` has none; one block of bytes when every text is taken); see
+        :mod:`bpb_tasks.billiards.truth_lines`."""
         from bpb_tasks.billiards.truth_lines import text_lines
 
-        return text_lines(texts, simulator, horizon)
+        return text_lines(texts, simulator, horizon, block=True)
 
     def calibrate_horizon(
         self, config: DatasetConfig, simulator: Simulator, horizon: float

@@ -58,8 +58,8 @@ def assemble(
     events: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     scene_ids: list[str],
     simulator: str,
-) -> list[str]:
-    """The lines of ``k`` scenes of ``n`` balls.
+) -> bytes:
+    """The lines of ``k`` scenes of ``n`` balls, joined by newlines (UTF-8).
 
     Args:
         numbers: pydantic-core's JSON of one flat list: the ``k`` horizons, the ``2kn`` final
@@ -91,7 +91,7 @@ def assemble(
         _TABLE,
         _OFFSETS,
     )
-    return out[:size].tobytes().decode().split("\n")
+    return out[:size].tobytes()
 
 
 @jit

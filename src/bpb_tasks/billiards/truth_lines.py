@@ -28,18 +28,26 @@ costs about a second, which the fast path saves back only over a few thousand sc
 
 
 def text_lines(
-    texts: Sequence[bytes], simulator: Simulator, horizon: float | None
-) -> list[str | None] | None:
+    texts: Sequence[bytes], simulator: Simulator, horizon: float | None, *, block: bool = False
+) -> list[str | None] | bytes | None:
     """``final.json`` lines of ``init.json`` texts read by
     :func:`~bpb_tasks.billiards.scene_text.light_scene` (no pydantic model per scene): ``None``
-    for a text it does not take, or as a whole when ``simulator`` has no fast path."""
+    for a text it does not take, or as a whole when ``simulator`` has no fast path. With
+    ``block``, when every text is taken and they share one table (the usual case), all the
+    lines as one UTF-8 block joined by newlines: the compiled code writes bytes, and decoding
+    and splitting them only for ``bpb simulate`` to join and encode them again cost about a
+    microsecond per scene."""
     if not _fast(simulator, worth_loading=len(texts) >= BATCH_MIN):
         return None
     from bpb_tasks.billiards.scene_scan import text_groups
+    from bpb_tasks.billiards.scene_text import SceneGroup
 
+    groups: list[SceneGroup] = text_groups(texts)
+    if block and len(groups) == 1 and groups[0].members == list(range(len(texts))):
+        return b"\n".join(_group_blocks(groups[0], simulator, horizon))
     lines: list[str | None] = [None] * len(texts)
-    for group in text_groups(texts):
-        _group_lines(group, simulator, horizon, lines)
+    for group in groups:
+        _put(group, _group_blocks(group, simulator, horizon), lines)
     return lines
 
 
@@ -65,15 +73,20 @@ def truth_lines(
 
     lines: list[str | None] = [None] * len(scenes)
     for group in scene_groups(scenes, checks=False):
-        _group_lines(group, simulator, horizon, lines)
+        _put(group, _group_blocks(group, simulator, horizon), lines)
     return [line for line in lines if line is not None]
 
 
-def _group_lines(
-    group: Any, simulator: Any, horizon: float | None, lines: list[str | None]
-) -> None:
-    """Simulate ``group`` (a :class:`~bpb_tasks.billiards.scene_text.SceneGroup`) in chunks and
-    put each scene's line at its member position in ``lines``."""
+def _put(group: Any, blocks: list[bytes], lines: list[str | None]) -> None:
+    """Each line of ``blocks`` (``group``'s, in member order) at its member position."""
+    made = b"\n".join(blocks).decode().split("\n")
+    for member, line in zip(group.members, made, strict=True):
+        lines[member] = line
+
+
+def _group_blocks(group: Any, simulator: Any, horizon: float | None) -> list[bytes]:
+    """Simulate ``group`` (a :class:`~bpb_tasks.billiards.scene_text.SceneGroup`) in chunks:
+    the lines of each chunk as one block (UTF-8, joined by newlines)."""
     from bpb_tasks.billiards.scene_text import LightScene
     from bpb_tasks.simulators.analytic.compiled import table_params
     from bpb_tasks.simulators.analytic.engine import SimulationError
@@ -84,6 +97,7 @@ def _group_lines(
     prm, centres = table_params(shape)  # type: ignore[arg-type]  # reads only the three parts
     n = group.ids.shape[1]
     name = to_json(simulator.name).decode()
+    blocks = []
     for at in range(0, len(group.members), CHUNK):
         names = group.names[at : at + CHUNK]
         k = len(names)
@@ -96,9 +110,8 @@ def _group_lines(
         )
         if status.any():
             raise SimulationError(f"more than {simulator.max_events} events in a scene")
-        made = _lines(names, group.ids[at : at + k], ends, final, events, name)
-        for member, line in zip(group.members[at : at + k], made, strict=True):
-            lines[member] = line
+        blocks.append(_lines(names, group.ids[at : at + k], ends, final, events, name))
+    return blocks
 
 
 def round4(values: np.ndarray) -> np.ndarray:
@@ -123,11 +136,11 @@ def _lines(
     final: np.ndarray,
     events: np.ndarray,
     simulator: str,
-) -> list[str]:
-    """The lines of one compiled call's results (``ids``: ``(k, n)``, ascending per scene, so
-    index 0 is the cue ball, id 0): every number formatted by one pydantic-core call, the labels
-    worked out on arrays, the lines put together as bytes by compiled code
-    (:func:`~bpb_tasks.billiards.truth_bytes.assemble`)."""
+) -> bytes:
+    """The lines of one compiled call's results, as one block joined by newlines (``ids``:
+    ``(k, n)``, ascending per scene, so index 0 is the cue ball, id 0): every number formatted
+    by one pydantic-core call, the labels worked out on arrays, the lines put together as bytes
+    by compiled code (:func:`~bpb_tasks.billiards.truth_bytes.assemble`)."""
     from bpb_tasks.billiards.truth_bytes import assemble
 
     k, n = ids.shape
