@@ -32,8 +32,14 @@ class _ManyPaths(click.Command):
         folded, runs = _fold(args)
         rest = super().parse_args(ctx, folded)
         if runs:
-            named = ctx.params.get("paths") or ()
-            ctx.params["paths"] = tuple(p for n in named for p in runs.get(n, (n,)))
+            paths: list[str] = []
+            for name in ctx.params.get("paths") or ():
+                run = runs.get(name)
+                if run is None:
+                    paths.append(name)
+                else:
+                    paths += run
+            ctx.params["paths"] = tuple(paths)
         return rest
 
 

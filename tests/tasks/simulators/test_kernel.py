@@ -81,6 +81,29 @@ def test_simulate_many_matches_single_runs_and_horizons() -> None:
         assert batch.positions[i] == ref.positions
 
 
+def test_simulate_many_of_mixed_ball_counts_matches_single_runs() -> None:
+    # one call over scenes of other ball counts (working arrays made anew when the count
+    # changes, shared while it does not) and more events than the event table first holds
+    from bpb_tasks.billiards.bench_compare import random_scene
+
+    counts = (2, 7, 7, 4, 1, 4)
+    scenes = [random_scene(14, i, balls=counts[i % 6], speeds=(3.0, 8.0)) for i in range(36)]
+    batch = simulate_many(scenes)
+    events = 0
+    for i, s in enumerate(scenes):
+        ref = PYTHON.run(s)
+        assert batch.contacts[i] == ref.cue_contacts() and batch.walls[i] == ref.cue_walls()
+        assert batch.events[i] == len(ref.events)
+        assert batch.positions[i].keys() == ref.positions.keys()
+        for ball, pos in ref.positions.items():
+            other = batch.positions[i][ball]
+            assert (pos is None) == (other is None)
+            if pos is not None and other is not None:
+                assert math.dist(pos, other) <= 1e-9
+        events += len(ref.events)
+    assert events > 4 * len(scenes)  # the table grew
+
+
 def test_simulate_many_refuses_scenes_on_different_tables() -> None:
     a = scene([(0.5, 0.5, 1.0, 0.0)])
     b = scene([(0.5, 0.5, 1.0, 0.0)], width=3.0)

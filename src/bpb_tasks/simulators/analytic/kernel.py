@@ -252,29 +252,33 @@ def run_many_arrays(
 ) -> tuple[Arr, Arr, Arr]:
     """Simulate many scenes sharing one table in a single call: scene ``s`` holds balls
     ``starts[s]:starts[s + 1]`` of ``pos``/``vel``. Returns per-ball final rows (as
-    :func:`run_arrays`), per-scene statuses, and per-scene counts of cue-ball contacts per
-    kind ``(balls, walls)`` are left to the caller: this returns the final rows, the statuses
-    and the event tables concatenated with a leading scene column."""
+    :func:`run_arrays`), per-scene statuses, and the event tables concatenated with a leading
+    scene column. Scenes of as many balls as the one before share its working arrays
+    (:func:`buffers`), and each scene's events go straight from the loop's rows into the one
+    table: no segment table, and no array per scene."""
     scenes = starts.shape[0] - 1
     final = np.zeros((pos.shape[0], 4))
     status = np.zeros(scenes, dtype=np.int64)
-    logs = [np.zeros((0, 10))]
-    logs.pop()
+    events = np.empty((max(16, 4 * scenes), 10))
+    row = 0
+    n = 0
+    work = buffers(0)
     for s in range(scenes):
         a, b = starts[s], starts[s + 1]
-        ev, _, fin, code = run_arrays(pos[a:b], vel[a:b], prm, pockets, horizons[s], max_events)
-        final[a:b] = fin
-        status[s] = code
-        tagged = np.empty((ev.shape[0], 10))
-        tagged[:, 0] = s
-        tagged[:, 1:] = ev
-        logs.append(tagged)
-    total = 0
-    for log in logs:
-        total += log.shape[0]
-    events = np.empty((total, 10))
-    row = 0
-    for log in logs:
-        events[row : row + log.shape[0]] = log
-        row += log.shape[0]
-    return final, status, events
+        if b - a != n:
+            n = b - a
+            work = buffers(n)
+        status[s] = run_into(work, pos[a:b], vel[a:b], prm, pockets, horizons[s], max_events)
+        final[a:b] = work[6]
+        rows = work[4]
+        if row + len(rows) > events.shape[0]:
+            grown = np.empty((max(2 * events.shape[0], row + len(rows)), 10))
+            grown[:row] = events[:row]
+            events = grown
+        for r in range(len(rows)):
+            event = rows[r]
+            events[row, 0] = s
+            for c in range(9):
+                events[row, c + 1] = event[c]
+            row += 1
+    return final, status, events[:row]
