@@ -59,20 +59,24 @@ def _scene_names(paths: Iterable[str | Path], *, ahead: bool = False) -> list[st
     """:func:`scene_files` as strings, with no path objects and the kind of each named path
     found from its folder's listing when many names share that folder (see :func:`_kinds`),
     else with one ``stat``: with ten thousand files named on the command line, a ``stat`` each
-    was a tenth of ``bpb simulate``'s time per scene. ``ahead``: find the kind of a path the
-    listing does not settle by reading it instead (:func:`_probe`), keeping the bytes of a
-    regular file for :func:`_read_all` (:data:`_AHEAD`)."""
+    was a tenth of ``bpb simulate``'s time per scene. ``ahead``: find the kind of each path by
+    reading it instead (:func:`_probe`), keeping the bytes of a regular file for
+    :func:`_read_all` (:data:`_AHEAD`), up to :data:`AHEAD_MAX` bytes; then list and ``stat``
+    the rest. Reading a file costs what reading it later would, so this saves the ``stat``, or
+    the folder's listing."""
     names = [os.fspath(raw) for raw in paths]
     _PIPED.clear()  # a pipe of an earlier call is not this call's
     _AHEAD.clear()
-    kinds = _kinds(names)
+    kinds = {} if ahead else _kinds(names)
     found: list[str] = []
     room = AHEAD_MAX if ahead else 0
-    for name in names:
+    for at, name in enumerate(names):
         mode = kinds.get(name)
         if mode is None and room > 0:
             mode = _probe(name)
             room -= len(_AHEAD.get(name, b""))
+            if room <= 0:
+                kinds = _kinds(names[at + 1 :])
         if mode is None:
             try:
                 mode = os.stat(name).st_mode

@@ -56,9 +56,15 @@ def test_read_ahead_stops_at_its_budget_and_the_rest_is_read_later(
     for i in range(5):
         names.append(str(tmp_path / f"{i}.json"))
         Path(names[-1]).write_bytes(bytes([65 + i]) * 100)
-    listed = simulate._scene_names(names, ahead=True)
-    assert sorted(simulate._AHEAD) == names[:3]  # the third passes the budget
-    assert simulate._read_all(listed) == [bytes([65 + i]) * 100 for i in range(5)]
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "folder" / "init.json").write_bytes(b"F")
+    names.append(str(tmp_path / "folder"))
+    for listed_min in (simulate.LISTED_MIN, 1):  # the rest stat-ed, or found in the listing
+        monkeypatch.setattr(simulate, "LISTED_MIN", listed_min)
+        listed = simulate._scene_names(names, ahead=True)
+        assert sorted(simulate._AHEAD) == names[:3]  # the third passes the budget
+        texts = simulate._read_all(listed)
+        assert texts == [bytes([65 + i]) * 100 for i in range(5)] + [b"F"]
 
 
 def test_many_names_in_one_folder_get_the_kinds_stat_would_give(
