@@ -7,6 +7,8 @@ not pay for pydantic, numpy or litellm. Errors become one line on stderr and an 
 
 from __future__ import annotations
 
+import atexit
+import gc
 import importlib
 import os
 import sys
@@ -108,10 +110,25 @@ def notes_on_stderr() -> None:
     warnings.showwarning = show
 
 
+def no_collection_at_exit() -> None:
+    """Freeze the garbage collector's objects as the interpreter exits, after the command.
+
+    Python's shutdown otherwise runs cyclic collections over every object the imports made
+    (numba, numpy, pydantic) and frees them one by one: about 0.2 s of CPU at the end of each
+    ``bpb generate``, to give back memory the exiting process gives back anyway. What a command
+    needs done at exit is done before: its files closed, its pools joined, the exit handlers
+    registered after this one run first, the standard streams flushed; only garbage cycles left
+    at exit go unfinalized, which Python never promises to finalize. Registered at exit, not
+    frozen now, so that a caller that runs :func:`main` in its own process (tests) keeps its
+    collector until it exits."""
+    atexit.register(gc.freeze)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the CLI and exit with bpb's exit codes."""
     single_threaded_blas()
     notes_on_stderr()
+    no_collection_at_exit()
     try:
         code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
     except click.exceptions.Abort as exc:

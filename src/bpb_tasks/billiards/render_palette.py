@@ -19,11 +19,12 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import PIL
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageChops, ImageDraw, ImageFont
 
 from bpb_tasks.billiards import render_canvas, render_style as st
 from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
@@ -128,16 +129,44 @@ def ship(spec: CanvasSpec) -> None:
 
 @functools.cache
 def base(spec: CanvasSpec, header: str = "", legend: bool = False) -> Image.Image:
-    """The background in palette mode with a fixed header (and the trajectory legend)."""
+    """The background in palette mode with a fixed header (and the trajectory legend).
+
+    Both are drawn in the header line at the top, so only the band of rows down to their lowest
+    pixel is drawn (in RGB, at the same coordinates) and mapped, over the mapped background:
+    mapping is pixel by pixel, so this is the image that drawing and mapping the whole canvas
+    gives, at a tenth of the cost (each horizon has its own headers, made in every process)."""
+    s = spec.scale
+    font = st.font(round(19 * s), True)
+    at = (spec.left - 60 * s, header_y(spec))
+    rows = _legend_rows(spec) if legend else 0
+    if header:  # the glyphs lie in their box, give or take a pixel of their subpixel start
+        box = ImageDraw.Draw(background(spec)).textbbox(at, header, font=font, anchor="lm")
+        rows = max(rows, math.ceil(box[3]) + 2)
+    img = _mapped_background(spec).copy()
+    rows = min(rows, img.height)
+    if rows > 0:
+        band = background(spec).crop((0, 0, img.width, rows))
+        if header:
+            ImageDraw.Draw(band).text(at, header, fill=st.INK, font=font, anchor="lm")
+        if legend:
+            draw_legend(band, spec)
+        img.paste(palette_for(spec).quantize(band), (0, 0))
+    return img
+
+
+@functools.cache
+def _mapped_background(spec: CanvasSpec) -> Image.Image:
+    """The background in palette mode."""
+    return palette_for(spec).quantize(background(spec))
+
+
+@functools.cache
+def _legend_rows(spec: CanvasSpec) -> int:
+    """How many rows from the top hold the trajectory legend's pixels."""
     img = background(spec).copy()
-    if header:
-        s = spec.scale
-        draw = ImageDraw.Draw(img)
-        font = st.font(round(19 * s), True)
-        draw.text((spec.left - 60 * s, header_y(spec)), header, fill=st.INK, font=font, anchor="lm")
-    if legend:
-        draw_legend(img, spec)
-    return palette_for(spec).quantize(img)
+    draw_legend(img, spec)
+    box = ImageChops.difference(img, background(spec)).getbbox()
+    return 0 if box is None else box[3]
 
 
 def header_y(spec: CanvasSpec) -> float:

@@ -9,14 +9,15 @@ import sys
 from pathlib import Path
 
 import pytest
-from PIL import Image, ImageChops
+from PIL import Image, ImageChops, ImageDraw
 
 from bpb_core.dataset import load_dataset
+from bpb_tasks.billiards import render_style
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_palette import base
+from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
+from bpb_tasks.billiards.render_palette import base, header_y, palette_for
 from bpb_tasks.billiards.render_style import ball_colour
 from bpb_tasks.billiards.scene import Ball, Scene
 
@@ -147,6 +148,29 @@ def test_the_header_title_and_legend_do_not_overlap_on_narrow_tables(width: floa
     title = _header_box(spec, "Trajectories, t = 0 to 12.5 s", legend=False)
     legend = _header_box(spec, "", legend=True)
     assert title[2] + 10 <= legend[0] and legend[2] <= spec.size[0]
+
+
+@pytest.mark.parametrize(
+    "image",
+    [{}, {"px_per_m": 800}, {"px_per_m": 3000, "margin_top": 20}, {"px_per_m": 100}],
+)
+@pytest.mark.parametrize("header", ["", "State at t = 2.5 s", "Trajectories, t = 0 to 12.25 s"])
+@pytest.mark.parametrize("legend", [False, True])
+def test_the_header_is_what_drawing_the_whole_canvas_gives(
+    image: dict[str, float], header: str, legend: bool
+) -> None:
+    """Only the header's band is drawn and mapped to the palette, over the mapped background:
+    the pixels are those of the whole canvas drawn in RGB and mapped, as the dataset's images
+    always were, on any canvas (a header near the top edge, larger and smaller text)."""
+    spec = CanvasSpec.from_config(config_from_mapping({"image": image}))
+    whole = background(spec).copy()
+    if header:
+        font = render_style.font(round(19 * spec.scale), True)
+        at = (spec.left - 60 * spec.scale, header_y(spec))
+        ImageDraw.Draw(whole).text(at, header, fill=render_style.INK, font=font, anchor="lm")
+    if legend:
+        draw_legend(whole, spec)
+    assert base(spec, header, legend).tobytes() == palette_for(spec).quantize(whole).tobytes()
 
 
 def test_balls_under_a_pixel_across_are_drawn_without_error(tmp_path: Path) -> None:
