@@ -2,7 +2,8 @@
 
 Text patches are made from FreeType's coverage mask and a palette-index table instead of drawing
 in RGB and quantising; the arrow fit proves a shaft clear from its two ends instead of checking
-every point. Both must give the very same pixels and lengths.
+every point; wall markers are drawn on a crop instead of the whole canvas. All must give the very
+same pixels and lengths.
 """
 
 from __future__ import annotations
@@ -12,13 +13,14 @@ from typing import Any
 
 import pytest
 from hypothesis import example, given, settings, strategies as st
-from PIL import ImageFont
+from PIL import Image, ImageDraw, ImageFont
 
 from bpb_tasks.billiards import render_style as style
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.render_arrow import ARROW_CLEARANCE, ARROW_MIN, arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_text import _coverage, drawn_patch, text_patch
+from bpb_tasks.billiards.render_trajectory import wall_diamond
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
 INKS = (style.INK, style.MUTED, style.ARROW, style.MARK_BALL, style.PAGE)
@@ -73,6 +75,20 @@ def _longest(pos: tuple[float, float], direction: tuple[float, float], wanted: f
     while length > ARROW_MIN and not _clear_everywhere(pos, direction, length):
         length -= 0.005
     return max(length, ARROW_MIN)
+
+
+@settings(max_examples=300, deadline=None)
+@given(x=st.floats(-20, 220), y=st.floats(-20, 140), r=st.floats(0, 20), width=st.integers(1, 5))
+@example(x=0.5, y=-3.5, r=7.0, width=2)  # cut by the canvas's top-left corner
+def test_a_wall_marker_drawn_on_a_crop_is_the_polygon_drawn_on_the_canvas(
+    x: float, y: float, r: float, width: int
+) -> None:
+    canvas = Image.new("P", (200, 120), 5)
+    expected = canvas.copy()
+    diamond = [(x, y - r), (x + r, y), (x, y + r), (x - r, y)]
+    ImageDraw.Draw(expected).polygon(diamond, fill=3, outline=4, width=width)
+    wall_diamond(canvas, (x, y), r, 3, 4, width)
+    assert canvas.tobytes() == expected.tobytes()
 
 
 @settings(max_examples=400, deadline=None)
