@@ -116,11 +116,15 @@ def _stamped_cache_class() -> type | None:
             generate``). Cached machine code needs none of it, only the symbols it links to:
             numba's C helpers and the C maths, there since the context was made, and those
             of the runtime (NRT) and of the hash secret, added here. Compiling refreshes the
-            context itself (numba's ``CompilerBase``)."""
-            rtsys.initialize(target_context)
-            importlib.import_module("numba.cpython.hashing")  # adds the hash secret's symbols
-            with self._guard_against_spurious_io_errors():
-                loaded = self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+            context itself (numba's ``CompilerBase``). Should the code need more (another
+            numba), that load fails and numba's own, with the refresh, is made instead."""
+            try:
+                rtsys.initialize(target_context)
+                importlib.import_module("numba.cpython.hashing")  # the hash secret's symbols
+                with self._guard_against_spurious_io_errors():
+                    loaded = self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+            except Exception:  # whatever it was, numba's own load decides
+                loaded = super().load_overload(sig, target_context)  # type: ignore[no-untyped-call]
             if loaded is None and self._enabled:
                 note_compiling(cache_root(self._cache_path, Path(inspect.getfile(self._py_func))))
             return loaded
