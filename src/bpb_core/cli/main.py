@@ -120,7 +120,8 @@ def no_collection_at_exit() -> None:
     registered after this one run first, the standard streams flushed; only garbage cycles left
     at exit go unfinalized, which Python never promises to finalize. Registered at exit, not
     frozen now, so that a caller that runs :func:`main` in its own process (tests) keeps its
-    collector until it exits."""
+    collector until it exits; once, however many commands such a caller runs."""
+    atexit.unregister(gc.freeze)
     atexit.register(gc.freeze)
 
 
