@@ -16,7 +16,6 @@ import gc
 import math
 import os
 import stat
-from collections import Counter
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -166,15 +165,12 @@ def _kinds(names: Sequence[str]) -> dict[str, int]:
     directory entry knows its type without a ``stat`` (one system call per file, several
     microseconds here). Symbolic links, ``.``, ``..``, names ending in a separator and
     anything the listing does not show are left out, for ``stat`` to settle."""
-    sep = os.sep
-    shared = Counter(name.rpartition(sep)[0] for name in names)  # not os.path.split: 1/3 the time
-    if not any(count >= LISTED_MIN for count in shared.values()):
-        return {}  # no folder to list: each name in a folder of its own, as in a dataset
     by_folder: dict[str, dict[str, str]] = {}
+    sep = os.sep
     for name in names:
         if os.altsep and os.altsep in name:
             continue
-        head, root, tail = name.rpartition(sep)
+        head, root, tail = name.rpartition(sep)  # not os.path.split: a third of the time
         by_folder.setdefault(head or root, {})[tail] = name
     kinds: dict[str, int] = {}
     for folder, wanted in by_folder.items():
