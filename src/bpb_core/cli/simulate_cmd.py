@@ -149,6 +149,9 @@ class _Output:
             self.fd: int | None = sys.stdout.fileno()
         except (AttributeError, ValueError, io.UnsupportedOperation):
             self.fd = None  # a stream with no file behind it (click's CliRunner)
+        encoding = sys.stdout.encoding
+        self.encoding = None if codecs.lookup(encoding).name == "utf-8" else encoding
+        self.errors = sys.stdout.errors or "strict"  # the lines are UTF-8: else transcoded
 
     def write(self, block: bytes) -> None:
         """Write ``block``'s lines (UTF-8, each ended by a newline) in standard output's
@@ -157,9 +160,8 @@ class _Output:
         if self.fd is None:
             sys.stdout.write(block.decode())
         else:
-            encoding, errors = sys.stdout.encoding, sys.stdout.errors or "strict"
-            if codecs.lookup(encoding).name != "utf-8":
-                block = block.decode().encode(encoding, errors)
+            if self.encoding is not None:
+                block = block.decode().encode(self.encoding, self.errors)
             self._write_all(self.fd, block)
         self.lines += count
 
