@@ -15,7 +15,8 @@ line would pair with the next file), ``truth_lines_type`` (bytes lines, not str)
 and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its config model)
 (these two and ``simulator_name_type``, None, also where a dataset is read back),
 ``make_scene_raise`` and ``make_scene_type`` (the scene's truth, not the scene), both from the
-second scene of a horizon on (the first is written), ``files_type`` (a list of names), and
+second scene of a horizon on (the first is written), ``late_raise`` (``make_scene_raise`` from
+the sixth scene on), ``files_type`` (a list of names), and
 ``write_stats_raise``, ``write_stats_type`` (a str, not a list of them), ``write_stats_missing``
 (a path it never wrote), ``check_config_raise``, ``physics_raise``, ``physics_type`` (a NaN),
 ``new_tally_raise``, ``new_tally_type`` (a dict), the tally's ``tally_add_raise``,
@@ -192,7 +193,7 @@ class FlawedFamily(BilliardsFamily):
 
     def make_scene(self, config: Any, simulator: Any, seed: int, horizon: float, index: int) -> Any:
         made = super().make_scene(config, simulator, seed, horizon, index)
-        if index >= 1 and _flaw() == "make_scene_raise":
+        if index >= {"make_scene_raise": 1, "late_raise": 5}.get(_flaw(), index + 1):
             raise RuntimeError("make_scene exploded")
         if index >= 1 and _flaw() == "make_scene_type":
             return made.truth

@@ -22,7 +22,7 @@ from bpb_core.dataset.worker import (
     init_pool_worker,
     init_worker,
     remove_scene,
-    run_job,
+    run_jobs,
     started_pool,
 )
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
@@ -33,7 +33,7 @@ from bpb_core.simulator_spec import parse_spec
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
 
-CHUNK = 4
+RUN = 8  # scenes a worker makes, then draws, then writes in turn (worker.produce_many)
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
 WORKERS_PER_CORE = 4  # beyond, processes only queue for the cores, each with its own memory
 # 50 times the largest size in the docs (10,000 per horizon); 500,000 scenes over five horizons
@@ -225,7 +225,7 @@ def run_scenes(
     if stable_only:
         first = None
         if pooled(n_workers):
-            first = next(InProcess(setup).imap(run_job, [Job(hs[0], 0, keep_unstable=False)]))
+            first = next(_results(InProcess(setup), [Job(hs[0], 0, keep_unstable=False)]))
         with make_pool(n_workers, setup) as pool:
             for h in hs:
                 _run_stable(pool, setup, writer, h, per_horizon, progress, first)
@@ -242,9 +242,20 @@ def _stream(
     pool: Pool | InProcess, jobs: Iterable[Job], writer: DatasetWriter, progress: GenerateProgress
 ) -> None:
     """Run ``jobs`` on ``pool`` and hand each result to ``writer`` in job order."""
-    for result in pool.imap(run_job, jobs, chunksize=CHUNK):
+    for result in _results(pool, jobs):
         writer.add(result)
         progress.advance()
+
+
+def _results(pool: Pool | InProcess, jobs: Iterable[Job]) -> Iterator[SceneResult]:
+    """The results of ``jobs`` run on ``pool`` in runs of :data:`RUN`, in job order; a run's
+    error is raised after the results of the scenes before it."""
+    left = iter(jobs)
+    runs = iter(lambda: tuple(itertools.islice(left, RUN)), ())
+    for batch in pool.imap(run_jobs, runs):
+        yield from batch.results
+        if batch.error is not None:
+            raise batch.error
 
 
 def _run_stable(
@@ -270,7 +281,7 @@ def _run_stable(
         batch = [Job(h, i, keep_unstable=False) for i in range(start, start + size)]
         start += size
         ahead, first = [] if first is None else [first], None
-        made = pool.imap(run_job, batch[len(ahead) :], chunksize=CHUNK)
+        made = _results(pool, batch[len(ahead) :])
         for result in itertools.chain(ahead, made):
             if kept >= per_horizon:
                 if result.written:

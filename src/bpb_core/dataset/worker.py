@@ -1,8 +1,8 @@
 """One scene from seed to files: the family makes it, the worker writes and hashes it.
 
 Runs in the worker processes of :func:`bpb_core.dataset.generate.generate_dataset` (and
-in-process for ``workers=1``). Each call writes one scene folder and returns a small
-:class:`SceneResult`, so nothing accumulates in memory however large the dataset is.
+in-process for ``workers=1``). Each call writes a short run of scene folders and returns a small
+:class:`SceneResult` for each, so nothing accumulates in memory however large the dataset is.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import signal
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
+from multiprocessing.pool import ExceptionWithTraceback  # type: ignore[attr-defined]
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -155,10 +156,11 @@ def _ready() -> tuple[WorkerSetup, SceneFamily, Simulator]:
     return _SETUP, _STATE["family"], _STATE["simulator"]
 
 
-def run_job(job: Job) -> SceneResult:
-    """Produce one scene with the process's setup (see :func:`init_worker`)."""
+def run_jobs(jobs: tuple[Job, ...]) -> Batch:
+    """Produce a run of scenes with the process's setup (see :func:`init_worker` and
+    :func:`produce_many`)."""
     setup, family, simulator = _ready()
-    return produce(setup, family, simulator, job)
+    return produce_many(setup, family, simulator, jobs)
 
 
 def calibrate_job(horizon: float) -> tuple[float, Any]:
@@ -177,36 +179,107 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
         return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 
-def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
-    """Make, write and hash one scene; return its row and file hashes.
+@dataclass(frozen=True)
+class Batch:
+    """What a worker reports for a run of jobs: the results of the scenes it finished, in job
+    order, and the error that stopped it, if one did (the scenes before it are written and
+    listed, as when each scene is its own job).
 
-    Raises:
+    Pickled, the error carries its traceback's text as its cause, as a pool's own does
+    (:class:`multiprocessing.pool.ExceptionWithTraceback`)."""
+
+    results: tuple[SceneResult, ...]
+    error: Exception | None = None
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        error = self.error
+        if error is None:
+            return Batch, (self.results,)
+        return Batch, (self.results, ExceptionWithTraceback(error, error.__traceback__))
+
+
+def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
+    """Make, write and hash one scene; return its row and file hashes (raises as
+    :func:`produce_many`)."""
+    batch = produce_many(setup, family, simulator, (job,))
+    if batch.error is not None:
+        raise batch.error
+    return batch.results[0]
+
+
+def produce_many(
+    setup: WorkerSetup, family: SceneFamily, simulator: Simulator, jobs: tuple[Job, ...]
+) -> Batch:
+    """Make, write and hash a run of scenes; return their rows and file hashes.
+
+    Every scene is made before any is drawn, and all are drawn before any is written: each
+    step then runs on caches its own previous call warmed, not on what encoding a scene's
+    images left there (docs/benchmarks.md: about 4% less CPU for the paper-size dataset
+    with 8 scenes a run). The first error in scene order stops the run; the scenes before it
+    are finished and returned with it.
+
+    Errors (in :attr:`Batch.error`):
         BadInput: The config makes a scene the simulator cannot finish.
         WriteRefused: The system refused to write a scene file (names it).
         PluginBug: The family's ``make_scene()`` (or its scene's ``files()``) raised or
             returned something else than it should, naming the family's plugin.
     """
-    name = scene_id(job.horizon, job.index)
-    what = f"scene family {family.name!r}: make_scene({name!r})"
-    with _finishing(setup, what, f"config: scene {name}"):
-        made = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
-    row = IndexRow(name, job.horizon, job.index, *_cells(setup.origin, what, name, family, made))
-    if not job.keep_unstable and row.stable is False:
-        return SceneResult(row, ())
-    folder = scene_dir(setup.root, job.horizon, job.index)
+    made: list[tuple[Job, str, str, Any]] = []
+    error: Exception | None = None
+    for job in jobs:
+        name = scene_id(job.horizon, job.index)
+        what = f"scene family {family.name!r}: make_scene({name!r})"
+        try:
+            with _finishing(setup, what, f"config: scene {name}"):
+                scene = family.make_scene(
+                    setup.config, simulator, setup.seed, job.horizon, job.index
+                )
+        except Exception as exc:
+            error = exc
+            break
+        made.append((job, name, what, scene))
+    staged: list[tuple[IndexRow, dict[str, bytes] | None]] = []
+    for job, name, what, scene in made:  # an error here comes before the one above
+        try:
+            row = IndexRow(
+                name, job.horizon, job.index, *_cells(setup.origin, what, name, family, scene)
+            )
+            keep = job.keep_unstable or row.stable is not False
+            staged.append((row, _files(setup, what, scene) if keep else None))
+        except Exception as exc:
+            error = exc
+            break
+    results: list[SceneResult] = []
+    for row, files in staged:  # ... and here before both
+        try:
+            results.append(SceneResult(row, _written(setup, row, files)))
+        except Exception as exc:
+            error = exc
+            break
+    return Batch(tuple(results), error)
+
+
+def _written(
+    setup: WorkerSetup, row: IndexRow, files: dict[str, bytes] | None
+) -> tuple[tuple[str, str], ...]:
+    """Write a scene's ``files`` into its folder; their paths relative to the dataset and
+    hashes (none for a scene not kept)."""
+    if files is None:
+        return ()
+    folder = scene_dir(setup.root, row.horizon, row.index)
     try:
         os.mkdir(folder)  # one call once the horizon's folder is there
     except OSError:  # not yet, or already there, or refused: as Path.mkdir(parents=True) does
         with writing(folder):
             os.makedirs(folder, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
-    files = []
-    for file_name, data in _files(setup, what, made).items():
+    hashed = []
+    for file_name, data in files.items():
         path = os.path.join(folder, file_name)
         with writing(path):  # a full disk, a file size limit: the user's to fix
             write_file(path, data)
-        files.append((f"{rel}/{file_name}", sha256_bytes(data)))
-    return SceneResult(row, tuple(files))
+        hashed.append((f"{rel}/{file_name}", sha256_bytes(data)))
+    return tuple(hashed)
 
 
 _WRITING = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
