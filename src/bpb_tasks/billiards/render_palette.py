@@ -162,10 +162,20 @@ def _mapped_background(spec: CanvasSpec) -> Image.Image:
 
 @functools.cache
 def _legend_rows(spec: CanvasSpec) -> int:
-    """How many rows from the top hold the trajectory legend's pixels."""
-    img = background(spec).copy()
-    draw_legend(img, spec)
-    box = ImageChops.difference(img, background(spec)).getbbox()
+    """How many rows from the top hold the trajectory legend's pixels.
+
+    The legend lies in the header line, so it is drawn and compared over the top margin only
+    (84 of 780 rows by default; drawing clips at the band's edge and leaves the rows above as
+    on the whole canvas); a legend reaching the band's last row is measured on the whole canvas.
+    """
+    width, height = spec.size
+    for rows in (min(spec.top, height), height):
+        plain = background(spec).crop((0, 0, width, rows))
+        band = plain.copy()
+        draw_legend(band, spec)
+        box = ImageChops.difference(band, plain).getbbox()
+        if box is None or box[3] < rows:
+            break
     return 0 if box is None else box[3]
 
 

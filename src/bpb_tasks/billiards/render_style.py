@@ -73,8 +73,13 @@ def font(size: int, bold: bool = False) -> Font:
 def ball_sprite(ball_id: int, radius_px: float, alpha: int = 255) -> Image.Image:
     """An RGBA sprite of ball ``ball_id``: coloured disc, dark rim, white badge with the id.
 
-    The ball's centre is the centre of the sprite, whose side is odd.
+    The ball's centre is the centre of the sprite, whose side is odd. A faded sprite is the
+    opaque one with its alpha scaled (not drawn again: the trajectory image fades every ball).
     """
+    if alpha < 255:
+        faded = ball_sprite(ball_id, radius_px).copy()  # the cached one stays opaque
+        faded.putalpha(faded.getchannel("A").point(lambda a: a * alpha // 255))
+        return faded
     side = int(2 * radius_px + 4) | 1
     big = side * SUPERSAMPLE
     r = radius_px * SUPERSAMPLE
@@ -90,7 +95,4 @@ def ball_sprite(ball_id: int, radius_px: float, alpha: int = 255) -> Image.Image
         draw.ellipse((c - badge, c - badge, c + badge, c + badge), fill=(*PAGE, 255))
     label = font(max(1, round(r * (0.95 if ball_id < 10 else 0.72))), bold=True)
     draw.text((c, c + 0.04 * r), str(ball_id), fill=(*INK, 255), font=label, anchor="mm")
-    small = img.resize((side, side), Image.Resampling.LANCZOS)
-    if alpha < 255:
-        small.putalpha(small.getchannel("A").point(lambda a: a * alpha // 255))
-    return small
+    return img.resize((side, side), Image.Resampling.LANCZOS)
