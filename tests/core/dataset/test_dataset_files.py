@@ -170,30 +170,3 @@ def test_stable_only_keeps_stable_scenes_and_counts_the_dropped(tmp_path: Path) 
     kept = {int(r["index"]) for r in rows}
     folders = {int(p.name.split("_")[1]) for p in (out / "h1").iterdir()}
     assert folders == kept
-
-
-def test_manifest_versions_are_the_installed_distributions(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """dataset.json's versions are importlib.metadata's, read from the metadata's headers
-    only: a ``Version:`` line in a long description is not the version."""
-    from importlib import metadata
-
-    from bpb_core.dataset import writer
-
-    info = tmp_path / "bpb_fake_dist-1.2.3.dist-info"
-    info.mkdir()
-    body = "Metadata-Version: 2.1\nName: bpb-fake-dist\nVersion: 1.2.3\n\nVersion: 9.9\n"
-    (info / "METADATA").write_text(body)
-    monkeypatch.syspath_prepend(str(tmp_path))
-    names = (*writer.VERSIONED, "bpb-fake-dist", "bpb-not-installed")
-    monkeypatch.setattr(writer, "VERSIONED", names)
-    installed = {}
-    for name in names:
-        try:
-            installed[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
-    found = writer.versions()
-    assert found.pop("python")
-    assert found == installed and found["bpb-fake-dist"] == "1.2.3" and "pillow" in found
