@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, write_refused, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -276,8 +276,10 @@ def _written(
     hashed = []
     for file_name, data in files.items():
         path = os.path.join(folder, file_name)
-        with writing(path):  # a full disk, a file size limit: the user's to fix
+        try:
             write_file(path, data)
+        except OSError as exc:  # a full disk, a file size limit: the user's to fix
+            raise write_refused(path, exc) from None  # as writing() does, without its frame
         hashed.append((f"{rel}/{file_name}", sha256_bytes(data)))
     return tuple(hashed)
 
