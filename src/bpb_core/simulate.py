@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import gc
 import math
 import os
 import stat
@@ -24,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.dataset.jobs import check_workers
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_family, dataset_simulator_spec
-from bpb_core.dataset.worker import started_pool, worker_signals
+from bpb_core.dataset.worker import collector_paused, started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
@@ -445,7 +444,7 @@ def simulate_blocks(
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
     check_workers(workers, least=0)
     try:
-        with _collector_paused():  # ten thousand names: see _collector_paused
+        with collector_paused():  # ten thousand names: see collector_paused
             files = _scene_names(paths, ahead=True)
         job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]], names)
         count = _worker_count(workers, len(files))
@@ -496,7 +495,7 @@ def _lines(files: Sequence[str]) -> tuple[list[str] | bytes, BadInput | None]:
     job, horizon, stability = _JOB
     texts: list[bytes] = []  # the ordinary path takes these bytes: a pipe is read only once
     if not stability and isinstance(job.family, WritesTruthLines):
-        with _collector_paused():
+        with collector_paused():
             texts = _read_all(files)
             try:
                 fast = _truth_lines(job, job.family, texts, horizon) if texts else []
@@ -555,26 +554,6 @@ def _checked_block(block: bytes, files: int, who: str) -> bytes:
         except UnicodeDecodeError as exc:
             raise PluginBug(f"{who} returned a block that is not UTF-8 ({exc.reason})") from None
     return block
-
-
-@contextlib.contextmanager
-def _collector_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector over one chunk of the batch path, or over listing
-    the scene files (restored after).
-
-    Both make thousands of small containers that stay alive until the work is done, so the
-    collector would run every few hundred of them and each time walk every object the imports
-    made (numba, pydantic, numpy): measured, that was about a third of the whole per-scene
-    cost, and listing a 10,000-scene dataset spent more time in collections than in listing.
-    Nothing made here needs the collector: it holds no reference cycles and is freed by
-    reference counting."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _read_all(files: Sequence[str]) -> list[bytes]:

@@ -10,6 +10,7 @@ picture and the simulator comparison of ``bpb bench sim``.
 
 from __future__ import annotations
 
+import functools
 import math
 import random
 from collections.abc import Mapping, Sequence
@@ -76,6 +77,12 @@ class MadeScene:
 
             blobs.update(render_pngs(self.scene, self.outcome, self.config))
         return blobs
+
+
+@functools.lru_cache(maxsize=64)
+def _simulator_name(spec: str) -> str:
+    """The simulator's name in a config's ``simulator`` spec (parsed once, not per scene)."""
+    return parse_spec(spec, "simulator").name
 
 
 @dataclass
@@ -169,7 +176,7 @@ class BilliardsFamily:
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
         load_kernel(simulator)  # the first scene runs as the later ones: all code built at once
         outcome: Outcome = simulator.run(scene)
-        final = final_state(scene, outcome, parse_spec(config.simulator, "simulator").name)
+        final = final_state(scene, outcome, _simulator_name(config.simulator))
         stability = annotate(
             scene,
             outcome,

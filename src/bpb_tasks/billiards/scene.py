@@ -80,13 +80,6 @@ class Ball(StrictModel):
     pos: Vec
     vel: Vec = (0.0, 0.0)
 
-    @field_validator("pos", "vel")
-    @classmethod
-    def _finite(cls, value: Vec) -> Vec:
-        if not all(math.isfinite(c) for c in value):
-            raise ValueError("must be finite numbers")
-        return value
-
     @field_validator("vel")
     @classmethod
     def _speed(cls, value: Vec) -> Vec:

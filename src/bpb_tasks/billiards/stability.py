@@ -257,18 +257,22 @@ def perturbation_arrays(
     arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_draws.perturb`, the
     same values to the bit; a test compares) instead of a Python call per draw and numpy
     operations."""
+    seed = f"{stream}:{scene.scene_id}"
+    if compiled:
+        from bpb_tasks.billiards.stability_draws import perturb, seed_key
+        from bpb_tasks.simulators.analytic.compiled import scene_arrays
+
+        ids, centres, velocities = scene_arrays(scene)  # the nominal run's, kept
+        cue = ids.index(CUE_ID) if CUE_ID in ids else -1
+        kick = delta * math.hypot(*scene.ball(CUE_ID).vel) if cue >= 0 else 0.0
+        pos, vel = perturb(seed_key(seed), samples, centres, velocities, delta, cue, kick)
+        return ids, pos, vel
     balls = sorted(scene.balls, key=lambda b: b.id)
     ids = [b.id for b in balls]
     cue = ids.index(CUE_ID) if CUE_ID in ids else -1
     kick = delta * math.hypot(*balls[cue].vel) if cue >= 0 else 0.0
     centres = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     velocities = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
-    seed = f"{stream}:{scene.scene_id}"
-    if compiled:
-        from bpb_tasks.billiards.stability_draws import perturb, seed_key
-
-        pos, vel = perturb(seed_key(seed), samples, centres, velocities, delta, cue, kick)
-        return ids, pos, vel
     rng = random.Random(seed)
     count = samples * (len(balls) + 1)
     draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row

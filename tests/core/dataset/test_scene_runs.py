@@ -5,6 +5,7 @@ traceback behind it."""
 
 from __future__ import annotations
 
+import gc
 import hashlib
 import traceback
 from pathlib import Path
@@ -12,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import support.flawed_family
-from bpb_core.dataset import generate_dataset
+from bpb_core.dataset import generate_dataset, worker
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, make_registry
 
@@ -38,3 +39,26 @@ def test_a_scene_failing_mid_run_leaves_the_scenes_before_it_listed_and_whole(
     assert len(sums) == 5 * 2  # init.json and final.json of each
     for digest, rel in sums:
         assert hashlib.sha256((partial / rel).read_bytes()).hexdigest() == digest
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_runs_in_this_process_leave_the_garbage_collector_as_they_found_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, enabled: bool
+) -> None:
+    """A run pauses the collector (worker.collector_paused); a library caller's is left
+    enabled or disabled as it was, also when the run is interrupted."""
+    seen: list[bool] = []
+
+    def interrupted(*args: object) -> None:
+        seen.append(gc.isenabled())
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(worker, "produce_many", interrupted)
+    (gc.enable if enabled else gc.disable)()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            generate_dataset(tmp_path / "data", 2, (1.0,), 0, workers=1, images=False)
+        assert gc.isenabled() is enabled
+    finally:
+        gc.enable()
+    assert seen == [False]

@@ -71,6 +71,25 @@ def test_kernel_outcome_is_the_reference_outcome() -> None:
     assert KERNEL.run(s) == PYTHON.run(s)  # events, segments and positions, bit for bit here
 
 
+def test_kernel_runs_scenes_of_other_tables_in_turn_on_their_own_tables() -> None:
+    """The kernel's table constants and ball arrays are kept between calls; a scene of another
+    table, physics or pockets runs on its own, and so does a scene whose pocket or ball list
+    was edited in place."""
+    balls = [(0.4, 0.45, 3.0, 1.1), (1.0, 0.6, 0.0, 0.0), (1.3, 0.3, 0.0, 0.0)]
+    wide = scene(balls, horizon=4)
+    narrow = scene(balls, horizon=4, width=1.5, mu=0.004, pocket_radius=0.08)
+    assert KERNEL.run(wide).positions != KERNEL.run(narrow).positions
+    for s in (wide, narrow, wide, narrow):
+        assert_same(PYTHON.run(s), KERNEL.run(s))
+    narrow.pockets.centers[:] = [(0.7, 0.56)]  # in the cue ball's way
+    assert_same(PYTHON.run(narrow), KERNEL.run(narrow))
+    assert KERNEL.run(narrow).positions[0] is None
+    before = KERNEL.run(wide)
+    wide.balls[0] = wide.balls[0].model_copy(update={"vel": (-3.0, 1.1)})  # the same scene
+    assert_same(PYTHON.run(wide), KERNEL.run(wide))
+    assert KERNEL.run(wide).positions != before.positions
+
+
 def test_simulate_many_matches_single_runs_and_horizons() -> None:
     scenes = random_scenes(13, 40)
     horizons = [0.5 + 0.1 * i for i in range(40)]

@@ -22,6 +22,7 @@ from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
 from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
 KINDS = ("ball", "wall", "pocket", "stop")
+SceneArrays = tuple[list[int], np.ndarray, np.ndarray]
 AVAILABLE = HAVE_NUMBA
 
 
@@ -31,10 +32,29 @@ class KernelBudgetError(BpbError):
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """The kernel's table constants and pocket centres of ``scene`` (same arithmetic as the
-    reference ``Predictor``)."""
-    phys, radius = scene.physics, scene.physics.ball_radius
+    reference ``Predictor``); shared by the calls for scenes of one table, physics and pockets
+    (a generated scene's nominal run, perturbed copies and horizon gap all take them): read
+    them, never write."""
+    table, physics, pockets = scene.table, scene.physics, scene.pockets
+    kept = _PARAMS.get((id(table), id(physics), id(pockets)))
+    if kept is not None and kept[0] == pockets.centers:  # the list could change in place
+        return kept[1]
+    made = _table_params(table, physics, pockets)
+    if len(_PARAMS) >= 64:
+        _PARAMS.clear()
+    _PARAMS[id(table), id(physics), id(pockets)] = (list(pockets.centers), made, scene)
+    return made
+
+
+_PARAMS: dict[tuple[int, int, int], tuple[list[Any], tuple[np.ndarray, np.ndarray], Any]] = {}
+""":func:`table_params` by the ids of a scene's table, physics and pockets, with the pocket
+centres they were made from and the scene (holding the three, so their ids stay theirs)."""
+
+
+def _table_params(table: Any, phys: Any, pockets: Any) -> tuple[np.ndarray, np.ndarray]:
+    radius = phys.ball_radius
     decel = phys.mu * phys.g
-    r = scene.pockets.radius
+    r = pockets.radius
     prm = np.array(
         [
             decel,
@@ -43,24 +63,36 @@ def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             2 * radius,
             1e-9,
             radius,
-            scene.table.width - radius,
+            table.width - radius,
             radius,
-            scene.table.height - radius,
+            table.height - radius,
             phys.wall_restitution,
             r,
             r * r,
         ]
     )
-    pockets = np.array(scene.pockets.centers, dtype=float).reshape(-1, 2)
-    return prm, pockets
+    return prm, np.array(pockets.centers, dtype=float).reshape(-1, 2)
 
 
-def scene_arrays(scene: Scene) -> tuple[list[int], np.ndarray, np.ndarray]:
-    """Ball ids (sorted), positions and velocities of ``scene``."""
+def scene_arrays(scene: Scene) -> SceneArrays:
+    """Ball ids (sorted), positions and velocities of ``scene``; the last scene's are kept for
+    its next call (its nominal run, perturbed copies and horizon gap): read them, never
+    write."""
+    global _LAST
+    last = _LAST
+    if last[0] is scene and last[1] == scene.balls:  # the list could change in place
+        return last[2]
     balls = sorted(scene.balls, key=lambda b: b.id)
     pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
-    return [b.id for b in balls], pos, vel
+    made = [b.id for b in balls], pos, vel
+    _LAST = scene, list(scene.balls), made
+    return made
+
+
+_LAST: tuple[object, list[Any], SceneArrays] = (None, [], ([], np.zeros((0, 2)), np.zeros((0, 2))))
+"""The scene :func:`scene_arrays` was last called for (held, so no other takes its id), its
+balls and its arrays."""
 
 
 def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
