@@ -240,8 +240,8 @@ def produce_many(
     Every scene is made before any is drawn, and all are drawn before any is written: each
     step then runs on caches its own previous call warmed, not on what encoding a scene's
     images left there (docs/benchmarks.md, generation, stop 30: in one warm process the work
-    beside encoding took about a tenth less with runs of 8). The first error in scene order stops the run; the scenes before it
-    are finished and returned with it.
+    beside encoding took about a tenth less with runs of 8). The first error in scene order
+    stops the run; the scenes before it are finished and returned with it.
 
     Errors (in :attr:`Batch.error`):
         BadInput: The config makes a scene the simulator cannot finish.
