@@ -2,9 +2,10 @@
 encoding its PNGs alone, measured in one process, rounds interleaved.
 
 Usage: ``python scripts/generate_cpu.py [ROUNDS]``. Generation runs in this process
-(``workers=1``), so ``time.process_time`` holds all of its CPU. The encoding baseline decodes the
-dataset's own PNGs first (not counted), then encodes every one of them as bpb stores them
-(8-bit palette, zlib level 1) and counts only that.
+(``workers=1``), so ``time.process_time`` holds all of its CPU. The encoding baselines decode the
+dataset's own PNGs first (not counted), then encode every one of them and count only that: once
+with Pillow (8-bit palette, zlib level 1: how bpb stored them until stop 31, the yardstick of
+issue 12), once with bpb's own writer (zlib-ng, its default level: how bpb stores them now).
 
 Generation's CPU is also split into user and system time: creating files costs system time,
 and on some file systems far more than on others (on the benchmark machine creating a file in
@@ -24,10 +25,12 @@ from pathlib import Path
 from PIL import Image
 
 from bpb_core.dataset import generate_dataset
+from bpb_core.png import DEFAULT_LEVEL, encode_palette_png
 
 
-def encode_cpu(paths: list[Path]) -> float:
-    """CPU seconds to encode the images at ``paths`` (decoded beforehand, not counted)."""
+def encode_cpu(paths: list[Path]) -> tuple[float, float]:
+    """CPU seconds to encode the images at ``paths`` (decoded beforehand, not counted) with
+    Pillow at zlib level 1 and with bpb's writer."""
     images: list[Image.Image] = []
     for path in paths:
         with Image.open(path) as opened:
@@ -36,7 +39,11 @@ def encode_cpu(paths: list[Path]) -> float:
     started = time.process_time()
     for img in images:
         img.save(io.BytesIO(), format="PNG", compress_level=1)
-    return time.process_time() - started
+    pillow = time.process_time() - started
+    started = time.process_time()
+    for img in images:
+        encode_palette_png(img, DEFAULT_LEVEL)
+    return pillow, time.process_time() - started
 
 
 def main(rounds: int) -> None:
@@ -51,11 +58,12 @@ def main(rounds: int) -> None:
             system = after.ru_stime - before.ru_stime
             paths = sorted(Path(root).rglob("*.png"))
             paths = [p for p in paths if p.parent.name.startswith("scene_")]
-            encode = encode_cpu(paths)
+            pillow, own = encode_cpu(paths)
         print(
-            f"round {r + 1}: generate {generate:.1f} s CPU ({generate - system:.1f} user, "
-            f"{system:.1f} system), encoding its {len(paths)} PNGs alone {encode:.1f} s CPU, "
-            f"ratio {generate / encode:.2f} (user time only {(generate - system) / encode:.2f})",
+            f"round {r + 1}: generate {generate:.2f} s CPU ({generate - system:.2f} user, "
+            f"{system:.2f} system); encoding its {len(paths)} PNGs alone: Pillow {pillow:.2f} s "
+            f"CPU, ratio {generate / pillow:.3f}; bpb's writer {own:.2f} s, ratio "
+            f"{generate / own:.3f}; beside bpb's encoding {generate - own:.2f} s",
             flush=True,
         )
 

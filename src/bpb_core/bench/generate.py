@@ -1,4 +1,4 @@
-"""``bpb bench generate``: dataset generation time beside Pillow encoding alone, and memory.
+"""``bpb bench generate``: dataset generation time beside PNG encoding alone, and memory.
 
 All timings of one call run on the same machine in one process tree, one after the other, with
 the same number of worker processes, so machine noise hits them alike:
@@ -8,10 +8,13 @@ the same number of worker processes, so machine noise hits them alike:
 * ``generate --no-images``: the same without images (what rendering costs is the difference);
 * ``pillow default``: Pillow alone encoding as many images of the same size, RGB with Pillow's
   default PNG settings (what a straightforward renderer pays just to save files);
-* ``pillow palette``: the same images encoded as 8-bit palette PNGs at zlib level 1.
+* ``pillow palette``: the same images encoded by Pillow as 8-bit palette PNGs at zlib level 1
+  (how bpb stored them until it wrote them with zlib-ng);
+* ``bpb palette``: the same images written by :func:`bpb_core.png.encode_palette_png` at its
+  default level (how the built-in family stores them now).
 
-The images encoded by the Pillow baselines are the dataset's own (its family's
-``image_names``, decoded). A family without images gets no Pillow rows.
+The images encoded by these baselines are the dataset's own (its family's ``image_names``,
+decoded). A family without images gets no encoding rows.
 """
 
 from __future__ import annotations
@@ -27,11 +30,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from multiprocessing.pool import Pool
 from pathlib import Path
+from typing import Literal
 
 from PIL import Image
 
 from bpb_core.bench.children import run_child
 from bpb_core.dataset.worker import started_pool, worker_signals
+from bpb_core.png import DEFAULT_LEVEL, encode_palette_png
 
 SAMPLE_IMAGES = 24
 
@@ -47,7 +52,8 @@ class GenerateTiming:
     generate_s: float
     no_images_s: float
     pillow_default_s: float | None
-    pillow_bpb_s: float | None
+    pillow_palette_s: float | None
+    bpb_palette_s: float | None
 
     @property
     def images_per_scene(self) -> float:
@@ -66,26 +72,37 @@ class MemoryUse:
     worker_mib: float | None
 
 
-def _encode_share(args: tuple[list[bytes], int, bool, int]) -> int:
+Encoder = Literal["pillow default", "pillow palette", "bpb palette"]
+
+
+def _encode_share(args: tuple[list[bytes], int, Encoder]) -> int:
     """Encode ``count`` images cycling through ``sources``; return total bytes written."""
-    sources, count, as_bpb, level = args
-    images = [Image.open(io.BytesIO(data)) for data in sources]
-    rgb = [img.convert("RGB") for img in images]
-    palette = [img.convert("P") if img.mode != "P" else img for img in images]
+    sources, count, how = args
+    images: list[Image.Image] = [Image.open(io.BytesIO(data)) for data in sources]
+    if how == "pillow default":
+        images = [img.convert("RGB") for img in images]
+    else:
+        images = [img.convert("P") if img.mode != "P" else img for img in images]
+        for img in images:
+            img.load()
     total = 0
     for i in range(count):
+        img = images[i % len(images)]
+        if how == "bpb palette":
+            total += len(encode_palette_png(img, DEFAULT_LEVEL))
+            continue
         out = io.BytesIO()
-        if as_bpb:
-            palette[i % len(palette)].save(out, format="PNG", compress_level=level)
+        if how == "pillow palette":
+            img.save(out, format="PNG", compress_level=1)
         else:
-            rgb[i % len(rgb)].save(out, format="PNG")
+            img.save(out, format="PNG")
         total += out.tell()
     return total
 
 
-def _pillow_seconds(sources: list[bytes], count: int, workers: int, as_bpb: bool) -> float:
+def _encode_seconds(sources: list[bytes], count: int, workers: int, how: Encoder) -> float:
     shares = [count // workers + (1 if i < count % workers else 0) for i in range(workers)]
-    jobs = [(sources, n, as_bpb, 1) for n in shares]
+    jobs = [(sources, n, how) for n in shares]
     # Ctrl-C: the parent stops them
     with started_pool(lambda: Pool(workers, initializer=worker_signals)) as pool:
         started = time.perf_counter()
@@ -117,7 +134,7 @@ def measure_generate(
     seed: int = 0,
     workers: int | None = None,
 ) -> GenerateTiming:
-    """Time a dataset generation against Pillow-only encoding of as many images (see module)."""
+    """Time a dataset generation against encoding as many images alone (see module)."""
     from bpb_core.dataset import generate_dataset
 
     n_workers = workers or os.cpu_count() or 1
@@ -136,7 +153,7 @@ def measure_generate(
         sources = [p.read_bytes() for p in images[:SAMPLE_IMAGES]]
     scenes, count = per_horizon * len(horizons), len(images)
     if not sources:
-        return GenerateTiming(scenes, 0, n_workers, None, generate_s, no_images_s, None, None)
+        return GenerateTiming(scenes, 0, n_workers, None, generate_s, no_images_s, None, None, None)
     with Image.open(io.BytesIO(sources[0])) as first:
         size = first.size
     return GenerateTiming(
@@ -146,8 +163,9 @@ def measure_generate(
         size=size,
         generate_s=generate_s,
         no_images_s=no_images_s,
-        pillow_default_s=_pillow_seconds(sources, count, n_workers, as_bpb=False),
-        pillow_bpb_s=_pillow_seconds(sources, count, n_workers, as_bpb=True),
+        pillow_default_s=_encode_seconds(sources, count, n_workers, "pillow default"),
+        pillow_palette_s=_encode_seconds(sources, count, n_workers, "pillow palette"),
+        bpb_palette_s=_encode_seconds(sources, count, n_workers, "bpb palette"),
     )
 
 

@@ -26,7 +26,7 @@ from bpb_core.dataset.worker import SceneResult
 from bpb_core.errors import writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
-VERSIONED = ("bpb", "pydantic", "pillow", "matplotlib", "numpy")
+VERSIONED = ("bpb", "pydantic", "pillow", "zlib-ng", "matplotlib", "numpy")
 
 
 @dataclass

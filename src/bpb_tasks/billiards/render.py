@@ -8,13 +8,13 @@ size, scale and ball radius, so they overlay exactly. They are drawn in palette 
 from __future__ import annotations
 
 import functools
-import io
 import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw
 
+from bpb_core.png import encode_palette_png
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
@@ -217,10 +217,9 @@ def _speed_label(
 
 
 def encode_png(img: Image.Image, level: int) -> bytes:
-    """PNG bytes of a palette image (deterministic for equal input)."""
-    out = io.BytesIO()
-    img.save(out, format="PNG", compress_level=level)
-    return out.getvalue()
+    """PNG bytes of a palette image, deflated by zlib-ng at ``level`` (deterministic for equal
+    input; see :mod:`bpb_core.png`)."""
+    return encode_palette_png(img, level)
 
 
 def render_pngs(scene: Scene, outcome: Outcome, config: DatasetConfig) -> dict[str, bytes]:

@@ -1,4 +1,4 @@
-"""``bpb bench generate``: generation seconds beside Pillow-only encoding; optional memory."""
+"""``bpb bench generate``: generation seconds beside PNG encoding alone; optional memory."""
 
 from __future__ import annotations
 
@@ -22,13 +22,14 @@ import click
     help="Also measure peak RSS at these per-horizon sizes, e.g. 200,2000 (each at most 100,000).",
 )
 def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
-    """Seconds for a dataset (1,000 scenes by default) beside Pillow encoding alone."""
+    """Seconds for a dataset (1,000 scenes by default) beside PNG encoding alone."""
     from rich.table import Table
 
     from bpb_core.bench.generate import measure_generate, measure_memory
     from bpb_core.cli.console import stdout
     from bpb_core.dataset.jobs import check_per_horizon, check_workers
     from bpb_core.errors import BadInput
+    from bpb_core.png import DEFAULT_LEVEL
 
     try:
         sizes = [int(x) for x in memory.split(",") if x.strip()]
@@ -47,7 +48,8 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
         (f"bpb generate (scenes, truth, {t.images_per_scene:g} images per scene)", t.generate_s),
         ("bpb generate --no-images", t.no_images_s),
         (f"Pillow alone: {t.images} RGB PNGs, default settings", t.pillow_default_s),
-        (f"Pillow alone: {t.images} palette PNGs, zlib level 1", t.pillow_bpb_s),
+        (f"Pillow alone: {t.images} palette PNGs, zlib level 1", t.pillow_palette_s),
+        (f"bpb's writer: {t.images} palette PNGs, zlib-ng level {DEFAULT_LEVEL}", t.bpb_palette_s),
     ]
     for name, seconds in rows:
         if seconds is not None:
