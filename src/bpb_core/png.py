@@ -7,9 +7,11 @@ in about a third of the time (docs/benchmarks.md, dataset generation). The file 
 PNG (8-bit palette, no filter, not interlaced) that any decoder reads to the same pixels as
 Pillow's file of the same image.
 
-The pixel rows come out of Pillow with a zero byte after each (its raw encoder's stride), which
-is the filter byte of the next row, so the data PNG wants is one leading zero and those bytes
-without their last: no copy in Python.
+The data PNG deflates is each row behind its filter byte (0, none). The image's rows are copied
+once, by Pillow's core, into a zeroed buffer mapped as an image whose rows lie one byte apart
+(``Image.frombuffer`` with a stride of width + 1, at an offset of one byte), so the zeros between
+them are the filter bytes: 0.13 ms for a 1364 x 780 image, where ``Image.tobytes`` alone takes
+about 1 ms.
 """
 
 from __future__ import annotations
@@ -37,6 +39,16 @@ def _header(img: Image.Image) -> bytes:
     return b"".join((SIGNATURE, _chunk(b"IHDR", ihdr), _chunk(b"PLTE", plte)))
 
 
+def filtered_rows(img: Image.Image) -> bytearray:
+    """The rows of an 8-bit image, each behind a zero (its PNG filter byte), and one more zero
+    at the end (not part of the PNG data)."""
+    width, height = img.size
+    rows = bytearray(height * (width + 1) + 1)
+    mapped = Image.frombuffer("P", img.size, memoryview(rows)[1:], "raw", "P", width + 1, 1)
+    mapped.im.paste(img.im, (0, 0, width, height))  # the core's copy: writes into ``rows``
+    return rows
+
+
 def encode_palette_png(img: Image.Image, level: int) -> bytes:
     """PNG bytes of a palette image, deflated by zlib-ng at ``level`` (0-9; deterministic for
     equal input and zlib-ng version).
@@ -50,8 +62,8 @@ def encode_palette_png(img: Image.Image, level: int) -> bytes:
             f"encode_palette_png: expected an opaque palette (P) image, got mode {img.mode}"
             + (" with transparency" if "transparency" in img.info else "")
         )
-    width = img.width
-    rows = img.tobytes("raw", "P", width + 1)  # each row followed by a zero: the next filter
+    img.load()
+    rows = filtered_rows(img)
     deflate = zlib_ng.compressobj(level, zlib_ng.DEFLATED, 15, 9)
-    data = deflate.compress(b"\x00") + deflate.compress(memoryview(rows)[:-1]) + deflate.flush()
+    data = deflate.compress(memoryview(rows)[:-1]) + deflate.flush()
     return b"".join((_header(img), _chunk(b"IDAT", data), _chunk(b"IEND", b"")))
