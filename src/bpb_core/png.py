@@ -39,15 +39,59 @@ def _header(img: Image.Image) -> bytes:
     return b"".join((SIGNATURE, _chunk(b"IHDR", ihdr), _chunk(b"PLTE", plte)))
 
 
+def _mapped(rows: bytearray, size: tuple[int, int]) -> Image.Image:
+    """A palette image whose pixels are ``rows`` as :func:`filtered_rows` lays them out
+    (shared, not copied; read-only to Pillow until told otherwise)."""
+    at_one = memoryview(rows)[1:]  # any buffer maps; Pillow's annotation names fewer types
+    return Image.frombuffer("P", size, at_one, "raw", "P", size[0] + 1, 1)  # type: ignore[arg-type]
+
+
 def filtered_rows(img: Image.Image) -> bytearray:
     """The rows of an 8-bit image, each behind a zero (its PNG filter byte), and one more zero
     at the end (not part of the PNG data)."""
     width, height = img.size
     rows = bytearray(height * (width + 1) + 1)
-    at_one = memoryview(rows)[1:]  # any buffer maps; Pillow's annotation names fewer types
-    mapped = Image.frombuffer("P", img.size, at_one, "raw", "P", width + 1, 1)  # type: ignore[arg-type]
-    mapped.im.paste(img.im, (0, 0, width, height))  # the core's copy: writes into ``rows``
+    # the core's copy writes into ``rows``
+    _mapped(rows, img.size).im.paste(img.im, (0, 0, width, height))
     return rows
+
+
+class RowImage:
+    """A palette image drawn in place in the data its PNG deflates.
+
+    Made from the :func:`filtered_rows` of a template (a background, say) and its palette, its
+    :attr:`image` is an ordinary Pillow image to draw on, whose pixels are those rows: encoding
+    it copies nothing, and making it copies the template once (``bytearray``), where copying
+    the template image and then its rows into PNG order copied twice.
+
+    Pillow treats an image on a shared buffer as read-only and copies it on the first drawing;
+    this one is marked writable (the buffer is ours and mutable). Should a Pillow version copy
+    it anyway, :meth:`encode` sees that the image no longer holds the rows and encodes the
+    image itself (:func:`encode_palette_png`): the file is right either way.
+    """
+
+    def __init__(self, rows: bytes | bytearray, size: tuple[int, int], palette: bytes) -> None:
+        self._rows = bytearray(rows)
+        if len(self._rows) != size[1] * (size[0] + 1) + 1:
+            raise ValueError(f"RowImage: {len(rows)} bytes are not the rows of a {size} image")
+        self.image = _mapped(self._rows, size)
+        self.image.readonly = False  # drawn on in place (see the class docstring)
+        self.image.putpalette(palette)
+        self._core = self.image.im
+
+    def encode(self, level: int) -> bytes:
+        """PNG bytes of :attr:`image` as drawn, at zlib-ng ``level`` (the same bytes as
+        :func:`encode_palette_png` of the image)."""
+        if self.image.im is not self._core or "transparency" in self.image.info:
+            return encode_palette_png(self.image, level)
+        return _png(self.image, self._rows, level)
+
+
+def _png(img: Image.Image, rows: bytearray, level: int) -> bytes:
+    """The PNG file of ``img`` whose :func:`filtered_rows` are ``rows``."""
+    deflate = zlib_ng.compressobj(level, zlib_ng.DEFLATED, 15, 9)
+    data = deflate.compress(memoryview(rows)[:-1]) + deflate.flush()
+    return b"".join((_header(img), _chunk(b"IDAT", data), _chunk(b"IEND", b"")))
 
 
 def encode_palette_png(img: Image.Image, level: int) -> bytes:
@@ -64,7 +108,4 @@ def encode_palette_png(img: Image.Image, level: int) -> bytes:
             + (" with transparency" if "transparency" in img.info else "")
         )
     img.load()
-    rows = filtered_rows(img)
-    deflate = zlib_ng.compressobj(level, zlib_ng.DEFLATED, 15, 9)
-    data = deflate.compress(memoryview(rows)[:-1]) + deflate.flush()
-    return b"".join((_header(img), _chunk(b"IDAT", data), _chunk(b"IEND", b"")))
+    return _png(img, filtered_rows(img), level)

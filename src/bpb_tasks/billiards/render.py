@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw
 
-from bpb_core.png import encode_palette_png
+from bpb_core.png import RowImage, encode_palette_png, filtered_rows
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
@@ -91,13 +91,18 @@ def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
 def render_init(scene: Scene, spec: CanvasSpec) -> Image.Image:
     """The initial state: balls, then the cue velocity arrow above them (shortened to stay on
     the cloth, off rails and pockets) and its speed in m/s."""
-    img = base(spec, "Initial state, t = 0 s").copy()
+    return _init_page(scene, spec).image
+
+
+def _init_page(scene: Scene, spec: CanvasSpec) -> RowImage:
+    page = _page(spec, "Initial state, t = 0 s")
+    img = page.image
     paste_balls(img, spec, ((ball.id, ball.pos) for ball in scene.balls))
     label = _draw_velocity(img, spec, scene)
     if label is not None:
         _speed_label(img, spec, *label)
     header_note(img, spec, speed_note(math.hypot(*scene.ball(CUE_ID).vel)))
-    return img
+    return page
 
 
 def speed_note(speed: float) -> str:
@@ -107,7 +112,12 @@ def speed_note(speed: float) -> str:
 
 def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
     """The state at the horizon; pocketed balls are absent and listed in the header."""
-    img = base(spec, f"State at t = {outcome.horizon:g} s").copy()
+    return _final_page(scene, outcome, spec).image
+
+
+def _final_page(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> RowImage:
+    page = _page(spec, f"State at t = {outcome.horizon:g} s")
+    img = page.image
     at = [
         (ball.id, outcome.positions.get(ball.id))
         for ball in sorted(scene.balls, key=lambda b: b.id)
@@ -118,19 +128,39 @@ def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Imag
     header_note(
         img, spec, f"pocketed: {noun} {', '.join(pocketed)}" if pocketed else "no ball pocketed"
     )
-    return img
+    return page
 
 
 def render_trajectory(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
     """Paths over [0, horizon], start positions faded, end positions solid, then the contact
     and pocketing markers above everything."""
-    img = base(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True).copy()
+    return _trajectory_page(scene, outcome, spec).image
+
+
+def _trajectory_page(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> RowImage:
+    page = _page(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True)
+    img = page.image
     paste_balls(img, spec, ((ball.id, ball.pos) for ball in scene.balls), alpha=GHOST_ALPHA)
     draw_paths(img, spec, palette_for(spec), outcome)
     ends = ((ball.id, outcome.positions.get(ball.id)) for ball in scene.balls)
     paste_balls(img, spec, ((i, pos) for i, pos in ends if pos is not None))
     draw_markers(img, spec, palette_for(spec), outcome)
-    return img
+    return page
+
+
+def _page(spec: CanvasSpec, header: str, legend: bool = False) -> RowImage:
+    """A fresh image of the base with ``header`` (and the legend), drawn in place in its PNG
+    rows (:class:`~bpb_core.png.RowImage`)."""
+    rows, palette = _base_rows(spec, header, legend)
+    return RowImage(rows, spec.size, palette)
+
+
+@functools.cache
+def _base_rows(spec: CanvasSpec, header: str, legend: bool) -> tuple[bytes, bytes]:
+    """The PNG rows and palette of :func:`base` (kept instead of the image: one per header, a
+    few per process, each the size of an image)."""
+    img = base.__wrapped__(spec, header, legend)
+    return bytes(filtered_rows(img)), bytes(img.getpalette() or ())
 
 
 def _draw_velocity(
@@ -227,7 +257,7 @@ def render_pngs(scene: Scene, outcome: Outcome, config: DatasetConfig) -> dict[s
     spec = CanvasSpec.from_config(config)
     level = config.image.compress_level
     return {
-        "init.png": encode_png(render_init(scene, spec), level),
-        "final.png": encode_png(render_final(scene, outcome, spec), level),
-        "trajectory.png": encode_png(render_trajectory(scene, outcome, spec), level),
+        "init.png": _init_page(scene, spec).encode(level),
+        "final.png": _final_page(scene, outcome, spec).encode(level),
+        "trajectory.png": _trajectory_page(scene, outcome, spec).encode(level),
     }
