@@ -1,17 +1,17 @@
 """PNG files of palette images, deflated by zlib-ng: what a scene family writes its images with.
 
-Pillow deflates PNG data with stock zlib (1.2.13 in its wheels): level 1 costs about 2.3 ms for
-one 1364 x 780 palette image on the benchmark machine, most of it in deflate. zlib-ng (the
+Pillow's PNG encoder deflates with stock zlib (1.2.13 in its wheels): at level 1 that is most of
+the 2.3-4 ms one 1364 x 780 palette image costs on the benchmark machine. zlib-ng (the
 maintained, SIMD-accelerated zlib; ``zlib-ng`` on PyPI) at level 2 makes a file a fifth smaller
-in about a third of the time (docs/benchmarks.md, dataset generation). The file is an ordinary
+in about a third of the time (docs/benchmarks.md, issue 12, stop 31). The file is an ordinary
 PNG (8-bit palette, no filter, not interlaced) that any decoder reads to the same pixels as
 Pillow's file of the same image.
 
-The data PNG deflates is each row behind its filter byte (0, none). The image's rows are copied
-once, by Pillow's core, into a zeroed buffer mapped as an image whose rows lie one byte apart
-(``Image.frombuffer`` with a stride of width + 1, at an offset of one byte), so the zeros between
-them are the filter bytes: 0.13 ms for a 1364 x 780 image, where ``Image.tobytes`` alone takes
-about 1 ms.
+The data PNG deflates is each row behind its filter byte (0, none). :class:`RowImage` is drawn
+on in place in such a buffer; any other image's rows are copied once, by Pillow's core, into a
+zeroed buffer mapped as an image whose rows lie one byte apart (``Image.frombuffer`` with a
+stride of width + 1, at an offset of one byte), so the zeros between them are the filter bytes:
+0.13 ms for a 1364 x 780 image, where ``Image.tobytes`` alone takes about 1 ms.
 """
 
 from __future__ import annotations
