@@ -17,7 +17,6 @@ one checkout must write the same ``checksums.sha256``; the script stops otherwis
 from __future__ import annotations
 
 import json
-import os
 import resource
 import statistics
 import subprocess
@@ -25,33 +24,17 @@ import sys
 import time
 from pathlib import Path
 
+from simulate_pairs import _env  # scripts/ is first on the path of a script
+
+HERE = Path(__file__).resolve().parent
 ENCODE = """
-import io, json, sys, time
+import json, sys
 from pathlib import Path
-from PIL import Image
-from bpb_core.png import DEFAULT_LEVEL, encode_palette_png
-images = []
-for path in sorted(Path(sys.argv[1]).glob("h*/scene_*/*.png")):
-    with Image.open(path) as opened:
-        opened.load()
-        images.append(opened.copy())
-started = time.process_time()
-for img in images:
-    img.save(io.BytesIO(), format="PNG", compress_level=1)
-pillow = time.process_time() - started
-started = time.process_time()
-for img in images:
-    encode_palette_png(img, DEFAULT_LEVEL)
-print(json.dumps([len(images), pillow, time.process_time() - started]))
+sys.path.insert(0, sys.argv[2])
+from generate_cpu import encode_cpu
+paths = sorted(Path(sys.argv[1]).glob("h*/scene_*/*.png"))
+print(json.dumps([len(paths), *encode_cpu(paths)]))
 """
-
-
-def _env(src: str | None) -> dict[str, str]:
-    env = dict(os.environ)
-    env.pop("PYTHONPATH", None)
-    if src is not None:
-        env["PYTHONPATH"] = src
-    return env
 
 
 def generate(out: Path, src: str | None) -> tuple[float, float, str]:
@@ -72,7 +55,7 @@ def generate(out: Path, src: str | None) -> tuple[float, float, str]:
 def encode_alone(out: Path) -> tuple[int, float, float]:
     """Images, then CPU seconds of encoding them alone with Pillow and with bpb's writer."""
     done = subprocess.run(
-        [sys.executable, "-c", ENCODE, str(out)],
+        [sys.executable, "-c", ENCODE, str(out), str(HERE)],
         env=_env(None),
         check=True,
         capture_output=True,
