@@ -507,3 +507,21 @@ def test_the_batch_path_prints_in_the_encoding_of_standard_output(
                           timeout=120, check=True)  # fmt: skip
     assert done.stdout == "".join(f"{line}\n" for line in expected).encode(encoding)
     assert any("schön" in line for line in expected)
+
+
+def test_a_caller_that_captures_standard_output_in_a_string_gets_the_lines(
+    scenes: list[tuple[Path, Scene]],
+) -> None:
+    """``io.StringIO`` has no file and no encoding (None): the lines go to it as text (an
+    internal error before, looking the encoding None up)."""
+    import contextlib
+    import io
+
+    from bpb_core.cli.main import main
+
+    paths = [str(p) for p, _ in scenes]
+    captured = io.StringIO()
+    with contextlib.redirect_stdout(captured), pytest.raises(SystemExit) as ended:
+        main(["simulate", "--workers", "1", *paths])
+    assert ended.value.code in (0, None)
+    assert captured.getvalue() == "".join(f"{line}\n" for line in simulate_lines(paths, workers=1))

@@ -149,9 +149,10 @@ class _Output:
             self.fd: int | None = sys.stdout.fileno()
         except (AttributeError, ValueError, io.UnsupportedOperation):
             self.fd = None  # a stream with no file behind it (click's CliRunner)
-        encoding = sys.stdout.encoding
+        encoding = getattr(sys.stdout, "encoding", None) or "utf-8"  # None: io.StringIO
         self.encoding = None if codecs.lookup(encoding).name == "utf-8" else encoding
-        self.errors = sys.stdout.errors or "strict"  # the lines are UTF-8: else transcoded
+        # the lines are UTF-8: else transcoded
+        self.errors = getattr(sys.stdout, "errors", None) or "strict"
 
     def write(self, block: bytes) -> None:
         """Write ``block``'s lines (UTF-8, each ended by a newline) in standard output's
