@@ -83,8 +83,6 @@ def _encode_share(args: tuple[list[bytes], int, Encoder]) -> int:
         images = [img.convert("RGB") for img in images]
     else:
         images = [img.convert("P") if img.mode != "P" else img for img in images]
-        for img in images:
-            img.load()
     total = 0
     for i in range(count):
         img = images[i % len(images)]
