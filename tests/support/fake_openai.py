@@ -1,4 +1,4 @@
-"""Start the fake OpenAI-compatible server (bpb_core.testing.fakeserver) in a subprocess."""
+"""Start the fake OpenAI-compatible server (bpb_testing.fakeserver) in a subprocess."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def fake_server(
     data: Path | None, config: dict[str, Any] | None = None, tmp: Path | None = None
 ) -> Iterator[FakeServer]:
     """Run the server for the duration of the block."""
-    args = [sys.executable, "-m", "bpb_core.testing.fakeserver"]
+    args = [sys.executable, "-m", "bpb_testing.fakeserver"]
     if data is not None:
         args += ["--data", str(data)]
     if config is not None:

@@ -21,7 +21,7 @@ from inspect_ai.tool import ToolChoice, ToolInfo
 
 from bpb_core import ModelRequest, ModelResponse, Usage
 from bpb_core.reply_json import balanced_objects
-from bpb_core.testing.fakereplies import PromptIndex, message_text
+from bpb_testing.fakereplies import PromptIndex, message_text
 
 
 def prompt_text(messages: list[ChatMessage]) -> str:

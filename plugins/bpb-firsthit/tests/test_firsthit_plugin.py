@@ -111,7 +111,7 @@ def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture
 def fake_server(data: Path) -> Iterator[str]:
     """The local OpenAI-compatible server, pointed at the dataset; yields its api_base."""
-    args = [sys.executable, "-m", "bpb_core.testing.fakeserver", "--data", str(data)]
+    args = [sys.executable, "-m", "bpb_testing.fakeserver", "--data", str(data)]
     process = subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
     try:
         assert process.stdout is not None

@@ -1,10 +1,10 @@
-"""A local OpenAI-compatible chat server with fault injection, for tests and ``bpb bench run``.
+"""A local OpenAI-compatible chat server with fault injection, for tests and ``benchmarks/run.py``.
 
 It answers ``POST /v1/chat/completions`` (and, in their own wire formats, Anthropic's
 ``/v1/messages``, Gemini's ``/v1beta/models/MODEL:generateContent`` and OpenAI's
-``/v1/responses``: :mod:`bpb_core.testing.protocols`) the way a model would: pointed at a
+``/v1/responses``: :mod:`bpb_testing.protocols`) the way a model would: pointed at a
 dataset, it knows every prompt bpb could send about it
-(:class:`~bpb_core.testing.fakereplies.PromptIndex`), so it recognises the scene and task it
+(:class:`~bpb_testing.fakereplies.PromptIndex`), so it recognises the scene and task it
 is asked and answers correctly from the ground truth; an unknown prompt is answered with the
 example answer the prompt itself shows. It injects the faults it was told to:
 
@@ -19,7 +19,7 @@ Faults are given per ``scene/task`` key as a list consumed one per request (``{"
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``);
 ``GET /requests`` what the recent requests carried (parameters, headers, image blocks; no text).
-Run it with ``python -m bpb_core.testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
+Run it with ``python -m bpb_testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
 """
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_core.testing.fakereplies import PromptIndex, fault_reply, model_reply
-from bpb_core.testing.protocols import add_protocol_routes, image_blocks
+from bpb_testing.fakereplies import PromptIndex, fault_reply, model_reply
+from bpb_testing.protocols import add_protocol_routes, image_blocks
 
 _CONVERSATION = frozenset({"messages", "contents", "input", "system", "system_instruction"})
 _KEEP_REQUESTS = 200
@@ -200,7 +200,7 @@ async def serve(
 
 def main(argv: list[str] | None = None) -> None:
     """Command line: ``--port``, ``--data``, ``--latency``, ``--config FILE`` (fault plan)."""
-    parser = argparse.ArgumentParser(prog="python -m bpb_core.testing.fakeserver")
+    parser = argparse.ArgumentParser(prog="python -m bpb_testing.fakeserver")
     parser.add_argument("--port", type=int, default=0)
     parser.add_argument("--data", default=None)
     parser.add_argument("--latency", type=float, default=0.0)

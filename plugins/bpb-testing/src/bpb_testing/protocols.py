@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
-from bpb_core.testing.fakereplies import reply_content
+from bpb_testing.fakereplies import reply_content
 
 if TYPE_CHECKING:
-    from bpb_core.testing.fakeserver import FakeOpenAI
+    from bpb_testing.fakeserver import FakeOpenAI
 
 THOUGHT = "Thinking about where each object goes."
 _FINISH = {

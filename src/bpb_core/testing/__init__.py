@@ -1,1 +1,0 @@
-"""Test and benchmark helpers: a local OpenAI-compatible server with fault injection."""
