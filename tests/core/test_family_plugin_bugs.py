@@ -26,7 +26,6 @@ import pytest
 import support.flawed_family
 from bpb_adapters.baseline.adapter import BaselineAdapter
 from bpb_core import ModelRequest, ModelResponse, Usage, build_messages, load_dataset
-from bpb_core.bench.score_sample import sample_units
 from bpb_core.dataset import generate_dataset
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, Registry, make_registry
@@ -78,16 +77,6 @@ def wrong_run(flawed_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Pa
     options = RunOptions(tasks=("balls",), limit=1)
     run_eval(flawed_data, WrongBalls(), run, options, registry=_registry())
     return run
-
-
-@pytest.mark.parametrize(("flaw", "said"), PREDICT_FLAWS)
-def test_bench_score_names_a_flawed_predict(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, flaw: str, said: str
-) -> None:
-    monkeypatch.setenv("BPB_TEST_FLAW", flaw)
-    with pytest.raises(PluginBug) as info:
-        sample_units(_registry(), "flawed", ["balls"], tmp_path / "data", per_horizon=1)
-    assert str(info.value) == f"{ORIGIN}: {FAMILY}: {said}"
 
 
 @pytest.mark.parametrize(("flaw", "said"), PREDICT_FLAWS)

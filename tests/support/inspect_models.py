@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from bpb_testing.fakereplies import PromptIndex, message_text
 from inspect_ai.model import (
     ChatMessage,
     ContentText,
@@ -21,7 +22,6 @@ from inspect_ai.tool import ToolChoice, ToolInfo
 
 from bpb_core import ModelRequest, ModelResponse, Usage
 from bpb_core.reply_json import balanced_objects
-from bpb_testing.fakereplies import PromptIndex, message_text
 
 
 def prompt_text(messages: list[ChatMessage]) -> str:

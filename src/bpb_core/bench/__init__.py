@@ -1,34 +1,8 @@
-"""Benchmarks behind ``bpb bench ...``, one module each (``generate``, ``run``, ``score``,
-``sim``, ``startup``), and the machine record every figure carries.
+"""``bpb bench sim``: simulators of one scene family side by side, speed against error.
 
-They reach scene families, simulators, tasks and scorers through the registry only, so a
-benchmark measures whatever plugins are installed. Nothing here prints; the CLI shows results.
+:mod:`~bpb_core.bench.comparing` calls the family's hooks checked and builds the simulators,
+:mod:`~bpb_core.bench.sim` measures, :mod:`~bpb_core.bench.sim_report` writes the markdown
+section and the plot. They reach scene families and simulators through the registry only, so
+the benchmark measures whatever plugins are installed. Nothing here prints; the CLI shows the
+results. The other benchmarks are scripts in the checkout's ``benchmarks/`` folder.
 """
-
-from __future__ import annotations
-
-import os
-import platform
-from datetime import date
-from pathlib import Path
-
-MAX_REPEATS = 100  # timed repeats of a benchmark: more take minutes for no better best time
-
-
-def machine_description() -> str:
-    """``2 cores, <CPU model>, CPython 3.11.7``: the machine a figure was measured on."""
-    model = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    python = f"{platform.python_implementation()} {platform.python_version()}"
-    return f"{os.cpu_count()} cores, {model}, {python}"
-
-
-def today() -> str:
-    """Today's date in ISO form (``2026-11-21``), the date a figure was measured."""
-    return date.today().isoformat()

@@ -1,4 +1,8 @@
-"""The scene family of ``bpb bench sim``, its hooks called checked.
+"""The scene family and the simulators of ``bpb bench sim``, its hooks called checked.
+
+Contestants are given as ``name`` or ``name:key=value,...`` (``mysim``, ``mysim:dt=0.01``):
+a registered simulator and the options it is built with, as ``bpb simulate`` takes them
+(:func:`~bpb_core.simulator_spec.parse_spec`).
 
 :class:`BenchFamily` runs each hook of a :class:`~bpb_core.capabilities.Comparing` (and
 :class:`~bpb_core.capabilities.CountsEvents`) family under :func:`~bpb_core.errors.blamed` and
@@ -9,18 +13,20 @@ failure counted against the simulator whose outcome the family was looking at.
 
 from __future__ import annotations
 
+import math
 import numbers
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.bench.contestants import comparing_family
-from bpb_core.capabilities import CountsEvents
-from bpb_core.errors import PluginBug, blamed
+from bpb_core.capabilities import Comparing, CountsEvents
+from bpb_core.errors import BadInput, PluginBug, blamed
 from bpb_core.plugin_calls import family_model
 
 if TYPE_CHECKING:
-    from bpb_core.capabilities import Comparing
+    from bpb_core.interfaces import Simulator
     from bpb_core.registry import Registry
+    from bpb_core.simulator_spec import SimulatorSpec
 
 ERROR = "error"
 """The key of :meth:`Comparing.compare`'s result that holds the distance to the reference."""
@@ -164,3 +170,48 @@ def bench_family(registry: Registry, name: str) -> BenchFamily:
 
 def _number(value: object) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)  # numpy's too
+
+
+def comparing_family(registry: Registry, name: str) -> Comparing:
+    """The scene family ``name``, which must be able to compare simulators.
+
+    Raises:
+        BadInput: It is not installed or has no :class:`Comparing` capability.
+    """
+    family = registry.scene_family(name)
+    if not isinstance(family, Comparing):
+        raise BadInput(f"--family: the {name} scene family cannot compare simulators")
+    return family
+
+
+def build_simulators(
+    registry: Registry, family: str, entries: list[SimulatorSpec], flag: str = "--contestant"
+) -> dict[str, Simulator]:
+    """The simulators of ``entries`` by spec, in order (``flag``: where they were given).
+
+    Raises:
+        BadInput: A simulator is unknown, simulates another family's scenes, or does not take
+            an option or refuses its value (``--contestant 'pymunk:dt=-1': dt: ...``).
+    """
+    sims: dict[str, Simulator] = {}
+    for entry in entries:
+        simulates = registry.simulator_info(entry.name).family
+        if simulates and simulates != family:
+            raise BadInput(f"{flag} {entry.spec}: simulates {simulates} scenes, not {family} ones")
+        try:
+            sims[entry.spec] = registry.simulator(entry.name, entry.options)
+        except BadInput as exc:  # "dt: must be ...": which of the specs given, and where
+            raise BadInput(f"{flag} {entry.spec!r}: {exc}") from None
+    return sims
+
+
+def timed_run(sim: Simulator, scene: Any, budget: float = 0.005) -> tuple[Any, float]:
+    """Run ``sim`` on ``scene``; fast runs are repeated (up to 5 times, within ``budget``
+    seconds) and the quickest counts, so a preempted sub-millisecond run does not dominate."""
+    best, spent, runs = math.inf, 0.0, 0
+    while runs < 5 and (runs == 0 or spent < budget):
+        started = time.perf_counter()
+        outcome = sim.run(scene)
+        seconds = time.perf_counter() - started
+        best, spent, runs = min(best, seconds), spent + seconds, runs + 1
+    return outcome, best

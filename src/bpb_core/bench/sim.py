@@ -7,6 +7,15 @@ reference and then by every contestant in turn (interleaved, so machine noise hi
 runs under 5 ms are repeated up to 5 times and the quickest counts. Per contestant the result
 holds the mean time per scene, the max and median of the family's ``error`` over scenes and the
 sums of its disagreement counts. :mod:`bpb_core.bench.sim_report` turns it into markdown and a plot.
+
+``--scaling``: a family that counts events (:class:`~bpb_core.capabilities.CountsEvents`) makes
+its scenes busier by a factor (more events in the same simulated time); each chosen simulator
+runs every scaled scene, the factors interleaved per scene, and per factor the result holds the
+mean milliseconds and events per scene. If the cost follows the events, the microseconds per
+event stay about flat while the events per scene grow.
+
+In both, a run that raises is a failed scene of that simulator, left out of its figures, and
+each simulator runs once untimed first, so loading its imports and compiled code is not timed.
 """
 
 from __future__ import annotations
@@ -21,11 +30,18 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.bench import machine_description, today
-from bpb_core.bench.comparing import ERROR, BenchFamily, bench_family
-from bpb_core.bench.contestants import build_simulators, parse_contestant, timed_run
-from bpb_core.capabilities import RunsMany
+from bpb_core.bench.comparing import (
+    ERROR,
+    BenchFamily,
+    bench_family,
+    build_simulators,
+    comparing_family,
+    timed_run,
+)
+from bpb_core.bench.sim_report import ScaleRow, SimBench, SimRow
+from bpb_core.capabilities import CountsEvents, RunsMany
 from bpb_core.errors import BadInput
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Simulator
@@ -33,69 +49,8 @@ if TYPE_CHECKING:
 
 Progress = Callable[[int, int], None]
 """Called with (scenes done, scenes in all) after each scene."""
-
-
-@dataclass(frozen=True)
-class SimRow:
-    """One contestant's figures over the benchmark scenes (``counts`` in column order; errors
-    and counts over the scenes the reference ran; ``us_per_event`` when the family counts
-    events, ``batch_ms`` per scene of the simulator's batch call when it has one).
-
-    A scene on which the contestant raised, or whose comparison gave a non-finite error, is
-    ``failed`` (``first_error`` says why) and counts in no figure: with every scene failed,
-    the time is None, and with none compared the errors are None and ``counts`` is empty."""
-
-    name: str
-    ms_per_scene: float | None
-    max_error: float | None
-    median_error: float | None
-    counts: dict[str, float]
-    reference: bool = False
-    us_per_event: float | None = None
-    batch_ms: float | None = None
-    failed: int = 0
-    first_error: str = ""
-
-
-@dataclass(frozen=True)
-class SimBench:
-    """The result of :func:`bench_simulators` (``rows``: the reference first)."""
-
-    family: str
-    scenes: int
-    seed: int
-    description: str
-    measures: str
-    columns: tuple[str, ...]
-    rows: list[SimRow]
-    simulate_ms: dict[str, float] | None = None
-    simulate_scenes: int = 0
-    simulate_with: str = ""
-    compared: int = 0
-    scaling: list[ScaleRow] = field(default_factory=list)
-    machine: str = field(default_factory=machine_description)
-    day: str = field(default_factory=today)
-
-
-@dataclass(frozen=True)
-class ScaleRow:
-    """Cost of one contestant on the scenes made busier by ``factor``: means over the scenes
-    it ran. A scene on which it raised is ``failed`` (``first_error`` says why) and counts in
-    neither mean; with every scene failed both are None."""
-
-    factor: float
-    name: str
-    ms_per_scene: float | None
-    events_per_scene: float | None
-    failed: int = 0
-    first_error: str = ""
-
-    @property
-    def us_per_event(self) -> float | None:
-        """Microseconds per event (None when every scene failed)."""
-        if self.ms_per_scene is None or self.events_per_scene is None:
-            return None
-        return 1000 * self.ms_per_scene / self.events_per_scene if self.events_per_scene else 0.0
+DEFAULT_FACTORS = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
+"""How much busier ``--scaling`` makes the scenes."""
 
 
 @dataclass
@@ -166,8 +121,8 @@ def bench_simulators(
     reg = registry if registry is not None else make_registry()
     name = family or reg.default_family()
     maker = bench_family(reg, name)
-    ref = parse_contestant(reference or maker.text("bench_reference"), "--reference")
-    others = [parse_contestant(s) for s in (contestants or maker.contestants())]
+    ref = parse_spec(reference or maker.text("bench_reference"), "--reference")
+    others = [parse_spec(s, "--contestant") for s in (contestants or maker.contestants())]
     build_simulators(reg, name, [ref], "--reference")
     sims = build_simulators(reg, name, [ref, *(c for c in others if c.spec != ref.spec)])
     sample = maker.scenes(scenes, seed)
@@ -261,7 +216,7 @@ def time_simulate(
     """
     from bpb_core.simulate import simulate_lines
 
-    job = parse_contestant(simulator)
+    job = parse_spec(simulator, "--simulate-with")
     best: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
         paths = _scene_files(family, count, seed, Path(tmp))
@@ -302,7 +257,7 @@ def check_simulate_with(registry: Registry, family: str, simulators: Sequence[st
     Raises:
         BadInput: A spec is malformed, unknown, of another family or has a bad option.
     """
-    specs = [parse_contestant(s, "--simulate-with") for s in simulators]
+    specs = [parse_spec(s, "--simulate-with") for s in simulators]
     build_simulators(registry, family, specs, "--simulate-with")
 
 
@@ -327,3 +282,62 @@ def with_simulate_timing(
         figures |= {f"{prefix}{label}": ms for label, ms in found.items()}
     with_ = ", ".join(names)
     return replace(result, simulate_ms=figures, simulate_scenes=count, simulate_with=with_)
+
+
+def with_scaling(
+    result: SimBench,
+    contestants: Sequence[str],
+    scenes: int,
+    factors: Sequence[float] = DEFAULT_FACTORS,
+    registry: Registry | None = None,
+) -> SimBench:
+    """``result`` with scaling rows for ``contestants`` on its first ``scenes`` scenes.
+
+    Raises:
+        BadInput: See :func:`scaling_simulators`.
+        PluginBug: A hook of the family raised or gave something else than it should.
+    """
+    from bpb_core.registry import make_registry
+
+    reg = registry if registry is not None else make_registry()
+    sims = scaling_simulators(reg, result.family, contestants, scenes)
+    family = bench_family(reg, result.family)
+    sample = family.scenes(scenes, result.seed)
+    tallies = {(f, label): _Tally() for f in factors for label in sims}
+    if sample and factors:  # untimed: imports and compiled code load before the x1 runs
+        warm_up(sims, family.scaled(sample[0], factors[0]))
+    for scene in sample:
+        for factor in factors:
+            busy = family.scaled(scene, factor)
+            for label, sim in sims.items():
+                try:
+                    outcome, spent = timed_run(sim, busy)
+                except Exception as exc:  # the simulator's own failure on this scene
+                    tallies[factor, label].fail(f"{type(exc).__name__}: {exc}")
+                    continue
+                tallies[factor, label].add(spent, None, family.events(outcome))
+    rows = [_scale_row(f, label, t) for (f, label), t in tallies.items()]
+    return replace(result, scaling=rows)
+
+
+def _scale_row(factor: float, label: str, tally: _Tally) -> ScaleRow:
+    ms = 1000 * tally.seconds / tally.runs if tally.runs else None
+    events = tally.events / tally.runs if tally.runs else None
+    return ScaleRow(factor, label, ms, events, tally.failed, tally.first_error)
+
+
+def scaling_simulators(
+    registry: Registry, family: str, contestants: Sequence[str], scenes: int
+) -> dict[str, Simulator]:
+    """The simulators of ``--scaling``, checked (the CLI calls this before the
+    benchmark, so a bad spec does not wait for it).
+
+    Raises:
+        BadInput: Fewer than one scene, a family that does not count events, or a bad spec.
+    """
+    if scenes < 1:
+        raise BadInput(f"--scaling-scenes: must be at least 1, got {scenes}")
+    if not isinstance(comparing_family(registry, family), CountsEvents):
+        raise BadInput(f"--scaling: scene family {family!r} does not count events")
+    specs = [parse_spec(c, "--scaling") for c in contestants]
+    return build_simulators(registry, family, specs, "--scaling")

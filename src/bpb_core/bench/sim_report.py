@@ -1,21 +1,107 @@
-"""Figures of ``bpb bench sim``: the markdown section of docs/benchmarks.md and the PNG plot.
+"""The result of ``bpb bench sim`` (:class:`SimBench`) and its figures: the markdown section
+of docs/benchmarks.md and the PNG plot.
 
-Both are built from a :class:`~bpb_core.bench.sim.SimBench` alone; the column names, the
-description of the scenes and the meaning of the measures are the scene family's.
+Both are built from a :class:`SimBench` alone; the column names, the description of the scenes
+and the meaning of the measures are the scene family's.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import platform
 import textwrap
+from dataclasses import dataclass, field
+from datetime import date
 from pathlib import Path
 
-from bpb_core.bench.sim import SimBench, SimRow
 from bpb_core.run_folder import write_bytes_atomic
 
-HEADING = "## Simulators (`bpb bench sim`)"
+HEADING = "## Simulation speed against error (`bpb bench sim`)"
 END = "<!-- end of the bpb bench sim output: what follows in this section is kept -->"
 WIDTH = 100
+
+
+def machine_description() -> str:
+    """``2 cores, <CPU model>, CPython 3.11.7``: the machine a figure was measured on."""
+    model = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    python = f"{platform.python_implementation()} {platform.python_version()}"
+    return f"{os.cpu_count()} cores, {model}, {python}"
+
+
+def today() -> str:
+    """Today's date in ISO form (``2026-11-21``), the date a figure was measured."""
+    return date.today().isoformat()
+
+
+@dataclass(frozen=True)
+class SimRow:
+    """One contestant's figures over the benchmark scenes (``counts`` in column order; errors
+    and counts over the scenes the reference ran; ``us_per_event`` when the family counts
+    events, ``batch_ms`` per scene of the simulator's batch call when it has one).
+
+    A scene on which the contestant raised, or whose comparison gave a non-finite error, is
+    ``failed`` (``first_error`` says why) and counts in no figure: with every scene failed,
+    the time is None, and with none compared the errors are None and ``counts`` is empty."""
+
+    name: str
+    ms_per_scene: float | None
+    max_error: float | None
+    median_error: float | None
+    counts: dict[str, float]
+    reference: bool = False
+    us_per_event: float | None = None
+    batch_ms: float | None = None
+    failed: int = 0
+    first_error: str = ""
+
+
+@dataclass(frozen=True)
+class SimBench:
+    """The result of :func:`bench_simulators` (``rows``: the reference first)."""
+
+    family: str
+    scenes: int
+    seed: int
+    description: str
+    measures: str
+    columns: tuple[str, ...]
+    rows: list[SimRow]
+    simulate_ms: dict[str, float] | None = None
+    simulate_scenes: int = 0
+    simulate_with: str = ""
+    compared: int = 0
+    scaling: list[ScaleRow] = field(default_factory=list)
+    machine: str = field(default_factory=machine_description)
+    day: str = field(default_factory=today)
+
+
+@dataclass(frozen=True)
+class ScaleRow:
+    """Cost of one contestant on the scenes made busier by ``factor``: means over the scenes
+    it ran. A scene on which it raised is ``failed`` (``first_error`` says why) and counts in
+    neither mean; with every scene failed both are None."""
+
+    factor: float
+    name: str
+    ms_per_scene: float | None
+    events_per_scene: float | None
+    failed: int = 0
+    first_error: str = ""
+
+    @property
+    def us_per_event(self) -> float | None:
+        """Microseconds per event (None when every scene failed)."""
+        if self.ms_per_scene is None or self.events_per_scene is None:
+            return None
+        return 1000 * self.ms_per_scene / self.events_per_scene if self.events_per_scene else 0.0
 
 
 def count_text(value: float) -> str:

@@ -75,10 +75,12 @@ def random_scene(
     )
 
 
-def random_scenes(count: int, seed: int = 0, **options: object) -> Iterator[Scene]:
-    """``count`` scenes of the stream ``seed`` (options as in :func:`random_scene`)."""
+def random_scenes(
+    count: int, seed: int = 0, *, speeds: tuple[float, float] = (0.1, 1.2)
+) -> Iterator[Scene]:
+    """``count`` scenes of the stream ``seed`` (``speeds`` as in :func:`random_scene`)."""
     for index in range(count):
-        yield random_scene(seed, index, **options)  # type: ignore[arg-type]
+        yield random_scene(seed, index, speeds=speeds)
 
 
 def scaled_scene(scene: Scene, factor: float) -> Scene:

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from bpb_testing.protocols import THOUGHT
 
 from bpb_adapters.litellm_adapter.adapter import _import_litellm
 from bpb_core.model_calls import AdapterOptions
@@ -23,7 +24,6 @@ from bpb_core.registry import Registry
 from bpb_core.run_folder import iter_answers, read_attempts, read_manifest
 from bpb_core.runner import run_eval
 from bpb_core.runner.options import RetryPolicy, RunOptions
-from bpb_testing.protocols import THOUGHT
 from support.fake_openai import FakeServer, fake_server
 
 SCENES = ("h1_0000", "h1_0001", "h1_0002", "h3_0001")  # where the faults go

@@ -1,18 +1,15 @@
-"""Fixture of the ``bpb bench`` tests: run a benchmark through the real ``bpb`` console script."""
+"""Fixture of the ``bpb bench sim`` tests: the command run in-process, through ``main``."""
 
 from __future__ import annotations
 
-import os
-import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
-from support.processes import run_group
-
-BPB = str(Path(sys.executable).with_name("bpb"))
+from bpb_core.cli import console
+from bpb_core.cli.main import main
 
 
 @dataclass(frozen=True)
@@ -42,17 +39,21 @@ BenchFn = Callable[..., BenchRun]
 
 
 @pytest.fixture
-def bench() -> BenchFn:
-    """``bench("sim", "--scenes", "2", env={...})`` runs ``bpb bench sim --scenes 2`` with wide
-    tables (COLUMNS=200) and returns a :class:`BenchRun`. ``timeout`` only bounds a hang, below
-    pytest's 600 s: a benchmark of three litellm clients took 93 s on a loaded 2-core CI
-    machine; a command that times out is killed with its whole process group."""
+def bench(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Iterator[BenchFn]:
+    """``bench("sim", "--scenes", "2")`` runs ``bpb bench sim --scenes 2`` in this process with
+    wide tables (COLUMNS=200) and returns a :class:`BenchRun`."""
+    monkeypatch.setenv("COLUMNS", "200")
 
-    def _run(
-        *args: str | Path, env: Mapping[str, str] | None = None, timeout: float = 480
-    ) -> BenchRun:
-        environ = {**(env if env is not None else os.environ), "COLUMNS": "200"}
-        done = run_group([BPB, "bench", *map(str, args)], timeout, env=environ)
-        return BenchRun(done.returncode, done.stdout, done.stderr)
+    def _run(*args: str | Path) -> BenchRun:
+        capsys.readouterr()
+        console.stdout.cache_clear()  # built for this test's streams and width
+        console.stderr.cache_clear()
+        with pytest.raises(SystemExit) as ended:
+            main(["bench", *map(str, args)])
+        out, err = capsys.readouterr()
+        code = ended.value.code
+        return BenchRun(code if isinstance(code, int) else 0, out, err)
 
-    return _run
+    yield _run
+    console.stdout.cache_clear()
+    console.stderr.cache_clear()

@@ -1,9 +1,9 @@
-"""``bpb bench sim``: contestants of any comparing scene family against its reference."""
+"""``bpb bench sim``: contestants of any comparing scene family against its reference (the
+command runs in-process, through ``main``)."""
 
 from __future__ import annotations
 
 import math
-import os
 import subprocess
 import sys
 import time
@@ -16,24 +16,36 @@ import pytest
 from PIL import Image
 
 from bpb_core.bench import sim_report
-from bpb_core.bench.contestants import build_simulators, comparing_family, parse_contestant
-from bpb_core.bench.sim import SimBench, SimRow, bench_simulators
+from bpb_core.bench.comparing import build_simulators, comparing_family
+from bpb_core.bench.sim import bench_simulators, with_scaling
+from bpb_core.bench.sim_report import SimBench, SimRow
 from bpb_core.errors import BadInput, UnknownName
 from bpb_core.hookspecs import hookimpl
 from bpb_core.registration import SceneFamilyInfo, SimulatorInfo
 from bpb_core.registry import Registry, make_registry
 from bpb_core.simulate import simulate_lines
+from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.bench_compare import random_scenes
 from support.compiled_code import on_a_cold_cache
 
 
-def test_parse_contestant_reads_typed_options() -> None:
-    assert parse_contestant("analytic").options == {}
-    entry = parse_contestant("pymunk:dt=0.01,precision=50,mode=fast")
+def test_a_contestant_spec_has_typed_options() -> None:
+    assert parse_spec("analytic", "--contestant").options == {}
+    entry = parse_spec("pymunk:dt=0.01,precision=50,mode=fast", "--contestant")
     assert entry.name == "pymunk" and entry.spec == "pymunk:dt=0.01,precision=50,mode=fast"
     assert entry.options == {"dt": 0.01, "precision": 50, "mode": "fast"}
-    with pytest.raises(BadInput, match="name:key=value"):
-        parse_contestant("pymunk:dt")
+    with pytest.raises(BadInput, match="--contestant 'pymunk:dt': expected name or name:key=value"):
+        parse_spec("pymunk:dt", "--contestant")
+
+
+def test_bench_help_lists_sim(bench: Callable[..., Any]) -> None:
+    done = bench("--help")
+    assert done.returncode == 0 and "sim " in done.stdout
+
+
+def test_unknown_benchmark_is_a_usage_error(bench: Callable[..., Any]) -> None:
+    done = bench("generate")  # a script in benchmarks/ now, no command
+    assert done.returncode == 2 and "generate" in done.stderr
 
 
 def test_billiards_reference_is_exact_and_analytic_close(registry: Registry) -> None:
@@ -56,8 +68,10 @@ def test_billiards_default_contestants_measure_pymunk_on_fast_scenes(registry: R
     # after pymunk learned to refuse coarse steps, the default pymunk:dt=0.01 refused every
     # scene with a cue over 1.43 m/s (most --scaling scenes): it is measured, not refused
     family = comparing_family(registry, "billiards")
-    reference = build_simulators(registry, "billiards", [parse_contestant(family.bench_reference)])
-    specs = [parse_contestant(c) for c in family.bench_contestants]
+    reference = build_simulators(
+        registry, "billiards", [parse_spec(family.bench_reference, "--reference")]
+    )
+    specs = [parse_spec(c, "--contestant") for c in family.bench_contestants]
     sims = build_simulators(registry, "billiards", specs)
     for scene in family.bench_scenes(2, 0):
         fast = family.scaled_scene(scene, 8.0)  # cue at 0.8-9.6 m/s
@@ -72,8 +86,6 @@ def test_billiards_default_contestants_measure_pymunk_on_fast_scenes(registry: R
 def test_kernel_and_python_engine_side_by_side_with_events_batches_and_scaling(
     registry: Registry,
 ) -> None:
-    from bpb_core.bench.sim_scaling import with_scaling
-
     contestants = ("analytic:engine=kernel", "analytic:engine=python")
     result = bench_simulators(6, 1, contestants, registry=registry, reference_scenes=2)
     assert result.compared == 2 and result.scenes == 6
@@ -189,7 +201,6 @@ def test_a_non_finite_error_is_a_failed_scene_not_a_figure() -> None:
 def test_scaling_does_not_time_a_simulator_s_first_load_as_a_scene() -> None:
     """A simulator's first run loads its imports or compiled code; --scaling, like the main
     comparison, runs each simulator once untimed, so the x1 figure is the scenes' cost."""
-    from bpb_core.bench.sim_scaling import with_scaling
 
     class Cold(Exact):
         name = "cold"
@@ -244,9 +255,7 @@ def test_a_family_that_cannot_compare_is_bad_input() -> None:
 def test_markdown_section_is_replaced_not_duplicated(tmp_path: Path, registry: Registry) -> None:
     result = bench_simulators(2, 1, ("analytic",), registry=registry)
     doc = tmp_path / "benchmarks.md"
-    doc.write_text(
-        "# Benchmarks\n\n## Simulators (`bpb bench sim`)\n\nold\n\n## Runner\n\nkeep me\n"
-    )
+    doc.write_text(f"# Benchmarks\n\n{sim_report.HEADING}\n\nold\n\n## Runner\n\nkeep me\n")
     sim_report.update_section(doc, sim_report.markdown(result))
     sim_report.update_section(doc, sim_report.markdown(result))
     text = doc.read_text()
@@ -261,9 +270,7 @@ def test_notes_below_the_generated_part_survive_a_rerun(tmp_path: Path, registry
     whole, and the next section is untouched either way."""
     result = bench_simulators(2, 1, ("analytic",), registry=registry)
     doc = tmp_path / "benchmarks.md"
-    doc.write_text(
-        "# Benchmarks\n\n## Simulators (`bpb bench sim`)\n\nold table\n\n## Runner\n\nkeep me\n"
-    )
+    doc.write_text(f"# Benchmarks\n\n{sim_report.HEADING}\n\nold table\n\n## Runner\n\nkeep me\n")
     sim_report.update_section(doc, sim_report.markdown(result))
     text = doc.read_text()
     assert "old table" not in text and text.count(sim_report.END) == 1
@@ -364,7 +371,7 @@ def bpb_simulators():
 
 
 def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
-    tmp_path: Path, bench: Callable[..., Any]
+    tmp_path: Path, bench: Callable[..., Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
 
     from support.plugin_dist import install_fake_dist
@@ -372,13 +379,11 @@ def test_a_contestant_that_fails_on_every_scene_shows_no_figures(
     site = tmp_path / "site"
     install_fake_dist(site, "bpb-diverging", "1.0", {"bpb_diverging": DIVERGING},
                       {"diverging": "bpb_diverging"})  # fmt: skip
-    # site first; a PYTHONPATH already set (a git worktree's src) stays after it
-    path = os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")]))
-    env = {**os.environ, "PYTHONPATH": path}
+    monkeypatch.syspath_prepend(str(site))  # installed: its entry point is found
     plot, doc = tmp_path / "sim.png", tmp_path / "benchmarks.md"
     args = ["sim", "--scenes", "3", "--simulate-scenes", "0", "--contestant", "analytic"]
     args += ["--contestant", "diverging", "--plot", plot, "--markdown", doc]
-    done = bench(*args, env=env)
+    done = bench(*args)
     assert done.returncode == 1, done.stderr
     assert done.row("diverging") == ["–", "–", "–", "–", "–", "–", "–", "3"]
     assert done.row("analytic")[-1] == "0" and float(done.row("analytic")[0]) > 0
@@ -397,15 +402,12 @@ def test_scaling_counts_a_simulator_s_refused_scenes_per_factor_and_keeps_the_re
     # benchmark with a bare "error: --dt: ..." (exit 3), every figure lost
     doc = tmp_path / "benchmarks.md"
     done = bench(
-        "sim", "--scenes", "1", "--simulate-scenes", "0", "--scaling", "pymunk",
-        "--scaling", "analytic", "--scaling-scenes", "2", "--markdown", doc,
+        "sim", "--scenes", "1", "--simulate-scenes", "0", "--contestant", "analytic",
+        "--scaling", "pymunk", "--scaling", "analytic", "--scaling-scenes", "2",
+        "--markdown", doc,
     )  # fmt: skip
     assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr
-    assert [row[0] for row in done.rows][2:] == [  # the default contestants, none failing
-        "pymunk:dt=0.01,tunnel=allow",
-        "pymunk:dt=0.001,tunnel=allow",
-        "pymunk:dt=0.0001,tunnel=allow",
-    ]
+    assert [row[0] for row in done.rows] == ["analytic:precision=50 (reference)", "analytic"]
     lines = {line.split(":")[0]: line for line in done.stdout.splitlines() if line[:1] == "x"}
     assert [f for f in lines if f.endswith(" pymunk") and "failed" in lines[f]] == [
         "x16 pymunk",
@@ -454,7 +456,7 @@ def test_a_contestant_s_bad_option_value_names_the_flag_and_spec(
     """The simulator's own refusal used to come alone ("error: --dt: must be ..."), naming no
     spec: with several contestants the user could not tell which one it was about."""
     args = ("sim", "--scenes", "100000", "--contestant", "analytic", "--simulate-scenes", "3")
-    done = bench(*args, flag, spec, timeout=60)
+    done = bench(*args, flag, spec)
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [f"error: {flag} {spec!r}: {said}"]
     assert done.stdout == ""
@@ -482,7 +484,7 @@ def test_bench_sim_refuses_a_bad_option_of_any_step_before_simulating(
 ) -> None:
     # 100,000 scenes would take many minutes: refused at once, the comparison never ran
     args = ("sim", "--scenes", "100000", "--contestant", "analytic", "--simulate-scenes", "0")
-    done = bench(*args, *option, timeout=60)
+    done = bench(*args, *option)
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and message in lines[0], done.stderr
     assert done.stdout == ""

@@ -45,11 +45,12 @@ FLAWS = [
 
 
 @pytest.fixture
-def bench_sim(install: Any, run_bpb: Any) -> Any:
+def bench_sim(install: Any, site: Path, bench: Any, monkeypatch: pytest.MonkeyPatch) -> Any:
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
-    return lambda *extra: run_bpb("bench", "sim", "--family", "flawed", "--scenes", "2",
-                                  "--simulate-scenes", "0", *extra)  # fmt: skip
+    monkeypatch.syspath_prepend(str(site))  # installed: its entry point is found
+    return lambda *extra: bench("sim", "--family", "flawed", "--scenes", "2",
+                                "--simulate-scenes", "0", *extra)  # fmt: skip
 
 
 def test_the_flawed_family_benches_without_a_flaw(bench_sim: Any) -> None:

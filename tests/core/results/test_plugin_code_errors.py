@@ -2,7 +2,7 @@
 naming the plugin (not an internal error from deep inside pandas).
 
 The same checks guard every caller of a scorer: load_results and bpb report, the library's
-score_answer and mark, bpb bench score, and bpb view (the gallery's explain and overlay too);
+score_answer and mark, and bpb view (the gallery's explain and overlay too);
 before, the last ones called the scorer unchecked. A report's task_metrics (a scorer that
 ReportsMetrics) was unchecked too: a list or a frame without the metric columns came out as an
 internal TypeError or KeyError; so was its metric_notes (a list, or notes that are not strings,
@@ -30,7 +30,6 @@ from bpb_core import (
     load_dataset,
     score_answer,
 )
-from bpb_core.bench.score_sample import sample_units
 from bpb_core.errors import PluginBug
 from bpb_core.library.answers import mark
 from bpb_core.registry import PluginSource, make_registry
@@ -305,28 +304,6 @@ def test_mark_names_the_module_of_a_flawed_scorer_object(
     with pytest.raises(PluginBug) as info:
         mark(FlawedScorer(), {"n": 0}, "ok", scene)
     assert str(info.value).startswith(f"module {__name__!r}: scorer 'brk': score() returned")
-
-
-@pytest.mark.parametrize(("flaw", "said"), [SCORER_FLAWS[0], SCORER_FLAWS[1]])
-def test_bench_score_names_a_flawed_scorers_units(
-    answered: tuple[Any, Path], tmp_path: Path, flaw: str, said: str
-) -> None:
-    registry, _ = answered
-    FLAW["now"] = flaw
-    with pytest.raises(PluginBug) as info:
-        sample_units(registry, "billiards", ["brk"], tmp_path / "data", per_horizon=1)
-    assert str(info.value).startswith(f"{ORIGIN}: {said}")
-
-
-def test_bench_score_names_a_flawed_scorers_score(
-    answered: tuple[Any, Path], tmp_path: Path
-) -> None:
-    registry, _ = answered
-    sample = sample_units(registry, "billiards", ["brk"], tmp_path / "data", per_horizon=1)["brk"]
-    FLAW["now"] = "score_type"
-    with pytest.raises(PluginBug) as info:
-        sample.score(sample.frame)
-    assert str(info.value).startswith(f"{ORIGIN}: {SCORER_FLAWS[2][1]}")
 
 
 class WrongAnswers:

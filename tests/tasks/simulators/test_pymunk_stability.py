@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from bpb_core.bench.contestants import parse_contestant
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
+from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
 from bpb_tasks.billiards.scene import table_box
 from bpb_tasks.billiards.stability import annotate
@@ -127,7 +127,7 @@ def test_pymunk_with_tunnel_allowed_gives_its_own_positions_as_bench_sim_measure
     # bpb bench sim measures pymunk at coarse steps on purpose: after the refusal above its
     # default pymunk:dt=0.01 failed most scenes and --scaling pymunk stopped the whole benchmark
     s = scene([(1.0, 0.5, 6.0, 0.0)], horizon=1.0, mu=0.0, pockets=[])
-    coarse = parse_contestant(f"pymunk:dt={30 * stable_dt(s)!r},tunnel=allow")
+    coarse = parse_spec(f"pymunk:dt={30 * stable_dt(s)!r},tunnel=allow", "--contestant")
     allowed = make_registry().simulator(coarse.name, coarse.options)
     with pytest.raises(SimulationError, match="above this scene's stability bound"):
         PymunkSimulator(dt=coarse.options["dt"]).run(s)

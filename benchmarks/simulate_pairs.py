@@ -1,6 +1,6 @@
 """``bpb simulate``'s steady CPU per scene, this checkout against another one, side by side.
 
-Usage: ``python scripts/simulate_pairs.py PATH_LIST OTHER_SRC [PAIRS]``. ``PATH_LIST`` names what
+Usage: ``python benchmarks/simulate_pairs.py PATH_LIST OTHER_SRC [PAIRS]``. ``PATH_LIST`` names what
 to give ``bpb simulate`` (see ``simulate_cpu.py``); ``OTHER_SRC`` is the ``src`` folder of the
 other checkout (for instance ``git worktree add /tmp/pre 7e5c969`` and ``/tmp/pre/src``), run
 with this interpreter and its installed packages. The two alternate, one fresh process each

@@ -2,7 +2,7 @@
 over the same scene files and only the second run is counted: the first counts the lines
 (scenes), the second writes them to ``/dev/null`` through file descriptor 1, as into a file.
 
-Usage: ``python scripts/simulate_cpu.py PATH_LIST [ROUNDS]``, where ``PATH_LIST`` names what to
+Usage: ``python benchmarks/simulate_cpu.py PATH_LIST [ROUNDS]``, where ``PATH_LIST`` names what to
 give ``bpb simulate``, one per line: scene files, or a dataset folder. Scenes are counted from
 the lines printed. Which code runs is whatever ``bpb_core`` this interpreter imports, so putting
 another checkout's ``src`` first on ``PYTHONPATH`` measures that checkout. The first run pays

@@ -1,4 +1,5 @@
-"""``bpb bench sim``: simulators side by side (speed, error against a reference, disagreements)."""
+"""``bpb bench``: ``bpb bench sim``, simulators side by side (speed, error against a reference,
+disagreements). The other benchmarks are scripts in the checkout's ``benchmarks/`` folder."""
 
 from __future__ import annotations
 
@@ -8,11 +9,16 @@ from typing import TYPE_CHECKING
 import click
 
 if TYPE_CHECKING:
-    from bpb_core.bench.sim import SimBench
+    from bpb_core.bench.sim_report import SimBench
     from bpb_core.registry import Registry
 
 
-@click.command("sim")
+@click.group("bench")
+def bench() -> None:
+    """Benchmarks: simulators side by side, speed against error (more in benchmarks/)."""
+
+
+@bench.command("sim")
 @click.option("--scenes", default=100, show_default=True, help="Scenes to compare on.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the scenes.")
 @click.option("--family", default=None, help="Scene family [default: the default family].")
@@ -99,7 +105,7 @@ def bench_sim(
             reference_scenes=reference_scenes,
         )
     if scaling:
-        from bpb_core.bench.sim_scaling import with_scaling
+        from bpb_core.bench.sim import with_scaling
 
         result = with_scaling(result, scaling, scaling_scenes, registry=registry)
     if simulate_scenes > 0:
@@ -130,7 +136,7 @@ def _check_options(
 
     name = family or registry.default_family()
     if scaling:
-        from bpb_core.bench.sim_scaling import scaling_simulators
+        from bpb_core.bench.sim import scaling_simulators
 
         scaling_simulators(registry, name, scaling, scaling_scenes)
     if simulate_scenes < 0:

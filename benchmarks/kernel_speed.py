@@ -1,6 +1,6 @@
 """The compiled kernel itself against the pure-Python engine, side by side on the same scenes.
 
-Usage: ``python scripts/kernel_speed.py [COUNT] [ROUNDS]`` (default 10,000 ``bpb bench sim``
+Usage: ``python benchmarks/kernel_speed.py [COUNT] [ROUNDS]`` (default 10,000 ``bpb bench sim``
 scenes, seed 0, 3 rounds). Per round, interleaved: the Python engine scene by scene
 (``AnalyticSimulator(engine="python").run``), the kernel's batch entry point on arrays prepared
 beforehand (``run_many_arrays``: the compiled event loop alone), ``simulate_many`` (arrays built

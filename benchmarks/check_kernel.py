@@ -1,6 +1,6 @@
 """Check the compiled kernel against the pure-Python engine on many random scenes.
 
-Usage: ``python scripts/check_kernel.py [COUNT] [SEED]`` (default 100,000 scenes, seed 2026).
+Usage: ``python benchmarks/check_kernel.py [COUNT] [SEED]`` (default 100,000 scenes, seed 2026).
 Scenes are sampled as in ``tests/tasks/simulators/test_kernel.py`` (horizons 1-5 s, cue speeds
 0.2-12 m/s). Prints label differences, the largest position difference and timings.
 """

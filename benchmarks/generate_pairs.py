@@ -1,7 +1,7 @@
 """``bpb generate`` of the paper-size dataset as users run it, this checkout against another one,
 each beside the CPU of encoding its own PNGs alone.
 
-Usage: ``python scripts/generate_pairs.py OTHER_SRC [PAIRS] [FOLDER]``. ``OTHER_SRC`` is the
+Usage: ``python benchmarks/generate_pairs.py OTHER_SRC [PAIRS] [FOLDER]``. ``OTHER_SRC`` is the
 ``src`` folder of the other checkout (``git worktree add /tmp/pre c8c8f10``, then ``/tmp/pre/src``),
 run with this interpreter and its installed packages. Each pair runs ``bpb generate --out
 FOLDER/x --per-horizon 200 --overwrite`` (default workers) once with the other checkout and once
@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from simulate_pairs import _env  # scripts/ is first on the path of a script
+from simulate_pairs import _env  # benchmarks/ is first on the path of a script
 
 HERE = Path(__file__).resolve().parent
 ENCODE = """

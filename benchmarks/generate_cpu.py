@@ -1,7 +1,7 @@
 """CPU of ``bpb generate`` (paper size, images, 64-perturbation stability) beside the CPU of
 encoding its PNGs alone, measured in one process, rounds interleaved.
 
-Usage: ``python scripts/generate_cpu.py [ROUNDS]``. Generation runs in this process
+Usage: ``python benchmarks/generate_cpu.py [ROUNDS]``. Generation runs in this process
 (``workers=1``), so ``time.process_time`` holds all of its CPU. The encoding baselines decode the
 dataset's own PNGs first (not counted), then encode every one of them and count only that: once
 with Pillow (8-bit palette, zlib level 1: how bpb stored them until stop 31, the yardstick of
