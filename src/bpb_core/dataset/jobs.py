@@ -6,7 +6,6 @@ order however many workers run.
 
 from __future__ import annotations
 
-import gc
 import itertools
 import os
 from collections.abc import Callable, Iterable, Iterator
@@ -22,7 +21,7 @@ from bpb_core.dataset.worker import (
     init_pool_worker,
     init_worker,
     remove_scene,
-    run_jobs,
+    run_job,
     started_pool,
 )
 from bpb_core.dataset.writer import DatasetWriter, plugin_label
@@ -33,7 +32,6 @@ from bpb_core.simulator_spec import parse_spec
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
 
-RUN = 8  # scenes a worker makes, then draws, then writes in turn (worker.produce_many)
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
 WORKERS_PER_CORE = 4  # beyond, processes only queue for the cores, each with its own memory
 # 50 times the largest size in the docs (10,000 per horizon); 500,000 scenes over five horizons
@@ -152,36 +150,11 @@ def pooled(n_workers: int) -> bool:
     return n_workers > 1
 
 
-class QuietPool(Pool):
-    """A :class:`multiprocessing.pool.Pool` whose worker-handler thread sleeps until a worker
-    exits or the pool changes (closed, terminated, its last task done).
-
-    Python's also wakes it while a result waits in the result queue, which lasts until the
-    result-handler thread reads it: for the paper-size dataset the thread went round about 15,000
-    times for 250 results, each round checking every worker's exit status, some 0.3 s of this
-    process's CPU. It needs no such wake-up: the pool announces its changes on its change
-    notifier, and each worker's exit is its sentinel, which the thread waits on as well."""
-
-    def _get_sentinels(self) -> list[Any]:
-        return [self._change_notifier._reader]  # type: ignore[attr-defined]
-
-
 def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
-    """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1).
-
-    The garbage collector's objects are frozen while the pool starts its workers, so that where
-    they are forked their collections do not copy the pages they share with this process; they
-    are unfrozen after, unless this process had frozen objects of its own (a library caller's
-    freeze is left as it is)."""
+    """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1)."""
     if n_workers == 1:
         return InProcess(setup)
-    host_froze = gc.get_freeze_count() > 0
-    gc.freeze()
-    try:
-        return started_pool(lambda: QuietPool(n_workers, init_pool_worker, (setup,)))
-    finally:
-        if not host_froze:
-            gc.unfreeze()
+    return started_pool(lambda: Pool(n_workers, init_pool_worker, (setup,)))
 
 
 def run_calibration(
@@ -248,14 +221,9 @@ def _stream(
 
 
 def _results(pool: Pool | InProcess, jobs: Iterable[Job]) -> Iterator[SceneResult]:
-    """The results of ``jobs`` run on ``pool`` in runs of :data:`RUN`, in job order; a run's
-    error is raised after the results of the scenes before it."""
-    left = iter(jobs)
-    runs = iter(lambda: tuple(itertools.islice(left, RUN)), ())
-    for batch in pool.imap(run_jobs, runs):
-        yield from batch.results
-        if batch.error is not None:
-            raise batch.error
+    """The results of ``jobs`` run on ``pool``, in job order; a scene's error is raised after
+    the results of the scenes before it."""
+    return pool.imap(run_job, jobs)
 
 
 def _run_stable(

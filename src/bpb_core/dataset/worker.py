@@ -1,26 +1,23 @@
 """One scene from seed to files: the family makes it, the worker writes and hashes it.
 
 Runs in the worker processes of :func:`bpb_core.dataset.generate.generate_dataset` (and
-in-process for ``workers=1``). Each call writes a short run of scene folders and returns a small
-:class:`SceneResult` for each, so nothing accumulates in memory however large the dataset is.
+in-process for ``workers=1``). Each call writes one scene folder and returns a small
+:class:`SceneResult`, so nothing accumulates in memory however large the dataset is.
 """
 
 from __future__ import annotations
 
-import gc
-import os
 import shutil
 import signal
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
-from multiprocessing.pool import ExceptionWithTraceback  # type: ignore[attr-defined]
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Calibrating
 from bpb_core.dataset.manifest import IndexRow, sha256_bytes
-from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, write_refused, writing
+from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
 
@@ -157,35 +154,9 @@ def _ready() -> tuple[WorkerSetup, SceneFamily, Simulator]:
     return _SETUP, _STATE["family"], _STATE["simulator"]
 
 
-def run_jobs(jobs: tuple[Job, ...]) -> Batch:
-    """Produce a run of scenes with the process's setup (see :func:`init_worker` and
-    :func:`produce_many`), the garbage collector paused (:func:`collector_paused`)."""
-    setup, family, simulator = _ready()
-    with collector_paused():
-        return produce_many(setup, family, simulator, jobs)
-
-
-@contextmanager
-def collector_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector over a block (restored after): a run of scenes
-    made, drawn and written (:func:`run_jobs`), a chunk of ``bpb simulate``'s batch path, its
-    listing of the scene files.
-
-    Each makes thousands of small containers that stay alive until its work is done, so the
-    collector ran every few hundred of them and each time walked them all, and in its older
-    generations every object the imports made (numba, pydantic, numpy). For ``bpb simulate``
-    that was about a third of the whole per-scene cost, and listing a 10,000-scene dataset
-    spent more time in collections than in listing; generating the paper-size dataset spent
-    about 70 ms in collections per 1,000 scenes, 15 ms with runs of 8 scenes paused. bpb's own
-    objects here hold no reference cycles and are freed by reference counting; a plugin's
-    cycles wait for the collector's next run."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
+def run_job(job: Job) -> SceneResult:
+    """Produce one scene with the process's setup (see :func:`init_worker` and :func:`produce`)."""
+    return produce(*_ready(), job)
 
 
 def calibrate_job(horizon: float) -> tuple[float, Any]:
@@ -204,126 +175,31 @@ def calibrate_job(horizon: float) -> tuple[float, Any]:
         return horizon, family.calibrate_horizon(setup.config, simulator, horizon)
 
 
-@dataclass(frozen=True)
-class Batch:
-    """What a worker reports for a run of jobs: the results of the scenes it finished, in job
-    order, and the error that stopped it, if one did (the scenes before it are written and
-    listed, as when each scene is its own job).
-
-    Pickled, the error carries its traceback's text as its cause, as a pool's own does
-    (:class:`multiprocessing.pool.ExceptionWithTraceback`)."""
-
-    results: tuple[SceneResult, ...]
-    error: Exception | None = None
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        error = self.error
-        if error is None:
-            return Batch, (self.results,)
-        return Batch, (self.results, ExceptionWithTraceback(error, error.__traceback__))
-
-
 def produce(setup: WorkerSetup, family: SceneFamily, simulator: Simulator, job: Job) -> SceneResult:
-    """Make, write and hash one scene; return its row and file hashes (raises as
-    :func:`produce_many`)."""
-    batch = produce_many(setup, family, simulator, (job,))
-    if batch.error is not None:
-        raise batch.error
-    return batch.results[0]
+    """Make, write and hash one scene; return its row and file hashes.
 
-
-def produce_many(
-    setup: WorkerSetup, family: SceneFamily, simulator: Simulator, jobs: tuple[Job, ...]
-) -> Batch:
-    """Make, write and hash a run of scenes; return their rows and file hashes.
-
-    Every scene is made before any is drawn, and all are drawn before any is written: each
-    step then runs on caches its own previous call warmed, not on what encoding a scene's
-    images left there (docs/benchmarks.md, generation, stop 30: in one warm process the work
-    beside encoding took about a tenth less with runs of 8). The first error in scene order
-    stops the run; the scenes before it are finished and returned with it.
-
-    Errors (in :attr:`Batch.error`):
+    Raises:
         BadInput: The config makes a scene the simulator cannot finish.
         WriteRefused: The system refused to write a scene file (names it).
         PluginBug: The family's ``make_scene()`` (or its scene's ``files()``) raised or
             returned something else than it should, naming the family's plugin.
     """
-    made: list[tuple[Job, str, str, Any]] = []
-    error: Exception | None = None
-    for job in jobs:
-        name = scene_id(job.horizon, job.index)
-        what = f"scene family {family.name!r}: make_scene({name!r})"
-        try:
-            with _finishing(setup, what, f"config: scene {name}"):
-                scene = family.make_scene(
-                    setup.config, simulator, setup.seed, job.horizon, job.index
-                )
-        except Exception as exc:
-            error = exc
-            break
-        made.append((job, name, what, scene))
-    staged: list[tuple[IndexRow, dict[str, bytes] | None]] = []
-    for job, name, what, scene in made:  # an error here comes before the one above
-        try:
-            row = IndexRow(
-                name, job.horizon, job.index, *_cells(setup.origin, what, name, family, scene)
-            )
-            keep = job.keep_unstable or row.stable is not False
-            staged.append((row, _files(setup, what, scene) if keep else None))
-        except Exception as exc:
-            error = exc
-            break
-    results: list[SceneResult] = []
-    for row, files in staged:  # ... and here before both
-        try:
-            results.append(SceneResult(row, _written(setup, row, files)))
-        except Exception as exc:
-            error = exc
-            break
-    return Batch(tuple(results), error)
-
-
-def _written(
-    setup: WorkerSetup, row: IndexRow, files: dict[str, bytes] | None
-) -> tuple[tuple[str, str], ...]:
-    """Write a scene's ``files`` into its folder; their paths relative to the dataset and
-    hashes (none for a scene not kept)."""
-    if files is None:
-        return ()
+    name = scene_id(job.horizon, job.index)
+    what = f"scene family {family.name!r}: make_scene({name!r})"
+    with _finishing(setup, what, f"config: scene {name}"):
+        scene = family.make_scene(setup.config, simulator, setup.seed, job.horizon, job.index)
+    row = IndexRow(name, job.horizon, job.index, *_cells(setup.origin, what, name, family, scene))
+    if not (job.keep_unstable or row.stable is not False):
+        return SceneResult(row, ())
+    files = _files(setup, what, scene)
     folder = scene_dir(setup.root, row.horizon, row.index)
-    try:
-        os.mkdir(folder)  # one call once the horizon's folder is there
-    except OSError:  # not yet, or already there, or refused: as Path.mkdir(parents=True) does
-        with writing(folder):
-            os.makedirs(folder, exist_ok=True)
+    with writing(folder):
+        folder.mkdir(parents=True, exist_ok=True)
     rel = folder.relative_to(setup.root).as_posix()
-    hashed = []
     for file_name, data in files.items():
-        path = os.path.join(folder, file_name)
-        try:
-            write_file(path, data)
-        except OSError as exc:  # a full disk, a file size limit: the user's to fix
-            raise write_refused(path, exc) from None  # as writing() does, without its frame
-        hashed.append((f"{rel}/{file_name}", sha256_bytes(data)))
-    return tuple(hashed)
-
-
-_WRITING = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
-
-
-def write_file(path: str, data: bytes) -> None:
-    """``Path(path).write_bytes(data)`` without the buffered file object around the descriptor
-    (a third of the 0.17 ms five scene files cost): the same mode (0o666 less the umask),
-    replacing a file there, and the same ``OSError`` for a full disk or a refused folder; a
-    short write (a file size limit reached) goes on, to fail as the file object's would."""
-    fd = os.open(path, _WRITING, 0o666)
-    try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view) :]
-    finally:
-        os.close(fd)
+        with writing(folder / file_name):  # a full disk, a file size limit: the user's to fix
+            (folder / file_name).write_bytes(data)
+    return SceneResult(row, tuple((f"{rel}/{n}", sha256_bytes(d)) for n, d in files.items()))
 
 
 @contextmanager
