@@ -26,10 +26,9 @@ stay below it."""
 
 def input_mode(data: Path) -> InputMode:
     """``image`` when the dataset's scene family has images, else ``state``."""
-    from bpb_core.registry import make_registry
-    from bpb_core.runner.asking import data_family
+    from bpb_core.dataset.reader import open_folder
 
-    return "image" if data_family(data, make_registry()).input_image else "state"
+    return "image" if open_folder(data).family.input_image else "state"
 
 
 def requests(data: Path) -> list[list[dict[str, Any]]]:
