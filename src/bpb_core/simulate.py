@@ -20,10 +20,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.jobs import check_workers
+from bpb_core.dataset.jobs import check_workers, started_pool, worker_signals
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_family, dataset_simulator_spec
-from bpb_core.dataset.worker import started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named

@@ -35,7 +35,7 @@ from typing import Literal
 from PIL import Image
 
 from bpb_core.bench.children import run_child
-from bpb_core.dataset.worker import started_pool, worker_signals
+from bpb_core.dataset.jobs import started_pool, worker_signals
 from bpb_core.png import DEFAULT_LEVEL, encode_palette_png
 
 SAMPLE_IMAGES = 24

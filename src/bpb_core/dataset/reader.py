@@ -16,10 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.checksums import inside, parse_line, read_scene_model
 from bpb_core.dataset.hf_import import SIDE, resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest, content_hash
-from bpb_core.dataset.scene_entry import DatasetScene
+from bpb_core.dataset.scene_entry import DatasetScene, inside, parse_line, read_scene_model
 from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys

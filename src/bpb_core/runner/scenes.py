@@ -13,10 +13,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.checksums import check_recorded, read_scene_model
 from bpb_core.dataset.manifest import content_hash
 from bpb_core.dataset.reader import DataFolder, dataset_keys
-from bpb_core.dataset.scene_entry import check_image, read_scene_files
+from bpb_core.dataset.scene_entry import (
+    check_image,
+    check_recorded,
+    read_scene_files,
+    read_scene_model,
+)
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 
@@ -41,7 +45,7 @@ class SceneRef:
 
         Raises:
             BadInput: The file is missing, invalid (names the file and the field) or changed
-                after generation (:mod:`bpb_core.dataset.checksums`).
+                after generation (:mod:`bpb_core.dataset.scene_entry`).
         """
         return read_scene_model(self.folder / INIT, self.family.scene_model)
 
