@@ -20,10 +20,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.jobs import check_workers
+from bpb_core.dataset.jobs import check_workers, started_pool, worker_signals
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import dataset_family, dataset_simulator_spec
-from bpb_core.dataset.worker import collector_paused, started_pool, worker_signals
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed
 from bpb_core.layout import FINAL, INIT, MANIFEST, horizon_label, scene_places
 from bpb_core.plugin_calls import loaded_config, simulated_truth, simulator_named
@@ -444,8 +443,7 @@ def simulate_blocks(
         raise BadInput(f"--workers: must be 0 (automatic) or more, got {workers}")
     check_workers(workers, least=0)
     try:
-        with collector_paused():  # ten thousand names: see collector_paused
-            files = _scene_names(paths, ahead=True)
+        files = _scene_names(paths, ahead=True)
         job = prepare(horizon, simulator, registry, options, [Path(f) for f in files[:1]], names)
         count = _worker_count(workers, len(files))
         _JOB = (job, horizon, stability)
@@ -495,14 +493,13 @@ def _lines(files: Sequence[str]) -> tuple[list[str] | bytes, BadInput | None]:
     job, horizon, stability = _JOB
     texts: list[bytes] = []  # the ordinary path takes these bytes: a pipe is read only once
     if not stability and isinstance(job.family, WritesTruthLines):
-        with collector_paused():
-            texts = _read_all(files)
-            try:
-                fast = _truth_lines(job, job.family, texts, horizon) if texts else []
-            except PluginBug:
-                raise
-            except BpbError:  # e.g. an event cap overrun: the ordinary path below names the file
-                fast = None
+        texts = _read_all(files)
+        try:
+            fast = _truth_lines(job, job.family, texts, horizon) if texts else []
+        except PluginBug:
+            raise
+        except BpbError:  # e.g. an event cap overrun: the ordinary path below names the file
+            fast = None
         if fast is not None:
             return _fill(files, fast, texts)
     return _fill(files, [], texts)

@@ -7,12 +7,13 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from bpb_core.cli.run_file import Prepared
+    from bpb_core.dataset.reader import DataFolder
     from bpb_core.registry import Registry
     from bpb_core.runner.options import RunOptions
 
 
 def show_dry_run(
-    data: Path, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
+    data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> None:
     """Print, per adapter and task, the calls a run would send, those already done, and the
     estimated input tokens and USD (nothing is sent)."""

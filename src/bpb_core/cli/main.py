@@ -7,11 +7,12 @@ not pay for pydantic, numpy or litellm. Errors become one line on stderr and an 
 
 from __future__ import annotations
 
-import atexit
-import gc
 import importlib
 import os
 import sys
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, TextIO
 
 import click
@@ -66,87 +67,62 @@ def cli() -> None:
     ask multimodal LLMs what happens, score them and report where they fail."""
 
 
-# BLAS libraries start a thread pool per process when numpy is imported (OpenBLAS: one thread
-# per core). bpb's arrays are small and its commands spread work over processes themselves, so
-# those pools only cost their start-up: about 0.1 s of CPU per process. A value the user set wins.
-BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-def single_threaded_blas() -> None:
-    """Ask the BLAS libraries of this process (and of processes it starts) for one thread,
-    unless the environment already says how many."""
-    for name in BLAS_THREAD_VARIABLES:
-        os.environ.setdefault(name, "1")
-
-
-def notes_on_stderr() -> None:
+@contextmanager
+def notes_on_stderr() -> Iterator[None]:
     """Show each :class:`~bpb_core.errors.Notice` (a plugin's word before slow work) as one
-    ``note:`` line on stderr, in this process and the workers it forks; other warnings as
-    Python shows them."""
-    import warnings
+    ``note:`` line on stderr in the block, in this process and the workers it forks; other
+    warnings as Python shows them. The caller's warning settings are restored after."""
+    with warnings.catch_warnings():
+        shown = warnings.showwarning
 
-    shown = warnings.showwarning
+        def show(
+            message: Warning | str,
+            category: type[Warning],
+            filename: str,
+            lineno: int,
+            file: TextIO | None = None,
+            line: str | None = None,
+        ) -> None:
+            from bpb_core.errors import Notice
 
-    def show(
-        message: Warning | str,
-        category: type[Warning],
-        filename: str,
-        lineno: int,
-        file: TextIO | None = None,
-        line: str | None = None,
-    ) -> None:
-        from bpb_core.errors import Notice
+            if not issubclass(category, Notice):
+                shown(message, category, filename, lineno, file, line)
+                return
+            from rich.markup import escape
 
-        if not issubclass(category, Notice):
-            shown(message, category, filename, lineno, file, line)
-            return
-        from rich.markup import escape
+            from bpb_core.cli.console import stderr
 
-        from bpb_core.cli.console import stderr
+            text = f"[yellow]note:[/] {escape(str(message))}"
+            stderr().print(text, highlight=False, soft_wrap=True)
 
-        text = f"[yellow]note:[/] {escape(str(message))}"
-        stderr().print(text, highlight=False, soft_wrap=True)
-
-    warnings.showwarning = show
-
-
-def no_collection_at_exit() -> None:
-    """Freeze the garbage collector's objects as the interpreter exits, after the command.
-
-    Python's shutdown otherwise runs cyclic collections over every object the imports made
-    (numba, numpy, pydantic) and frees them one by one: about 0.2 s of CPU at the end of each
-    ``bpb generate``, to give back memory the exiting process gives back anyway. What a command
-    needs done at exit is done before: its files closed, its pools joined, the exit handlers
-    registered after this one run first, the standard streams flushed; only garbage cycles left
-    at exit go unfinalized, which Python never promises to finalize. Registered at exit, not
-    frozen now, so that a caller that runs :func:`main` in its own process (tests) keeps its
-    collector until it exits; once, however many commands such a caller runs."""
-    atexit.unregister(gc.freeze)
-    atexit.register(gc.freeze)
+        warnings.showwarning = show
+        yield
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Run the CLI and exit with bpb's exit codes."""
-    single_threaded_blas()
-    notes_on_stderr()
-    no_collection_at_exit()
+    """Run the CLI and exit with bpb's exit codes; the caller's process is left as it was."""
+    with notes_on_stderr():
+        code = _run(argv)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def _run(argv: list[str] | None) -> Any:
     try:
-        code = cli.main(args=argv, prog_name="bpb", standalone_mode=False)
+        return cli.main(args=argv, prog_name="bpb", standalone_mode=False)
     except click.exceptions.Abort as exc:
         click.echo(_aborted(exc.__cause__), err=True)
-        code = 130
+        return 130
     except click.UsageError as exc:  # one line, like every other bad input
         where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
         click.echo(f"error: {exc.format_message()}{where}", err=True)
-        code = 2
+        return 2
     except click.ClickException as exc:
         exc.show()
-        code = 2 if exc.exit_code == 2 or isinstance(exc, click.UsageError) else exc.exit_code
+        return 2 if exc.exit_code == 2 or isinstance(exc, click.UsageError) else exc.exit_code
     except click.exceptions.Exit as exc:
-        code = exc.exit_code
+        return exc.exit_code
     except Exception as exc:  # every failure leaves as one line and an exit code
-        code = _report_error(exc)
-    sys.exit(code if isinstance(code, int) else 0)
+        return _report_error(exc)
 
 
 def _aborted(cause: BaseException | None) -> str:

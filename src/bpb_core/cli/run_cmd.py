@@ -18,6 +18,7 @@ from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
     from bpb_core.cli.run_file import AdapterPlan, Prepared
+    from bpb_core.dataset.reader import DataFolder
     from bpb_core.model_calls import AdapterOptions
     from bpb_core.registry import Registry
     from bpb_core.runner.options import RunOptions
@@ -88,17 +89,16 @@ def _adapter_options(
     return AdapterOptions(api_base=api_base, seed=seed, prices=price_table, aliases=alias_table)
 
 
-def _offline_adapters(registry: Registry, data: Path) -> list[str]:
+def _offline_adapters(registry: Registry, data: DataFolder) -> list[str]:
     """Every model of every offline adapter that can answer the dataset's scene family (and
     whose simulator, if it runs one, is installed)."""
     from rich.markup import escape
 
     from bpb_core.cli.console import stderr
     from bpb_core.plugin_calls import answer_refusal
-    from bpb_core.runner.asking import data_family
     from bpb_core.runner.run import adapter_origin, check_simulator_for
 
-    family = data_family(data, registry)
+    family = data.family
     chosen = []
     for spec in registry.offline_specs():
         adapter = registry.adapter(spec)
@@ -261,8 +261,8 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
     from bpb_core.cli.console import load_registry
+    from bpb_core.dataset.reader import open_folder
     from bpb_core.layout import check_writable_folder
-    from bpb_core.runner.asking import default_tasks
     from bpb_core.runner.options import RetryPolicy, RunOptions
 
     check_writable_folder(kw["out"], "--out")  # before any work: a file or unwritable path
@@ -274,8 +274,8 @@ def run(**kw: Any) -> None:
     _check_names(registry, [], [p.spec for p in plans])
     check = not kw["dry_run"]  # a dry run sends nothing, so it needs no key
     ready = _prepare(registry, plans, check) if plans else []  # preflight: before any call
-    data = _data(kw["data"], out, kw["seed"], registry)
-    tasks = tasks or default_tasks(data, registry)
+    data = open_folder(_data(kw["data"], out, kw["seed"], registry), registry)  # read once
+    tasks = tasks or registry.tasks_for(data.family.name, default_only=True)
     if not ready:
         ready = _prepare(registry, _plans(kw, _offline_adapters(registry, data)), check)
     if kw["max_cost"] is not None and not kw["allow_unpriced"] and not kw["dry_run"]:
@@ -313,7 +313,7 @@ def run(**kw: Any) -> None:
     for item in ready:  # before any adapter's first call
         check_simulator_for(data, item.name, item.adapter, registry)
     results = _run_all(data, out, ready, options, registry)
-    raise click.exceptions.Exit(_finish(results, registry))
+    raise click.exceptions.Exit(_finish(results, registry, data))
 
 
 def _prepare(registry: Registry, plans: list[AdapterPlan], check: bool) -> list[Prepared]:
@@ -323,7 +323,7 @@ def _prepare(registry: Registry, plans: list[AdapterPlan], check: bool) -> list[
 
 
 def _run_all(
-    data: Path, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
+    data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> list[RunResult]:
     import dataclasses
 
@@ -351,13 +351,13 @@ def _run_all(
     return results
 
 
-def _finish(results: list[RunResult], registry: Registry) -> int:
+def _finish(results: list[RunResult], registry: Registry, data: DataFolder) -> int:
     from rich.markup import escape
 
     from bpb_core.cli.console import stderr
     from bpb_core.cli.run_summary import show_summary
 
-    show_summary([r.run_dir for r in results], registry)
+    show_summary([r.run_dir for r in results], registry, [data])
     code = 0
     for result in results:
         if result.stopped == "auth":

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -10,6 +11,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from rich.table import Table
 
+    from bpb_core.dataset.reader import DataFolder
     from bpb_core.registry import Registry
 
 _NOT_SCORES = (
@@ -17,8 +19,11 @@ _NOT_SCORES = (
 )  # fmt: skip
 
 
-def show_summary(run_dirs: list[Path], registry: Registry) -> None:
-    """Write ``scores.csv`` into each run folder and print the leaderboard summary."""
+def show_summary(
+    run_dirs: list[Path], registry: Registry, folders: Iterable[DataFolder] = ()
+) -> None:
+    """Write ``scores.csv`` into each run folder and print the leaderboard summary
+    (``folders``: the runs' datasets, already read)."""
     from rich.markup import escape
 
     from bpb_core.cli.console import stderr, stdout
@@ -26,7 +31,7 @@ def show_summary(run_dirs: list[Path], registry: Registry) -> None:
     from bpb_core.results.scores_csv import write_scores
 
     try:
-        frame = write_scores(run_dirs, registry)
+        frame = write_scores(run_dirs, registry, folders)
     except BpbError as exc:
         stderr().print(f"[yellow]warning:[/] could not score the run: {exc}")
         return

@@ -1,4 +1,7 @@
-"""The files that describe a dataset: ``dataset.json``, ``index.csv`` and ``checksums.sha256``.
+"""The files that describe a dataset: ``dataset.json``, ``index.csv`` and ``checksums.sha256``,
+and their writer (:class:`DatasetWriter`), which streams the index and the checksums to disk as
+scenes arrive, then seals the manifest; only per-horizon counters (and whatever the scene
+family's tallies keep) stay in memory.
 
 The manifest holds no timestamps and no absolute paths, so two generations with the same seed,
 config and software versions are byte-identical. ``dataset_hash`` is the SHA-256 of the
@@ -8,18 +11,24 @@ manifest's canonical JSON without that field; it changes whenever any file of th
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
+import platform
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from bpb_core.errors import BadInput
+from bpb_core.capabilities import HorizonTally
+from bpb_core.errors import BadInput, writing
+from bpb_core.layout import INDEX, MANIFEST, horizon_label
 
 if TYPE_CHECKING:
+    from bpb_core.dataset.jobs import SceneResult
     from bpb_core.registry import Registry
 
 FORMAT = "bpb-dataset/1"
@@ -148,3 +157,107 @@ def cell(value: object) -> str:
 def sha256_bytes(data: bytes) -> str:
     """Hex SHA-256 of ``data``."""
     return hashlib.sha256(data).hexdigest()
+
+
+VERSIONED = ("bpb", "pydantic", "pillow", "zlib-ng", "matplotlib", "numpy")
+
+
+@dataclass
+class HorizonCounts:
+    """Running counts of one horizon that every family has."""
+
+    scenes: int = 0
+    unstable: int = 0
+    dropped: int = 0
+
+
+class DatasetWriter:
+    """Appends index rows and checksums in scene order; writes the manifest.
+
+    Attributes:
+        tallies: The family's per-horizon tallies (empty when the family keeps none).
+    """
+
+    def __init__(
+        self,
+        root: Path,
+        horizons: Sequence[float],
+        columns: Sequence[str],
+        tallies: Mapping[float, HorizonTally] | None = None,
+    ) -> None:
+        self.root = root
+        self.counts = {h: HorizonCounts() for h in horizons}
+        self.tallies = dict(tallies or {})
+        with writing(root):
+            self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
+            self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
+        self._rows = csv.writer(self._index, lineterminator="\n")
+        with writing(root / INDEX):
+            self._rows.writerow(IndexRow.header(columns))
+
+    def add(self, result: SceneResult) -> None:
+        """Record a kept scene."""
+        row = result.row
+        counts = self.counts[row.horizon]
+        counts.scenes += 1
+        counts.unstable += row.stable is False
+        if row.horizon in self.tallies:
+            self.tallies[row.horizon].add(dict(row.values))
+        # Checksums first: a Ctrl-C between the two leaves no index row whose files are unlisted
+        with writing(self.root / CHECKSUMS):  # the buffer reaching the disk, which may be full
+            self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
+        with writing(self.root / INDEX):
+            self._rows.writerow(row.cells())
+
+    def drop(self, horizon: float) -> None:
+        """Count a scene dropped as unstable."""
+        self.counts[horizon].dropped += 1
+
+    def add_file(self, rel: str) -> None:
+        """Checksum an extra file (a stats figure) written under the root."""
+        digest = sha256_bytes((self.root / rel).read_bytes())
+        with writing(self.root / CHECKSUMS):
+            self._sums.write(f"{digest}  {rel}\n")
+
+    def close(self) -> None:
+        """Flush and close the streamed files (both, even when the first cannot be)."""
+        try:
+            with writing(self.root / INDEX):
+                self._index.close()
+        finally:
+            with writing(self.root / CHECKSUMS):
+                self._sums.close()
+
+    def summary(self) -> dict[str, HorizonSummary]:
+        """Per-horizon counts (with the family's fields) keyed by horizon label (``h3``)."""
+        out = {}
+        for h, c in self.counts.items():
+            extra: dict[str, Any] = self.tallies[h].summary() if h in self.tallies else {}
+            out[horizon_label(h)] = HorizonSummary(
+                scenes=c.scenes, dropped_unstable=c.dropped, unstable=c.unstable, **extra
+            )
+        return out
+
+    def write_manifest(self, manifest: DatasetManifest) -> DatasetManifest:
+        """Add the descriptive files' hashes, seal and write ``dataset.json``."""
+        files = {name: sha256_bytes((self.root / name).read_bytes()) for name in (INDEX, CHECKSUMS)}
+        sealed = manifest.model_copy(update={"files": files}).sealed()
+        with writing(self.root / MANIFEST):
+            (self.root / MANIFEST).write_text(sealed.to_json(), encoding="utf-8")
+        return sealed
+
+
+def versions() -> dict[str, str]:
+    """Versions of Python and of the packages whose output lands in the dataset."""
+    found = {"python": platform.python_version()}
+    for name in VERSIONED:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return found
+
+
+def plugin_label(registered: Any) -> str:
+    """``name (distribution version)`` of a registered component."""
+    return f"{registered.info.name} ({registered.distribution} {registered.version})"

@@ -16,14 +16,14 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.checksums import inside, parse_line, read_scene_model
 from bpb_core.dataset.hf_import import SIDE, resolve_data
 from bpb_core.dataset.manifest import CHECKSUMS, DatasetManifest, content_hash
-from bpb_core.dataset.scene_entry import DatasetScene
+from bpb_core.dataset.scene_entry import DatasetScene, inside, parse_line, read_scene_model
 from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.plugin_calls import loaded_config, simulator_named
+from bpb_core.scored_units import object_origin
 from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 from bpb_core.validated_files import read_model, validate_mapping
 
@@ -252,11 +252,17 @@ def manifest_data(root: Path) -> dict[str, Any] | None:
         BadInput: The file cannot be read, is not a JSON object, or one of those fields is
             wrong (names the file and the field).
     """
+    return _manifest_file(root)[0]
+
+
+def _manifest_file(root: Path) -> tuple[dict[str, Any] | None, str | None]:
+    """:func:`manifest_data` and the SHA-256 of the file's bytes, from one read."""
     path = root / MANIFEST
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+        data = json.loads(raw.decode("utf-8"))
     except FileNotFoundError:
-        return None
+        return None, None
     except (OSError, ValueError) as exc:
         why = getattr(exc, "strerror", None) or exc
         raise BadInput(f"{path}: cannot read dataset manifest: {why}") from None
@@ -285,7 +291,7 @@ def manifest_data(root: Path) -> dict[str, Any] | None:
             )
     if "format" in data:  # written by bpb generate: every field it writes is checked
         validate_mapping(DatasetManifest, data, str(path))
-    return data
+    return data, hashlib.sha256(raw).hexdigest()
 
 
 def _json_kind(value: object) -> str:
@@ -319,66 +325,92 @@ def _non_finite(value: object, where: str = "") -> str | None:
     return None
 
 
-def family_name(root: Path) -> str | None:
-    """The scene family named by ``root/dataset.json`` (``config.family``), or ``None`` when
-    there is no manifest or it names none (a hand-made folder of scenes).
+@dataclass(frozen=True)
+class DataFolder:
+    """A folder of scenes as a command reads it, once (:func:`open_folder`): its
+    ``dataset.json`` and the scene family that made it, passed down to every check and record
+    of a run instead of each reading the file again.
+
+    Attributes:
+        recorded: The manifest's fields as written, checked (:func:`manifest_data`; ``None``:
+            a hand-made folder of scenes without one).
+        digest: The SHA-256 of the manifest's bytes (``None`` without one).
+        family: The scene family it names (the default family when it names none).
+        origin: Who supplied the family (``Registered.origin``), for one-line plugin errors.
+    """
+
+    root: Path
+    recorded: dict[str, Any] | None
+    digest: str | None
+    family: SceneFamily
+    origin: str
+
+    def config(self) -> Any:
+        """The family's config the dataset was made with (its defaults for a folder without a
+        manifest, or a manifest without a config).
+
+        Raises:
+            BadInput: The config is not valid for the family (names the file and the field).
+            PluginBug: The family's ``load_config()`` raised anything else or returned
+                something other than its ``config_model``
+                (:func:`~bpb_core.plugin_calls.loaded_config`).
+        """
+        config = self.recorded.get("config") if self.recorded is not None else None
+        if not isinstance(config, dict):
+            return loaded_config(self.family, self.origin, None)
+        fields = getattr(self.family.config_model, "model_fields", {})
+        try:
+            return loaded_config(
+                self.family,
+                self.origin,
+                {k: v for k, v in config.items() if k != "family" or k in fields},
+            )
+        except BadInput as exc:  # the family names the field ("config: balls: ..."), not the file
+            raise BadInput(f"{self.root / MANIFEST}: {exc}") from None
+
+    def simulator(self) -> str:
+        """The simulator the dataset was made with: the one its config names, checked
+        (:func:`~bpb_core.plugin_calls.simulator_named`).
+
+        Raises:
+            BadInput: As :meth:`config`.
+            PluginBug: The family's ``load_config()`` or ``simulator_name()`` raised or
+                returned the wrong type, naming ``origin``.
+        """
+        return simulator_named(self.family, self.origin, self.config())
+
+    def simulator_spec(self) -> SimulatorSpec:
+        """:meth:`simulator` parsed into its name and options (``pymunk:dt=0.0005``).
+
+        Raises:
+            BadInput: As :meth:`simulator`, or the spec does not parse (names the manifest's
+                ``config: simulator``).
+        """
+        return parse_spec(self.simulator(), f"{self.root / MANIFEST}: config: simulator")
+
+
+def open_folder(data: Path | DataFolder, registry: Registry | None = None) -> DataFolder:
+    """The folder of scenes ``data`` read once (a :class:`DataFolder` is returned as it is).
 
     Raises:
-        BadInput: ``dataset.json`` exists but is not a valid manifest (:func:`manifest_data`).
+        BadInput: ``dataset.json`` is not a valid manifest (:func:`manifest_data`), or the
+            family it names is not installed.
     """
-    data = manifest_data(root)
-    config = data.get("config") if data is not None else None
-    name = config.get("family") if isinstance(config, dict) else None
-    return name if isinstance(name, str) and name else None
+    if isinstance(data, DataFolder):
+        return data
+    from bpb_core.registry import make_registry
 
-
-def dataset_config(root: Path, family: SceneFamily, origin: str) -> Any:
-    """The family's config the dataset at ``root`` was made with (its defaults for a folder of
-    scenes with no manifest, or a manifest without a config). ``origin``: who supplied the
-    family (``Registered.origin``).
-
-    Raises:
-        BadInput: The manifest is invalid (:func:`manifest_data`) or its config is not valid
-            for the family (names the file and the field).
-        PluginBug: The family's ``load_config()`` raised anything else or returned something
-            other than its ``config_model`` (:func:`~bpb_core.plugin_calls.loaded_config`).
-    """
-    path = root / MANIFEST
-    data = manifest_data(root)
-    config = data.get("config") if data is not None else None
-    if not isinstance(config, dict):
-        return loaded_config(family, origin, None)
-    fields = getattr(family.config_model, "model_fields", {})
-    try:
-        return loaded_config(
-            family, origin, {k: v for k, v in config.items() if k != "family" or k in fields}
-        )
-    except BadInput as exc:  # the family names the field ("config: balls: ..."), not the file
-        raise BadInput(f"{path}: {exc}") from None
-
-
-def dataset_simulator(root: Path, family: SceneFamily, origin: str) -> str:
-    """The simulator the dataset at ``root`` was made with: the one its config names
-    (:func:`dataset_config`), checked (:func:`~bpb_core.plugin_calls.simulator_named`).
-
-    Raises:
-        BadInput: As :func:`dataset_config`.
-        PluginBug: The family's ``load_config()`` or ``simulator_name()`` raised or returned
-            the wrong type, naming ``origin``.
-    """
-    return simulator_named(family, origin, dataset_config(root, family, origin))
+    registry = registry if registry is not None else make_registry()
+    recorded, digest = _manifest_file(data)
+    family = _installed_family(_named_family(recorded), data, registry)
+    entry = registry.entries("scene_family").get(family.name)
+    origin = entry.origin if entry is not None else object_origin(family)
+    return DataFolder(data, recorded, digest, family, origin)
 
 
 def dataset_simulator_spec(root: Path, family: SceneFamily, origin: str) -> SimulatorSpec:
-    """:func:`dataset_simulator` parsed into its name and options (``pymunk:dt=0.0005``).
-
-    Raises:
-        BadInput: As :func:`dataset_simulator`, or the spec does not parse (names the manifest's
-            ``config: simulator``).
-    """
-    return parse_spec(
-        dataset_simulator(root, family, origin), f"{root / MANIFEST}: config: simulator"
-    )
+    """:meth:`DataFolder.simulator_spec` of the folder ``root`` made by ``family``."""
+    return DataFolder(root, manifest_data(root), None, family, origin).simulator_spec()
 
 
 def dataset_family(
@@ -388,12 +420,23 @@ def dataset_family(
     the default family (a folder of scenes with no manifest).
 
     Raises:
-        BadInput: The family is not installed.
+        BadInput: ``dataset.json`` is not a valid manifest, or the family is not installed.
     """
     from bpb_core.registry import make_registry
 
     registry = registry if registry is not None else make_registry()
-    name = manifest.family if manifest is not None else family_name(root)
+    name = manifest.family if manifest is not None else _named_family(manifest_data(root))
+    return _installed_family(name, root, registry)
+
+
+def _named_family(recorded: dict[str, Any] | None) -> str | None:
+    """The scene family a manifest's fields name (``config.family``), if any."""
+    config = recorded.get("config") if recorded is not None else None
+    name = config.get("family") if isinstance(config, dict) else None
+    return name if isinstance(name, str) and name else None
+
+
+def _installed_family(name: str | None, root: Path, registry: Registry) -> SceneFamily:
     if name is None:
         name = registry.default_family()
     elif name not in registry.names("scene_family"):

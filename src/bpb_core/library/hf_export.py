@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.checksums import read_scene_file
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset
+from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import NO_ROOM, BadInput, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label

@@ -42,6 +42,7 @@ from bpb_core.scored_units import (
 if TYPE_CHECKING:
     import pandas as pd
 
+    from bpb_core.dataset.reader import DataFolder
     from bpb_core.interfaces import Scorer, Task
     from bpb_core.layout import SceneKey
     from bpb_core.registry import Registry
@@ -106,7 +107,10 @@ class Results:
 
 
 def load_results(
-    run_dirs: Path | str | Iterable[Path | str], *, registry: Registry | None = None
+    run_dirs: Path | str | Iterable[Path | str],
+    *,
+    registry: Registry | None = None,
+    folders: Iterable[DataFolder] = (),
 ) -> Results:
     """Read and score run folders.
 
@@ -114,6 +118,8 @@ def load_results(
         run_dirs: Run folders (holding ``run.json``) or folders of run folders.
         registry: Where scorers, suites and scene families come from; default: all installed
             plugins.
+        folders: The datasets of the runs, when the caller has read them (else each is read
+            here, once).
 
     Raises:
         BadInput: No run folder found, a run, answer or ground-truth file cannot be read, or
@@ -125,7 +131,7 @@ def load_results(
     from bpb_core.registry import make_registry
 
     registry = registry if registry is not None else make_registry()
-    runs = find_runs(run_dirs, registry)
+    runs = find_runs(run_dirs, registry, folders)
     scorers: dict[str, Scorer] = {}
     origins: dict[str, str] = {}  # who supplied each scorer, for one-line plugin errors
     for run in runs:

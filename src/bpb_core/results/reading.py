@@ -18,19 +18,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.reader import dataset_family, dataset_keys
+from bpb_core.dataset.reader import DataFolder, dataset_keys, open_folder
 from bpb_core.dataset.scene_entry import read_truth
 from bpb_core.errors import BadInput
-from bpb_core.layout import (
-    MANIFEST,
-    RUN_MANIFEST,
-    SceneKey,
-    iter_scene_keys,
-    select_keys,
-)
+from bpb_core.layout import RUN_MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.model_calls import valid_unicode
 from bpb_core.run_folder import answer_path, live_run, read_manifest as read_run_manifest
-from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -95,11 +88,14 @@ class RunFolder:
 
 
 def find_runs(
-    paths: Path | str | Iterable[Path | str], registry: Registry | None = None
+    paths: Path | str | Iterable[Path | str],
+    registry: Registry | None = None,
+    folders: Iterable[DataFolder] = (),
 ) -> list[RunFolder]:
     """Run folders in ``paths`` (each a run folder or a folder of run folders), labelled uniquely.
     Inspect AI logs of bpb tasks (``.eval`` files, or folders of them) count as run folders
-    (:mod:`bpb_core.results.inspect_logs`).
+    (:mod:`bpb_core.results.inspect_logs`). Each run's dataset is read once however many runs
+    answered it; ``folders``: datasets the caller has read already.
 
     Raises:
         BadInput: A path does not exist or holds no run folder.
@@ -121,7 +117,10 @@ def find_runs(
         found.extend(inner)
     found = _once(found)
     labels = _labels(found)
-    runs = [read_run(path, label, registry) for path, label in zip(found, labels, strict=True)]
+    known = {folder.root.resolve(): folder for folder in folders}  # each dataset read once
+    runs = [
+        read_run(path, label, registry, known) for path, label in zip(found, labels, strict=True)
+    ]
     return _not_copies(runs)
 
 
@@ -175,8 +174,14 @@ def _labels(paths: list[Path]) -> list[str]:
     return [f"{p.parent.name}/{p.name}" if names.count(p.name) > 1 else p.name for p in paths]
 
 
-def read_run(path: Path, label: str | None = None, registry: Registry | None = None) -> RunFolder:
-    """Read ``path/run.json`` and work out the scenes the run was expected to answer."""
+def read_run(
+    path: Path,
+    label: str | None = None,
+    registry: Registry | None = None,
+    known: dict[Path, DataFolder] | None = None,
+) -> RunFolder:
+    """Read ``path/run.json`` and work out the scenes the run was expected to answer.
+    ``known``: dataset folders already read, by resolved path (the run's is added)."""
     manifest = read_run_manifest(path)
     if manifest is None:
         raise BadInput(f"{path / RUN_MANIFEST}: no run manifest")
@@ -185,8 +190,11 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     adapter = valid_unicode(str(manifest.get("adapter") or manifest.get("spec") or path.name))
     model = valid_unicode(str(manifest.get("model_id") or manifest.get("model") or adapter))
     dataset = _dataset_path(manifest, path)
-    _same_dataset(manifest, dataset, path)
-    family, family_origin = _family(dataset, registry)
+    known = known if known is not None else {}
+    if dataset not in known:
+        known[dataset] = open_folder(dataset, registry)
+    folder = known[dataset]
+    _same_dataset(manifest, folder, path)
     tasks = _option(manifest, "tasks")
     if not tasks:
         raise BadInput(f"{path / RUN_MANIFEST}: tasks: the run records no tasks")
@@ -199,35 +207,22 @@ def read_run(path: Path, label: str | None = None, registry: Registry | None = N
     epochs = _option(manifest, "epochs")
     epochs = epochs if isinstance(epochs, int) and epochs >= 1 else 1
     return RunFolder(
-        path, label, adapter, model, names, dataset, keys, manifest, family, epochs,
-        live_run(path), family_origin,
+        path, label, adapter, model, names, dataset, keys, manifest, folder.family, epochs,
+        live_run(path), folder.origin,
     )  # fmt: skip
 
 
-def _same_dataset(manifest: dict[str, Any], dataset: Path, run_path: Path) -> None:
+def _same_dataset(manifest: dict[str, Any], folder: DataFolder, run_path: Path) -> None:
     """Refuse a run whose dataset was regenerated since: its answers are about other scenes
     and scoring them against the new ground truth would mix two datasets silently."""
     recorded = manifest.get("dataset_hash")
-    try:
-        current = json.loads((dataset / MANIFEST).read_text(encoding="utf-8")).get("dataset_hash")
-    except (OSError, ValueError, AttributeError):
-        return  # no manifest hash to compare with (a hand-made dataset)
+    current = folder.recorded.get("dataset_hash") if folder.recorded is not None else None
     if isinstance(recorded, str) and isinstance(current, str) and recorded != current:
         raise BadInput(
-            f"{run_path / RUN_MANIFEST}: dataset_hash {recorded[:12]} but {dataset} now holds "
+            f"{run_path / RUN_MANIFEST}: dataset_hash {recorded[:12]} but {folder.root} now holds "
             f"dataset {current[:12]} (regenerated since the run?): point data at the dataset "
             "the run answered"
         )
-
-
-def _family(dataset: Path, registry: Registry | None) -> tuple[SceneFamily, str]:
-    """The dataset's scene family and who supplied it."""
-    from bpb_core.registry import make_registry
-
-    registry = registry if registry is not None else make_registry()
-    family = dataset_family(None, dataset, registry)
-    entry = registry.entries("scene_family").get(family.name)
-    return family, entry.origin if entry is not None else object_origin(family)
 
 
 def _option(manifest: dict[str, Any], name: str) -> Any:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bpb_core.dataset.reader import dataset_family, dataset_simulator
+from bpb_core.dataset.reader import DataFolder, open_folder
 from bpb_core.errors import BadInput
 from bpb_core.runner.options import RunOptions, check_options
 from bpb_core.runner.scenes import SceneRef, check_manifest, check_truth, select_scenes
@@ -32,24 +32,11 @@ class Asking:
     tasks: dict[str, Task]
     scenes: list[SceneRef]
     simulator: str
+    folder: DataFolder
 
 
-def data_family(data: Path, registry: Registry) -> SceneFamily:
-    """The scene family of the dataset at ``data`` (the default family without a manifest).
-
-    Raises:
-        BadInput: The manifest is invalid or its family is not installed.
-    """
-    return dataset_family(None, data, registry)
-
-
-def default_tasks(data: Path, registry: Registry) -> list[str]:
-    """The default tasks of the dataset's scene family."""
-    return registry.tasks_for(data_family(data, registry).name, default_only=True)
-
-
-def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
-    """Resolve what a run on ``data`` with ``options`` asks.
+def asking(data: Path | DataFolder, options: RunOptions, registry: Registry) -> Asking:
+    """Resolve what a run on ``data`` (read here when it is a path) with ``options`` asks.
 
     Raises:
         BadInput: A bad option, not a dataset, a ``dataset.json`` edited after generation, an
@@ -57,7 +44,8 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
             ``final.json`` is missing or invalid.
     """
     check_options(options)
-    family = data_family(data, registry)
+    folder = open_folder(data, registry)
+    family = folder.family
     names = options.tasks or tuple(registry.tasks_for(family.name, default_only=True))
     if not names:
         raise BadInput(f"--tasks: no installed task asks about {family.name} scenes")
@@ -65,15 +53,16 @@ def asking(data: Path, options: RunOptions, registry: Registry) -> Asking:
         asks = registry.task_info(name).family
         if asks and asks != family.name:
             raise BadInput(
-                f"--tasks: {name} asks about {asks} scenes, but {data} holds {family.name} scenes"
+                f"--tasks: {name} asks about {asks} scenes, but {folder.root} holds "
+                f"{family.name} scenes"
             )
     resolved = dataclasses.replace(options, tasks=tuple(names))
     tasks = {name: registry.task(name) for name in names}
-    scenes = _chosen(select_scenes(data, family, options.horizons, options.limit), options)
+    scenes = _chosen(select_scenes(folder, options.horizons, options.limit), options)
     check_truth(scenes)
-    simulator = dataset_simulator(data, family, registry.origin("scene_family", family.name))
-    check_manifest(data)  # after the checks that name a field, which say more
-    return Asking(family, resolved, tasks, scenes, simulator)
+    simulator = folder.simulator()
+    check_manifest(folder)  # after the checks that name a field, which say more
+    return Asking(family, resolved, tasks, scenes, simulator, folder)
 
 
 def _chosen(refs: list[SceneRef], options: RunOptions) -> list[SceneRef]:

@@ -25,6 +25,7 @@ from bpb_core.runner.scenes import check_images
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
+    from bpb_core.dataset.reader import DataFolder
     from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 
@@ -71,7 +72,7 @@ def _samples(tasks: dict[str, Task], epochs: int) -> list[tuple[str, Task, int]]
 
 
 def dry_run(
-    data: Path,
+    data: Path | DataFolder,
     run_dir: Path,
     options: RunOptions,
     registry: Registry,
@@ -88,7 +89,7 @@ def dry_run(
     plan = DryRun()
     asked = asking(data, options, registry)
     options, tasks = asked.options, asked.tasks
-    check_images(data, asked.scenes, options.input_mode)
+    check_images(asked.folder, asked.scenes, options.input_mode)
     done = completed_epochs(run_dir) if run_dir.exists() else set()
     for ref in asked.scenes:
         scene = ref.load()

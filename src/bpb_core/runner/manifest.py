@@ -20,6 +20,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.dataset.reader import DataFolder, open_folder
 from bpb_core.errors import BadInput
 from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
 from bpb_core.run_folder import AnswerRecord, iter_answers, read_manifest, write_manifest
@@ -163,7 +164,7 @@ def _check_selection(
 def start_manifest(
     run_dir: Path,
     spec: str,
-    data: Path,
+    data: Path | DataFolder,
     options: RunOptions,
     registry: Registry,
     scenes: int,
@@ -174,7 +175,8 @@ def start_manifest(
 ) -> dict[str, Any]:
     """Write ``run.json`` at the start (or resume) of a run and return its content.
 
-    ``settings``: the adapter's, checked (:func:`~bpb_core.plugin_calls.described_settings`).
+    ``data``: the dataset folder (read here when it is a path). ``settings``: the adapter's,
+    checked (:func:`~bpb_core.plugin_calls.described_settings`).
     ``logged`` holds the configuration hashes found in the attempts log; with no ``run.json``
     they alone guard the resume. ``scene_ids`` lists the scenes asked when ``--scenes`` or
     ``--sample`` chose them (the results expect answers for these only); ``held``: the answer
@@ -184,14 +186,15 @@ def start_manifest(
         BadInput: The folder holds a run with other answer-shaping settings, or answers
             outside this selection.
     """
+    folder = open_folder(data, registry)
     manifest: dict[str, Any] = {
         "adapter": spec,
         "model_id": None,
         "adapter_settings": settings,
         "tasks": list(options.tasks),
         "options": _options(options, registry),
-        "dataset": str(data.resolve()),
-        "dataset_hash": dataset_hash(data),
+        "dataset": str(folder.root.resolve()),
+        "dataset_hash": dataset_hash(folder),
         "scenes": scenes,
         "versions": versions(),
         "plugins": _plugins(registry),

@@ -21,13 +21,13 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import NeedsSimulator
 from bpb_core.dataset.manifest import check_simulator
-from bpb_core.dataset.reader import dataset_simulator_spec
+from bpb_core.dataset.reader import DataFolder, open_folder
 from bpb_core.errors import BadInput, WriteRefused
 from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.asking import Asking, asking, data_family
+from bpb_core.runner.asking import Asking, asking
 from bpb_core.runner.drive import drive
 from bpb_core.runner.history import read_history, recover_answers
 from bpb_core.runner.limits import RateLimiter, TokenBudget
@@ -84,9 +84,11 @@ def check_adapter(spec: str, adapter: ModelAdapter, origin: str, flag: str = "--
         raise BadInput(f"{flag} {spec}: {problem}")
 
 
-def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: Registry) -> None:
+def check_simulator_for(
+    folder: DataFolder, spec: str, adapter: ModelAdapter, registry: Registry
+) -> None:
     """Refuse ``adapter`` when it runs the dataset's simulator (:class:`NeedsSimulator`, e.g.
-    ``baseline:oracle``) and ``data``'s manifest names one that is not installed: its every
+    ``baseline:oracle``) and ``folder``'s manifest names one that is not installed: its every
     call would fail. An adapter that does not run it (a model's, ``baseline:stasis``) runs on.
 
     Raises:
@@ -94,12 +96,9 @@ def check_simulator_for(data: Path, spec: str, adapter: ModelAdapter, registry: 
     """
     if not (isinstance(adapter, NeedsSimulator) and adapter.needs_simulator()):
         return
-    if (data / MANIFEST).is_file():  # without one, the family's default simulator (built in)
-        family = data_family(data, registry)
-        made_with = dataset_simulator_spec(
-            data, family, registry.origin("scene_family", family.name)
-        )
-        check_simulator(data / MANIFEST, made_with.name, registry, f"; {spec} runs it")
+    if folder.recorded is not None:  # without one, the family's default simulator (built in)
+        made_with = folder.simulator_spec()
+        check_simulator(folder.root / MANIFEST, made_with.name, registry, f"; {spec} runs it")
 
 
 def _state(
@@ -129,7 +128,7 @@ def _state(
 
 
 async def run_eval_async(
-    data: Path,
+    data: Path | DataFolder,
     adapter: str | ModelAdapter,
     run_dir: Path,
     options: RunOptions | None = None,
@@ -142,16 +141,17 @@ async def run_eval_async(
 ) -> RunResult:
     """Async form of :func:`run_eval` (for callers already inside an event loop). The set-up
     (the registry and the adapter built, the dataset and the run folder read) runs in a worker
-    thread, so the caller's loop keeps serving its other tasks meanwhile."""
+    thread, so the caller's loop keeps serving its other tasks meanwhile. ``data``: the dataset
+    folder, or a :class:`~bpb_core.dataset.reader.DataFolder` the caller has read."""
     progress = progress or NoProgress()
     setup = (data, adapter, run_dir, options, registry, adapter_options, spec, flag)
     asked, model, name, plugins, settings = await asyncio.to_thread(_prepare, *setup)
     with run_lock(run_dir):
-        return await _session(asked, data, model, name, run_dir, plugins, progress, settings)
+        return await _session(asked, model, name, run_dir, plugins, progress, settings)
 
 
 def _prepare(
-    data: Path,
+    data: Path | DataFolder,
     adapter: str | ModelAdapter,
     run_dir: Path,
     options: RunOptions | None,
@@ -166,7 +166,7 @@ def _prepare(
 
     registry = registry or make_registry()
     asked = asking(data, options or RunOptions(), registry)
-    check_images(data, asked.scenes, asked.options.input_mode)
+    check_images(asked.folder, asked.scenes, asked.options.input_mode)
     model = _adapter(registry, adapter, adapter_options, asked.options, flag)
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
@@ -176,7 +176,7 @@ def _prepare(
     why = answer_refusal(model, origin, asked.family)
     if why is not None:
         raise BadInput(f"{flag} {spec}: {why}")
-    check_simulator_for(data, spec, model, registry)
+    check_simulator_for(asked.folder, spec, model, registry)
     settings = described_settings(model, origin)
     make_run_folder(run_dir)
     return asked, model, spec, registry, settings
@@ -184,7 +184,6 @@ def _prepare(
 
 async def _session(
     asked: Asking,
-    data: Path,
     model: ModelAdapter,
     spec: str,
     run_dir: Path,
@@ -194,7 +193,7 @@ async def _session(
 ) -> RunResult:
     """One session on a locked run folder: guard, recover, send the rest, record the end."""
     options, refs = asked.options, asked.scenes
-    setup = (asked, data, spec, run_dir, registry, settings)
+    setup = (asked, spec, run_dir, registry, settings)
     opened = await asyncio.to_thread(_opening, *setup)
     history, held, manifest = opened
     state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
@@ -232,7 +231,6 @@ def _kept_quiet(failing: bool) -> contextlib.AbstractContextManager[None]:
 
 def _opening(
     asked: Asking,
-    data: Path,
     spec: str,
     run_dir: Path,
     registry: Registry,
@@ -246,7 +244,16 @@ def _opening(
     ids = [ref.scene_id for ref in refs]
     held = [record for _, record in iter_answers(run_dir)]  # read once: guard and plan
     manifest = start_manifest(
-        run_dir, spec, data, options, registry, len(refs), settings, history.configs, ids, held
+        run_dir,
+        spec,
+        asked.folder,
+        options,
+        registry,
+        len(refs),
+        settings,
+        history.configs,
+        ids,
+        held,
     )
     return history, held, manifest
 
@@ -320,7 +327,7 @@ def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str, int
 
 
 def run_eval(
-    data: Path,
+    data: Path | DataFolder,
     adapter: str | ModelAdapter,
     run_dir: Path,
     options: RunOptions | None = None,
@@ -329,7 +336,7 @@ def run_eval(
     """Ask ``adapter`` every task about every selected scene of ``data``; write ``run_dir``.
 
     Args:
-        data: Dataset folder.
+        data: Dataset folder (or a :class:`~bpb_core.dataset.reader.DataFolder` read once).
         adapter: An adapter spec (``baseline:oracle``, ``litellm:gpt-5``) or an adapter object.
         run_dir: The run folder (created; resumed when it holds an earlier run).
         options: Run options.
@@ -345,7 +352,7 @@ def run_eval(
 
 
 def evaluate(
-    data: Path,
+    data: Path | DataFolder,
     adapters: Sequence[str],
     out: Path,
     options: RunOptions | None = None,
@@ -356,4 +363,5 @@ def evaluate(
     An adapter stopped by an authentication failure does not stop the others.
     """
     kwargs.setdefault("flag", "adapters")
+    data = open_folder(data, kwargs.get("registry"))
     return [run_eval(data, spec, out / slug(spec), options, **kwargs) for spec in adapters]

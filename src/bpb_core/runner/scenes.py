@@ -13,10 +13,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.checksums import check_recorded, read_scene_model
 from bpb_core.dataset.manifest import content_hash
-from bpb_core.dataset.reader import dataset_keys, manifest_data
-from bpb_core.dataset.scene_entry import check_image, read_scene_files
+from bpb_core.dataset.reader import DataFolder, dataset_keys
+from bpb_core.dataset.scene_entry import (
+    check_image,
+    check_recorded,
+    read_scene_files,
+    read_scene_model,
+)
 from bpb_core.errors import BadInput
 from bpb_core.layout import INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
 
@@ -41,7 +45,7 @@ class SceneRef:
 
         Raises:
             BadInput: The file is missing, invalid (names the file and the field) or changed
-                after generation (:mod:`bpb_core.dataset.checksums`).
+                after generation (:mod:`bpb_core.dataset.scene_entry`).
         """
         return read_scene_model(self.folder / INIT, self.family.scene_model)
 
@@ -69,23 +73,21 @@ class SceneRef:
 
 
 def select_scenes(
-    data: Path,
-    family: SceneFamily,
-    horizons: Sequence[float] | None = None,
-    limit: int | None = None,
+    folder: DataFolder, horizons: Sequence[float] | None = None, limit: int | None = None
 ) -> list[SceneRef]:
-    """Scenes of ``data`` at ``horizons`` (all when ``None``), the first ``limit`` per horizon.
+    """Scenes of ``folder`` at ``horizons`` (all when ``None``), the first ``limit`` per horizon.
 
     Raises:
-        BadInput: ``data`` is not a dataset folder, its scene folders do not match its
+        BadInput: ``folder`` is not a dataset folder, its scene folders do not match its
             ``index.csv``, or no scene matches.
     """
+    data = folder.root
     if not data.is_dir():
         raise BadInput(f"{data}: --data: not a dataset folder")
     keys = select_keys(dataset_keys(data), horizons, limit)
     if not keys:
         raise BadInput(f"{data}: --data: no scenes (h*/scene_*/init.json) match the selection")
-    return [SceneRef(key, key.dir(data), family) for key in keys]
+    return [SceneRef(key, key.dir(data), folder.family) for key in keys]
 
 
 def check_truth(refs: Sequence[SceneRef]) -> None:
@@ -99,7 +101,7 @@ def check_truth(refs: Sequence[SceneRef]) -> None:
         read_scene_files(ref.folder, ref.family.scene_model, ref.family.truth_model)
 
 
-def check_images(data: Path, refs: Sequence[SceneRef], input_mode: str) -> None:
+def check_images(folder: DataFolder, refs: Sequence[SceneRef], input_mode: str) -> None:
     """Refuse image input (any ``input_mode`` but ``state``) on a dataset without the family's
     input images, before the run folder is made: one generated with ``--no-images`` (its
     manifest's ``images`` is false), of a family that renders none, or missing a selected
@@ -111,7 +113,7 @@ def check_images(data: Path, refs: Sequence[SceneRef], input_mode: str) -> None:
     """
     if input_mode == "state":
         return
-    recorded = manifest_data(data)
+    data, recorded = folder.root, folder.recorded
     if recorded is not None and recorded.get("images") is False:
         raise BadInput(
             f"{data}: generated with --no-images ({MANIFEST}: images: false), so it has no "
@@ -129,7 +131,7 @@ def check_images(data: Path, refs: Sequence[SceneRef], input_mode: str) -> None:
             )
 
 
-def check_manifest(data: Path) -> None:
+def check_manifest(folder: DataFolder) -> None:
     """Refuse a ``dataset.json`` edited after ``bpb generate`` wrote it: its ``dataset_hash``,
     which runs record to identify the dataset, no longer matches its content, so two different
     datasets would look the same. The hash is recomputed from the file's own fields
@@ -139,32 +141,25 @@ def check_manifest(data: Path) -> None:
     Raises:
         BadInput: One line naming ``dataset.json``.
     """
-    recorded = manifest_data(data)
+    recorded = folder.recorded
     if recorded is None or "format" not in recorded:
         return
     value = recorded.get("dataset_hash")
     if isinstance(value, str) and value and content_hash(recorded) != value:
         raise BadInput(
-            f"{data / MANIFEST}: edited after the dataset was generated: its dataset_hash "
+            f"{folder.root / MANIFEST}: edited after the dataset was generated: its dataset_hash "
             f"{value[:12]} no longer matches its content, and runs record that hash to "
             "identify the dataset; restore the file or generate the dataset again"
         )
 
 
-def dataset_hash(data: Path) -> str:
+def dataset_hash(folder: DataFolder) -> str:
     """A hash identifying the dataset: the manifest's own when it records one, else a digest of
-    ``dataset.json`` (or, without a manifest, of every ``init.json``).
-
-    Raises:
-        BadInput: ``dataset.json`` is not a valid manifest (names the file and the field).
-    """
-    manifest = data / MANIFEST
-    recorded = manifest_data(data)
-    if recorded is not None:
+    ``dataset.json`` (or, without a manifest, of every ``init.json``)."""
+    data, recorded = folder.root, folder.recorded
+    if recorded is not None and folder.digest is not None:
         value = recorded.get("dataset_hash")
-        if isinstance(value, str) and value:
-            return value
-        return hashlib.sha256(manifest.read_bytes()).hexdigest()
+        return value if isinstance(value, str) and value else folder.digest
     digest = hashlib.sha256()
     for key in iter_scene_keys(data):
         path = key.dir(data) / INIT

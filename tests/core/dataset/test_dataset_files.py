@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import gc
 import hashlib
 import json
 from pathlib import Path
@@ -11,8 +10,7 @@ from pathlib import Path
 import pytest
 
 from bpb_core.dataset import generate_dataset, load_dataset
-from bpb_core.dataset.jobs import worker_setup
-from bpb_core.dataset.worker import Job, produce
+from bpb_core.dataset.jobs import Job, produce, worker_setup
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry
@@ -61,24 +59,6 @@ def test_same_seed_gives_byte_identical_datasets_whatever_the_workers(
     first, second = tree(small_dataset), tree(again)
     assert first.keys() == second.keys()
     assert [k for k in first if first[k] != second[k]] == []
-
-
-def test_generating_on_workers_leaves_the_callers_garbage_collector_as_it_was(
-    tmp_path: Path,
-) -> None:
-    """The pool starts with the collector's objects frozen (so forked workers share pages);
-    a library caller gets its collector back unfrozen, and its own freeze is kept."""
-    assert gc.get_freeze_count() == 0
-    generate_dataset(tmp_path / "a", 2, [1.0], seed=5, workers=2, images=False)
-    assert gc.get_freeze_count() == 0
-    gc.freeze()
-    try:
-        held = gc.get_freeze_count()
-        generate_dataset(tmp_path / "b", 2, [1.0], seed=5, workers=2, images=False)
-        assert gc.get_freeze_count() >= held
-    finally:
-        gc.unfreeze()
-    assert tree(tmp_path / "a") == tree(tmp_path / "b")
 
 
 def test_another_seed_gives_another_dataset(small_dataset: Path, tmp_path: Path) -> None:

@@ -1,11 +1,8 @@
-"""Workers make scenes in runs (``worker.produce_many``): every scene of a run is made, then
-drawn, then written. A scene that fails stops its run as it stopped a lone scene: the scenes
-before it are written whole and listed, and its error is the one raised, with the worker's
-traceback behind it."""
+"""A scene that fails stops generation: the scenes before it are written whole and listed, and
+its error is the one raised, with the worker's traceback behind it."""
 
 from __future__ import annotations
 
-import gc
 import hashlib
 import traceback
 from pathlib import Path
@@ -13,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import support.flawed_family
-from bpb_core.dataset import generate_dataset, worker
+from bpb_core.dataset import generate_dataset
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, make_registry
 
@@ -39,26 +36,3 @@ def test_a_scene_failing_mid_run_leaves_the_scenes_before_it_listed_and_whole(
     assert len(sums) == 5 * 2  # init.json and final.json of each
     for digest, rel in sums:
         assert hashlib.sha256((partial / rel).read_bytes()).hexdigest() == digest
-
-
-@pytest.mark.parametrize("enabled", [True, False])
-def test_runs_in_this_process_leave_the_garbage_collector_as_they_found_it(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, enabled: bool
-) -> None:
-    """A run pauses the collector (worker.collector_paused); a library caller's is left
-    enabled or disabled as it was, also when the run is interrupted."""
-    seen: list[bool] = []
-
-    def interrupted(*args: object) -> None:
-        seen.append(gc.isenabled())
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(worker, "produce_many", interrupted)
-    (gc.enable if enabled else gc.disable)()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            generate_dataset(tmp_path / "data", 2, (1.0,), 0, workers=1, images=False)
-        assert gc.isenabled() is enabled
-    finally:
-        gc.enable()
-    assert seen == [False]

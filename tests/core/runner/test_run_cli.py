@@ -246,3 +246,46 @@ def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the
     state = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out),
                  "--input-mode", "state")  # fmt: skip
     assert state.returncode == 0, state.stderr
+
+
+READS: list[list[str]] = []  # the reads of dataset.json seen while a list is pushed here
+
+
+def _reads_of_manifest(event: str, args: tuple[object, ...]) -> None:
+    if event != "open" or not READS or not str(args[0]).endswith("dataset.json"):
+        return
+    mode, flags = args[1], args[2]
+    reading = "r" in mode and "+" not in mode if isinstance(mode, str) else None
+    if reading is None and isinstance(flags, int):  # os.open
+        reading = flags & os.O_ACCMODE == os.O_RDONLY
+    if reading:
+        READS[-1].append(str(args[0]))
+
+
+sys.addaudithook(_reads_of_manifest)  # hooks stay for the process; it counts only when asked
+
+
+def _manifest_reads(argv: list[str]) -> int:
+    from bpb_core.cli.main import main
+
+    READS.append([])
+    try:
+        with pytest.raises(SystemExit) as done:
+            main(argv)
+    finally:
+        seen = READS.pop()
+    assert done.value.code == 0
+    return len(seen)
+
+
+def test_each_command_reads_dataset_json_once(tmp_path: Path) -> None:
+    """The dataset is read once into one value that every check of the command is given (a
+    2-scene bpb run read it 6 times, a report once per run and again for its family)."""
+    data, runs = str(tmp_path / "data"), str(tmp_path / "runs")
+    generate = ["generate", "--out", data, "--per-horizon", "2", "--horizons", "1",
+                "--no-images", "--workers", "1"]  # fmt: skip
+    assert _manifest_reads(generate) == 1  # the summary it prints
+    run = ["run", "--data", data, "--out", runs, "--input-mode", "state"]  # every offline adapter
+    assert _manifest_reads(run) == 1  # the checks, run.json's hash, the scores it prints
+    assert len(list(Path(runs).iterdir())) >= 2
+    assert _manifest_reads(["report", runs, "--out", str(tmp_path / "report")]) == 1
