@@ -229,10 +229,10 @@ def test_bpb_simulate_is_one_line_naming_the_family_plugin_and_exit_3(
     done = run_bpb("simulate", *many, "--simulator", "flawed-analytic", "--workers", "1")
     assert done.returncode == 3
     assert done.stdout == ""  # no line paired with the wrong scene file
-    said = "ground_truths() returned a list of 255 for 256 scenes; expected a list with one "
+    said = "ground_truths() returned a list of 255 for 256 scenes; expected a list with one"
+    debug = "(set BPB_DEBUG=1 for a traceback)"
     assert done.stderr.strip().splitlines() == [
-        f"error: {ORIGIN}: {FAMILY}: {said}ground truth per scene (set BPB_DEBUG=1 for a "
-        "traceback)"
+        f"error: {ORIGIN}: {FAMILY}: {said} ground truth per scene {debug}"
     ]
 
 

@@ -58,7 +58,7 @@ def test_missing_paths_and_empty_folders_are_named(tmp_path: Path) -> None:
     with pytest.raises(BadInput, match=f"^{tmp_path}/nope.json: no such file or directory$"):
         simulate.scene_files([tmp_path / "nope.json"])
     (tmp_path / "empty").mkdir()
-    with pytest.raises(BadInput, match="empty: no init.json and no dataset scene folders"):
+    with pytest.raises(BadInput, match=r"empty: no init\.json and no dataset scene folders"):
         simulate.scene_files([tmp_path / "empty"])
 
 
