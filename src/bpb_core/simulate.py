@@ -87,16 +87,23 @@ def read_scene(path: Path, model: type[Any]) -> Any:
         BadInput: It cannot be read, is larger than :data:`MAX_SCENE_BYTES` or is invalid,
             naming the file (and the field).
     """
+    parts: list[bytes] = []
+    size = 0
     try:
         with open(path, "rb") as file:
-            data = file.read(MAX_SCENE_BYTES + 1)
+            while size <= MAX_SCENE_BYTES:  # read(MAX_SCENE_BYTES + 1) would allocate that much
+                part = file.read(1 << 16)
+                if not part:
+                    break
+                parts.append(part)
+                size += len(part)
     except OSError as exc:
         raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
-    if len(data) > MAX_SCENE_BYTES:
+    if size > MAX_SCENE_BYTES:
         raise BadInput(
             f"{path}: larger than {MAX_SCENE_BYTES // (1024 * 1024)} MB, not a scene file"
         )
-    return read_model(path, model, data)
+    return read_model(path, model, b"".join(parts))
 
 
 def simulate_scene(
