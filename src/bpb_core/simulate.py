@@ -341,8 +341,8 @@ class _Run:
 
 
 BATCH_MIN = 256
-"""Scenes from which they go to a family's batch hook in chunks: it may start slowly (load a
-compiled kernel) and pay that back only over many scenes."""
+"""Scenes from which they go to a family's batch hook in chunks: it may start slowly (load
+compiled code) and pay that back only over many scenes."""
 PARALLEL_MIN = 256  # below this many scenes, worker start-up costs more than it saves
 CHUNK = 256  # most scenes handed to a worker at once
 
