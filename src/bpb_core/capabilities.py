@@ -22,6 +22,8 @@ without when it is missing.
 - A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery),
   :class:`ReportsMetrics` (metrics beside its task's accuracy in reports).
 - A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
+- A scene family: :class:`TruthOfMany` (the ground truth of many scenes at once, for
+  ``bpb simulate``).
 - A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
 - A scene family: :class:`DescribesDataset` (the dataset card of ``bpb export --format hf``).
 """
@@ -191,23 +193,6 @@ class Comparing(Protocol):
 
 
 @runtime_checkable
-class WritesTruthLines(Protocol):
-    """A family that turns many scene files into ground-truth JSON lines at once, without
-    building its scene or ground-truth models per scene (the fast path of ``bpb simulate``)."""
-
-    def truth_lines(
-        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
-    ) -> list[str | None] | bytes | None:
-        """One JSON line per scene file's text, equal in content to the ground truth's JSON, in
-        order; ``None`` for a text the fast path does not take (core reads that file the
-        ordinary way, which reports bad input), or as a whole when this simulator (or its
-        options) has no fast path. When it takes every text it may return all the lines as one
-        block instead: UTF-8 bytes, the lines joined by newlines, none after the last (core
-        writes the block as it is, with no decoding and splitting)."""
-        ...
-
-
-@runtime_checkable
 class KnowsFamilies(Protocol):
     """An offline adapter that answers from the scene itself, so it can answer only the scene
     families it knows (``bpb run`` checks before the first call, and leaves it out of its
@@ -365,8 +350,24 @@ class CountsEvents(Protocol):
 class RunsMany(Protocol):
     """A simulator with a batch call (``bpb bench sim`` times it beside one call per scene)."""
 
-    def run_many(self, scenes: Sequence[Any]) -> Any:
-        """Simulate every scene to its own horizon."""
+    def run_many(self, scenes: Sequence[Any], horizon: float | None = None) -> list[Any]:
+        """Simulate every scene to ``horizon`` (default: its own): one outcome per scene, in
+        order, as :meth:`~bpb_core.interfaces.Simulator.run` returns (motion a picture would
+        need may be left out)."""
+
+
+@runtime_checkable
+class TruthOfMany(Protocol):
+    """A family that makes the ground truth of many scenes at once (``bpb simulate`` hands it
+    its scenes in chunks, when there are many and no stability is asked), e.g. through its
+    simulator's :class:`RunsMany` batch call."""
+
+    def ground_truths(
+        self, scenes: Sequence[Any], simulator: Simulator, horizon: float | None = None
+    ) -> list[GroundTruth]:
+        """The truth of each scene, in order, equal to what ``ground_truth(scene, simulator,
+        horizon, stability=False)`` gives."""
+        ...
 
 
 @runtime_checkable

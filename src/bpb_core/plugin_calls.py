@@ -18,7 +18,13 @@ from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 
 if TYPE_CHECKING:
-    from bpb_core.capabilities import Estimating, Perceiving, Predicting, PublishesSchema
+    from bpb_core.capabilities import (
+        Estimating,
+        Perceiving,
+        Predicting,
+        PublishesSchema,
+        TruthOfMany,
+    )
     from bpb_core.interfaces import SceneFamily, Simulator, Task
     from bpb_core.model_calls import Message
 
@@ -75,6 +81,28 @@ def simulated_truth(
     with blamed(origin, what):
         truth = family.ground_truth(scene, simulator, horizon, stability=stability)
     return _checked_model(family, origin, what, truth, "truth_model")
+
+
+def simulated_truths(
+    family: TruthOfMany, origin: str, scenes: list[Any], simulator: Simulator, horizon: float | None
+) -> list[Any]:
+    """``family.ground_truths(scenes, simulator, horizon)``, checked: a list of one instance of
+    the family's ``truth_model`` per scene (each is paired with its scene file by position).
+
+    Raises:
+        PluginBug: The family raised or returned something else, naming ``origin`` and the
+            family.
+    """
+    what = f"{family_label(family)}: ground_truths()"
+    with blamed(origin, what):
+        truths = family.ground_truths(scenes, simulator, horizon)
+    if not isinstance(truths, list) or len(truths) != len(scenes):
+        got = f"a list of {len(truths)}" if isinstance(truths, list) else type(truths).__name__
+        raise PluginBug(
+            f"{origin}: {what} returned {got} for {len(scenes)} scenes; expected a list with "
+            "one ground truth per scene"
+        )
+    return [_checked_model(family, origin, what, truth, "truth_model") for truth in truths]
 
 
 def perception(

@@ -9,7 +9,7 @@ task whose expected() choked on it; the failure gallery of bpb report and bpb vi
 picture() unchecked (a RuntimeError, or "AttributeError: 'bytes' object has no attribute
 'png'"). The oracle's ground_truth() of the wrong type was blamed on the task's expected(), and
 baseline:vision blamed each of those flaws on itself (adapter 'baseline:vision': complete()
-raised ...). bpb simulate paired the lines of a truth_lines() one line short with the wrong scene
+raised ...). bpb simulate paired the lines of a batch one line short with the wrong scene
 files (exit 0), and turned a ground_truth() of the wrong type into bad input or an
 AttributeError. The oracle and vision asked without a simulator called the family's
 load_config() and simulator_name() unchecked."""
@@ -126,14 +126,10 @@ def test_the_oracle_and_vision_name_a_flawed_family(
 
 
 SIMULATE_FLAWS = [
-    ("truth_lines_short", False, "truth_lines() returned a list of 1 for 2 scene files; "
-     "expected a list with one line or None per file, or a block of one line per file"),
-    ("truth_lines_block_short", False, "truth_lines() returned a block of 1 lines for 2 scene "
-     "files; expected one line per file"),
-    ("truth_lines_block_utf8", False, "truth_lines() returned a block that is not UTF-8 "
-     "(invalid start byte)"),
-    ("truth_lines_type", False, "truth_lines() returned a list holding bytes; expected a JSON "
-     "line (str) or None per file"),
+    ("ground_truths_short", False, "ground_truths() returned a list of 1 for 2 scenes; "
+     "expected a list with one ground truth per scene"),
+    ("ground_truths_type", False, "ground_truths() returned dict; expected FinalState (the "
+     "family's truth_model)"),
     ("truth_type", True, TRUTH_TYPE),
 ]  # fmt: skip
 
@@ -142,7 +138,12 @@ SIMULATE_FLAWS = [
 def test_bpb_simulate_names_a_flawed_family(
     monkeypatch: pytest.MonkeyPatch, flawed_data: Path, flaw: str, stability: bool, said: str
 ) -> None:
-    # the batch path (truth_lines) and the ordinary one (ground_truth, taken for --stability)
+    # batches (ground_truths, for many scenes: here from 1) and one by one (ground_truth,
+    # taken for --stability)
+    import bpb_core.simulate
+
+    monkeypatch.setattr(bpb_core.simulate, "BATCH_MIN", 1)
+
     def lines() -> list[str]:
         return list(simulate_lines([flawed_data], simulator="flawed-analytic", workers=1,
                                    stability=stability, registry=_registry()))  # fmt: skip
@@ -212,12 +213,15 @@ def test_bpb_simulate_is_one_line_naming_the_family_plugin_and_exit_3(
 ) -> None:
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
-    monkeypatch.setenv("BPB_TEST_FLAW", "truth_lines_short")
-    done = run_bpb("simulate", str(flawed_data), "--simulator", "flawed-analytic")
+    monkeypatch.setenv("BPB_TEST_FLAW", "ground_truths_short")
+    many = [str(flawed_data)] * 128  # 256 scenes: in batches
+    done = run_bpb("simulate", *many, "--simulator", "flawed-analytic", "--workers", "1")
     assert done.returncode == 3
     assert done.stdout == ""  # no line paired with the wrong scene file
+    said = "ground_truths() returned a list of 255 for 256 scenes; expected a list with one"
+    debug = "(set BPB_DEBUG=1 for a traceback)"
     assert done.stderr.strip().splitlines() == [
-        f"error: {ORIGIN}: {FAMILY}: {SIMULATE_FLAWS[0][2]} (set BPB_DEBUG=1 for a traceback)"
+        f"error: {ORIGIN}: {FAMILY}: {said} ground truth per scene {debug}"
     ]
 
 

@@ -1,7 +1,11 @@
-"""``bpb simulate`` through the real entry point: output order, formats, overrides, bad input."""
+"""``bpb simulate`` through the CLI's entry point (in this process, unless a process is what is
+under test: standard input and output, signals, installed plugins): output order, formats,
+overrides, bad input."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import os
 import subprocess
@@ -27,7 +31,20 @@ BPB = str(Path(sys.executable).with_name("bpb"))
 
 
 def bpb(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+    """``bpb *args`` run in this process: its exit code and what it printed."""
+    from bpb_core.cli.main import main
+
+    out, err, code = io.StringIO(), io.StringIO(), 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main(list(args))
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 0
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
+
+
+def bpb_process(*args: str, **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120, **kwargs)
 
 
 def write(path: Path, scene: Scene) -> Path:
@@ -252,37 +269,40 @@ def test_the_simulator_a_dataset_s_config_names_simulates_with_the_dataset_s_fam
 ) -> None:
     """Generation paired the flawed family with analytic (a billiards simulator): that pairing
     is taken, and the scenes are read and simulated by the dataset's family, as generated
-    (a truth_lines() one line short shows which family ran)."""
+    (a ground_truths() one short shows which family ran)."""
     done = run_bpb("simulate", str(flawed_data), "--simulator", "analytic")
     assert done.returncode == 0, done.stderr
     assert [json.loads(line)["scene_id"] for line in done.stdout.splitlines()] == [
         "h1_0000",
         "h1_0001",
     ]
-    monkeypatch.setenv("BPB_TEST_FLAW", "truth_lines_short")
-    done = run_bpb("simulate", str(flawed_data), "--simulator", "analytic")
+    monkeypatch.setenv("BPB_TEST_FLAW", "ground_truths_short")
+    many = [str(flawed_data)] * 128  # 256 scenes: in batches
+    done = run_bpb("simulate", *many, "--simulator", "analytic", "--workers", "1")
     assert done.returncode == 3
-    assert done.stderr.startswith(f"error: {FLAWED}: scene family 'flawed': truth_lines() ")
+    assert done.stderr.startswith(f"error: {FLAWED}: scene family 'flawed': ground_truths() ")
 
 
 @pytest.mark.parametrize(
-    "args", [[], ["--workers", "2"], ["--stability"]], ids=["batch", "forked", "ordinary"]
+    ("args", "count", "bad"),
+    [([], 300, 20), (["--workers", "2"], 300, 200), (["--stability"], 40, 20)],
+    ids=["batch", "forked", "ordinary"],
 )
 def test_an_event_cap_overrun_among_many_scenes_is_named_never_truncated(
-    tmp_path: Path, args: list[str]
+    tmp_path: Path, args: list[str], count: int, bad: int
 ) -> None:
     # a frictionless ball between two cushions never rests: its truth is never a cut-off run
-    paths = [write(tmp_path / f"s{i:02d}.json", random_scene(11, i)) for i in range(40)]
-    endless = random_scene(11, 20).model_dump(mode="json")
+    paths = [write(tmp_path / f"s{i:03d}.json", random_scene(11, i)) for i in range(count)]
+    endless = random_scene(11, bad).model_dump(mode="json")
     endless.update(horizon=1e9, physics={"mu": 0.0}, pockets={"radius": 0.0, "centers": []})
     endless["balls"] = [{"id": 0, "pos": [0.5, 0.5], "vel": [0.0, 1.0]}]
-    paths[20].write_text(json.dumps(endless))
+    paths[bad].write_text(json.dumps(endless))
     done = bpb("simulate", *map(str, paths), *args)
     assert one_line_error_after_output(done) == (
-        f"error: {paths[20]}: more than 100000 events before t=1000000000.0"
+        f"error: {paths[bad]}: more than 100000 events before t=1000000000.0"
     )
     kept = [FinalState.model_validate_json(line).scene_id for line in done.stdout.splitlines()]
-    assert kept == [f"r11_{i:05d}" for i in range(20)]  # those before it, none after
+    assert kept == [f"r11_{i:05d}" for i in range(bad)]  # those before it, none after
 
 
 def one_line_error_after_output(result: subprocess.CompletedProcess[str]) -> str:
@@ -312,39 +332,20 @@ def test_lines_before_a_bad_file_are_kept(scenes: list[tuple[Path, Scene]], tmp_
 def test_a_scene_piped_on_stdin_is_read_once(
     scenes: list[tuple[Path, Scene]], args: list[str]
 ) -> None:
-    # `cat init.json | bpb simulate /dev/stdin`: the pipe was read by the batch path, then
+    # `cat init.json | bpb simulate /dev/stdin`: the pipe was read by the fast path, then
     # opened again by the ordinary path and found empty ("Invalid JSON: EOF")
     path, scene = scenes[0]
-    piped = subprocess.run([BPB, "simulate", str(scenes[1][0]), "/dev/stdin", *args],
-                           input=path.read_text(), capture_output=True, text=True,
-                           timeout=120)  # fmt: skip
+    piped = bpb_process("simulate", str(scenes[1][0]), "/dev/stdin", *args,
+                        input=path.read_text())  # fmt: skip
     files = lines(bpb("simulate", str(scenes[1][0]), str(path), *args))
     assert lines(piped) == files and files[1].scene_id == scene.scene_id
     bad = json.loads(path.read_text())
     bad["balls"][0]["vel"] = [1000.0, 0.0]
-    refused = subprocess.run([BPB, "simulate", "/dev/stdin", *args], input=json.dumps(bad),
-                             capture_output=True, text=True, timeout=120)  # fmt: skip
+    refused = bpb_process("simulate", "/dev/stdin", *args, input=json.dumps(bad))
     assert refused.returncode == 2
     assert refused.stderr.strip().splitlines() == [
         "error: /dev/stdin: balls[0].vel: speed 1000 m/s is above 100 m/s"
     ]
-
-
-@pytest.mark.parametrize(
-    "args", [[], ["--simulator", "pymunk"], ["--workers", "2"]], ids=["batch", "ordinary", "forked"]
-)
-def test_a_pipe_named_twice_is_read_once_and_stands_for_both(
-    scenes: list[tuple[Path, Scene]], args: list[str]
-) -> None:
-    # `cat init.json | bpb simulate /dev/stdin /dev/stdin`: the second reading of the pipe was
-    # empty ("error: /dev/stdin: Invalid JSON: EOF"); a file named twice gives two lines
-    path, _ = scenes[0]
-    other = str(scenes[1][0])
-    named = ["/dev/stdin", other, "/dev/stdin", "/dev/fd/0"]
-    piped = subprocess.run([BPB, "simulate", *named, *args], input=path.read_text(),
-                           capture_output=True, text=True, timeout=120)  # fmt: skip
-    files = lines(bpb("simulate", str(path), other, str(path), str(path), *args))
-    assert lines(piped) == files
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
@@ -362,8 +363,7 @@ def test_a_named_pipe_is_simulated_not_waited_on(
     writer = threading.Thread(target=write, daemon=True)
     writer.start()
     try:
-        result = subprocess.run([BPB, "simulate", str(fifo)], capture_output=True, text=True,
-                                timeout=120)  # fmt: skip  # bounds a hang: a busy CI is slow
+        result = bpb_process("simulate", str(fifo))  # the timeout bounds a hang
     except subprocess.TimeoutExpired:
         pytest.fail("bpb simulate waited for a second writer on the named pipe")
     writer.join()
@@ -458,45 +458,12 @@ def test_a_plugin_simulator_may_take_options_called_name_and_names(
     ]
 
 
-def test_paths_and_options_parse_as_click_parses_them() -> None:
-    # bpb simulate hands click's parser long runs of paths folded into stand-ins (its parser
-    # took time in the square of their number); what the command gets must not change
-    import click
-    from hypothesis import given, settings, strategies as st
-
-    from bpb_core.cli.simulate_cmd import simulate as command
-
-    plain = click.Command("simulate", params=command.params)
-    fixed = ["a.json", "b/c.json", "-", "--", "", "x y", "--stability", "--horizon", "2",
-             "-1", "--workers=1", "--workers", "--dt", "0.01", "--simulator", "pymunk",
-             "--no"]  # fmt: skip
-    token = st.one_of(st.sampled_from(fixed), st.text(alphabet="ab-./ 0", max_size=4))
-
-    def parse(cmd: click.Command, args: list[str]) -> tuple[Any, ...]:
-        try:
-            with cmd.make_context("simulate", list(args)) as ctx:
-                return "ok", ctx.params, ctx.args
-        except click.ClickException as exc:
-            return "error", exc.format_message()
-
-    @settings(max_examples=400, deadline=None)
-    @given(st.lists(token, max_size=40))
-    def check(args: list[str]) -> None:
-        assert parse(command, args) == parse(plain, args)
-
-    check()
-    many = [f"s{i}.json" for i in range(5000)]
-    assert parse(command, [*many, "--horizon", "2", *many])[1]["paths"] == (*many, *many)
-
-
 @pytest.mark.parametrize("encoding", ["utf-8", "latin-1"])
-def test_the_batch_path_prints_in_the_encoding_of_standard_output(
+def test_lines_are_printed_in_the_encoding_of_standard_output(
     tmp_path: Path, encoding: str
 ) -> None:
-    # the batch path's lines come as UTF-8 bytes, written as they are only when standard
-    # output is UTF-8
     paths = []
-    for i in range(300):  # past BATCH_MIN: the compiled batch path
+    for i in range(300):  # past BATCH_MIN: in batches
         scene = random_scene(31, i)
         if i % 7 == 3:
             scene = scene.model_copy(update={"scene_id": f"schön {i}"})
@@ -525,3 +492,42 @@ def test_a_caller_that_captures_standard_output_in_a_string_gets_the_lines(
         main(["simulate", "--workers", "1", *paths])
     assert ended.value.code in (0, None)
     assert captured.getvalue() == "".join(f"{line}\n" for line in simulate_lines(paths, workers=1))
+
+
+def test_paths_from_a_file_and_from_standard_input(
+    scenes: list[tuple[Path, Scene]], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Long path lists come from --from-file FILE (or -) and from '-' among the arguments, one
+    path a line, in the order given: arguments first, each '-' where it stands."""
+    (a, _), (b, _), (c, _) = scenes
+    listed = tmp_path / "paths.txt"
+    listed.write_text(f"{b}\n\n{c}\r\n")
+    want = lines(bpb("simulate", str(a), str(b), str(c)))
+    assert lines(bpb("simulate", str(a), "--from-file", str(listed))) == want
+    monkeypatch.setattr("sys.stdin", io.StringIO(f"{b}\n{c}\n"))
+    assert lines(bpb("simulate", str(a), "-")) == want
+    monkeypatch.setattr("sys.stdin", io.StringIO(f"{a}\n{b}\n"))
+    assert lines(bpb("simulate", "--from-file", "-", str(c))) == lines(
+        bpb("simulate", str(c), str(a), str(b))
+    )
+    missing = tmp_path / "none.txt"
+    assert one_line_error(bpb("simulate", "--from-file", str(missing))) == (
+        f"error: --from-file {missing}: cannot read: No such file or directory"
+    )
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))
+    assert one_line_error(bpb("simulate", "-")) == (
+        "error: no scene paths given (arguments, --from-file FILE, or - for stdin)"
+    )
+    assert one_line_error(bpb("simulate")).startswith("error: no scene paths given")
+
+
+def test_a_reader_that_leaves_early_ends_it_quietly(small_dataset: Path) -> None:
+    """``bpb simulate ... | head -1``: the closed pipe was an internal error (exit 1 or 3)."""
+    args = [BPB, "simulate", *[str(small_dataset)] * 60]  # 360 lines, past a pipe's buffer
+    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdout is not None and process.stderr is not None
+    first = process.stdout.readline()
+    process.stdout.close()
+    stderr = process.stderr.read()
+    assert process.wait(timeout=120) == 141
+    assert json.loads(first)["scene_id"] == "h1_0000" and stderr == b""

@@ -9,8 +9,8 @@ the family's truth model), ``truth_type`` (the same from ``ground_truth``), ``pi
 ``perceive_raise`` (a RuntimeError, not the ValueError of an unreadable image),
 ``perceive_type`` (the scene read as a dict, not its scene model), ``perception_error_type``
 (a list, not a dict),
-``truth_lines_short`` (``bpb simulate``'s batch path: one line fewer than scene files, so every
-line would pair with the next file), ``truth_lines_type`` (bytes lines, not str),
+``ground_truths_short`` (``bpb simulate``'s batches: one truth fewer than scenes, so every
+truth would pair with the next file), ``ground_truths_type`` (dicts, not its truth model),
 ``unstable_reasons_type`` (ground truths read back whose ``unstable_reasons`` is a str);
 and at generation ``load_config_raise``, ``load_config_type`` (a dict, not its config model)
 (these two and ``simulator_name_type``, None, also where a dataset is read back),
@@ -223,17 +223,13 @@ class FlawedFamily(BilliardsFamily):
             return {"balls": []}
         return super().ground_truth(scene, simulator, horizon, stability=stability)
 
-    def truth_lines(self, texts: Sequence[bytes], simulator: Any, horizon: float | None) -> Any:
-        if not _flaw().startswith("truth_lines"):
-            return super().truth_lines(texts, simulator, horizon)
-        scenes = [self.scene_model.model_validate_json(text) for text in texts]
-        truths = [self.ground_truth(s, simulator, horizon, stability=False) for s in scenes]
-        lines = [truth.model_dump_json() for truth in truths]
-        if _flaw() == "truth_lines_block_short":
-            return "\n".join(lines[1:]).encode()
-        if _flaw() == "truth_lines_block_utf8":
-            return "\n".join(lines).encode().replace(b'"scene_id":', b'"scene_id":\xff', 1)
-        return lines[1:] if _flaw() == "truth_lines_short" else [line.encode() for line in lines]
+    def ground_truths(
+        self, scenes: Sequence[Any], simulator: Any, horizon: float | None = None
+    ) -> Any:
+        truths = super().ground_truths(scenes, simulator, horizon)
+        if _flaw() == "ground_truths_type":
+            return [truth.model_dump() for truth in truths]
+        return truths[1:] if _flaw() == "ground_truths_short" else truths
 
     def perceive(self, image: bytes, prompt: str) -> Any:
         if _flaw() == "perceive_raise":

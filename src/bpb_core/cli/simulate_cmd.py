@@ -2,73 +2,26 @@
 
 from __future__ import annotations
 
-import codecs
 import io
 import os
 import sys
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import click
 
-from bpb_core.errors import NO_ROOM, WriteRefused, write_refused
+from bpb_core.errors import NO_ROOM, BadInput, BpbError, WriteRefused, write_refused
 
 
-class _Named(click.Path):
-    """A path argument taken as given (shell completion as for paths): the library checks each
-    once, naming the one that is missing, so ten thousand scene files are not stat'ed twice."""
-
-    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
-        return value
-
-
-class _ManyPaths(click.Command):
-    """A command taking many paths: click's parser takes each argument off the front of a
-    list, moving the rest of the list every time, so its time grew with the square of the
-    number of paths (about a microsecond per scene at 10,000 paths, five at 50,000). Each
-    long run of plain arguments reaches the parser as its first argument (it may be an
-    option's value) and one stand-in for the others, which are put back in ``paths`` after."""
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        folded, runs = _fold(args)
-        rest = super().parse_args(ctx, folded)
-        if runs:
-            paths: list[str] = []
-            for name in ctx.params.get("paths") or ():
-                run = runs.get(name)
-                if run is None:
-                    paths.append(name)
-                else:
-                    paths += run
-            ctx.params["paths"] = tuple(paths)
-        return rest
-
-
-def _fold(args: list[str]) -> tuple[list[str], dict[str, list[str]]]:
-    """``args`` with each run of three or more arguments that are not options (up to a
-    ``--``, after which click takes the rest at once) cut to its first and a stand-in for the
-    others, and the runs by stand-in: a stand-in holds a NUL, which no argument can."""
-    folded: list[str] = []
-    runs: dict[str, list[str]] = {}
-    at, end = 0, len(args)
-    while at < end:
-        if args[at] == "--":
-            folded.extend(args[at:])
-            break
-        stop = at
-        while stop < end and not args[stop].startswith("-"):
-            stop += 1
-        if stop - at > 2:
-            stand_in = f"\0{len(runs)}"
-            runs[stand_in] = args[at + 1 : stop]
-            folded += [args[at], stand_in]
-        else:
-            folded.extend(args[at : max(stop, at + 1)])
-        at = max(stop, at + 1)
-    return folded, runs
-
-
-@click.command("simulate", cls=_ManyPaths)
-@click.argument("paths", nargs=-1, required=True, type=_Named())
+@click.command("simulate")
+@click.argument("paths", nargs=-1, type=click.Path())
+@click.option(
+    "--from-file",
+    "from_file",
+    type=click.Path(allow_dash=True),
+    default=None,
+    help="Also simulate the paths in FILE, one a line ('-': standard input).",
+)
 @click.option("--horizon", type=float, default=None, help="Override each scene's own horizon (s).")
 @click.option(
     "--simulator",
@@ -102,6 +55,7 @@ def _fold(args: list[str]) -> tuple[list[str], dict[str, list[str]]]:
 )
 def simulate(
     paths: tuple[str, ...],
+    from_file: str | None,
     horizon: float | None,
     simulator: str | None,
     dt: float | None,
@@ -110,9 +64,15 @@ def simulate(
     stability: bool,
     workers: int,
 ) -> None:
-    """Simulate init.json files, scene folders or dataset folders, in input order."""
-    from bpb_core.simulate import simulate_blocks
+    """Simulate init.json files, scene folders or dataset folders, in input order.
 
+    PATHS may include '-': the paths on standard input, one a line (as --from-file -).
+    """
+    from bpb_core.simulate import simulate_lines
+
+    named = _named_paths(paths, from_file)
+    if not named:
+        raise BadInput("no scene paths given (arguments, --from-file FILE, or - for stdin)")
     options: dict[str, Any] = {}
     if dt is not None:
         options["dt"] = dt
@@ -120,17 +80,58 @@ def simulate(
         options["precision"] = precision
     if engine is not None:
         options["engine"] = engine
-    out = _Output()
-    for block in simulate_blocks(  # up to 512 lines each: not one write per line
-        paths,
+    lines = simulate_lines(
+        named,
         horizon=horizon,
         simulator=simulator,
         stability=stability,
         options=options,
         workers=workers,
         names=FLAGS,
-    ):
-        out.write(block)  # the lines before a bad file are written before its error
+    )
+    out = _Output()
+    try:
+        for block in _blocks(lines):
+            out.write(block)
+    except BrokenPipeError:  # the reader left (`bpb simulate ... | head -1`): stop quietly
+        raise click.exceptions.Exit(141) from None
+
+
+def _blocks(lines: Iterable[str], size: int = 512) -> Iterator[list[str]]:
+    """``lines`` in lists of up to ``size``, written at once; the lines before a bad file come
+    before its error."""
+    block: list[str] = []
+    try:
+        for line in lines:
+            block.append(line)
+            if len(block) == size:
+                yield block
+                block = []
+    except BpbError:
+        yield block
+        raise
+    yield block
+
+
+def _named_paths(paths: tuple[str, ...], from_file: str | None) -> list[str]:
+    """``paths`` with each ``-`` replaced by the paths on standard input, then those in
+    ``from_file`` (``-``: standard input), one a line (blank lines skipped)."""
+    named: list[str] = []
+    for path in paths:
+        named += _listed(sys.stdin) if path == "-" else [path]
+    if from_file == "-":
+        named += _listed(sys.stdin)
+    elif from_file is not None:
+        try:
+            with open(from_file, encoding="utf-8") as file:
+                named += _listed(file)
+        except OSError as exc:
+            raise BadInput(f"--from-file {from_file}: cannot read: {exc.strerror or exc}") from None
+    return named
+
+
+def _listed(lines: Iterable[str]) -> list[str]:
+    return [name for line in lines if (name := line.rstrip("\r\n"))]
 
 
 FLAGS = {"dt": "--dt", "precision": "--precision", "engine": "--engine"}
@@ -149,22 +150,19 @@ class _Output:
             self.fd: int | None = sys.stdout.fileno()
         except (AttributeError, ValueError, io.UnsupportedOperation):
             self.fd = None  # a stream with no file behind it (click's CliRunner)
-        encoding = getattr(sys.stdout, "encoding", None) or "utf-8"  # None: io.StringIO
-        self.encoding = None if codecs.lookup(encoding).name == "utf-8" else encoding
-        # the lines are UTF-8: else transcoded
+        self.encoding = getattr(sys.stdout, "encoding", None) or "utf-8"  # None: io.StringIO
         self.errors = getattr(sys.stdout, "errors", None) or "strict"
 
-    def write(self, block: bytes) -> None:
-        """Write ``block``'s lines (UTF-8, each ended by a newline) in standard output's
-        encoding."""
-        count = block.count(b"\n")
+    def write(self, lines: list[str]) -> None:
+        """Write ``lines``, each ended by a newline, in standard output's encoding."""
+        if not lines:
+            return
+        text = "".join(f"{line}\n" for line in lines)
         if self.fd is None:
-            sys.stdout.write(block.decode())
+            sys.stdout.write(text)
         else:
-            if self.encoding is not None:
-                block = block.decode().encode(self.encoding, self.errors)
-            self._write_all(self.fd, block)
-        self.lines += count
+            self._write_all(self.fd, text.encode(self.encoding, self.errors))
+        self.lines += len(lines)
 
     def _write_all(self, fd: int, data: bytes) -> None:
         left = memoryview(data)

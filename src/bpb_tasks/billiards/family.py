@@ -85,6 +85,23 @@ def _simulator_name(spec: str) -> str:
     return parse_spec(spec, "simulator").name
 
 
+def _same_table_runs(scenes: Sequence[Scene]) -> list[list[Scene]]:
+    """``scenes`` cut into runs of consecutive scenes on the same table, physics and pockets
+    (a batch call takes one table)."""
+    runs: list[list[Scene]] = []
+    for scene in scenes:
+        first = runs[-1][0] if runs else None
+        if first is not None and (first.table, first.physics, first.pockets) == (
+            scene.table,
+            scene.physics,
+            scene.pockets,
+        ):
+            runs[-1].append(scene)
+        else:
+            runs.append([scene])
+    return runs
+
+
 @dataclass
 class BilliardsTally:
     """Per-horizon counts: cue-ball collisions and the cue speeds drawn (for the histogram)."""
@@ -213,16 +230,21 @@ class BilliardsFamily:
 
         return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
 
-    def truth_lines(
-        self, texts: Sequence[bytes], simulator: Simulator, horizon: float | None
-    ) -> list[str | None] | bytes | None:
-        """``final.json`` lines of many ``init.json`` texts from the compiled kernel, read
-        without scene models (``None`` for a text left to the ordinary path, or as a whole when
-        ``simulator`` has none; one block of bytes when every text is taken); see
-        :mod:`bpb_tasks.billiards.truth_lines`."""
-        from bpb_tasks.billiards.truth_lines import text_lines
+    def ground_truths(
+        self, scenes: Sequence[Scene], simulator: Simulator, horizon: float | None = None
+    ) -> list[FinalState]:
+        """``final.json`` of each scene (no stability), each run of scenes on one table
+        simulated by one call of the simulator's ``run_many`` when it has one."""
+        from bpb_core.capabilities import RunsMany
 
-        return text_lines(texts, simulator, horizon, block=True)
+        outcomes: list[Outcome] = []
+        for group in _same_table_runs(scenes):
+            if isinstance(simulator, RunsMany):
+                outcomes += simulator.run_many(group, horizon)
+            else:
+                outcomes += [simulator.run(scene, horizon) for scene in group]
+        name = getattr(simulator, "name", "unknown")
+        return [final_state(s, o, name) for s, o in zip(scenes, outcomes, strict=True)]
 
     def calibrate_horizon(
         self, config: DatasetConfig, simulator: Simulator, horizon: float

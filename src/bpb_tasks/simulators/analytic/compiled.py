@@ -2,8 +2,9 @@
 
 :func:`kernel_outcome` simulates one :class:`~bpb_tasks.billiards.scene.Scene` with
 :func:`~bpb_tasks.simulators.analytic.kernel.run_arrays` and builds the same
-:class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`simulate_many`
-is the batch API: many scenes in one compiled call, returning only what labels and final
+:class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`outcomes_many`
+is the batch API behind ``AnalyticSimulator.run_many``: many scenes in one compiled call, their
+outcomes without motion pieces; :func:`simulate_many` returns only what labels and final
 positions need (no event objects).
 """
 
@@ -114,13 +115,7 @@ def build_outcome(
     decel: float,
 ) -> Outcome:
     """An :class:`Outcome` from the kernel's arrays."""
-    log = []
-    for t, kind, a, b, wall, xa, ya, xb, yb in events.tolist():
-        if b >= 0:
-            log.append(Event(t, "ball", (ids[int(a)], ids[int(b)]), None, ((xa, ya), (xb, yb))))
-        else:
-            name = WALLS[int(wall)] if wall >= 0 else None
-            log.append(Event(t, KINDS[int(kind)], (ids[int(a)],), name, ((xa, ya),)))
+    log = _event_log(ids, events.tolist())
     rows = final.tolist()
     positions = {ids[i]: (r[0], r[1]) if r[2] else None for i, r in enumerate(rows)}
     per_ball: list[list[list[float]]] = [[] for _ in ids]
@@ -135,7 +130,20 @@ def build_outcome(
             )
             for j, p in enumerate(own)
         )
-    return Outcome(horizon, positions, tuple(log), segments)
+    return Outcome(horizon, positions, log, segments)
+
+
+def _event_log(ids: Sequence[int], rows: list[list[float]]) -> tuple[Event, ...]:
+    """The events of the kernel's event rows ``(t, kind, a, b, wall, xa, ya, xb, yb)``, whose
+    balls ``a`` and ``b`` are indices into ``ids``."""
+    log = []
+    for t, kind, a, b, wall, xa, ya, xb, yb in rows:
+        if b >= 0:
+            log.append(Event(t, "ball", (ids[int(a)], ids[int(b)]), None, ((xa, ya), (xb, yb))))
+        else:
+            name = WALLS[int(wall)] if wall >= 0 else None
+            log.append(Event(t, KINDS[int(kind)], (ids[int(a)],), name, ((xa, ya),)))
+    return tuple(log)
 
 
 @dataclass(frozen=True)
@@ -168,6 +176,34 @@ def simulate_many(
         return BatchResult([], [], [], [])
     arrays, starts, final, events = run_batch(scenes, horizons, max_events)
     return _batch(arrays, starts, final, events)
+
+
+def outcomes_many(
+    scenes: Sequence[Scene], horizon: float | None = None, max_events: int = 100_000
+) -> list[Outcome]:
+    """The outcomes of many scenes (sharing table, physics and pockets) run to ``horizon``
+    (default: their own) in one compiled call: final positions and events, and no motion
+    pieces (``segments`` empty: nothing to draw from them).
+
+    Raises:
+        ValueError: The scenes do not share one table.
+        KernelBudgetError: A scene exceeded ``max_events``.
+    """
+    if not scenes:
+        return []
+    ends = [s.horizon if horizon is None else horizon for s in scenes]
+    arrays, starts, final, events = run_batch(scenes, ends, max_events)
+    rows = final.tolist()
+    bounds = np.searchsorted(events[:, 0], np.arange(len(scenes) + 1)).tolist()  # in scene order
+    event_rows = events[:, 1:].tolist()
+    outcomes = []
+    for k, ((ids, _, _), a, b) in enumerate(
+        zip(arrays, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
+    ):
+        positions = {i: (r[0], r[1]) if r[2] else None for i, r in zip(ids, rows[a:b], strict=True)}
+        log = _event_log(ids, event_rows[bounds[k] : bounds[k + 1]])
+        outcomes.append(Outcome(float(ends[k]), positions, log, {}))
+    return outcomes
 
 
 Batch = tuple[list[tuple[list[int], np.ndarray, np.ndarray]], np.ndarray, np.ndarray, np.ndarray]

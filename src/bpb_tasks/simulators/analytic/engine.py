@@ -137,18 +137,19 @@ class AnalyticSimulator:
             return tuple(simulation.events), False
         return tuple(simulation.events), True
 
-    def run_many(self, scenes: Sequence[Scene]) -> object:
-        """Simulate scenes sharing one table to their own horizons: one compiled batch call
-        (:func:`~bpb_tasks.simulators.analytic.compiled.simulate_many`, labels and final
-        positions only) with the kernel, else a list of :meth:`run` outcomes."""
+    def run_many(self, scenes: Sequence[Scene], horizon: float | None = None) -> list[Outcome]:
+        """Simulate scenes sharing one table to ``horizon`` (default: each scene's own): with
+        the kernel in one compiled call
+        (:func:`~bpb_tasks.simulators.analytic.compiled.outcomes_many`: outcomes without motion
+        pieces, ``segments`` empty), else :meth:`run` on each."""
         if self.compiled and scenes:
-            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, simulate_many
+            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, outcomes_many
 
             try:
-                return simulate_many(scenes, max_events=self.max_events)
+                return outcomes_many(scenes, horizon, self.max_events)
             except KernelBudgetError as exc:
                 raise SimulationError(str(exc)) from None
-        return [self.run(s) for s in scenes]
+        return [self.run(s, horizon) for s in scenes]
 
 
 def _use_kernel(engine: str, float64: bool) -> bool:
