@@ -8,10 +8,7 @@ the same number of worker processes, so machine noise hits them alike:
 * ``generate --no-images``: the same without images (what rendering costs is the difference);
 * ``pillow default``: Pillow alone encoding as many images of the same size, RGB with Pillow's
   default PNG settings (what a straightforward renderer pays just to save files);
-* ``pillow palette``: the same images encoded by Pillow as 8-bit palette PNGs at zlib level 1
-  (how bpb stored them until it wrote them with zlib-ng);
-* ``bpb palette``: the same images written by :func:`bpb_core.png.encode_palette_png` at its
-  default level (how the built-in family stores them now).
+* ``pillow palette``: the same images encoded by Pillow as 8-bit palette PNGs at zlib level 1.
 
 The images encoded by these baselines are the dataset's own (its family's ``image_names``,
 decoded). A family without images gets no encoding rows.
@@ -36,7 +33,6 @@ from PIL import Image
 
 from bpb_core.bench.children import run_child
 from bpb_core.dataset.worker import started_pool, worker_signals
-from bpb_core.png import DEFAULT_LEVEL, encode_palette_png
 
 SAMPLE_IMAGES = 24
 
@@ -53,7 +49,6 @@ class GenerateTiming:
     no_images_s: float
     pillow_default_s: float | None
     pillow_palette_s: float | None
-    bpb_palette_s: float | None
 
     @property
     def images_per_scene(self) -> float:
@@ -72,7 +67,7 @@ class MemoryUse:
     worker_mib: float | None
 
 
-Encoder = Literal["pillow default", "pillow palette", "bpb palette"]
+Encoder = Literal["pillow default", "pillow palette"]
 
 
 def _encode_share(args: tuple[list[bytes], int, Encoder]) -> int:
@@ -86,9 +81,6 @@ def _encode_share(args: tuple[list[bytes], int, Encoder]) -> int:
     total = 0
     for i in range(count):
         img = images[i % len(images)]
-        if how == "bpb palette":
-            total += len(encode_palette_png(img, DEFAULT_LEVEL))
-            continue
         out = io.BytesIO()
         if how == "pillow palette":
             img.save(out, format="PNG", compress_level=1)
@@ -151,7 +143,7 @@ def measure_generate(
         sources = [p.read_bytes() for p in images[:SAMPLE_IMAGES]]
     scenes, count = per_horizon * len(horizons), len(images)
     if not sources:
-        return GenerateTiming(scenes, 0, n_workers, None, generate_s, no_images_s, None, None, None)
+        return GenerateTiming(scenes, 0, n_workers, None, generate_s, no_images_s, None, None)
     with Image.open(io.BytesIO(sources[0])) as first:
         size = first.size
     return GenerateTiming(
@@ -163,7 +155,6 @@ def measure_generate(
         no_images_s=no_images_s,
         pillow_default_s=_encode_seconds(sources, count, n_workers, "pillow default"),
         pillow_palette_s=_encode_seconds(sources, count, n_workers, "pillow palette"),
-        bpb_palette_s=_encode_seconds(sources, count, n_workers, "bpb palette"),
     )
 
 

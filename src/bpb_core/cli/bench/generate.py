@@ -29,7 +29,6 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
     from bpb_core.cli.console import stdout
     from bpb_core.dataset.jobs import check_per_horizon, check_workers
     from bpb_core.errors import BadInput
-    from bpb_core.png import DEFAULT_LEVEL
 
     try:
         sizes = [int(x) for x in memory.split(",") if x.strip()]
@@ -49,7 +48,6 @@ def bench_generate(per_horizon: int, workers: int | None, memory: str) -> None:
         ("bpb generate --no-images", t.no_images_s),
         (f"Pillow alone: {t.images} RGB PNGs, default settings", t.pillow_default_s),
         (f"Pillow alone: {t.images} palette PNGs, zlib level 1", t.pillow_palette_s),
-        (f"bpb's writer: {t.images} palette PNGs, zlib-ng level {DEFAULT_LEVEL}", t.bpb_palette_s),
     ]
     for name, seconds in rows:
         if seconds is not None:
