@@ -15,9 +15,9 @@ from PIL import Image, ImageDraw
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.png import encode_palette_png
 from bpb_tasks.billiards.render_arrow import arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.png import encode_palette_png
 from bpb_tasks.billiards.render_palette import (
     GHOST_ALPHA,
     base,

@@ -153,8 +153,8 @@ def text_patch(
     outline: st.RGB | None = None,
 ) -> Image.Image:
     """``text`` antialiased on a ``back`` rectangle ``pad`` pixels around the text's box
-    (optionally outlined on its edge), in palette mode: the pixels that drawing it in RGB and
-    mapping the result to the palette gives.
+    (optionally outlined on its edge, over the text when ``pad`` is 0), in palette mode: the
+    pixels that drawing it in RGB and mapping the result to the palette gives.
 
     On a flat background each pixel's colour depends only on the glyphs' coverage there, so the
     text is drawn as coverage (an "L" image) and each coverage value mapped through a table made
