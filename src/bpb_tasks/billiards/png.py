@@ -23,17 +23,6 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
     return b"".join((struct.pack(">I", len(data)), kind, data, struct.pack(">I", crc)))
 
 
-def filtered_rows(img: Image.Image) -> bytes:
-    """The data a PNG deflates: each row of an 8-bit image behind its filter byte (0, none).
-
-    The image is pasted one column right of a zero column, so that column holds the filter
-    bytes."""
-    width, height = img.size
-    framed = Image.new(img.mode, (width + 1, height), 0)
-    framed.paste(img, (1, 0))
-    return framed.tobytes()
-
-
 def encode_palette_png(img: Image.Image, level: int = DEFAULT_LEVEL) -> bytes:
     """PNG bytes of a palette image, deflated by zlib-ng at ``level`` (0-9; the same bytes for
     equal images and zlib-ng version).
@@ -50,7 +39,11 @@ def encode_palette_png(img: Image.Image, level: int = DEFAULT_LEVEL) -> bytes:
     width, height = img.size
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 3, 0, 0, 0)
     plte = bytes(img.getpalette() or [0, 0, 0])
+    # PNG deflates each row behind its filter byte (0, none). Pillow's raw encoder writes rows
+    # width + 1 bytes apart with a zero after each (its stride argument); a zero in front puts
+    # each zero before the next row instead, and the last one is left out.
+    rows = memoryview(img.tobytes("raw", ("P", width + 1)))
     deflate = zlib_ng.compressobj(level, zlib_ng.DEFLATED, 15, 9)
-    data = deflate.compress(filtered_rows(img)) + deflate.flush()
+    data = deflate.compress(b"\0") + deflate.compress(rows[:-1]) + deflate.flush()
     chunks = (_chunk(b"IHDR", ihdr), _chunk(b"PLTE", plte), _chunk(b"IDAT", data))
     return b"".join((SIGNATURE, *chunks, _chunk(b"IEND", b"")))
