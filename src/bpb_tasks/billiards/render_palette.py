@@ -1,7 +1,7 @@
 """The fixed 8-bit palette of a canvas, and the palette-mode pieces drawn from it.
 
-Scene images are drawn directly in palette ("P") mode: copying a 1-byte-per-pixel base and
-encoding it costs a third of RGB, and no per-image colour quantisation is needed. Ball sprites
+Scene images are drawn directly in palette ("P") mode: a page is a copy of a 1-byte-per-pixel
+base, and no per-image colour quantisation is needed. Ball sprites
 are composed in RGB once, mapped to the palette, and pasted with a binary mask; text patches
 (:func:`text_patch`) give the same pixels as text drawn in RGB and mapped here. The palette
 holds every flat colour exactly, plus median-cut colours for the antialiased edges; it depends
@@ -82,7 +82,7 @@ def base(spec: CanvasSpec, header: str = "", legend: bool = False) -> Image.Imag
     Both are drawn in the header line at the top, so only the band of rows down to their lowest
     pixel is drawn (in RGB, at the same coordinates) and mapped, over the mapped background:
     mapping is pixel by pixel, so this is the image that drawing and mapping the whole canvas
-    gives, at a tenth of the cost (each horizon has its own headers, made in every process)."""
+    gives (each horizon has its own headers, made in every process)."""
     s = spec.scale
     font = st.font(round(19 * s), True)
     at = (spec.left - 60 * s, header_y(spec))
