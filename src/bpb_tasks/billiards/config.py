@@ -19,8 +19,8 @@ from typing import Any
 from pydantic import Field, field_validator, model_validator
 
 from bpb_core.errors import BadInput
-from bpb_core.png import DEFAULT_LEVEL
 from bpb_core.validated_files import validate_mapping
+from bpb_tasks.billiards.png import DEFAULT_LEVEL
 from bpb_tasks.billiards.scene import MAX_SPEED, Physics, Pockets, StrictModel, Table
 
 
@@ -47,7 +47,7 @@ class ImageConfig(StrictModel):
             ``px_per_m``, the pockets and a narrow table (:func:`needed_margins`); given, they
             must be at least that (checked before generating).
         compress_level: zlib-ng level of the PNG encoder (0-9; 2, the default, gives smaller
-            files than Pillow's level 1 in a third of its time; see ``bpb_core.png``).
+            files than Pillow's level 1, faster; see :mod:`bpb_tasks.billiards.png`).
     """
 
     px_per_m: float = Field(600.0, ge=100, le=3000)

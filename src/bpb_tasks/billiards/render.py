@@ -7,17 +7,15 @@ size, scale and ball radius, so they overlay exactly. They are drawn in palette 
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw
 
-from bpb_core.png import RowImage, encode_palette_png, filtered_rows
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.png import encode_palette_png
 from bpb_tasks.billiards.render_arrow import arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_palette import (
@@ -26,13 +24,10 @@ from bpb_tasks.billiards.render_palette import (
     header_y,
     palette_for,
     stamp,
+    text_patch,
 )
-from bpb_tasks.billiards.render_text import text_patch
 from bpb_tasks.billiards.render_trajectory import draw_markers, draw_paths
 from bpb_tasks.billiards.scene import Scene
-
-if TYPE_CHECKING:
-    from PIL._imaging import ImagingCore
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
 Point = tuple[float, float]
@@ -43,42 +38,11 @@ def paste_balls(
 ) -> None:
     """Draw ball ``id`` centred on table point ``pos`` for each ``(id, pos)`` of ``balls``
     (``img`` in palette mode)."""
-    if img.mode != "P" or img.readonly:
-        for ball_id, pos in balls:
-            sprite, mask = stamp(spec, ball_id, alpha)
-            px, py = spec.to_px(*pos)
-            half = sprite.width // 2
-            img.paste(sprite, (round(px) - half, round(py) - half), mask)
-        return
-    # what Image.paste does for equal modes, without its per-call checks and with the sprites'
-    # core images at hand (a scene pastes ~30 sprites; this makes them 40% cheaper)
-    core, stamps, to_px = img.im, _stamp_cores(spec, alpha), spec.to_px
     for ball_id, pos in balls:
-        pixels, cut, w, h = stamps[ball_id]
-        px, py = to_px(*pos)
-        x, y = round(px) - w // 2, round(py) - w // 2
-        core.paste(pixels, (x, y, x + w, y + h), cut)
-
-
-class _StampCores(dict[int, tuple["ImagingCore", "ImagingCore", int, int]]):
-    """Per ball id: the core images of its palette sprite and paste mask, and the sprite's size,
-    made on first use (a scene has 7 balls of the 16 ids a config allows, and each sprite costs
-    about 0.7 ms to draw, in every process that draws)."""
-
-    def __init__(self, spec: CanvasSpec, alpha: int) -> None:
-        super().__init__()
-        self._spec, self._alpha = spec, alpha
-
-    def __missing__(self, ball_id: int) -> tuple[ImagingCore, ImagingCore, int, int]:
-        sprite, mask = stamp(self._spec, ball_id, self._alpha)
-        self[ball_id] = cores = (sprite.im, mask.im, sprite.width, sprite.height)
-        return cores
-
-
-@functools.cache
-def _stamp_cores(spec: CanvasSpec, alpha: int) -> _StampCores:
-    """The :class:`_StampCores` of ``spec``'s sprites at ``alpha``."""
-    return _StampCores(spec, alpha)
+        sprite, mask = stamp(spec, ball_id, alpha)
+        px, py = spec.to_px(*pos)
+        half = sprite.width // 2
+        img.paste(sprite, (round(px) - half, round(py) - half), mask)
 
 
 def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
@@ -91,18 +55,13 @@ def header_note(img: Image.Image, spec: CanvasSpec, text: str) -> None:
 def render_init(scene: Scene, spec: CanvasSpec) -> Image.Image:
     """The initial state: balls, then the cue velocity arrow above them (shortened to stay on
     the cloth, off rails and pockets) and its speed in m/s."""
-    return _init_page(scene, spec).image
-
-
-def _init_page(scene: Scene, spec: CanvasSpec) -> RowImage:
-    page = _page(spec, "Initial state, t = 0 s")
-    img = page.image
+    img = base(spec, "Initial state, t = 0 s").copy()
     paste_balls(img, spec, ((ball.id, ball.pos) for ball in scene.balls))
     label = _draw_velocity(img, spec, scene)
     if label is not None:
         _speed_label(img, spec, *label)
     header_note(img, spec, speed_note(math.hypot(*scene.ball(CUE_ID).vel)))
-    return page
+    return img
 
 
 def speed_note(speed: float) -> str:
@@ -112,12 +71,7 @@ def speed_note(speed: float) -> str:
 
 def render_final(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
     """The state at the horizon; pocketed balls are absent and listed in the header."""
-    return _final_page(scene, outcome, spec).image
-
-
-def _final_page(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> RowImage:
-    page = _page(spec, f"State at t = {outcome.horizon:g} s")
-    img = page.image
+    img = base(spec, f"State at t = {outcome.horizon:g} s").copy()
     at = [
         (ball.id, outcome.positions.get(ball.id))
         for ball in sorted(scene.balls, key=lambda b: b.id)
@@ -128,39 +82,19 @@ def _final_page(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> RowImage:
     header_note(
         img, spec, f"pocketed: {noun} {', '.join(pocketed)}" if pocketed else "no ball pocketed"
     )
-    return page
+    return img
 
 
 def render_trajectory(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> Image.Image:
     """Paths over [0, horizon], start positions faded, end positions solid, then the contact
     and pocketing markers above everything."""
-    return _trajectory_page(scene, outcome, spec).image
-
-
-def _trajectory_page(scene: Scene, outcome: Outcome, spec: CanvasSpec) -> RowImage:
-    page = _page(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True)
-    img = page.image
+    img = base(spec, f"Trajectories, t = 0 to {outcome.horizon:g} s", legend=True).copy()
     paste_balls(img, spec, ((ball.id, ball.pos) for ball in scene.balls), alpha=GHOST_ALPHA)
     draw_paths(img, spec, palette_for(spec), outcome)
     ends = ((ball.id, outcome.positions.get(ball.id)) for ball in scene.balls)
     paste_balls(img, spec, ((i, pos) for i, pos in ends if pos is not None))
     draw_markers(img, spec, palette_for(spec), outcome)
-    return page
-
-
-def _page(spec: CanvasSpec, header: str, legend: bool = False) -> RowImage:
-    """A fresh image of the base with ``header`` (and the legend), drawn in place in its PNG
-    rows (:class:`~bpb_core.png.RowImage`)."""
-    rows, palette = _base_rows(spec, header, legend)
-    return RowImage(rows, spec.size, palette)
-
-
-@functools.cache
-def _base_rows(spec: CanvasSpec, header: str, legend: bool) -> tuple[bytes, bytes]:
-    """The PNG rows and palette of :func:`base` (kept instead of the image: one per header, a
-    few per process, each the size of an image)."""
-    img = base.__wrapped__(spec, header, legend)
-    return bytes(filtered_rows(img)), bytes(img.getpalette() or ())
+    return img
 
 
 def _draw_velocity(
@@ -246,18 +180,12 @@ def _speed_label(
     img.paste(patch, (round(cx - w / 2), round(cy - h / 2)))
 
 
-def encode_png(img: Image.Image, level: int) -> bytes:
-    """PNG bytes of a palette image, deflated by zlib-ng at ``level`` (deterministic for equal
-    input; see :mod:`bpb_core.png`)."""
-    return encode_palette_png(img, level)
-
-
 def render_pngs(scene: Scene, outcome: Outcome, config: DatasetConfig) -> dict[str, bytes]:
     """``init.png``, ``final.png`` and ``trajectory.png`` of a simulated scene, encoded."""
     spec = CanvasSpec.from_config(config)
     level = config.image.compress_level
     return {
-        "init.png": _init_page(scene, spec).encode(level),
-        "final.png": _final_page(scene, outcome, spec).encode(level),
-        "trajectory.png": _trajectory_page(scene, outcome, spec).encode(level),
+        "init.png": encode_palette_png(render_init(scene, spec), level),
+        "final.png": encode_palette_png(render_final(scene, outcome, spec), level),
+        "trajectory.png": encode_palette_png(render_trajectory(scene, outcome, spec), level),
     }

@@ -102,7 +102,7 @@ def background(spec: CanvasSpec) -> Image.Image:
         draw.line((x0, py, x1, py), fill=st.GRID, width=1)
     draw.rectangle((x0, y0, x1, y1), outline=st.CUSHION, width=max(2, rail // 5))
     _pockets(draw, spec)
-    _axes(draw, spec, max(rail, round(spec.pocket_radius_m * spec.ppm)) + round(6 * spec.scale))
+    _axes(img, spec, max(rail, round(spec.pocket_radius_m * spec.ppm)) + round(6 * spec.scale))
     return img
 
 
@@ -113,7 +113,8 @@ def _pockets(draw: ImageDraw.ImageDraw, spec: CanvasSpec) -> None:
         draw.ellipse((px - r, py - r, px + r, py + r), fill=st.POCKET)
 
 
-def _axes(draw: ImageDraw.ImageDraw, spec: CanvasSpec, offset: int) -> None:
+def _axes(img: Image.Image, spec: CanvasSpec, offset: int) -> None:
+    draw = ImageDraw.Draw(img)
     s = spec.scale
     label_font = st.font(round(15 * s))
     x0, y1 = spec.to_px(0, 0)
@@ -138,7 +139,7 @@ def _axes(draw: ImageDraw.ImageDraw, spec: CanvasSpec, offset: int) -> None:
     xmid = spec.to_px(spec.width_m / 2, 0)[0]
     draw.text((xmid, bottom + 36 * s), "x (m)", fill=st.INK, font=title_font, anchor="mt")
     ymid = spec.to_px(0, spec.height_m / 2)[1]
-    _vertical_text(draw, (left - 62 * s, ymid), "y (m)", title_font)
+    _vertical_text(img, (left - 62 * s, ymid), "y (m)", title_font)
 
 
 def _is_major(value: float) -> bool:
@@ -146,16 +147,13 @@ def _is_major(value: float) -> bool:
     return abs(ratio - round(ratio)) < 1e-6
 
 
-def _vertical_text(
-    draw: ImageDraw.ImageDraw, centre: tuple[float, float], text: str, font: st.Font
-) -> None:
-    box = draw.textbbox((0, 0), text, font=font)
+def _vertical_text(img: Image.Image, centre: tuple[float, float], text: str, font: st.Font) -> None:
+    box = ImageDraw.Draw(img).textbbox((0, 0), text, font=font)
     w, h = int(box[2] - box[0] + 4), int(box[3] - box[1] + 6)
     patch = Image.new("RGB", (w, h), st.PAGE)
     ImageDraw.Draw(patch).text((w / 2, h / 2), text, fill=st.INK, font=font, anchor="mm")
     rotated = patch.rotate(90, expand=True)
-    target = draw._image  # the image this ImageDraw draws on
-    target.paste(
+    img.paste(
         rotated, (round(centre[0] - rotated.width / 2), round(centre[1] - rotated.height / 2))
     )
 

@@ -1,32 +1,22 @@
 """The fixed 8-bit palette of a canvas, and the palette-mode pieces drawn from it.
 
-Scene images are drawn directly in palette ("P") mode: copying a 1-byte-per-pixel base and
-encoding it costs a third of RGB, and no per-image colour quantisation is needed. Ball sprites
+Scene images are drawn directly in palette ("P") mode: a page is a copy of a 1-byte-per-pixel
+base, and no per-image colour quantisation is needed. Ball sprites
 are composed in RGB once, mapped to the palette, and pasted with a binary mask; text patches
-(:mod:`bpb_tasks.billiards.render_text`) give the same pixels as text drawn in RGB and mapped
-here. The palette holds every flat colour exactly, plus median-cut colours for the
-antialiased edges; it depends only on the canvas, so it is identical in every process.
-
-Computing it costs about 0.1 s of CPU in every process that draws (the sample image and its
-median cut), so the default canvas's palette ships in ``render_palette.json``, stored with the
-:func:`palette_key` of everything it was computed from; a process whose key differs (another
-canvas, an edited style, other Pillow or font files) computes it. ``scripts/refresh_palette.py``
-writes the file again.
+(:func:`text_patch`) give the same pixels as text drawn in RGB and mapped here. The palette
+holds every flat colour exactly, plus median-cut colours for the antialiased edges; it depends
+only on the canvas, so it is identical in every process, which computes it once.
 """
 
 from __future__ import annotations
 
 import functools
-import hashlib
-import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import PIL
-from PIL import Image, ImageChops, ImageDraw, ImageFont
+from PIL import Image, ImageChops, ImageDraw
 
-from bpb_tasks.billiards import render_canvas, render_style as st
+from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
 
 FLAT: tuple[st.RGB, ...] = (
@@ -35,7 +25,6 @@ FLAT: tuple[st.RGB, ...] = (
 )  # fmt: skip
 MAX_IDS = 16  # sprites of ids 0..15 shape the palette (the config allows up to 16 balls)
 GHOST_ALPHA = 110
-SHIPPED = Path(__file__).with_name("render_palette.json")
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,55 +65,14 @@ def _sample(spec: CanvasSpec) -> Image.Image:
 
 @functools.cache
 def palette_for(spec: CanvasSpec) -> Palette:
-    """The canvas's palette (read from the shipped file when its key matches, else computed;
-    once per process)."""
-    flat = list(dict.fromkeys(FLAT))
-    image = Image.new("P", (1, 1))
-    image.putpalette(_shipped(spec) or computed_colours(spec))
-    return Palette(image, {rgb: i for i, rgb in enumerate(flat)})
-
-
-def computed_colours(spec: CanvasSpec) -> list[int]:
-    """The palette's 768 channel values: the flat colours, then the sample's median cut."""
+    """The canvas's palette: the flat colours, then the median cut of a sample of what images
+    are made of (once per process)."""
     flat = list(dict.fromkeys(FLAT))
     extra = _sample(spec).quantize(256 - len(flat), method=Image.Quantize.MEDIANCUT)
     colours = [c for rgb in flat for c in rgb] + (extra.getpalette() or [])[: 3 * (256 - len(flat))]
-    return colours + [0] * (768 - len(colours))
-
-
-def palette_key(spec: CanvasSpec) -> str:
-    """A digest of what :func:`computed_colours` depends on: the canvas, the source of the
-    modules that draw the sample (colours, sprites, background), the font files and the
-    versions of Pillow and the libraries it draws text with."""
-    digest = hashlib.sha256(repr(spec).encode())
-    for source in (__file__, st.__file__, render_canvas.__file__):
-        digest.update(Path(source or "").read_bytes())
-    for bold in (False, True):
-        font_path = getattr(st.font(17, bold), "path", None)
-        digest.update(Path(font_path).read_bytes() if font_path else b"builtin font")
-    core = ImageFont.core
-    libraries = ("freetype2_version", "raqm_version", "harfbuzz_version", "fribidi_version")
-    versions = [PIL.__version__, *(str(getattr(core, name, None)) for name in libraries)]
-    digest.update(repr(versions).encode())
-    return digest.hexdigest()
-
-
-def _shipped(spec: CanvasSpec) -> list[int] | None:
-    """The shipped palette if it was computed from exactly what ``spec`` would compute from."""
-    try:
-        stored = json.loads(SHIPPED.read_text())
-        colours = list(bytes.fromhex(stored["colours"]))
-        if len(colours) == 768 and stored["key"] == palette_key(spec):
-            return colours
-    except (OSError, ValueError, KeyError, TypeError, ImportError):
-        pass  # no usable file (or no module source to key): computing gives the same palette
-    return None
-
-
-def ship(spec: CanvasSpec) -> None:
-    """Write ``spec``'s computed palette and key as the shipped palette."""
-    colours = bytes(computed_colours(spec)).hex()
-    SHIPPED.write_text(json.dumps({"key": palette_key(spec), "colours": colours}) + "\n")
+    image = Image.new("P", (1, 1))
+    image.putpalette(colours + [0] * (768 - len(colours)))
+    return Palette(image, {rgb: i for i, rgb in enumerate(flat)})
 
 
 @functools.cache
@@ -134,7 +82,7 @@ def base(spec: CanvasSpec, header: str = "", legend: bool = False) -> Image.Imag
     Both are drawn in the header line at the top, so only the band of rows down to their lowest
     pixel is drawn (in RGB, at the same coordinates) and mapped, over the mapped background:
     mapping is pixel by pixel, so this is the image that drawing and mapping the whole canvas
-    gives, at a tenth of the cost (each horizon has its own headers, made in every process)."""
+    gives (each horizon has its own headers, made in every process)."""
     s = spec.scale
     font = st.font(round(19 * s), True)
     at = (spec.left - 60 * s, header_y(spec))
@@ -192,3 +140,49 @@ def stamp(spec: CanvasSpec, ball_id: int, alpha: int = 255) -> tuple[Image.Image
     flat.paste(sprite, (0, 0), sprite)
     mask = sprite.getchannel("A").point(lambda a: 255 if a >= 24 else 0)
     return palette_for(spec).quantize(flat), mask
+
+
+@functools.lru_cache(maxsize=1024)
+def text_patch(
+    spec: CanvasSpec,
+    text: str,
+    font: st.Font,
+    colour: st.RGB,
+    back: st.RGB,
+    pad: int = 2,
+    outline: st.RGB | None = None,
+) -> Image.Image:
+    """``text`` antialiased on a ``back`` rectangle ``pad`` pixels around the text's box
+    (optionally outlined on its edge, over the text when ``pad`` is 0), in palette mode: the
+    pixels that drawing it in RGB and mapping the result to the palette gives.
+
+    On a flat background each pixel's colour depends only on the glyphs' coverage there, so the
+    text is drawn as coverage (an "L" image) and each coverage value mapped through a table made
+    by that very RGB drawing and mapping (:func:`_table`). The patch is shared between callers:
+    paste or copy it, never draw on it.
+    """
+    left, top, right, bottom = font.getbbox(text)
+    w, h = int(right - left) + 2 * pad, int(bottom - top) + 2 * pad
+    coverage = Image.new("L", (w, h), 0)
+    ImageDraw.Draw(coverage).text((pad - left, pad - top), text, fill=255, font=font)
+    patch = coverage.point(_table(spec, colour, back))
+    patch.putpalette(palette_for(spec).image.getpalette() or [])  # the "L" image becomes "P"
+    if outline is not None and w > 0 and h > 0:  # an empty patch (blank text, no pad) has none
+        ImageDraw.Draw(patch).rectangle((0, 0, w - 1, h - 1), outline=_index(spec, outline))
+    return patch
+
+
+@functools.cache
+def _table(spec: CanvasSpec, colour: st.RGB, back: st.RGB) -> tuple[int, ...]:
+    """Palette index of ``colour`` drawn over ``back`` at each coverage value 0-255: a 0-255
+    coverage ramp drawn in RGB as Pillow draws text (``ImageDraw.bitmap``), mapped."""
+    ramp = Image.frombytes("L", (256, 1), bytes(range(256)))
+    rgb = Image.new("RGB", (256, 1), back)
+    ImageDraw.Draw(rgb).bitmap((0, 0), ramp, fill=colour)
+    return tuple(palette_for(spec).quantize(rgb).tobytes())
+
+
+@functools.cache
+def _index(spec: CanvasSpec, colour: st.RGB) -> int:
+    """The palette index a flat ``colour`` is mapped to."""
+    return palette_for(spec).quantize(Image.new("RGB", (1, 1), colour)).getpixel((0, 0))  # type: ignore[return-value]

@@ -17,7 +17,7 @@ from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
 from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
-from bpb_tasks.billiards.render_palette import base, header_y, palette_for
+from bpb_tasks.billiards.render_palette import FLAT, base, header_y, palette_for
 from bpb_tasks.billiards.render_style import ball_colour
 from bpb_tasks.billiards.scene import Ball, Scene
 
@@ -181,3 +181,20 @@ def test_balls_under_a_pixel_across_are_drawn_without_error(tmp_path: Path) -> N
     out = _generate_one(config, tmp_path / "ds")
     with Image.open(out / "h1" / "scene_0000" / "init.png") as img:
         assert img.size == SPEC.size
+
+
+def test_the_palette_has_each_flat_colour_at_its_ink_and_a_fresh_process_computes_it() -> None:
+    """Every process computes the palette itself: the images of workers must agree."""
+    palette = palette_for(SPEC)
+    colours = palette.image.getpalette() or []
+    for rgb in FLAT:
+        i = palette.ink(rgb)
+        assert tuple(colours[3 * i : 3 * i + 3]) == rgb
+    code = (
+        "from bpb_tasks.billiards.config import DatasetConfig\n"
+        "from bpb_tasks.billiards.render_canvas import CanvasSpec\n"
+        "from bpb_tasks.billiards.render_palette import palette_for\n"
+        "print(bytes(palette_for(CanvasSpec.from_config(DatasetConfig())).image.getpalette()).hex())"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert bytes.fromhex(done.stdout.strip()) == bytes(colours)

@@ -1,6 +1,6 @@
 """The renderer's shortcuts draw exactly what the plain definitions draw (same seed, same bytes).
 
-Text patches are made from FreeType's coverage mask and a palette-index table instead of drawing
+Text patches are drawn as coverage and mapped through a palette-index table instead of drawing
 in RGB and quantising; the arrow fit proves a shaft clear from its two ends instead of checking
 every point; wall markers are drawn on a crop instead of the whole canvas. All must give the very
 same pixels and lengths.
@@ -9,17 +9,15 @@ same pixels and lengths.
 from __future__ import annotations
 
 import math
-from typing import Any
 
-import pytest
 from hypothesis import example, given, settings, strategies as st
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw
 
 from bpb_tasks.billiards import render_style as style
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.render_arrow import ARROW_CLEARANCE, ARROW_MIN, arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_text import _coverage, drawn_patch, text_patch
+from bpb_tasks.billiards.render_palette import palette_for, text_patch
 from bpb_tasks.billiards.render_trajectory import wall_diamond
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
@@ -32,10 +30,10 @@ BACKS = (style.PAGE, style.CLOTH, style.POCKET)
     text=st.text(st.characters(codec="latin-1", exclude_categories=("Cc",)), min_size=1,
                  max_size=30),
     size=st.integers(8, 32), bold=st.booleans(), colour=st.sampled_from(INKS),
-    back=st.sampled_from(BACKS), pad=st.integers(0, 8), outlined=st.booleans(),
+    back=st.sampled_from(BACKS), pad=st.integers(1, 8), outlined=st.booleans(),
 )  # fmt: skip
-@example(  # blank text without padding: an empty patch, where Pillow refuses the outline
-    text=" ", size=8, bold=False, colour=style.INK, back=style.PAGE, pad=0, outlined=True
+@example(  # the speed label of a scene image
+    text="0.86 m/s", size=17, bold=True, colour=style.INK, back=style.PAGE, pad=6, outlined=True
 )
 def test_a_text_patch_is_the_text_drawn_in_rgb_and_quantised(
     text: str, size: int, bold: bool, colour: style.RGB, back: style.RGB, pad: int, outlined: bool
@@ -43,9 +41,15 @@ def test_a_text_patch_is_the_text_drawn_in_rgb_and_quantised(
     font = style.font(size, bold)
     outline = style.HALO if outlined else None
     left, top, right, bottom = font.getbbox(text)
-    box = (int(right - left) + 2 * pad, int(bottom - top) + 2 * pad)
-    want = drawn_patch(SPEC, text, font, colour, back, box, (pad - left, pad - top), outline)
+    w, h = int(right - left) + 2 * pad, int(bottom - top) + 2 * pad
+    rgb = Image.new("RGB", (w, h), back)
+    draw = ImageDraw.Draw(rgb)
+    if outline is not None:
+        draw.rectangle((0, 0, w - 1, h - 1), outline=outline)
+    draw.text((pad - left, pad - top), text, fill=colour, font=font)
+    want = palette_for(SPEC).quantize(rgb)
     got = text_patch(SPEC, text, font, colour, back, pad, outline)
+    assert got.mode == "P"
     assert got.size == want.size
     assert got.tobytes() == want.tobytes()
     assert got.convert("RGB").tobytes() == want.convert("RGB").tobytes()
@@ -108,94 +112,3 @@ def test_the_arrow_fit_is_the_per_point_definition(
     if axis is not None:  # exactly along a cushion: the shaft's ends share a coordinate
         direction = ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[axis]
     assert arrow_length(SPEC, pos, direction, wanted) == _longest(pos, direction, wanted)
-
-
-@settings(max_examples=300, deadline=None)
-@given(speed=st.floats(0, 20), pocketed=st.lists(st.integers(1, 15), max_size=6, unique=True))
-def test_scene_texts_put_together_from_kept_pieces_are_the_whole_text(
-    speed: float, pocketed: list[int]
-) -> None:
-    """The header notes and speed labels of scene images (numbers change, words do not) come
-    from kept glyph pieces; their masks are FreeType's mask of the whole text."""
-    texts = [
-        (style.font(round(16 * SPEC.scale)), f"cue ball 0 speed {speed:.3f} m/s"),
-        (style.font(round(17 * SPEC.scale), bold=True), f"{speed:.2f} m/s"),
-        (style.font(round(16 * SPEC.scale)), f"pocketed: balls {', '.join(map(str, pocketed))}"),
-    ]
-    for font, text in texts:
-        assert isinstance(font, ImageFont.FreeTypeFont)
-        whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
-        got = _coverage(font, text)
-        assert got.size == whole.size
-        assert bytes(got) == bytes(whole)
-
-
-def test_scene_texts_are_put_together_from_pieces_not_rendered_whole(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """The test above compares with the whole text's mask; this one checks the pieces are what
-    made it (a fallback to rendering the whole text would pass the comparison trivially)."""
-    font = style.font(round(16 * SPEC.scale))
-    assert isinstance(font, ImageFont.FreeTypeFont)
-    rendered: list[str] = []
-    real = ImageFont.FreeTypeFont.getmask2
-
-    def spy(self: ImageFont.FreeTypeFont, text: str, *args: Any, **kwargs: Any) -> Any:
-        rendered.append(text)
-        return real(self, text, *args, **kwargs)
-
-    monkeypatch.setattr(ImageFont.FreeTypeFont, "getmask2", spy)
-    for speed in (0.0, 1.234, 7.5, 19.999):
-        text = f"cue ball 0 speed {speed:.3f} m/s"
-        _coverage(font, text)
-        assert text not in rendered
-
-
-def test_a_scene_text_is_laid_out_from_its_pieces_without_measuring_it_whole(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """Measuring a whole text (its advance, its box) costs as much as a layout: per scene it is
-    done at most once for a new pen fraction of the last piece, never for each text."""
-    measured: list[str] = []
-    for name in ("getlength", "getbbox"):
-        real = getattr(ImageFont.FreeTypeFont, name)
-
-        def spy(self: ImageFont.FreeTypeFont, text: str, *a: Any, _real: Any = real,
-                **k: Any) -> Any:  # fmt: skip
-            measured.append(text)
-            return _real(self, text, *a, **k)
-
-        monkeypatch.setattr(ImageFont.FreeTypeFont, name, spy)
-    font = style.font(round(16 * SPEC.scale))
-    assert isinstance(font, ImageFont.FreeTypeFont)
-    texts = [f"cue ball 0 speed {k / 997:.3f} m/s" for k in range(1, 3000, 7)]
-    for text in texts:
-        _coverage(font, text)
-    wholes = [t for t in measured if t in texts]
-    assert len(wholes) <= 64  # at most once per pen fraction of " m/s"
-    for text in texts:  # once seen, never again
-        _coverage(font, text)
-    assert [t for t in measured if t in texts] == wholes
-
-
-KERNED = "AFHOPRTVWYforvwy"  # letters DejaVu kerns before a point ("r.", "T.", ...)
-
-
-@settings(max_examples=300, deadline=None)
-@given(
-    text=st.text(st.sampled_from(KERNED + "0123456789. ,:/msabl"), min_size=1, max_size=24),
-    size=st.integers(8, 40), bold=st.booleans(),
-)  # fmt: skip
-@example(text="Vr.5 T.1", size=16, bold=False)
-@example(text="1.5f.r.", size=17, bold=True)
-def test_texts_with_kerned_boundaries_put_together_from_pieces_are_the_whole_text(
-    text: str, size: int, bold: bool
-) -> None:
-    """Where neighbouring pieces kern (the whole text is laid out differently) or a piece's box
-    is not known, the mask is still FreeType's mask of the whole text, at every canvas scale."""
-    font = style.font(size, bold)
-    assert isinstance(font, ImageFont.FreeTypeFont)
-    whole = font.getmask2(text, "L", start=(0.0, 0.0))[0]
-    got = _coverage(font, text)
-    assert got.size == whole.size
-    assert bytes(got) == bytes(whole)

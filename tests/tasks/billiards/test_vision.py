@@ -12,7 +12,8 @@ from PIL import Image
 
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.config import config_from_mapping
-from bpb_tasks.billiards.render import encode_png, render_init
+from bpb_tasks.billiards.png import encode_palette_png
+from bpb_tasks.billiards.render import render_init
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Ball, Physics, Pockets, Scene, Table
 from bpb_tasks.billiards.vision.perceive import perceive, perception_error
@@ -28,7 +29,7 @@ def _prompt(scene: Scene) -> str:
 
 def _png(scene: Scene, **image: object) -> bytes:
     config = config_from_mapping({"image": image} if image else {})
-    return encode_png(render_init(scene, CanvasSpec.from_config(config)), 1)
+    return encode_palette_png(render_init(scene, CanvasSpec.from_config(config)), 1)
 
 
 def _scenes(root: Path) -> list[Path]:

@@ -7,7 +7,8 @@ from bpb_core.capabilities import BoundsPerception
 from bpb_core.interfaces import PromptOptions
 from bpb_core.registry import Registry
 from bpb_tasks.billiards.config import config_from_mapping
-from bpb_tasks.billiards.render import encode_png, render_init
+from bpb_tasks.billiards.png import encode_palette_png
+from bpb_tasks.billiards.render import render_init
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Ball, Scene
 from bpb_tasks.questions.prompt import common_prompt
@@ -24,7 +25,7 @@ def _ceiling(registry: Registry, offset_px: float) -> dict[str, bool]:
         Ball(id=2, pos=(1.5, 0.2)),
     ]
     scene = Scene(scene_id="h1_0000", horizon=1.0, balls=balls)
-    png = encode_png(render_init(scene, CanvasSpec.from_config(config_from_mapping({}))), 1)
+    png = encode_palette_png(render_init(scene, CanvasSpec.from_config(config_from_mapping({}))), 1)
     prompt = common_prompt(scene, PromptOptions("image", True, False, 0))
     family = registry.scene_family("billiards")
     assert isinstance(family, BoundsPerception)

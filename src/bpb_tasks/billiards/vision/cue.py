@@ -22,8 +22,7 @@ from numpy.typing import NDArray
 from bpb_tasks.billiards import render_style as st
 from bpb_tasks.billiards.render import speed_note
 from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_palette import header_y
-from bpb_tasks.billiards.render_text import text_patch
+from bpb_tasks.billiards.render_palette import header_y, text_patch
 from bpb_tasks.billiards.vision.balls import image_keys_of
 from bpb_tasks.billiards.vision.frame import Keys, shown
 from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed

@@ -13,10 +13,10 @@ import zlib
 
 import pytest
 from hypothesis import given, settings, strategies as strat
-from PIL import Image, ImageDraw
+from PIL import Image
 
-from bpb_core.png import DEFAULT_LEVEL, RowImage, encode_palette_png, filtered_rows
 from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.png import DEFAULT_LEVEL, encode_palette_png
 from bpb_tasks.billiards.render import render_init
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Ball, Scene
@@ -103,6 +103,11 @@ def test_any_palette_image_round_trips(
     size, plte, decoded = by_hand(encoded)
     assert size == (width, height) and decoded == img.tobytes()
     assert plte == bytes(img.getpalette() or [])
+    with Image.open(io.BytesIO(encoded)) as back:
+        back.load()
+        assert back.mode == "P" and back.size == img.size
+        assert back.tobytes() == img.tobytes()
+        assert back.convert("RGB").tobytes() == img.convert("RGB").tobytes()
     assert encode_palette_png(img, level) == encoded  # the same image, the same bytes
 
 
@@ -123,37 +128,3 @@ def test_a_transparent_palette_colour_is_refused() -> None:
     img.info["transparency"] = 0
     with pytest.raises(ValueError, match="with transparency"):
         encode_palette_png(img, 2)
-
-
-def drawn_on(img: Image.Image) -> None:
-    """Every way the scene images are drawn: a line, a polygon, a pasted patch and sprite."""
-    draw = ImageDraw.Draw(img)
-    draw.line((3, 2, 60, 30), fill=7, width=3)
-    draw.polygon([(10, 30), (30, 5), (50, 35)], fill=9)
-    img.paste(Image.new("P", (8, 6), 4), (40, 10))
-    img.paste(Image.new("P", (5, 5), 2), (1, 1), Image.new("1", (5, 5), 1))
-
-
-@pytest.mark.parametrize("pillow_copies", [False, True])
-def test_a_row_image_encodes_what_was_drawn_on_it(pillow_copies: bool) -> None:
-    """Drawn in place, or copied by Pillow on the first drawing (as it does with read-only
-    images: the fallback), the file holds the drawing."""
-    template = Image.new("P", (64, 40), 1)
-    template.putpalette(bytes(range(256)) * 3)
-    page = RowImage(filtered_rows(template), template.size, bytes(template.getpalette() or ()))
-    page.image.readonly = pillow_copies
-    drawn_on(page.image)
-    expected = template.copy()
-    drawn_on(expected)
-    data = page.encode(DEFAULT_LEVEL)
-    assert data == encode_palette_png(expected, DEFAULT_LEVEL)
-    size, palette, pixels = by_hand(data)
-    assert size == expected.size and pixels == expected.tobytes()
-    assert list(palette) == expected.getpalette()
-    fresh = RowImage(filtered_rows(template), template.size, bytes(template.getpalette() or ()))
-    assert by_hand(fresh.encode(DEFAULT_LEVEL))[2] == template.tobytes()  # the template is kept
-
-
-def test_rows_of_another_size_are_refused() -> None:
-    with pytest.raises(ValueError, match=r"are not the rows of a \(5, 4\) image"):
-        RowImage(bytes(5 * 4), (5, 4), bytes(768))
