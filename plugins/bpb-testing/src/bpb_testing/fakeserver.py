@@ -191,10 +191,8 @@ async def serve(
     await runner.setup()
     site = web.TCPSite(runner, "127.0.0.1", port, backlog=1024)
     await site.start()
-    server: Any = site._server
-    sockets = server.sockets if server is not None else []
     if on_ready is not None:
-        on_ready(sockets[0].getsockname()[1])
+        on_ready(runner.addresses[0][1])  # the port the system chose for port 0
     await asyncio.Event().wait()
 
 
