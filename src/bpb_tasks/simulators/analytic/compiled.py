@@ -31,27 +31,9 @@ class KernelBudgetError(BpbError):
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's table constants and pocket centres of ``scene`` (same arithmetic as the
-    reference ``Predictor``); shared by the calls for scenes of one table, physics and pockets
-    (a generated scene's nominal run, perturbed copies and horizon gap all take them): read
-    them, never write."""
-    table, physics, pockets = scene.table, scene.physics, scene.pockets
-    kept = _PARAMS.get((id(table), id(physics), id(pockets)))
-    if kept is not None and kept[0] == pockets.centers:  # the list could change in place
-        return kept[1]
-    made = _table_params(table, physics, pockets)
-    if len(_PARAMS) >= 64:
-        _PARAMS.clear()
-    _PARAMS[id(table), id(physics), id(pockets)] = (list(pockets.centers), made, scene)
-    return made
-
-
-_PARAMS: dict[tuple[int, int, int], tuple[list[Any], tuple[np.ndarray, np.ndarray], Any]] = {}
-""":func:`table_params` by the ids of a scene's table, physics and pockets, with the pocket
-centres they were made from and the scene (holding the three, so their ids stay theirs)."""
-
-
-def _table_params(table: Any, phys: Any, pockets: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's table constants (``kernel_predict``'s :data:`DECEL` .. :data:`POCKET_R2`,
+    the same arithmetic as the reference ``Predictor``) and pocket centres of ``scene``."""
+    table, phys, pockets = scene.table, scene.physics, scene.pockets
     radius = phys.ball_radius
     decel = phys.mu * phys.g
     r = pockets.radius
@@ -75,24 +57,29 @@ def _table_params(table: Any, phys: Any, pockets: Any) -> tuple[np.ndarray, np.n
 
 
 def scene_arrays(scene: Scene) -> SceneArrays:
-    """Ball ids (sorted), positions and velocities of ``scene``; the last scene's are kept for
-    its next call (its nominal run, perturbed copies and horizon gap): read them, never
-    write."""
-    global _LAST
-    last = _LAST
-    if last[0] is scene and last[1] == scene.balls:  # the list could change in place
-        return last[2]
-    balls = sorted(scene.balls, key=lambda b: b.id)
+    """Ball ids (sorted), positions and velocities of ``scene``."""
+    balls = sorted(scene.balls, key=_ball_id)
     pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
-    made = [b.id for b in balls], pos, vel
-    _LAST = scene, list(scene.balls), made
-    return made
+    return [b.id for b in balls], pos, vel
 
 
-_LAST: tuple[object, list[Any], SceneArrays] = (None, [], ([], np.zeros((0, 2)), np.zeros((0, 2))))
-"""The scene :func:`scene_arrays` was last called for (held, so no other takes its id), its
-balls and its arrays."""
+def kernel_failure(scene: Scene) -> str | None:
+    """Load (or build) the kernel's entry points by running ``scene`` through each as the real
+    calls do: ``None`` when they run, else what went wrong (numba cannot read a cache file of
+    them, say); numba keeps what it loaded, so the calls after this one take it."""
+    from bpb_tasks.billiards.stability import perturbation_arrays
+    from bpb_tasks.billiards.stability_kernel import copy_labels
+
+    one = scene.model_copy(update={"balls": scene.balls[:1]})  # a few events at most
+    try:
+        kernel_outcome(one, one.horizon, 10_000)
+        run_batch([one], None, 10_000, check=False)
+        ids, pos, vel = perturbation_arrays(one, 1e-4, 1)
+        copy_labels(one, ids, pos, vel, 10_000)
+    except Exception as exc:  # whatever numba raised: the kernel is not to be used
+        return f"{type(exc).__name__}: {exc}"
+    return None
 
 
 def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
@@ -166,17 +153,20 @@ def simulate_many(
     """
     if not scenes:
         return BatchResult([], [], [], [])
-    arrays, starts, final, events = run_batch(scenes, horizons, max_events)
-    return _batch(arrays, starts, final, events)
+    ids, starts, final, _, events = run_batch(scenes, horizons, max_events)
+    return _batch(ids, starts, final, events)
 
 
-Batch = tuple[list[tuple[list[int], np.ndarray, np.ndarray]], np.ndarray, np.ndarray, np.ndarray]
+def run_batch(
+    scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int, check: bool = True
+) -> tuple[list[list[int]], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The kernel's raw batch results of ``scenes`` (sharing one table) run to ``horizons``
+    (default: their own): per-scene ball ids, ball offsets, final rows, statuses and the event
+    rows (scene index first).
 
-
-def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int) -> Batch:
-    """The kernel's raw batch results: per-scene ``(ids, pos, vel)`` (``pos`` and ``vel`` left
-    empty: the flat arrays went to the kernel), ball offsets, final rows and the event rows
-    (scene index first) of ``scenes`` (sharing one table)."""
+    Raises:
+        KernelBudgetError: A scene exceeded ``max_events`` (when ``check``).
+    """
     first = scenes[0]
     shape = (first.table, first.physics, first.pockets)
     if any(
@@ -195,11 +185,9 @@ def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_eve
     final, status, events = run_many_arrays(
         pos, vel, starts, prm, pockets, np.array(ends, dtype=float), max_events
     )
-    if status.any():
+    if check and status.any():
         raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
-    empty = np.zeros((0, 2))
-    arrays = [([b.id for b in balls], empty, empty) for balls in ordered]
-    return arrays, starts, final, events
+    return [[b.id for b in balls] for balls in ordered], starts, final, status, events
 
 
 def _ball_id(ball: Any) -> int:
@@ -207,25 +195,22 @@ def _ball_id(ball: Any) -> int:
 
 
 def _batch(
-    arrays: list[tuple[list[int], np.ndarray, np.ndarray]],
-    starts: np.ndarray,
-    final: np.ndarray,
-    events: np.ndarray,
+    ids: list[list[int]], starts: np.ndarray, final: np.ndarray, events: np.ndarray
 ) -> BatchResult:
     rows = final.tolist()
     positions = [
-        {i: (r[0], r[1]) if r[2] else None for i, r in zip(ids, rows[a:b], strict=True)}
-        for (ids, _, _), a, b in zip(arrays, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
+        {i: (r[0], r[1]) if r[2] else None for i, r in zip(own, rows[a:b], strict=True)}
+        for own, a, b in zip(ids, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
     ]
-    contacts: list[set[int]] = [set() for _ in arrays]
-    walls: list[set[str]] = [set() for _ in arrays]
-    counts = np.bincount(events[:, 0].astype(np.int64), minlength=len(arrays)).tolist()
+    contacts: list[set[int]] = [set() for _ in ids]
+    walls: list[set[str]] = [set() for _ in ids]
+    counts = np.bincount(events[:, 0].astype(np.int64), minlength=len(ids)).tolist()
     kind, a, b = events[:, 2], events[:, 3], events[:, 4]
     cue_rows = ((kind == 0) | (kind == 1)) & ((a == 0) | (b == 0))  # index 0: the lowest id
     for s, _, kind_, a_, b_, wall, *_ in events[cue_rows].tolist():
-        ids = arrays[int(s)][0]
-        if kind_ == 0 and (ids[int(a_)] == 0 or ids[int(b_)] == 0):
-            contacts[int(s)].add(ids[int(b_)] if ids[int(a_)] == 0 else ids[int(a_)])
-        elif kind_ == 1 and ids[int(a_)] == 0:
+        own = ids[int(s)]
+        if kind_ == 0 and (own[int(a_)] == 0 or own[int(b_)] == 0):
+            contacts[int(s)].add(own[int(b_)] if own[int(a_)] == 0 else own[int(a_)])
+        elif kind_ == 1 and own[int(a_)] == 0:
             walls[int(s)].add(WALLS[int(wall)])
     return BatchResult(positions, contacts, walls, counts)
