@@ -27,7 +27,7 @@ def fill() -> None:
     from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
     warnings.simplefilter("ignore")  # the note, when it builds
-    family, simulator = BilliardsFamily(), AnalyticSimulator()
+    family, simulator = BilliardsFamily(), AnalyticSimulator(engine="kernel")
     made = family.make_scene(family.load_config(None), simulator, 0, 1.0, 0)
     simulator.run_many([made.scene])
     assert family.truth_lines([made.files(False)["init.json"]], simulator, None) is not None

@@ -23,7 +23,6 @@ from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
 KINDS = ("ball", "wall", "pocket", "stop")
 SceneArrays = tuple[list[int], np.ndarray, np.ndarray]
-AVAILABLE = HAVE_NUMBA
 
 
 class KernelBudgetError(BpbError):
@@ -71,6 +70,8 @@ def kernel_failure(scene: Scene) -> str | None:
     from bpb_tasks.billiards.stability import perturbation_arrays
     from bpb_tasks.billiards.stability_kernel import copy_labels
 
+    if not HAVE_NUMBA:
+        return "numba could not be imported"
     one = scene.model_copy(update={"balls": scene.balls[:1]})  # a few events at most
     try:
         kernel_outcome(one, one.horizon, 10_000)

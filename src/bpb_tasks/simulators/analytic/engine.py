@@ -58,6 +58,7 @@ from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import WALLS, Scene
 from bpb_tasks.simulators.analytic.kernel_cache import (
     PYTHON_SECONDS_PER_RUN,
+    clear_own_cache,
     is_cached,
     note,
     numba_cache_dir,
@@ -148,12 +149,14 @@ class AnalyticSimulator:
             self.spent += runs * PYTHON_SECONDS_PER_RUN
             return False
         from bpb_tasks.simulators.analytic.compiled import kernel_failure
+        from bpb_tasks.simulators.analytic.kernel_roots import CACHE
 
-        if not self.cached:
+        if CACHE and not self.cached:  # else kernel_roots said it cannot cache it
             note(COMPILE_NOTE.format(numba_cache_dir(os.environ)))
         failure = kernel_failure(scene)
         if failure is not None:
             note(f"the compiled physics kernel cannot be used ({failure}); using the Python engine")
+            clear_own_cache(numba_cache_dir(os.environ))
         self.kernel = failure is None
         return self.kernel
 

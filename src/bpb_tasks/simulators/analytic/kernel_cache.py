@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import shutil
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -68,6 +69,13 @@ def is_cached(folder: Path) -> bool:
         return all(any(folder.rglob(f"*.{name}-*.nbi")) for name in ENTRY_POINTS)
     except OSError:
         return False
+
+
+def clear_own_cache(folder: Path) -> None:
+    """Remove ``folder`` when it is bpb's own cache folder (one numba could not load the kernel
+    from), so that the next command builds it anew; a folder the user named stays."""
+    if folder == cache_folder():
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def use_kernel(engine: str, available: bool, cached: bool, spent: float, runs: int) -> bool:
