@@ -72,9 +72,8 @@ def test_kernel_outcome_is_the_reference_outcome() -> None:
 
 
 def test_kernel_runs_scenes_of_other_tables_in_turn_on_their_own_tables() -> None:
-    """The kernel's table constants and ball arrays are kept between calls; a scene of another
-    table, physics or pockets runs on its own, and so does a scene whose pocket or ball list
-    was edited in place."""
+    """Scenes of other tables, physics or pockets in turn each run on their own, and so does a
+    scene whose pocket or ball list was edited in place."""
     balls = [(0.4, 0.45, 3.0, 1.1), (1.0, 0.6, 0.0, 0.0), (1.3, 0.3, 0.0, 0.0)]
     wide = scene(balls, horizon=4)
     narrow = scene(balls, horizon=4, width=1.5, mu=0.004, pocket_radius=0.08)

@@ -4,7 +4,8 @@
 :func:`~bpb_tasks.simulators.analytic.kernel.run_arrays` and builds the same
 :class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`simulate_many`
 is the batch API: many scenes in one compiled call, returning only what labels and final
-positions need (no event objects).
+positions need (no event objects). :func:`kernel_failure` loads (or builds) the kernel's entry
+points, or says why numba could not.
 """
 
 from __future__ import annotations

@@ -93,9 +93,9 @@ class AnalyticSimulator:
     Args:
         precision: ``None``/``"float64"`` (default) or a number of decimal digits for mpmath.
         max_events: Bound on processed events; exceeding it raises :class:`SimulationError`.
-        engine: ``"auto"`` (compiled kernel for float64 batches when numba is installed; single
-            runs once numba is loaded), ``"kernel"`` (require it, for every run) or
-            ``"python"`` (the pure-Python reference loop).
+        engine: ``"auto"`` (the compiled kernel for float64 batches when numba has it cached or
+            the work is worth building it; single runs once a batch loaded it), ``"kernel"``
+            (require numba, for every run) or ``"python"`` (the pure-Python reference loop).
     """
 
     name = "analytic"
