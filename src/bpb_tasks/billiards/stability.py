@@ -134,7 +134,8 @@ def _copies(
     scene has at most :data:`KERNEL_MAX_BALLS` balls, else copy by copy."""
     if isinstance(simulator, AnalyticSimulator):
         budget = copy_budget(len(base.events), simulator.max_events)
-        if len(ids) <= KERNEL_MAX_BALLS and simulator.takes_kernel(scene, len(pos)):
+        events = len(base.events)
+        if len(ids) <= KERNEL_MAX_BALLS and simulator.takes_kernel(scene, len(pos), events):
             from bpb_tasks.billiards.stability_kernel import copy_labels
 
             return copy_labels(scene, ids, pos, vel, budget)

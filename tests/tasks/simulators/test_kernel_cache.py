@@ -19,9 +19,9 @@ import pytest
 from bpb_tasks.simulators.analytic import kernel_cache
 from bpb_tasks.simulators.analytic.kernel_cache import (
     COMPILE_SECONDS,
-    PYTHON_SECONDS_PER_RUN,
     cache_folder,
     is_cached,
+    python_seconds,
     sources_hash,
     use_kernel,
 )
@@ -48,14 +48,15 @@ def test_the_cache_folder_follows_every_compiled_module_and_bpb_s_version(
 
 
 def test_the_engine_is_chosen_by_the_work() -> None:
-    compile_runs = int(COMPILE_SECONDS / PYTHON_SECONDS_PER_RUN)
-    assert not use_kernel("auto", True, False, 0.0, 64)  # a small command does not compile
-    assert use_kernel("auto", True, False, 0.0, compile_runs)
-    assert use_kernel("auto", True, False, COMPILE_SECONDS - 0.01, 64)  # the work so far counts
-    assert use_kernel("auto", True, True, 0.0, 1)  # cached: loaded, not built
-    assert use_kernel("kernel", True, False, 0.0, 1)
-    assert not use_kernel("python", True, True, 0.0, compile_runs)
-    assert not use_kernel("auto", False, True, 0.0, compile_runs)  # no numba, or mpmath
+    copies = python_seconds(64, 5)  # a generated scene's perturbed copies
+    assert copies < COMPILE_SECONDS < python_seconds(64, 100_000)  # a long scene's are not
+    assert not use_kernel("auto", True, False, 0.0, copies)  # a small command does not compile
+    assert use_kernel("auto", True, False, 0.0, COMPILE_SECONDS)
+    assert use_kernel("auto", True, False, COMPILE_SECONDS - copies, copies)  # so far counts
+    assert use_kernel("auto", True, True, 0.0, copies)  # cached: loaded, not built
+    assert use_kernel("kernel", True, False, 0.0, 0.0)
+    assert not use_kernel("python", True, True, 0.0, COMPILE_SECONDS)
+    assert not use_kernel("auto", False, True, 0.0, COMPILE_SECONDS)  # no numba, or mpmath
 
 
 def test_the_session_cache_holds_the_kernel() -> None:

@@ -65,15 +65,20 @@ def scene_arrays(scene: Scene) -> SceneArrays:
 
 
 def kernel_failure(scene: Scene) -> str | None:
-    """Load (or build) the kernel's entry points by running ``scene`` through each as the real
-    calls do: ``None`` when they run, else what went wrong (numba cannot read a cache file of
-    them, say); numba keeps what it loaded, so the calls after this one take it."""
+    """Load (or build) the kernel's entry points by running a ball at rest on ``scene``'s table
+    through each as the real calls do: ``None`` when they run, else what went wrong (numba
+    cannot read a cache file of them, say); numba keeps what it loaded, so the calls after this
+    one take it."""
     from bpb_tasks.billiards.stability import perturbation_arrays
     from bpb_tasks.billiards.stability_kernel import copy_labels
 
     if not HAVE_NUMBA:
         return "numba could not be imported"
-    one = scene.model_copy(update={"balls": scene.balls[:1]})  # a few events at most
+    from bpb_tasks.billiards.scene import Ball
+
+    table = scene.table  # one ball at rest mid-table: one event at most
+    still = Ball.model_construct(id=0, pos=(table.width / 2, table.height / 2), vel=(0.0, 0.0))
+    one = scene.model_copy(update={"balls": [still]})
     try:
         kernel_outcome(one, one.horizon, 10_000)
         run_batch([one], None, 10_000, check=False)

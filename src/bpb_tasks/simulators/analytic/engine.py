@@ -57,11 +57,11 @@ from bpb_core.errors import BadInput, BpbError
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import WALLS, Scene
 from bpb_tasks.simulators.analytic.kernel_cache import (
-    PYTHON_SECONDS_PER_RUN,
     clear_own_cache,
     is_cached,
     note,
     numba_cache_dir,
+    python_seconds,
     use_kernel,
 )
 from bpb_tasks.simulators.analytic.motion import Body
@@ -136,8 +136,9 @@ class AnalyticSimulator:
         run with ``engine="kernel"``."""
         return self.kernel is True
 
-    def takes_kernel(self, scene: Scene, runs: int) -> bool:
-        """Whether a batch of ``runs`` simulations of scenes like ``scene`` takes the kernel
+    def takes_kernel(self, scene: Scene, runs: int, events: float = 0.0) -> bool:
+        """Whether a batch of ``runs`` simulations of scenes like ``scene`` (``events`` each,
+        when known) takes the kernel
         (:func:`~bpb_tasks.simulators.analytic.kernel_cache.use_kernel`); the first time,
         it is loaded (built, with a note, when numba has not cached it): on a failure the
         Python engine runs from then on, said in a note."""
@@ -145,8 +146,9 @@ class AnalyticSimulator:
             return self.kernel
         if self.cached is None:
             self.cached = self.available and is_cached(numba_cache_dir(os.environ))
-        if not use_kernel(self.engine, self.available, self.cached, self.spent, runs):
-            self.spent += runs * PYTHON_SECONDS_PER_RUN
+        seconds = python_seconds(runs, events)
+        if not use_kernel(self.engine, self.available, self.cached, self.spent, seconds):
+            self.spent += seconds
             return False
         from bpb_tasks.simulators.analytic.compiled import kernel_failure
         from bpb_tasks.simulators.analytic.kernel_roots import CACHE

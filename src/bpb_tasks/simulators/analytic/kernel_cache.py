@@ -28,8 +28,10 @@ JIT_MARK = b"@jit"
 """How a module's compiled functions are marked; the modules holding it are hashed."""
 ENTRY_POINTS = ("run_arrays", "run_many_arrays", "copy_masks")
 """The compiled functions Python calls; the kernel is cached when numba holds all three."""
-PYTHON_SECONDS_PER_RUN = 4e-4
-"""The Python engine's CPU time per simulated scene or perturbed copy (a generated scene)."""
+PYTHON_SECONDS_PER_RUN = 2e-4
+"""The Python engine's CPU time per simulated scene or perturbed copy, besides its events."""
+PYTHON_SECONDS_PER_EVENT = 1e-4
+"""The Python engine's CPU time per event."""
 COMPILE_SECONDS = 20.0
 """The CPU time numba takes to build the kernel's entry points."""
 
@@ -78,8 +80,14 @@ def clear_own_cache(folder: Path) -> None:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def use_kernel(engine: str, available: bool, cached: bool, spent: float, runs: int) -> bool:
-    """Whether a batch of ``runs`` simulations takes the compiled kernel.
+def python_seconds(runs: int, events: float) -> float:
+    """The Python engine's estimated CPU time for ``runs`` simulations of ``events`` each."""
+    return runs * (PYTHON_SECONDS_PER_RUN + events * PYTHON_SECONDS_PER_EVENT)
+
+
+def use_kernel(engine: str, available: bool, cached: bool, spent: float, seconds: float) -> bool:
+    """Whether a batch the Python engine would take ``seconds`` for (:func:`python_seconds`)
+    takes the compiled kernel.
 
     ``engine`` is ``"kernel"``, ``"python"`` or ``"auto"``; ``available``: numba is installed
     and the numbers are float64; ``cached``: the kernel is cached or already loaded;
@@ -90,7 +98,7 @@ def use_kernel(engine: str, available: bool, cached: bool, spent: float, runs: i
         return False
     if engine == "kernel" or cached:
         return True
-    return spent + runs * PYTHON_SECONDS_PER_RUN >= COMPILE_SECONDS
+    return spent + seconds >= COMPILE_SECONDS
 
 
 def note(text: str) -> None:
