@@ -13,7 +13,10 @@ here, because conftest modules share one name across folders and are never impor
 - ``runs``: the oracle, stasis and model run folders of the hand-made report fixture.
 - ``secret_key``: an OpenAI key in the environment that must never reach a file.
 - ``compiled_code`` (every session): numba's cache of bpb's compiled code filled first, so that
-  no ``bpb`` command of a test builds it and says so on stderr.
+  no ``bpb`` command of a test builds it and says so on stderr. The cache is one folder for the
+  session (:func:`pytest_configure` sets ``NUMBA_CACHE_DIR``, which subprocesses inherit), under
+  the temporary folder and keyed like bpb's own by the version and the compiled sources: a
+  second run of the suite finds it warm, and an edit of the kernel starts a new one.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -36,10 +40,19 @@ from support.runner_scenes import make_dataset
 BPB = str(Path(sys.executable).with_name("bpb"))
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """One numba cache folder for the session, set before any test module imports the kernel
+    (``NUMBA_CACHE_DIR`` in ``os.environ``: this process and every subprocess use it)."""
+    from bpb_tasks.simulators.analytic.kernel_cache import cache_folder
+
+    folder = Path(tempfile.gettempdir()) / f"bpb-tests-numba-{os.getuid()}" / cache_folder().name
+    os.environ["NUMBA_CACHE_DIR"] = str(folder)
+
+
 @pytest.fixture(scope="session", autouse=True)
 def compiled_code() -> None:
-    """numba's cache filled before any test (:mod:`support.compiled_code`; about a second when
-    it is warm), in a process of its own: this one keeps numba unloaded."""
+    """numba's cache filled before any test (:mod:`support.compiled_code`), in a process of
+    its own: this one keeps numba unloaded."""
     done = subprocess.run(
         [sys.executable, "-m", "support.compiled_code"],
         cwd=Path(__file__).parent,

@@ -108,7 +108,7 @@ def test_stability_of_a_scene_whose_second_past_the_horizon_crosses_the_event_ca
     now stops at the cap, and the first event after the horizon, which came before it, gives
     the uncapped gap."""
     pytest.importorskip("numba")  # the pure-Python engine takes about 100 s for it
-    from bpb_tasks.billiards.stability_batch import kernel_horizon_gap
+    from bpb_tasks.billiards.stability import kernel_horizon_gap
 
     radius, gap = 0.028575, 1.4e-5
     narrow = Scene.model_validate(

@@ -27,7 +27,7 @@ def fill() -> None:
     from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
     warnings.simplefilter("ignore")  # the note, when it builds
-    family, simulator = BilliardsFamily(), AnalyticSimulator()
+    family, simulator = BilliardsFamily(), AnalyticSimulator(engine="kernel")
     made = family.make_scene(family.load_config(None), simulator, 0, 1.0, 0)
     assert len(family.ground_truths([made.scene], simulator)) == 1
 

@@ -23,6 +23,7 @@ from bpb_core.errors import BadInput
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.config import DatasetConfig, SpeedRange, horizon_key
 from bpb_tasks.billiards.sampler import Draw, build_scene, draw, scene_rng
+from bpb_tasks.billiards.scene import Scene
 
 MAX_HIGH = 64.0  # m/s; a bracket search beyond this means the target cannot be reached
 
@@ -52,7 +53,7 @@ def collision_rate(
     """
     from bpb_tasks.simulators.analytic.engine import SimulationError
 
-    if _compiled(simulator):
+    if _compiled(simulator, build_scene(draws[0], horizon, 0, config, speed=1.0), len(draws)):
         return _kernel_rate(draws, horizon, speeds, config)
     hits = 0
     for i, d in enumerate(draws):
@@ -67,10 +68,10 @@ def collision_rate(
     return hits / len(draws)
 
 
-def _compiled(simulator: Simulator) -> bool:
+def _compiled(simulator: Simulator, scene: Scene, runs: int) -> bool:
     from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 
-    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
+    return isinstance(simulator, AnalyticSimulator) and simulator.takes_kernel(scene, runs)
 
 
 def _kernel_rate(

@@ -188,10 +188,9 @@ class BilliardsFamily:
         self, config: DatasetConfig, simulator: Simulator, seed: int, horizon: float, index: int
     ) -> MadeScene:
         """Sample, simulate and annotate scene ``index`` at ``horizon``."""
-        from bpb_tasks.billiards.stability import annotate, load_kernel
+        from bpb_tasks.billiards.stability import annotate
 
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
-        load_kernel(simulator)  # the first scene runs as the later ones: all code built at once
         outcome: Outcome = simulator.run(scene)
         final = final_state(scene, outcome, _simulator_name(config.simulator))
         stability = annotate(

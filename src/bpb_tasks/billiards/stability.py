@@ -19,32 +19,25 @@ resolve; the analytic engine only). The deterministic margins
 (:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside; ``stable`` does not depend
 on them (a ``horizon_gap`` left unmeasured at the event cap, or where pymunk's run past the
 horizon stopped, included).
-Perturbed copies skip scene validation (a copy may touch a wall or another ball); with numba
-installed they run as one batch in the compiled kernel.
+Perturbed copies skip scene validation (a copy may touch a wall or another ball); with the
+analytic engine's compiled kernel they run as one batch there
+(:mod:`bpb_tasks.billiards.stability_kernel`). Either way every written number comes from the
+same Python functions, so the annotation does not depend on whether numba is installed.
 """
 
 from __future__ import annotations
 
 import functools
-import importlib
-import itertools
+import hashlib
 import math
-import random
 from collections.abc import Iterator, Sequence
-from typing import TypeGuard
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.outcome import CUE_ID, Outcome
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.stability_batch import (
-    KERNEL_MAX_BALLS,
-    Tally,
-    kernel_horizon_gap,
-    kernel_margins,
-    kernel_tally,
-)
 from bpb_tasks.billiards.stability_margins import (
     capped_horizon_gap,
     events_horizon_gap,
@@ -53,8 +46,9 @@ from bpb_tasks.billiards.stability_margins import (
     min_graze_cos,
     pair_margins,
     pocket_gap,
+    times_horizon_gap,
 )
-from bpb_tasks.billiards.truth import Stability
+from bpb_tasks.billiards.truth import UNFINISHED, Stability
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
 
@@ -64,6 +58,20 @@ DEFAULT_SAMPLES = 64
 COPY_MIN_EVENTS = 1_000
 COPY_EVENT_FACTOR = 10
 GROUPS = ("q1", "q2", "pocketed")
+KERNEL_MAX_BALLS = 63  # the kernel's label masks hold one bit per ball in an int64
+
+
+@dataclass
+class Tally:
+    """Flip counts per label group, copies with any flip, flipped label names, Q3 spread, and
+    copies left unfinished at the event budget (counted among the copies with any flip and
+    named :data:`UNFINISHED` in ``flips``)."""
+
+    counts: dict[str, int]
+    any_flip: int = 0
+    flips: set[str] = field(default_factory=set)
+    spread: float = 0.0
+    unfinished: int = 0
 
 
 def annotate(
@@ -75,14 +83,18 @@ def annotate(
     simulator: Simulator | None = None,
 ) -> Stability:
     """Flip rates, Q3 spread and margins of ``scene`` (simulated with ``simulator``, default
-    analytic)."""
+    analytic). The overlap is the analytic engine's only: a simulator that steps time (pymunk)
+    lets touching balls sink into each other by design (up to about 1 mm at its default
+    step), so there it is ``None``, not a finding."""
     if simulator is None:
         simulator = AnalyticSimulator()
     base = outcome if outcome is not None else simulator.run(scene)
-    tally = _tally(scene, base, delta, samples, simulator)
-    counts, any_flip, flips, spread = tally.counts, tally.any_flip, tally.flips, tally.spread
-    radius = scene.physics.ball_radius
-    gap, overlap, pocket = _margins(scene, base, simulator)
+    ids, pos, vel = perturbation_arrays(scene, delta, samples)
+    copies, finals = _copies(scene, base, ids, pos, vel, simulator)
+    tally = tally_copies(labels(base), copies, finals, _positions(base.positions, ids))
+    counts, any_flip, spread = tally.counts, tally.any_flip, tally.spread
+    radius, pockets = scene.physics.ball_radius, scene.pockets
+    gap, overlap = pair_margins(base, radius)
     return Stability(
         stable=any_flip == 0 and spread <= radius / 2 and overlap is None,
         delta=delta,
@@ -96,9 +108,9 @@ def annotate(
         min_graze_cos=min_graze_cos(base),
         min_event_gap=min_event_gap(base),
         horizon_gap=_horizon_gap(scene, base.horizon, simulator),
-        pocket_gap=pocket,
-        overlap=overlap,
-        flips=sorted(flips, key=_flip_order),
+        pocket_gap=pocket_gap(base, pockets.centers, pockets.radius),
+        overlap=overlap if isinstance(simulator, AnalyticSimulator) else None,
+        flips=sorted(tally.flips, key=_flip_order),
     )
 
 
@@ -108,77 +120,77 @@ def copy_budget(nominal_events: int, max_events: int) -> int:
     return min(max_events, max(COPY_MIN_EVENTS, COPY_EVENT_FACTOR * nominal_events))
 
 
-def _tally(scene: Scene, base: Outcome, delta: float, samples: int, simulator: Simulator) -> Tally:
-    """Flip counts and Q3 spread of the perturbed copies: on arrays in one compiled call when
-    ``simulator`` runs the kernel and the scene has at most :data:`KERNEL_MAX_BALLS` balls,
-    else copy by copy. A copy the analytic engine cannot finish within :func:`copy_budget`
-    events is counted unfinished, not simulated further."""
-    if _runs_kernel(simulator) and len(scene.balls) <= KERNEL_MAX_BALLS:
-        ids, pos, vel = perturbation_arrays(scene, delta, samples, compiled=True)
+def _copies(
+    scene: Scene,
+    base: Outcome,
+    ids: list[int],
+    pos: np.ndarray,
+    vel: np.ndarray,
+    simulator: Simulator,
+) -> tuple[list[Labels | None], np.ndarray]:
+    """Each copy's labels (``None``: the analytic engine did not finish it within
+    :func:`copy_budget` events) and ``(k, n, 2)`` final positions (NaN where pocketed or
+    unfinished): in one compiled call when ``simulator`` takes the kernel for them and the
+    scene has at most :data:`KERNEL_MAX_BALLS` balls, else copy by copy."""
+    if isinstance(simulator, AnalyticSimulator):
         budget = copy_budget(len(base.events), simulator.max_events)
-        return kernel_tally(scene, base, ids, pos, vel, budget)
-    ids, pos, vel = perturbation_arrays(scene, delta, samples)
-    reference = labels(base)
-    tally = Tally(counts=dict.fromkeys(GROUPS, 0))
-    runner = _budgeted(simulator, len(base.events))
-    for k in range(samples):
+        events = len(base.events)
+        if len(ids) <= KERNEL_MAX_BALLS and simulator.takes_kernel(scene, len(pos), events):
+            from bpb_tasks.billiards.stability_kernel import copy_labels
+
+            return copy_labels(scene, ids, pos, vel, budget)
+        simulator = simulator.with_max_events(budget)
+    copies: list[Labels | None] = []
+    finals = np.full(pos.shape, np.nan)
+    for k in range(len(pos)):
         copy = unvalidated_copy(scene, ids, pos[k].tolist(), vel[k].tolist())
         try:
-            out = runner.run(copy, base.horizon)
+            out = simulator.run(copy, base.horizon)
         except SimulationError:
-            tally.add_unfinished()
+            copies.append(None)
             continue
-        other = labels(out)
+        copies.append(labels(out))
+        finals[k] = _positions(out.positions, ids)
+    return copies, finals
+
+
+def _positions(positions: Positions, ids: list[int]) -> np.ndarray:
+    """The ``(n, 2)`` positions of balls ``ids`` (NaN for a pocketed one)."""
+    return np.array([positions[i] or (math.nan, math.nan) for i in ids], dtype=float)
+
+
+def tally_copies(
+    reference: Labels, copies: Sequence[Labels | None], finals: np.ndarray, nominal: np.ndarray
+) -> Tally:
+    """The tally of the copies' labels against ``reference`` and their final positions
+    against ``nominal`` (see :func:`q3_spread`); a copy without labels counts unfinished."""
+    tally = Tally(counts=dict.fromkeys(GROUPS, 0))
+    for other in copies:
+        if other is None:
+            tally.unfinished += 1
+            tally.any_flip += 1
+            tally.flips.add(UNFINISHED)
+            continue
         names = list(flipped(reference, other))
         tally.flips.update(names)
         tally.any_flip += bool(names)
         for group, a, b in zip(GROUPS, reference, other, strict=True):
             tally.counts[group] += a != b
-        tally.spread = max(tally.spread, q3_spread(base.positions, out.positions))
+    tally.spread = q3_spread(nominal, finals)
     return tally
 
 
-def _budgeted(simulator: Simulator, nominal_events: int) -> Simulator:
-    """``simulator`` with the copies' event budget (the analytic engine; others as they are)."""
-    if isinstance(simulator, AnalyticSimulator):
-        return simulator.with_max_events(copy_budget(nominal_events, simulator.max_events))
-    return simulator
-
-
-def _margins(
-    scene: Scene, base: Outcome, simulator: Simulator
-) -> tuple[float | None, float | None, float | None]:
-    """The near-miss gap and the overlap (:func:`pair_margins`) and the :func:`pocket_gap`, in
-    compiled code when ``simulator`` runs the kernel. The overlap is the analytic engine's only:
-    a simulator that steps time (pymunk) lets touching balls sink into each other by design (up
-    to about 1 mm at its default step), so there it is ``None``, not a finding."""
-    radius, pockets = scene.physics.ball_radius, scene.pockets
-    if _runs_kernel(simulator):
-        gap, overlap, pocket = kernel_margins(base, radius, pockets.centers, pockets.radius)
-    else:
-        gap, overlap = pair_margins(base, radius)
-        pocket = pocket_gap(base, pockets.centers, pockets.radius)
-    return gap, overlap if isinstance(simulator, AnalyticSimulator) else None, pocket
-
-
-def load_kernel(simulator: Simulator) -> None:
-    """Load the compiled kernel before a scene's own run when its annotation will run it
-    (:func:`_runs_kernel`): ``auto`` single runs take the kernel only once numba is loaded, so
-    each process ran its first scene in Python and compiled the kernel's single-scene entry on
-    its second; a pool's workers each built it, which the parent's first scene never had."""
-    if _runs_kernel(simulator):
-        importlib.import_module("bpb_tasks.simulators.analytic.kernel")
-
-
-def _runs_kernel(simulator: Simulator) -> TypeGuard[AnalyticSimulator]:
-    """Whether ``simulator`` is the analytic engine with its compiled kernel."""
-    return isinstance(simulator, AnalyticSimulator) and simulator.compiled
+def q3_spread(nominal: np.ndarray, finals: np.ndarray) -> float:
+    """Largest distance between a ball's nominal final position (``(n, 2)``) and its final
+    positions in the copies (``(k, n, 2)``), over balls on the table in both (NaN where not)."""
+    gaps = np.hypot(finals[..., 0] - nominal[:, 0], finals[..., 1] - nominal[:, 1])
+    gaps = gaps[~np.isnan(gaps)]
+    return float(gaps.max()) if gaps.size else 0.0
 
 
 def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | None:
-    """:func:`horizon_gap` of a run to ``horizon`` + 1 s: in one compiled call from the
-    kernel's event rows (the same events; no outcome is built) when single runs take the
-    kernel, else from the analytic engine's events or another simulator's outcome. The
+    """:func:`horizon_gap` of a run to ``horizon`` + 1 s: from the kernel's event rows when
+    it is loaded, else from the analytic engine's events or another simulator's outcome. The
     analytic engine's run stops at its event cap instead of failing the scene, which ran to
     its horizon within it: the gap is then measured on the events up to the cap
     (:func:`~bpb_tasks.billiards.stability_margins.capped_horizon_gap`; ``None`` when they
@@ -194,6 +206,18 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
         gap = events_horizon_gap(events, horizon)
         return gap if stopped is None else capped_horizon_gap(gap, stopped, horizon)
     return horizon_gap(simulator.run(scene, horizon + 1.0), horizon)
+
+
+def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float | None:
+    """The analytic engine's horizon gap of ``scene`` (a run to ``horizon`` + 1 s stopping
+    after ``max_events`` events) from the kernel's event rows."""
+    from bpb_tasks.simulators.analytic.compiled import run_batch
+    from bpb_tasks.simulators.analytic.kernel_predict import STOP
+
+    _, _, _, status, events = run_batch([scene], [horizon + 1.0], max_events, check=False)
+    rows = events[:, 1:3].tolist()
+    times = [t for t, kind in rows if kind != STOP]
+    return times_horizon_gap(times, rows[-1][0] if rows else None, horizon, not status[0])
 
 
 def labels(outcome: Outcome) -> Labels:
@@ -212,16 +236,6 @@ def flipped(reference: Labels, other: Labels) -> Iterator[str]:
     for prefix, a, b in zip(("q1", "q2", "q3:pocket"), reference, other, strict=True):
         for item in a ^ b:
             yield f"{prefix}:{item}"
-
-
-def q3_spread(nominal: Positions, other: Positions) -> float:
-    """Largest distance between final positions of balls on the table in both."""
-    best = 0.0
-    for ball, pos in nominal.items():
-        moved = other.get(ball)
-        if pos is not None and moved is not None:
-            best = max(best, math.dist(pos, moved))
-    return best
 
 
 @functools.lru_cache(maxsize=256)
@@ -250,34 +264,21 @@ def _flip_order(name: str) -> tuple[str, str]:
 
 
 def perturbation_arrays(
-    scene: Scene, delta: float, samples: int, stream: str = "stability", *, compiled: bool = False
+    scene: Scene, delta: float, samples: int, stream: str = "stability"
 ) -> tuple[list[int], np.ndarray, np.ndarray]:
-    """Ball ids and the ``(samples, n, 2)`` positions and velocities of the perturbed copies
-    (drawn from a generator seeded by ``stream`` and the scene id); ``compiled`` builds the
-    arrays in one compiled call (:func:`~bpb_tasks.billiards.stability_draws.perturb`, the
-    same values to the bit; a test compares) instead of a Python call per draw and numpy
-    operations."""
-    seed = f"{stream}:{scene.scene_id}"
-    if compiled:
-        from bpb_tasks.billiards.stability_draws import perturb, seed_key
-        from bpb_tasks.simulators.analytic.compiled import scene_arrays
-
-        ids, centres, velocities = scene_arrays(scene)  # the nominal run's, kept
-        cue = ids.index(CUE_ID) if CUE_ID in ids else -1
-        kick = delta * math.hypot(*scene.ball(CUE_ID).vel) if cue >= 0 else 0.0
-        pos, vel = perturb(seed_key(seed), samples, centres, velocities, delta, cue, kick)
-        return ids, pos, vel
+    """Ball ids (sorted) and the ``(samples, n, 2)`` positions and velocities of the perturbed
+    copies, drawn from a numpy generator seeded by ``stream`` and the scene id: per copy
+    ``n + 1`` uniform angles, ball ``j`` moved by ``delta`` at angle ``j``, the cue ball's
+    velocity kicked by ``delta`` times its speed at the last one."""
     balls = sorted(scene.balls, key=lambda b: b.id)
     ids = [b.id for b in balls]
     cue = ids.index(CUE_ID) if CUE_ID in ids else -1
     kick = delta * math.hypot(*balls[cue].vel) if cue >= 0 else 0.0
     centres = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     velocities = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
-    rng = random.Random(seed)
-    count = samples * (len(balls) + 1)
-    draws = list(itertools.starmap(rng.random, itertools.repeat((), count)))  # row by row
-    angles = np.array(draws, dtype=float).reshape(samples, len(balls) + 1)
-    angles *= 2 * math.pi
+    seed = hashlib.sha256(f"{stream}:{scene.scene_id}".encode()).digest()
+    rng = np.random.default_rng(int.from_bytes(seed[:16], "little"))
+    angles = rng.random((samples, len(balls) + 1)) * (2 * math.pi)
     pos = centres[None] + delta * np.stack(
         (np.cos(angles[:, :-1]), np.sin(angles[:, :-1])), axis=-1
     )

@@ -118,11 +118,20 @@ def events_horizon_gap(
     """Time between ``horizon`` and the nearest non-stop event of ``events`` (in time order);
     ``finished=False``: of a run stopped at its event cap after them (see
     :func:`capped_horizon_gap`)."""
-    gaps = [abs(e.t - horizon) for e in events if e.kind != "stop"]
+    times = [e.t for e in events if e.kind != "stop"]
+    return times_horizon_gap(times, events[-1].t if events else None, horizon, finished)
+
+
+def times_horizon_gap(
+    times: Sequence[float], last: float | None, horizon: float, finished: bool
+) -> float | None:
+    """:func:`events_horizon_gap` from the times of the non-stop events and the time of the
+    last event of all (``None`` without one)."""
+    gaps = [abs(t - horizon) for t in times]
     best = min(gaps) if gaps else None
     if finished:
         return best
-    return capped_horizon_gap(best, events[-1].t, horizon) if events else None
+    return capped_horizon_gap(best, last, horizon) if last is not None else None
 
 
 def capped_horizon_gap(best: float | None, last: float, horizon: float) -> float | None:

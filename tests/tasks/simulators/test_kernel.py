@@ -12,7 +12,7 @@ from bpb_tasks.billiards.outcome import Outcome
 from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import simulate_many
+from bpb_tasks.simulators.analytic.compiled import outcomes_many
 from support.phys_helpers import scene
 
 pytest.importorskip("numba")
@@ -54,13 +54,16 @@ def test_kernel_matches_the_python_engine_on_random_scenes() -> None:
 @pytest.mark.slow
 def test_kernel_matches_the_python_engine_on_many_scenes() -> None:
     scenes = random_scenes(12, 4000)
-    batch = simulate_many(scenes)
+    batch = outcomes_many(scenes)
     for i, s in enumerate(scenes):
         ref = PYTHON.run(s)
-        assert batch.contacts[i] == ref.cue_contacts() and batch.walls[i] == ref.cue_walls()
-        assert batch.events[i] == len(ref.events)
+        assert (
+            batch[i].cue_contacts() == ref.cue_contacts()
+            and batch[i].cue_walls() == ref.cue_walls()
+        )
+        assert len(got.events) == len(ref.events)
         for ball, pos in ref.positions.items():
-            other = batch.positions[i][ball]
+            other = batch[i].positions[ball]
             assert (pos is None) == (other is None)
             if pos is not None and other is not None:
                 assert math.dist(pos, other) <= 1e-9
@@ -72,9 +75,8 @@ def test_kernel_outcome_is_the_reference_outcome() -> None:
 
 
 def test_kernel_runs_scenes_of_other_tables_in_turn_on_their_own_tables() -> None:
-    """The kernel's table constants and ball arrays are kept between calls; a scene of another
-    table, physics or pockets runs on its own, and so does a scene whose pocket or ball list
-    was edited in place."""
+    """Scenes of other tables, physics or pockets in turn each run on their own, and so does a
+    scene whose pocket or ball list was edited in place."""
     balls = [(0.4, 0.45, 3.0, 1.1), (1.0, 0.6, 0.0, 0.0), (1.3, 0.3, 0.0, 0.0)]
     wide = scene(balls, horizon=4)
     narrow = scene(balls, horizon=4, width=1.5, mu=0.004, pocket_radius=0.08)
@@ -90,32 +92,38 @@ def test_kernel_runs_scenes_of_other_tables_in_turn_on_their_own_tables() -> Non
     assert KERNEL.run(wide).positions != before.positions
 
 
-def test_simulate_many_matches_single_runs_and_horizons() -> None:
+def test_outcomes_many_matches_single_runs_and_horizons() -> None:
     scenes = random_scenes(13, 40)
     horizons = [0.5 + 0.1 * i for i in range(40)]
-    batch = simulate_many(scenes, horizons)
+    batch = outcomes_many(scenes, horizons)
     for i, s in enumerate(scenes):
         ref = PYTHON.run(s, horizons[i])
-        assert batch.contacts[i] == ref.cue_contacts() and batch.walls[i] == ref.cue_walls()
-        assert batch.positions[i] == ref.positions
+        assert (
+            batch[i].cue_contacts() == ref.cue_contacts()
+            and batch[i].cue_walls() == ref.cue_walls()
+        )
+        assert batch[i].positions == ref.positions
 
 
-def test_simulate_many_of_mixed_ball_counts_matches_single_runs() -> None:
+def test_outcomes_many_of_mixed_ball_counts_matches_single_runs() -> None:
     # one call over scenes of other ball counts (working arrays made anew when the count
     # changes, shared while it does not) and more events than the event table first holds
     from bpb_tasks.billiards.bench_compare import random_scene
 
     counts = (2, 7, 7, 4, 1, 4)
     scenes = [random_scene(14, i, balls=counts[i % 6], speeds=(3.0, 8.0)) for i in range(36)]
-    batch = simulate_many(scenes)
+    batch = outcomes_many(scenes)
     events = 0
     for i, s in enumerate(scenes):
         ref = PYTHON.run(s)
-        assert batch.contacts[i] == ref.cue_contacts() and batch.walls[i] == ref.cue_walls()
-        assert batch.events[i] == len(ref.events)
-        assert batch.positions[i].keys() == ref.positions.keys()
+        assert (
+            batch[i].cue_contacts() == ref.cue_contacts()
+            and batch[i].cue_walls() == ref.cue_walls()
+        )
+        assert len(got.events) == len(ref.events)
+        assert batch[i].positions.keys() == ref.positions.keys()
         for ball, pos in ref.positions.items():
-            other = batch.positions[i][ball]
+            other = batch[i].positions[ball]
             assert (pos is None) == (other is None)
             if pos is not None and other is not None:
                 assert math.dist(pos, other) <= 1e-9
@@ -123,8 +131,8 @@ def test_simulate_many_of_mixed_ball_counts_matches_single_runs() -> None:
     assert events > 4 * len(scenes)  # the table grew
 
 
-def test_simulate_many_refuses_scenes_on_different_tables() -> None:
+def test_outcomes_many_refuses_scenes_on_different_tables() -> None:
     a = scene([(0.5, 0.5, 1.0, 0.0)])
     b = scene([(0.5, 0.5, 1.0, 0.0)], width=3.0)
     with pytest.raises(ValueError, match="share"):
-        simulate_many([a, b])
+        outcomes_many([a, b])

@@ -4,14 +4,13 @@
 :func:`~bpb_tasks.simulators.analytic.kernel.run_arrays` and builds the same
 :class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`outcomes_many`
 is the batch API behind ``AnalyticSimulator.run_many``: many scenes in one compiled call, their
-outcomes without motion pieces; :func:`simulate_many` returns only what labels and final
-positions need (no event objects).
+outcomes without motion pieces; the stability copies take :func:`run_batch`'s arrays.
+:func:`kernel_failure` loads (or builds) the kernel's entry points, or says why numba could not.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -24,7 +23,6 @@ from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
 KINDS = ("ball", "wall", "pocket", "stop")
 SceneArrays = tuple[list[int], np.ndarray, np.ndarray]
-AVAILABLE = HAVE_NUMBA
 
 
 class KernelBudgetError(BpbError):
@@ -32,27 +30,9 @@ class KernelBudgetError(BpbError):
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's table constants and pocket centres of ``scene`` (same arithmetic as the
-    reference ``Predictor``); shared by the calls for scenes of one table, physics and pockets
-    (a generated scene's nominal run, perturbed copies and horizon gap all take them): read
-    them, never write."""
-    table, physics, pockets = scene.table, scene.physics, scene.pockets
-    kept = _PARAMS.get((id(table), id(physics), id(pockets)))
-    if kept is not None and kept[0] == pockets.centers:  # the list could change in place
-        return kept[1]
-    made = _table_params(table, physics, pockets)
-    if len(_PARAMS) >= 64:
-        _PARAMS.clear()
-    _PARAMS[id(table), id(physics), id(pockets)] = (list(pockets.centers), made, scene)
-    return made
-
-
-_PARAMS: dict[tuple[int, int, int], tuple[list[Any], tuple[np.ndarray, np.ndarray], Any]] = {}
-""":func:`table_params` by the ids of a scene's table, physics and pockets, with the pocket
-centres they were made from and the scene (holding the three, so their ids stay theirs)."""
-
-
-def _table_params(table: Any, phys: Any, pockets: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's table constants (``kernel_predict``'s :data:`DECEL` .. :data:`POCKET_R2`,
+    the same arithmetic as the reference ``Predictor``) and pocket centres of ``scene``."""
+    table, phys, pockets = scene.table, scene.physics, scene.pockets
     radius = phys.ball_radius
     decel = phys.mu * phys.g
     r = pockets.radius
@@ -76,24 +56,36 @@ def _table_params(table: Any, phys: Any, pockets: Any) -> tuple[np.ndarray, np.n
 
 
 def scene_arrays(scene: Scene) -> SceneArrays:
-    """Ball ids (sorted), positions and velocities of ``scene``; the last scene's are kept for
-    its next call (its nominal run, perturbed copies and horizon gap): read them, never
-    write."""
-    global _LAST
-    last = _LAST
-    if last[0] is scene and last[1] == scene.balls:  # the list could change in place
-        return last[2]
-    balls = sorted(scene.balls, key=lambda b: b.id)
+    """Ball ids (sorted), positions and velocities of ``scene``."""
+    balls = sorted(scene.balls, key=_ball_id)
     pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
-    made = [b.id for b in balls], pos, vel
-    _LAST = scene, list(scene.balls), made
-    return made
+    return [b.id for b in balls], pos, vel
 
 
-_LAST: tuple[object, list[Any], SceneArrays] = (None, [], ([], np.zeros((0, 2)), np.zeros((0, 2))))
-"""The scene :func:`scene_arrays` was last called for (held, so no other takes its id), its
-balls and its arrays."""
+def kernel_failure(scene: Scene) -> str | None:
+    """Load (or build) the kernel's entry points by running a ball at rest on ``scene``'s table
+    through each as the real calls do: ``None`` when they run, else what went wrong (numba
+    cannot read a cache file of them, say); numba keeps what it loaded, so the calls after this
+    one take it."""
+    from bpb_tasks.billiards.stability import perturbation_arrays
+    from bpb_tasks.billiards.stability_kernel import copy_labels
+
+    if not HAVE_NUMBA:
+        return "numba could not be imported"
+    from bpb_tasks.billiards.scene import Ball
+
+    table = scene.table  # one ball at rest mid-table: one event at most
+    still = Ball.model_construct(id=0, pos=(table.width / 2, table.height / 2), vel=(0.0, 0.0))
+    one = scene.model_copy(update={"balls": [still]})
+    try:
+        kernel_outcome(one, one.horizon, 10_000)
+        run_batch([one], None, 10_000, check=False)
+        ids, pos, vel = perturbation_arrays(one, 1e-4, 1)
+        copy_labels(one, ids, pos, vel, 10_000)
+    except Exception as exc:  # whatever numba raised: the kernel is not to be used
+        return f"{type(exc).__name__}: {exc}"
+    return None
 
 
 def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
@@ -146,42 +138,10 @@ def _event_log(ids: Sequence[int], rows: list[list[float]]) -> tuple[Event, ...]
     return tuple(log)
 
 
-@dataclass(frozen=True)
-class BatchResult:
-    """Results of :func:`simulate_many` for scenes ``0..n-1``.
-
-    Attributes:
-        positions: Per scene, ball id to final centre (``None`` when pocketed).
-        contacts: Per scene, ids of the balls the cue ball (id 0) touched.
-        walls: Per scene, the walls the cue ball touched.
-        events: Per scene, the number of events processed.
-    """
-
-    positions: list[dict[int, tuple[float, float] | None]]
-    contacts: list[set[int]]
-    walls: list[set[str]]
-    events: list[int]
-
-
-def simulate_many(
-    scenes: Sequence[Scene], horizons: Sequence[float] | None = None, max_events: int = 100_000
-) -> BatchResult:
-    """Simulate many scenes in one compiled call (they must share table, physics and pockets).
-
-    Raises:
-        ValueError: The scenes do not share one table.
-        KernelBudgetError: A scene exceeded ``max_events``.
-    """
-    if not scenes:
-        return BatchResult([], [], [], [])
-    arrays, starts, final, events = run_batch(scenes, horizons, max_events)
-    return _batch(arrays, starts, final, events)
-
-
 def outcomes_many(
-    scenes: Sequence[Scene], horizon: float | None = None, max_events: int = 100_000
+    scenes: Sequence[Scene], horizons: Sequence[float] | None = None, max_events: int = 100_000
 ) -> list[Outcome]:
-    """The outcomes of many scenes (sharing table, physics and pockets) run to ``horizon``
+    """The outcomes of many scenes (sharing table, physics and pockets) run to ``horizons``
     (default: their own) in one compiled call: final positions and events, and no motion
     pieces (``segments`` empty: nothing to draw from them).
 
@@ -191,28 +151,31 @@ def outcomes_many(
     """
     if not scenes:
         return []
-    ends = [s.horizon if horizon is None else horizon for s in scenes]
-    arrays, starts, final, events = run_batch(scenes, ends, max_events)
+    ends = [s.horizon for s in scenes] if horizons is None else list(horizons)
+    ids, starts, final, _, events = run_batch(scenes, ends, max_events)
     rows = final.tolist()
     bounds = np.searchsorted(events[:, 0], np.arange(len(scenes) + 1)).tolist()  # in scene order
     event_rows = events[:, 1:].tolist()
     outcomes = []
-    for k, ((ids, _, _), a, b) in enumerate(
-        zip(arrays, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
+    for k, (own, a, b) in enumerate(
+        zip(ids, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
     ):
-        positions = {i: (r[0], r[1]) if r[2] else None for i, r in zip(ids, rows[a:b], strict=True)}
-        log = _event_log(ids, event_rows[bounds[k] : bounds[k + 1]])
+        positions = {i: (r[0], r[1]) if r[2] else None for i, r in zip(own, rows[a:b], strict=True)}
+        log = _event_log(own, event_rows[bounds[k] : bounds[k + 1]])
         outcomes.append(Outcome(float(ends[k]), positions, log, {}))
     return outcomes
 
 
-Batch = tuple[list[tuple[list[int], np.ndarray, np.ndarray]], np.ndarray, np.ndarray, np.ndarray]
+def run_batch(
+    scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int, check: bool = True
+) -> tuple[list[list[int]], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The kernel's raw batch results of ``scenes`` (sharing one table) run to ``horizons``
+    (default: their own): per-scene ball ids, ball offsets, final rows, statuses and the event
+    rows (scene index first).
 
-
-def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_events: int) -> Batch:
-    """The kernel's raw batch results: per-scene ``(ids, pos, vel)`` (``pos`` and ``vel`` left
-    empty: the flat arrays went to the kernel), ball offsets, final rows and the event rows
-    (scene index first) of ``scenes`` (sharing one table)."""
+    Raises:
+        KernelBudgetError: A scene exceeded ``max_events`` (when ``check``).
+    """
     first = scenes[0]
     shape = (first.table, first.physics, first.pockets)
     if any(
@@ -221,7 +184,7 @@ def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_eve
         if s.table is not first.table or s.physics is not first.physics
         or s.pockets is not first.pockets
     ):  # fmt: skip
-        raise ValueError("simulate_many: scenes must share table, physics and pockets")
+        raise ValueError("outcomes_many: scenes must share table, physics and pockets")
     ordered = [sorted(s.balls, key=_ball_id) for s in scenes]
     pos = np.array([b.pos for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
@@ -231,37 +194,10 @@ def run_batch(scenes: Sequence[Scene], horizons: Sequence[float] | None, max_eve
     final, status, events = run_many_arrays(
         pos, vel, starts, prm, pockets, np.array(ends, dtype=float), max_events
     )
-    if status.any():
+    if check and status.any():
         raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
-    empty = np.zeros((0, 2))
-    arrays = [([b.id for b in balls], empty, empty) for balls in ordered]
-    return arrays, starts, final, events
+    return [[b.id for b in balls] for balls in ordered], starts, final, status, events
 
 
 def _ball_id(ball: Any) -> int:
     return int(ball.id)
-
-
-def _batch(
-    arrays: list[tuple[list[int], np.ndarray, np.ndarray]],
-    starts: np.ndarray,
-    final: np.ndarray,
-    events: np.ndarray,
-) -> BatchResult:
-    rows = final.tolist()
-    positions = [
-        {i: (r[0], r[1]) if r[2] else None for i, r in zip(ids, rows[a:b], strict=True)}
-        for (ids, _, _), a, b in zip(arrays, starts[:-1].tolist(), starts[1:].tolist(), strict=True)
-    ]
-    contacts: list[set[int]] = [set() for _ in arrays]
-    walls: list[set[str]] = [set() for _ in arrays]
-    counts = np.bincount(events[:, 0].astype(np.int64), minlength=len(arrays)).tolist()
-    kind, a, b = events[:, 2], events[:, 3], events[:, 4]
-    cue_rows = ((kind == 0) | (kind == 1)) & ((a == 0) | (b == 0))  # index 0: the lowest id
-    for s, _, kind_, a_, b_, wall, *_ in events[cue_rows].tolist():
-        ids = arrays[int(s)][0]
-        if kind_ == 0 and (ids[int(a_)] == 0 or ids[int(b_)] == 0):
-            contacts[int(s)].add(ids[int(b_)] if ids[int(a_)] == 0 else ids[int(a_)])
-        elif kind_ == 1 and ids[int(a_)] == 0:
-            walls[int(s)].add(WALLS[int(wall)])
-    return BatchResult(positions, contacts, walls, counts)

@@ -34,14 +34,15 @@ Physics conventions (the data contract; the dataset card quotes them):
   stop), so a piece is either pure deceleration or rest.
 
 The same code runs on float64 or on 50-digit mpmath numbers (``precision=50``), the reference.
-With numba installed (the ``fast`` extra) float64 batches go through the compiled event kernel
+With numba installed (the ``fast`` extra) float64 runs can go through the compiled event kernel
 (:mod:`bpb_tasks.simulators.analytic.kernel`), which performs the same operations in the same
-order; ``engine="python"`` forces this module's pure-Python loop (the reference and fallback).
-With ``engine="auto"`` a single :meth:`AnalyticSimulator.run` uses the kernel only once numba is
-loaded: building the full outcome around the kernel makes one run just 1.2x faster, while
-importing numba and its cached kernels costs about a second, so a short job (one scene simulated,
-a few answered by the oracle) does not pay for it. Batches (stability copies, calibration,
-``bpb simulate`` on many scenes) load it.
+order, so either gives the same numbers. ``engine="python"`` forces this module's pure-Python
+loop (the reference and fallback), ``engine="kernel"`` the kernel. With ``engine="auto"`` a
+batch (:meth:`AnalyticSimulator.run_many`, the stability copies) takes the kernel when numba has
+it cached, or once the Python engine's estimated time in this simulator would reach the time to
+build it (:func:`~bpb_tasks.simulators.analytic.kernel_cache.use_kernel`); single runs take it
+once a batch has loaded it. A kernel numba cannot load or build is said in a ``note:`` and the
+Python engine runs instead.
 """
 
 from __future__ import annotations
@@ -49,12 +50,20 @@ from __future__ import annotations
 import copy
 import heapq
 import importlib.util
-import sys
+import os
 from collections.abc import Sequence
 
 from bpb_core.errors import BadInput, BpbError
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.simulators.analytic.kernel_cache import (
+    clear_own_cache,
+    is_cached,
+    note,
+    numba_cache_dir,
+    python_seconds,
+    use_kernel,
+)
 from bpb_tasks.simulators.analytic.motion import Body
 from bpb_tasks.simulators.analytic.numeric import FLOAT64, Number, Numeric, backend
 from bpb_tasks.simulators.analytic.prediction import (
@@ -84,9 +93,9 @@ class AnalyticSimulator:
     Args:
         precision: ``None``/``"float64"`` (default) or a number of decimal digits for mpmath.
         max_events: Bound on processed events; exceeding it raises :class:`SimulationError`.
-        engine: ``"auto"`` (compiled kernel for float64 batches when numba is installed; single
-            runs once numba is loaded), ``"kernel"`` (require it, for every run) or
-            ``"python"`` (the pure-Python reference loop).
+        engine: ``"auto"`` (the compiled kernel for float64 batches when numba has it cached or
+            the work is worth building it; single runs once a batch loaded it), ``"kernel"``
+            (require numba, for every run) or ``"python"`` (the pure-Python reference loop).
     """
 
     name = "analytic"
@@ -97,10 +106,18 @@ class AnalyticSimulator:
         max_events: int = DEFAULT_MAX_EVENTS,
         engine: str = "auto",
     ) -> None:
+        if engine not in ("auto", "kernel", "python"):
+            raise BadInput(f"engine: expected 'auto', 'kernel' or 'python', got {engine!r}")
         self.numeric = backend(precision)
         self.max_events = max_events
-        self.compiled = _use_kernel(engine, self.numeric is FLOAT64)
         self.engine = engine
+        have_numba = importlib.util.find_spec("numba") is not None  # found, not imported
+        self.available = have_numba and self.numeric is FLOAT64
+        if engine == "kernel" and not self.available:
+            raise BadInput("engine: 'kernel' needs numba (pip install 'bpb[fast]') and float64")
+        self.kernel: bool | None = None  # loaded and running; False: it failed, said once
+        self.cached: bool | None = None  # whether numba has it cached, once looked up
+        self.spent = 0.0  # the Python engine's estimated CPU seconds in batches so far
 
     def with_max_events(self, max_events: int) -> AnalyticSimulator:
         """This simulator with another event budget (same precision and engine)."""
@@ -108,15 +125,47 @@ class AnalyticSimulator:
         other.max_events = max_events
         return other
 
+    @property
+    def compiled(self) -> bool:
+        """Whether runs may take the compiled kernel (numba installed, float64, not
+        ``engine="python"``, and it has not failed to load)."""
+        return self.available and self.engine != "python" and self.kernel is not False
+
     def kernel_loaded(self) -> bool:
-        """Whether single runs take the kernel now: always with ``engine="kernel"``, with
-        ``"auto"`` once numba has been imported (by a batch, or by anyone else)."""
-        return self.compiled and (self.engine == "kernel" or "numba" in sys.modules)
+        """Whether single runs take the kernel now: once a batch loaded it, or from the first
+        run with ``engine="kernel"``."""
+        return self.kernel is True
+
+    def takes_kernel(self, scene: Scene, runs: int, events: float = 0.0) -> bool:
+        """Whether a batch of ``runs`` simulations of scenes like ``scene`` (``events`` each,
+        when known) takes the kernel
+        (:func:`~bpb_tasks.simulators.analytic.kernel_cache.use_kernel`); the first time,
+        it is loaded (built, with a note, when numba has not cached it): on a failure the
+        Python engine runs from then on, said in a note."""
+        if self.kernel is not None:
+            return self.kernel
+        if self.cached is None:
+            self.cached = self.available and is_cached(numba_cache_dir(os.environ))
+        seconds = python_seconds(runs, events)
+        if not use_kernel(self.engine, self.available, self.cached, self.spent, seconds):
+            self.spent += seconds
+            return False
+        from bpb_tasks.simulators.analytic.compiled import kernel_failure
+        from bpb_tasks.simulators.analytic.kernel_roots import CACHE
+
+        if CACHE and not self.cached:  # else kernel_roots said it cannot cache it
+            note(COMPILE_NOTE.format(numba_cache_dir(os.environ)))
+        failure = kernel_failure(scene)
+        if failure is not None:
+            note(f"the compiled physics kernel cannot be used ({failure}); using the Python engine")
+            clear_own_cache(numba_cache_dir(os.environ))
+        self.kernel = failure is None
+        return self.kernel
 
     def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
         end = scene.horizon if horizon is None else horizon
-        if self.kernel_loaded():
+        if self.kernel or (self.engine == "kernel" and self.takes_kernel(scene, 1)):
             from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, kernel_outcome
 
             try:
@@ -142,26 +191,20 @@ class AnalyticSimulator:
         the kernel in one compiled call
         (:func:`~bpb_tasks.simulators.analytic.compiled.outcomes_many`: outcomes without motion
         pieces, ``segments`` empty), else :meth:`run` on each."""
-        if self.compiled and scenes:
+        if scenes and self.takes_kernel(scenes[0], len(scenes)):
             from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, outcomes_many
 
             try:
-                return outcomes_many(scenes, horizon, self.max_events)
+                ends = None if horizon is None else [horizon] * len(scenes)
+                return outcomes_many(scenes, ends, self.max_events)
             except KernelBudgetError as exc:
                 raise SimulationError(str(exc)) from None
         return [self.run(s, horizon) for s in scenes]
 
 
-def _use_kernel(engine: str, float64: bool) -> bool:
-    """Whether runs go through the compiled kernel (see :class:`AnalyticSimulator`)."""
-    if engine not in ("auto", "kernel", "python"):
-        raise BadInput(f"engine: expected 'auto', 'kernel' or 'python', got {engine!r}")
-    if engine == "python":
-        return False
-    have_numba = importlib.util.find_spec("numba") is not None  # found, not imported
-    if engine == "kernel" and not (have_numba and float64):
-        raise BadInput("engine: 'kernel' needs numba (pip install 'bpb[fast]') and float64")
-    return have_numba and float64
+COMPILE_NOTE = (
+    "compiling the physics kernel for this machine (about 20 s); cached in {} for later commands"
+)
 
 
 class _Simulation(Predictor):
@@ -244,6 +287,7 @@ class _Simulation(Predictor):
 
     def run(self, horizon_in: float) -> Outcome:
         zero, horizon = self.numeric.num(0.0), self.numeric.num(horizon_in)
+        self.horizon = horizon
         for b, (vx, vy) in zip(self.bodies, self.initial, strict=True):
             self.motion.set_velocity(b, zero, vx, vy)
             b.seg.append((zero, b.x, b.y, vx, vy))

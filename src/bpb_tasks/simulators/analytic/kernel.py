@@ -24,7 +24,9 @@ from bpb_tasks.simulators.analytic.kernel_predict import (
     ALIVE,
     BALL,
     BOTTOM,
+    HORIZON,
     POCKET,
+    RECORD,
     REST,
     RIGHT,
     SPEED,
@@ -50,7 +52,7 @@ from bpb_tasks.simulators.analytic.kernel_predict import (
 )
 from bpb_tasks.simulators.analytic.kernel_roots import SPEED_TOL, jit
 
-__all__ = ["run_arrays", "run_many_arrays"]
+__all__ = ["buffers", "run_arrays", "run_into", "run_many_arrays"]
 
 
 @jit
@@ -59,7 +61,8 @@ def _changed(
 ) -> None:
     set_velocity(st, prm, i, t, vx, vy)
     iv[i, VERSION] += 1
-    pieces.append((float(i), t, st[i, _X], st[i, _Y], vx, vy))
+    if prm[RECORD]:
+        pieces.append((float(i), t, st[i, _X], st[i, _Y], vx, vy))
 
 
 @jit
@@ -110,7 +113,8 @@ def _start(st: Arr, iv: Arr, prm: Arr, pockets: Arr, vel: Arr, queue: Any, piece
     n = st.shape[0]
     for i in range(n):
         set_velocity(st, prm, i, 0.0, vel[i, 0], vel[i, 1])
-        pieces.append((float(i), 0.0, st[i, _X], st[i, _Y], vel[i, 0], vel[i, 1]))
+        if prm[RECORD]:
+            pieces.append((float(i), 0.0, st[i, _X], st[i, _Y], vel[i, 0], vel[i, 1]))
     for i in range(n):
         if st[i, SPEED] > 0:
             predict_single(st, iv, prm, pockets, queue, i)
@@ -176,45 +180,40 @@ def run_arrays(
 ) -> tuple[Arr, Arr, Arr, int]:
     """Simulate one scene (see the module docstring); ``pos``/``vel`` are ``(n, 2)`` arrays of
     the balls sorted by id and ``prm`` the table constants of ``kernel_predict``."""
-    events, pieces, final, status = run_rows(pos, vel, prm, pockets, horizon, max_events)
-    return _table(events, 9), _table(pieces, 6), final, status
-
-
-@jit
-def run_rows(
-    pos: Arr, vel: Arr, prm: Arr, pockets: Arr, horizon: float, max_events: int
-) -> tuple[Any, Any, Arr, int]:
-    """:func:`run_arrays` with the events and pieces as the lists of row tuples the loop
-    appends (for compiled callers that read them once)."""
     work = buffers(pos.shape[0])
-    status = run_into(work, pos, vel, prm, pockets, horizon, max_events)
-    return work[4], work[5], work[6], status
+    status = run_into(work, pos, vel, prm, pockets, horizon, max_events, True)
+    return _table(work[4], 9), _table(work[5], 6), work[6], status
 
 
 @jit
-def buffers(n: int) -> tuple[Arr, Arr, Arr, Any, Any, Any, Arr]:
+def buffers(n: int) -> tuple[Arr, Arr, Arr, Any, Any, Any, Arr, Arr]:
     """The working arrays and lists of a run of ``n`` balls: ``(st, iv, ended, queue, events,
-    pieces, final)``; :func:`run_into` resets them, so many runs can share one set."""
+    pieces, final, constants)``; :func:`run_into` resets them, so many runs can share one
+    set."""
     queue = [(0.0, 0, 0, 0, 0, 0)]
     events = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
     pieces = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)]
     st, iv, ended = np.zeros((n, 8)), np.zeros((n, 2), dtype=np.int64), np.zeros(n)
-    return st, iv, ended, queue, events, pieces, np.zeros((n, 4))
+    return st, iv, ended, queue, events, pieces, np.zeros((n, 4)), np.zeros(RECORD + 1)
 
 
 @jit
 def run_into(
-    work: tuple[Arr, Arr, Arr, Any, Any, Any, Arr],
+    work: tuple[Arr, Arr, Arr, Any, Any, Any, Arr, Arr],
     pos: Arr,
     vel: Arr,
-    prm: Arr,
+    table: Arr,
     pockets: Arr,
     horizon: float,
     max_events: int,
+    record: bool,
 ) -> int:
-    """Run the balls ``pos``/``vel`` in the :func:`buffers` ``work``, leaving the events,
-    pieces and final rows there (as :func:`run_rows` returns them); returns the status."""
-    st, iv, ended, queue, events, pieces, final = work
+    """Run the balls ``pos``/``vel`` on the table ``table`` in the :func:`buffers` ``work``,
+    leaving the events, the pieces of motion (when ``record``) and the final rows there;
+    returns the status."""
+    st, iv, ended, queue, events, pieces, final, prm = work
+    prm[:HORIZON] = table[:HORIZON]
+    prm[HORIZON], prm[RECORD] = horizon, 1.0 if record else 0.0
     n = pos.shape[0]
     st[:] = 0.0
     st[:, 0] = pos[:, 0]
@@ -255,7 +254,7 @@ def run_many_arrays(
     :func:`run_arrays`), per-scene statuses, and the event tables concatenated with a leading
     scene column. Scenes of as many balls as the one before share its working arrays
     (:func:`buffers`), and each scene's events go straight from the loop's rows into the one
-    table: no segment table, and no array per scene."""
+    table: no pieces of motion, and no array per scene."""
     scenes = starts.shape[0] - 1
     final = np.zeros((pos.shape[0], 4))
     status = np.zeros(scenes, dtype=np.int64)
@@ -268,7 +267,7 @@ def run_many_arrays(
         if b - a != n:
             n = b - a
             work = buffers(n)
-        status[s] = run_into(work, pos[a:b], vel[a:b], prm, pockets, horizons[s], max_events)
+        status[s] = run_into(work, pos[a:b], vel[a:b], prm, pockets, horizons[s], max_events, False)
         final[a:b] = work[6]
         rows = work[4]
         if row + len(rows) > events.shape[0]:

@@ -3,7 +3,7 @@
 
 A ball is a row of the float array ``st`` (columns :data:`X` .. :data:`WALL_T`) plus its version
 and alive flag in the int array ``iv``; table constants are the float array ``prm`` (columns
-:data:`DECEL` .. :data:`POCKET_R2`). Queue entries are the reference's
+:data:`DECEL` .. :data:`HORIZON`). Queue entries are the reference's
 ``(time, kind, index, other, version, other_version)`` tuples in a list kept as a heap, so events
 pop in the same order.
 """
@@ -19,6 +19,7 @@ from bpb_tasks.simulators.analytic.kernel_roots import NO_ROOT, first_contact, j
 X, Y, T0, SPEED, UX, UY, TSTOP, WALL_T = range(8)
 VERSION, ALIVE = 0, 1
 DECEL, HALF, CONTACT2, TWO_R, MARGIN, XMIN, XMAX, YMIN, YMAX, REST, POCKET_R, POCKET_R2 = range(12)
+HORIZON, RECORD = 12, 13  # a run's own: its end (no later event is queued), pieces kept
 BALL, WALL, POCKET, STOP = 0, 1, 2, 3
 TOP, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3
 INF = math.inf
@@ -73,8 +74,9 @@ def reach(st: Arr, prm: Arr, i: int) -> float:
 
 
 @jit
-def push(queue: Any, t: float, kind: int, i: int, k: int, ver: int, other: int) -> None:
-    heapq.heappush(queue, (t, kind, i, k, ver, other))
+def push(prm: Arr, queue: Any, t: float, kind: int, i: int, k: int, ver: int, other: int) -> None:
+    if t <= prm[HORIZON]:  # a later event cannot fire in this run
+        heapq.heappush(queue, (t, kind, i, k, ver, other))
 
 
 @jit
@@ -83,7 +85,7 @@ def predict_single(st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int)
     if st[i, SPEED] == 0:
         return
     if prm[DECEL] > 0:
-        push(queue, st[i, TSTOP], STOP, i, 0, iv[i, VERSION], 0)
+        push(prm, queue, st[i, TSTOP], STOP, i, 0, iv[i, VERSION], 0)
     far = reach(st, prm, i)
     x, y, ux, uy = st[i, X], st[i, Y], st[i, UX], st[i, UY]
     if uy != 0:
@@ -105,7 +107,7 @@ def pocket_at_start(st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int
     for k in range(pockets.shape[0]):
         dx, dy = x - pockets[k, 0], y - pockets[k, 1]
         if -r <= dx <= r and dx * dx + dy * dy <= r2:
-            push(queue, st[i, T0], POCKET, i, k, iv[i, VERSION], 0)
+            push(prm, queue, st[i, T0], POCKET, i, k, iv[i, VERSION], 0)
             return
 
 
@@ -116,7 +118,7 @@ def predict_wall(
     gap = gap if gap > 0 else gap * 0
     if gap < far:
         t = st[i, T0] + time_for(prm, st[i, SPEED], gap)
-        push(queue, t, WALL, i, wall, iv[i, VERSION], 0)
+        push(prm, queue, t, WALL, i, wall, iv[i, VERSION], 0)
         st[i, WALL_T] = t if t < st[i, WALL_T] else st[i, WALL_T]
 
 
@@ -146,7 +148,7 @@ def predict_pocket(
             best, found, pocket = s, True, k
     if found:
         t = st[i, T0] + (time_for(prm, st[i, SPEED], best) if best > 0 else best)
-        push(queue, t, POCKET, i, pocket, iv[i, VERSION], 0)
+        push(prm, queue, t, POCKET, i, pocket, iv[i, VERSION], 0)
 
 
 @jit
@@ -185,11 +187,11 @@ def predict_pair(st: Arr, iv: Arr, prm: Arr, queue: Any, p: int, q: int, t: floa
         far = ms * ms / (2 * prm[DECEL]) if prm[DECEL] > 0 else INF
         if s < far:
             tau = time_for(prm, ms, s) if s > 0 else s
-            push(queue, t + tau, BALL, p, q, iv[p, VERSION], iv[q, VERSION])
+            push(prm, queue, t + tau, BALL, p, q, iv[p, VERSION], iv[q, VERSION])
         return
     tau = moving_pair(st, prm, p, q, t, px, py, qx, qy, ps, qs)
     if tau != NO_ROOT:
-        push(queue, t + tau, BALL, p, q, iv[p, VERSION], iv[q, VERSION])
+        push(prm, queue, t + tau, BALL, p, q, iv[p, VERSION], iv[q, VERSION])
 
 
 @jit

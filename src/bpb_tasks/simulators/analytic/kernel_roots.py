@@ -4,24 +4,19 @@ leading zeros) so numba compiles them without allocating.
 
 Every expression keeps the operand order of the reference code, so the kernel reproduces the
 Python engine's float64 results operation for operation. Without numba the functions run as plain
-Python (slowly), which keeps the module importable and testable.
+Python (slowly), which keeps the module importable and testable. This is the one module that
+imports numba; it first points ``NUMBA_CACHE_DIR`` at bpb's cache folder unless the user set it
+(:mod:`~bpb_tasks.simulators.analytic.kernel_cache`).
 """
 
 from __future__ import annotations
 
-import contextlib
-import functools
-import hashlib
-import importlib
-import inspect
 import math
 import os
-import warnings
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any, TypeVar
 
-from bpb_core.errors import Notice
+from bpb_tasks.simulators.analytic.kernel_cache import cache_folder, note
 
 F = TypeVar("F", bound=Callable[..., Any])
 TIME_TOL = 1e-15  # FLOAT64.time_tol
@@ -29,152 +24,43 @@ SPEED_TOL = 1e-15  # FLOAT64.speed_tol
 MAX_ITER = 200  # FLOAT64.max_iter
 NO_ROOT = -1.0  # contact times are never negative
 
+if not os.environ.get("NUMBA_CACHE_DIR"):  # numba reads it as it is imported
+    os.environ["NUMBA_CACHE_DIR"] = str(cache_folder())
 _numba: Any
 try:  # numba is an optional extra (``pip install 'bpb[fast]'``)
-    _numba = importlib.import_module("numba")
-except ImportError:  # pragma: no cover - exercised where numba is absent
+    import numba as _numba
+except ImportError:
+    _numba = None
+except Exception as exc:  # an install numba cannot load itself in
+    note(f"numba could not be imported ({type(exc).__name__}: {exc}); using the Python engine")
     _numba = None
 HAVE_NUMBA = _numba is not None
 
 
-def jit(func: F) -> F:
-    """Compile ``func`` with numba (cached on disk) when it is installed; else return it.
+def _cacheable() -> bool:
+    """Whether numba finds a folder it can write its cache in (not on a read-only install
+    without a writable home or cache folder: the kernel is then compiled in memory by each
+    command that uses it, said once)."""
+    try:
+        _numba.njit(cache=True)(_cacheable)
+    except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+        note(f"numba cannot cache the physics kernel ({exc}); each command compiles it anew")
+        return False
+    return True
 
-    numba checks a cached function against its own file only, yet the cached machine code
-    holds every compiled function it calls, from other files too: after an edit or upgrade of
-    a callee's file alone (``git pull`` on an editable install), the caller would go on running
-    the old callee. The cache of a function made here is therefore also stamped with
-    :func:`kernel_sources_stamp`, so a change to any compiled module it may call recompiles it.
-    """
+
+CACHE = HAVE_NUMBA and _cacheable()
+
+
+def jit(func: F) -> F:
+    """Compile ``func`` with numba (cached on disk when it can be) when it is installed; else
+    return it."""
     if _numba is None:
         return func
-    cache_class = _stamped_cache_class()
-    compiled: Any = _numba.njit(cache=cache_class is None)(func)  # not numba's cache, then ours
-    if cache_class is not None:
-        compiled._cache = cache_class(func)  # what Dispatcher.enable_caching sets, stamped
-    return compiled  # type: ignore[no-any-return]
-
-
-JIT_MARK = "@jit"
-"""How a module's compiled functions are marked; the modules holding it are stamped."""
-
-
-@functools.cache
-def _folder_stamp(folder: Path) -> bytes:
-    """SHA-256 over the names and contents of ``folder``'s Python files with compiled
-    functions (those holding :data:`JIT_MARK`), in name order."""
-    digest = hashlib.sha256()
-    for path in sorted(folder.glob("*.py")):
-        data = path.read_bytes()
-        if JIT_MARK.encode() in data:
-            digest.update(path.name.encode() + b"\0" + hashlib.sha256(data).digest())
-    return digest.digest()
-
-
-def kernel_sources_stamp(func: Callable[..., Any]) -> tuple[bytes, bytes]:
-    """What the cache of compiled ``func`` is also stamped with: the compiled modules of this
-    folder (the kernel every compiled function builds on) and of ``func``'s own folder."""
-    return _folder_stamp(Path(__file__).parent), _folder_stamp(Path(inspect.getfile(func)).parent)
-
-
-@functools.cache
-def _stamped_cache_class() -> type | None:
-    """numba's per-function cache with :func:`kernel_sources_stamp` added to the source stamp
-    it checks (``None`` where this numba's caching internals differ: plain caching then)."""
     try:
-        from numba.core.caching import CompileResultCacheImpl, FunctionCache
-        from numba.core.runtime.nrt import rtsys
-    except ImportError:  # pragma: no cover - other numba versions
-        return None
-
-    class Stamped:
-        """A cache locator giving its source stamp with the kernel sources' stamp."""
-
-        def __init__(self, inner: Any, extra: tuple[bytes, bytes]) -> None:
-            self._inner, self._extra = inner, extra
-
-        def get_source_stamp(self) -> Any:
-            return (self._inner.get_source_stamp(), self._extra)
-
-        def __getattr__(self, name: str) -> Any:
-            return getattr(self._inner, name)
-
-    class StampedImpl(CompileResultCacheImpl):
-        def __init__(self, py_func: Callable[..., Any]) -> None:
-            super().__init__(py_func)  # type: ignore[no-untyped-call]
-            self._locator = Stamped(self._locator, kernel_sources_stamp(py_func))
-
-    class StampedCache(FunctionCache):
-        _impl_class = StampedImpl
-
-        def load_overload(self, sig: Any, target_context: Any) -> Any:
-            """numba's lookup, which the dispatcher makes before it compiles: nothing loaded
-            means it compiles now (see :func:`note_compiling`).
-
-            numba refreshes the target context first, importing and installing all its
-            lowering code (about 0.25 s of CPU, once per process: a fifth of a small ``bpb
-            generate``). Cached machine code needs none of it, only the symbols it links to:
-            numba's C helpers and the C maths, there since the context was made, and those
-            of the runtime (NRT) and of the hash secret, added here. Compiling refreshes the
-            context itself (numba's ``CompilerBase``). Should the code need more (another
-            numba), that load fails and numba's own, with the refresh, is made instead."""
-            try:
-                rtsys.initialize(target_context)
-                importlib.import_module("numba.cpython.hashing")  # the hash secret's symbols
-                with self._guard_against_spurious_io_errors():
-                    loaded = self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
-            except Exception:  # whatever it was, numba's own load decides
-                loaded = super().load_overload(sig, target_context)  # type: ignore[no-untyped-call]
-            if loaded is None and self._enabled:
-                note_compiling(cache_root(self._cache_path, Path(inspect.getfile(self._py_func))))
-            return loaded
-
-    if not hasattr(CompileResultCacheImpl, "locator") or not hasattr(
-        FunctionCache, "_load_overload"
-    ):  # pragma: no cover
-        return None
-    return StampedCache
-
-
-class CompileNotice(Notice):
-    """The compiled kernel is about to be built: numba's cache holds no code for this machine
-    and these sources (a first use, or after an upgrade or edit)."""
-
-
-COMPILE_NOTE = (
-    "compiling the physics kernel for this machine (about 20 s); cached in {} for later commands"
-)
-"""Each part is built on its first use: a command that runs code no earlier one did (``bpb
-simulate``'s fast path after ``bpb generate``, say) builds that part then, and says so again."""
-_noted = False  # one note per process; workers forked after it inherit it
-
-
-def cache_root(cache_path: str, source: Path) -> str:
-    """Where numba caches the code of every compiled module, from ``cache_path``, where it caches
-    ``source``'s: beside each module (its ``__pycache__``; the compiled modules are in this
-    package, ``bpb_tasks``, and ``source``'s folder: the note comes with the first function
-    built, which may be the kernel's or the stability code's), or in one folder per module
-    folder under a cache folder (``NUMBA_CACHE_DIR``, else a user-wide one where the package's
-    is not writable)."""
-    path = Path(cache_path)
-    if path.name != "__pycache__":
-        return str(path.parent)
-    common = os.path.commonpath([source.parent, Path(__file__).parents[2]])
-    return f"the __pycache__ folders under {common}"
-
-
-def note_compiling(cache_path: str) -> None:
-    """Warn once per process (:class:`CompileNotice`) that compiled code is being built, naming
-    where numba caches it (``NUMBA_CACHE_DIR`` when set, else ``cache_path``: see
-    :func:`cache_root`): the first build of the kernel and the stability code costs about 20 s
-    of CPU, silent otherwise."""
-    global _noted
-    if _noted:
-        return
-    _noted = True
-    where = getattr(getattr(_numba, "config", None), "CACHE_DIR", "") or cache_path
-    with contextlib.suppress(CompileNotice):  # warnings made errors: a note must not stop it
-        warnings.warn(COMPILE_NOTE.format(where), CompileNotice, stacklevel=2)
+        return _numba.njit(cache=CACHE)(func)  # type: ignore[no-any-return]
+    except RuntimeError:  # no cache folder for this module's folder alone: in memory
+        return _numba.njit(func)  # type: ignore[no-any-return]
 
 
 Poly = tuple[float, float, float, float, float]

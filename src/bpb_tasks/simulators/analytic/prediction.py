@@ -47,10 +47,12 @@ class Predictor:
         self.bodies = [Body(i, b.id, num(b.pos[0]), num(b.pos[1])) for i, b in enumerate(balls)]
         self.initial = [(num(b.vel[0]), num(b.vel[1])) for b in balls]
         self.queue: list[tuple[Any, ...]] = []
+        self.horizon: Number = num(float("inf"))  # the run's end: no later event is queued
 
     def push(self, t: Number, kind: int, a: Body, k: int, other: Body | None = None) -> None:
-        ver = other.version if other is not None else 0
-        heapq.heappush(self.queue, (t, kind, a.index, k, a.version, ver))
+        if t <= self.horizon:  # a later event cannot fire in this run
+            ver = other.version if other is not None else 0
+            heapq.heappush(self.queue, (t, kind, a.index, k, a.version, ver))
 
     def predict_single(self, b: Body) -> None:
         """Queue ``b``'s stop, next wall contacts and pocket entry (``b`` is at ``b.t0``)."""
@@ -132,12 +134,11 @@ class Predictor:
                 return
             reach = ms * ms / (2 * motion.decel) if motion.decel > 0 else motion.inf
             if s < reach:  # stopping exactly at contact distance is not a collision
-                tau = motion.time_for(ms, s) if s > 0 else s
-                heapq.heappush(self.queue, (t + tau, BALL, p.index, q.index, p.version, q.version))
+                self.push(t + (motion.time_for(ms, s) if s > 0 else s), BALL, p, q.index, q)
             return
         tau = self.moving_pair(p, q, t, (px, py, qx, qy), (ps, qs))
         if tau is not None:
-            heapq.heappush(self.queue, (t + tau, BALL, p.index, q.index, p.version, q.version))
+            self.push(t + tau, BALL, p, q.index, q)
 
     def moving_pair(
         self, p: Body, q: Body, t: Number, ends: tuple[Number, ...], speeds: tuple[Number, Number]
