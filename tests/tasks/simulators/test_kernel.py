@@ -61,7 +61,7 @@ def test_kernel_matches_the_python_engine_on_many_scenes() -> None:
             batch[i].cue_contacts() == ref.cue_contacts()
             and batch[i].cue_walls() == ref.cue_walls()
         )
-        assert len(got.events) == len(ref.events)
+        assert len(batch[i].events) == len(ref.events)
         for ball, pos in ref.positions.items():
             other = batch[i].positions[ball]
             assert (pos is None) == (other is None)
@@ -120,7 +120,7 @@ def test_outcomes_many_of_mixed_ball_counts_matches_single_runs() -> None:
             batch[i].cue_contacts() == ref.cue_contacts()
             and batch[i].cue_walls() == ref.cue_walls()
         )
-        assert len(got.events) == len(ref.events)
+        assert len(batch[i].events) == len(ref.events)
         assert batch[i].positions.keys() == ref.positions.keys()
         for ball, pos in ref.positions.items():
             other = batch[i].positions[ball]
