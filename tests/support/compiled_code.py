@@ -9,13 +9,7 @@ loads them (about a second).
 from __future__ import annotations
 
 import importlib.util
-import json
-import os
-import subprocess
-import sys
 import warnings
-from pathlib import Path
-from typing import Any
 
 
 def fill() -> None:
@@ -30,19 +24,6 @@ def fill() -> None:
     family, simulator = BilliardsFamily(), AnalyticSimulator(engine="kernel")
     made = family.make_scene(family.load_config(None), simulator, 0, 1.0, 0)
     assert len(family.ground_truths([made.scene], simulator)) == 1
-
-
-def on_a_cold_cache(script: str, scratch: Path) -> Any:
-    """Run ``script`` in a fresh interpreter with an empty numba cache (in ``scratch``), check
-    it ended well and built compiled code there, and return its last stdout line's JSON (what
-    it saw: the tests spy on ``kernel_roots.note_compiling`` to learn where builds happened)."""
-    cache = scratch / "cold"
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          env=env, timeout=600)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert any(cache.rglob("*.nbi"))  # the cache was cold: it was built here
-    return json.loads(done.stdout.splitlines()[-1])
 
 
 if __name__ == "__main__":

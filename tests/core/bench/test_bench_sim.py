@@ -26,7 +26,6 @@ from bpb_core.registry import Registry, make_registry
 from bpb_core.simulate import simulate_lines
 from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.bench_compare import random_scenes
-from support.compiled_code import on_a_cold_cache
 
 
 def test_a_contestant_spec_has_typed_options() -> None:
@@ -535,40 +534,3 @@ def test_the_speed_chart_draws_dollar_names_as_written(tmp_path: Path) -> None:
     sim_report.plot(result, tmp_path / "bench.png")
     with Image.open(tmp_path / "bench.png") as image:
         assert image.format == "PNG" and image.size[0] >= 1000
-
-
-WARM_SCRIPT = """
-import json
-import bpb_core.simulate
-from bpb_core.bench.comparing import bench_family
-from bpb_core.bench.sim import time_simulate
-from bpb_core.registry import make_registry
-from bpb_tasks.simulators.analytic import kernel_roots
-
-calls, builds = [], []  # each simulate_lines call: its file count; the call each build was in
-lines, note = bpb_core.simulate.simulate_lines, kernel_roots.note_compiling
-
-def counted_lines(files, **kwargs):
-    calls.append(len(files))
-    return lines(files, **kwargs)
-
-def counted_note(*args, **kwargs):
-    builds.append(len(calls) - 1)
-    return note(*args, **kwargs)
-
-bpb_core.simulate.simulate_lines, kernel_roots.note_compiling = counted_lines, counted_note
-registry = make_registry()
-time_simulate(bench_family(registry, "billiards"), "analytic", 300, registry=registry,
-              workers=(1,))
-print(json.dumps({"calls": calls, "builds_in": sorted(set(builds))}))
-"""
-
-
-@pytest.mark.slow
-def test_a_cold_compile_cache_is_not_counted_in_the_simulate_time(tmp_path: Path) -> None:
-    """The warm-up simulated one file, which takes the ordinary path (the compiled batch path
-    is for 256 scenes or more), so the kernel was built (20-60 s on a cold cache) or loaded
-    inside the first timed round; the warm-up now takes the timed rounds' input."""
-    seen = on_a_cold_cache(WARM_SCRIPT, tmp_path)
-    assert seen["calls"] == [300, 300, 300, 300]  # the untimed one, then three timed rounds
-    assert seen["builds_in"] == [0]  # every build in the untimed first one
