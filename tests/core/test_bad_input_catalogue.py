@@ -4,13 +4,11 @@ line naming the option or the path at fault, and nothing is started or written."
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-BPB = str(Path(sys.executable).with_name("bpb"))
+from support.inprocess import bpb
 
 # (command line, text the one line must hold); {tmp} is a fresh folder, {file} a plain file in
 # it, {scene} a valid scene file, {data} the small runner dataset, {most} the most worker
@@ -53,7 +51,7 @@ CATALOGUE = [
 
 @pytest.mark.parametrize(("command", "expected"), CATALOGUE, ids=[c for c, _ in CATALOGUE])
 def test_bad_option_is_one_line_exit_2(
-    command: str, expected: str, tmp_path: Path, dataset: Path
+    command: str, expected: str, tmp_path: Path, dataset: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
     (tmp_path / "file").write_text("not a folder\n")
     names = {"tmp": str(tmp_path), "file": str(tmp_path / "file"), "data": str(dataset)}
@@ -62,7 +60,7 @@ def test_bad_option_is_one_line_exit_2(
     names.update(most=str(most), over=str(most + 1))
     args = [part.format(**names) for part in command.split()]
     before = sorted(p.name for p in tmp_path.iterdir())
-    done = subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+    done = bpb(capfd, *args)
     assert done.returncode == 2, done.stderr
     assert done.stdout == ""  # refused before any work, no table or scene line
     line = done.stderr.strip()
@@ -70,11 +68,10 @@ def test_bad_option_is_one_line_exit_2(
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing started
 
 
-def test_run_file_numbers_must_be_finite(tmp_path: Path) -> None:
+def test_run_file_numbers_must_be_finite(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
     config = tmp_path / "paper.toml"
     config.write_text('[[adapter]]\nspec = "baseline:stasis"\ntimeout = inf\n')
-    args = [BPB, "run", "--config", str(config), "--dry-run", "--out", str(tmp_path / "o")]
-    done = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    done = bpb(capfd, "run", "--config", str(config), "--dry-run", "--out", str(tmp_path / "o"))
     assert done.returncode == 2
     assert done.stderr.strip().count("\n") == 0
     assert "timeout: must be a positive finite number, got inf" in done.stderr
@@ -85,7 +82,7 @@ def test_run_file_numbers_must_be_finite(tmp_path: Path) -> None:
     ["simulate {data}", "run --data {data} --adapter baseline:stasis --out {tmp}/runs"],
 )
 def test_a_scene_folder_symlink_loop_is_named_not_an_internal_error(
-    command: str, tmp_path: Path, dataset: Path
+    command: str, tmp_path: Path, dataset: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
     import shutil
 
@@ -93,7 +90,7 @@ def test_a_scene_folder_symlink_loop_is_named_not_an_internal_error(
     (data / "scene_0007").symlink_to("scene_0007")  # a link to itself: opening it loops
     names = {"tmp": str(tmp_path), "data": str(data.parent)}
     args = [part.format(**names) for part in command.split()]
-    done = subprocess.run([BPB, *args], capture_output=True, text=True, timeout=120)
+    done = bpb(capfd, *args)
     assert done.returncode == 2, done.stderr
     assert done.stderr.strip() == (
         f"error: {data / 'scene_0007'}: cannot open: Too many levels of symbolic links"

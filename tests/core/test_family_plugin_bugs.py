@@ -17,7 +17,9 @@ load_config() and simulator_name() unchecked."""
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +36,7 @@ from bpb_core.results import load_results
 from bpb_core.runner import RunOptions, run_eval
 from bpb_core.simulate import simulate_lines, simulate_paths
 from bpb_core.web.viewer import Viewer
+from support.inprocess import Done, bpb
 
 ORIGIN = "plugin 'flawed' (flawed_family) from bpb-flawed 1.2"
 FAMILY = "scene family 'flawed'"
@@ -48,6 +51,13 @@ PICTURE_FLAWS = [
     ("picture_raise", "picture() raised RuntimeError: picture exploded"),
     ("picture_type", "picture() returned bytes; expected bpb_core.ScenePicture"),
 ]
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 def _registry() -> Registry:

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
 from bpb_core.partial import partial_path
+from support.inprocess import bpb
 
 HOLD = (
     "import sys, pathlib\n"
@@ -43,7 +44,7 @@ def test_a_second_command_on_one_out_is_refused_and_the_first_s_work_kept(
     command: str,
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    capfd: pytest.CaptureFixture[str],
 ) -> None:
     # Each command emptied the one hidden partial folder on start: a second command on the
     # same --out deleted what the first was writing (and both then wrote into one folder).
@@ -52,8 +53,8 @@ def test_a_second_command_on_one_out_is_refused_and_the_first_s_work_kept(
         "generate": ["generate", "--out", str(out), "--per-horizon", "1", "--no-images"],
         "export": ["export", str(small_dataset), "--out", str(out)],
     }[command]
-    with _held(out):
-        second = run_bpb(*args)
+    with _held(out):  # a process of its own
+        second = bpb(capfd, *args)
         theirs = (partial_path(out) / "theirs.txt").read_text()
     assert second.returncode == 2, second.stderr
     assert second.stderr.strip().splitlines()[-1] == (
@@ -62,6 +63,6 @@ def test_a_second_command_on_one_out_is_refused_and_the_first_s_work_kept(
     )
     assert theirs == "being written" and not out.exists()
     # the holder is gone (as if interrupted): its leftover folder is emptied and reused
-    done = run_bpb(*args)
+    done = bpb(capfd, *args)
     assert done.returncode == 0, done.stderr
     assert not partial_path(out).exists() and not (out / "theirs.txt").exists()

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +16,7 @@ from bpb_core import AdapterInfo, hookimpl, lazy, make_registry
 from bpb_core.errors import PluginBug, PluginError, UnknownName
 from bpb_core.model_calls import Message, ModelRequest, TextPart
 from bpb_core.registry import PluginSource, PluginWarning
+from support.inprocess import Done, bpb
 
 GOOD_PLUGIN = """
 from bpb_core import AdapterInfo, hookimpl, lazy
@@ -39,6 +42,13 @@ class Shout:
 def make(model, options):
     return Shout(model)
 """
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 def test_installed_plugin_is_listed_with_distribution_and_version(

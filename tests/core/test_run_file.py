@@ -3,9 +3,9 @@ line, and a resume with other model arguments refused."""
 
 from __future__ import annotations
 
+import functools
 import json
 import re
-import subprocess
 from collections.abc import Callable
 from pathlib import Path
 
@@ -15,8 +15,9 @@ from hypothesis import given, strategies as st
 from bpb_core.cli.run_file import model_args, read_run_file
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
+from support.inprocess import Done, bpb
 
-RunBpb = Callable[..., subprocess.CompletedProcess[str]]
+RunBpb = Callable[..., Done]
 GOOD = """
 [defaults]
 timeout = 300
@@ -35,6 +36,13 @@ label = "budget"
 args = {thinking = {type = "enabled", budget_tokens = 8000}}
 price = {input = 1e-6, output = 2e-6, cache_read = 1e-7}
 """
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> RunBpb:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 def test_run_file_gives_each_adapter_its_options(tmp_path: Path) -> None:

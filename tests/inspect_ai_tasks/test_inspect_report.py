@@ -3,6 +3,7 @@ compares a model run with ``inspect eval bpb/...`` and one run with ``bpb run``.
 
 from __future__ import annotations
 
+import functools
 import subprocess
 from collections.abc import Callable
 from pathlib import Path
@@ -13,7 +14,15 @@ from inspect_ai.dataset import Sample
 from inspect_ai.scorer import match
 
 from bpb_core import RunOptions, leaderboard, load_results, run_eval
+from support.inprocess import Done, bpb
 from support.inspect_models import ExampleAdapter
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 @pytest.fixture
@@ -50,7 +59,7 @@ def test_inspect_logs_score_like_the_same_replies_in_bpb(
 def test_bpb_report_on_logs_and_a_foreign_log(
     logs: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     done = run_bpb("report", str(logs), "--out", str(tmp_path / "report"))
     assert done.returncode == 0, done.stderr
@@ -138,7 +147,6 @@ def test_each_new_log_replaces_the_cache_folder_unless_another_process_holds_it(
     the logs' state), so evaluations in a row accumulated them. A newer state now replaces the
     older ones, except a folder another process still reads (bpb view, say): it stays until that
     process lets go, and goes at the next reading."""
-    import subprocess
     import sys
 
     import support.inspect_models  # noqa: F401 (registers bpbtest/example)

@@ -3,8 +3,10 @@ and ``--max-cost`` refuses adapters it cannot price."""
 
 from __future__ import annotations
 
+import functools
 import json
 import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -12,9 +14,18 @@ import pytest
 
 from bpb_adapters.litellm_adapter.estimate import image_tokens
 from support.fake_openai import fake_server
+from support.inprocess import Done, bpb
 from support.runner_scenes import png_bytes
 
-RunBpb = Callable[..., subprocess.CompletedProcess[str]]
+RunBpb = Callable[..., Done]
+BPB = str(Path(sys.executable).with_name("bpb"))
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> RunBpb:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 def test_image_rules_per_provider() -> None:
@@ -71,7 +82,10 @@ def test_max_cost_refuses_unpriced_adapters_unless_priced_or_allowed(
         assert allowed.returncode == 0, allowed.stderr
         prices = tmp_path / "prices.json"
         prices.write_text(json.dumps({"qwen3.6-plus": {"input": 1e-6, "output": 4e-6}}))
-        priced = run_bpb(*base, "--out", str(tmp_path / "c"), "--prices", str(prices))
+        # a process of its own: litellm keeps one price map per process, and this one's tests
+        # must see qwen3.6-plus unpriced
+        command = [BPB, *base, "--out", str(tmp_path / "c"), "--prices", str(prices)]
+        priced = subprocess.run(command, capture_output=True, text=True, timeout=120)
         assert priced.returncode == 0, priced.stderr
     manifest = json.loads(next((tmp_path / "c").rglob("run.json")).read_text())
     assert manifest["last_session"]["cost"] == pytest.approx(2 * (1000 * 1e-6 + 50 * 4e-6))

@@ -3,8 +3,8 @@
 
 from __future__ import annotations
 
+import functools
 import json
-import subprocess
 import tomllib
 from collections.abc import Callable
 from pathlib import Path
@@ -15,14 +15,22 @@ import pytest
 from bpb_adapters.litellm_adapter.aliases import PAPER_MODELS, resolve
 from bpb_core.run_folder import iter_answers, read_attempts, read_manifest
 from support.fake_openai import fake_server
+from support.inprocess import Done, bpb
 from support.paths import REPO
 
-RunBpb = Callable[..., subprocess.CompletedProcess[str]]
+RunBpb = Callable[..., Done]
 KEYS = ("OPENAI", "ANTHROPIC", "GEMINI", "DASHSCOPE", "MOONSHOT", "VOLCENGINE")
 # What litellm 1.106.2 does with temperature 0 for these models (the issue's finding).
 DROPS_TEMPERATURE = ("gpt-5.2-pro", "gpt-5.4-pro", "gpt-5.5", "gpt-5.5-pro", "claude-opus-4.7",
                      "kimi-k2.5", "gpt-5.4 [effort=high]")  # fmt: skip
 PATHS = {"anthropic": "", "gemini": "/v1beta"}  # every other provider: /v1
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> RunBpb:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 def _toml(value: Any) -> str:

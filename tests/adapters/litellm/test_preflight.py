@@ -4,6 +4,7 @@ retried."""
 
 from __future__ import annotations
 
+import functools
 import subprocess
 from collections.abc import Callable
 from pathlib import Path
@@ -14,8 +15,9 @@ from bpb_adapters.litellm_adapter.adapter import _import_litellm
 from bpb_adapters.litellm_adapter.errors import map_error
 from bpb_core.errors import RequestRejected, RetryableModelError
 from support.fake_openai import fake_server
+from support.inprocess import Done, bpb
 
-RunBpb = Callable[..., subprocess.CompletedProcess[str]]
+RunBpb = Callable[..., subprocess.CompletedProcess[str] | Done]
 
 
 def _run(run_bpb: RunBpb, dataset: Path, out: Path, api_base: str, *adapters: str) -> str:
@@ -30,22 +32,25 @@ def _run(run_bpb: RunBpb, dataset: Path, out: Path, api_base: str, *adapters: st
 @pytest.mark.slow
 def test_missing_key_unknown_provider_and_missing_module_send_nothing(
     run_bpb: RunBpb,
+    capfd: pytest.CaptureFixture[str],
     dataset: Path,
     tmp_path: Path,
     site: Path,
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    here = functools.partial(bpb, capfd)  # in this process; the third, in a fresh one (mcp)
     monkeypatch.delenv("OPENAI_API_KEY", raising=False)
     monkeypatch.setenv("ANTHROPIC_API_KEY", "sk-ant-bpbtest-0123456789abcdef")
     with fake_server(dataset) as server:
         # The first adapter is fine: nothing of it may be sent either.
-        line = _run(run_bpb, dataset, tmp_path / "a", server.api_base,
+        line = _run(here, dataset, tmp_path / "a", server.api_base,
                     "litellm:claude-opus-4.7", "litellm:gpt-5.4-pro")  # fmt: skip
         assert "OPENAI_API_KEY" in line and "gpt-5.4-pro" in line
-        line = _run(run_bpb, dataset, tmp_path / "b", server.api_base, "litellm:doubao-seed-9")
+        line = _run(here, dataset, tmp_path / "b", server.api_base, "litellm:doubao-seed-9")
         assert "no provider" in line and "doubao-seed-9" in line
         monkeypatch.setenv("OPENAI_API_KEY", "sk-bpbtest-0123456789abcdefSECRET")
         (site / "mcp").mkdir(parents=True)  # shadows the installed mcp: as if it were missing
+        # (in a process of its own: this one may have imported mcp already)
         (site / "mcp" / "__init__.py").write_text(
             "raise ModuleNotFoundError(\"No module named 'mcp'\", name='mcp')\n"
         )

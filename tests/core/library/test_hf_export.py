@@ -3,11 +3,11 @@ the same bytes for the same dataset, and a ``bpb run --data`` on it that scores 
 
 from __future__ import annotations
 
+import functools
 import io
 import json
 import re
 import shutil
-import subprocess
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,8 +20,16 @@ from bpb_core import RunOptions, TextPart, build_messages, load_dataset, make_re
 from bpb_core.dataset import generate_dataset
 from bpb_core.errors import BadInput
 from bpb_core.library.hf_export import export_hf
+from support.inprocess import Done, bpb
 
 SCORE_COLUMNS = ["task", "scene_id", "unit", "truth", "pred", "correct"]
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 @pytest.fixture(scope="module")
@@ -111,7 +119,7 @@ def test_cli_export_run_on_it_and_bad_out(
     small_dataset: Path,
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     monkeypatch.setenv("BPB_CACHE_DIR", str(tmp_path / "cache"))
     out = tmp_path / "hf"
@@ -188,7 +196,7 @@ def test_an_edited_shard_row_is_named_not_an_internal_error(
 def test_a_failed_export_leaves_the_earlier_one_as_it_was(
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     out = tmp_path / "hf"
     assert run_bpb("export", str(small_dataset), "--out", str(out)).returncode == 0
@@ -226,7 +234,7 @@ def test_a_failed_export_leaves_the_earlier_one_as_it_was(
 def test_an_out_that_cannot_be_a_folder_is_one_line(
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
     out: str,
     message: str,
 ) -> None:
@@ -243,7 +251,7 @@ def test_an_out_that_cannot_be_a_folder_is_one_line(
 def test_a_missing_image_is_named_and_a_dataset_without_images_exports(
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     broken = tmp_path / "broken"
     shutil.copytree(small_dataset, broken)
@@ -314,7 +322,7 @@ def _cell(shard: Path, column: str, row: int) -> str:
 def test_a_dataset_without_its_checksums_is_not_exported(
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     broken = Path(shutil.copytree(small_dataset, tmp_path / "broken"))
     (broken / "checksums.sha256").unlink()
@@ -330,7 +338,7 @@ def test_a_dataset_without_its_checksums_is_not_exported(
 def test_scene_folders_unlike_the_index_are_not_exported(
     small_dataset: Path,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     broken = Path(shutil.copytree(small_dataset, tmp_path / "broken"))
     index = broken / "index.csv"
@@ -355,7 +363,7 @@ def test_the_card_names_the_simulator_that_made_the_truth(
     simulator: str,
     said: str,
     tmp_path: Path,
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]],
+    run_bpb: Callable[..., Done],
 ) -> None:
     """The card said "exact physics ground truth" whatever made it, a fixed-step pymunk run
     too; it now names the simulator the dataset's config names, with its own summary."""

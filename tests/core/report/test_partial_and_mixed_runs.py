@@ -4,9 +4,9 @@ never one leaderboard over two datasets."""
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -17,16 +17,26 @@ from bpb_core.registry import make_registry
 from bpb_core.report.build import Completeness, build_report
 from bpb_core.report.figures import unasked
 from bpb_core.report.sections import headline_cells
+from support.inprocess import Done, bpb
 from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run
 
 
-def _report(
-    runs: Path, *args: str, env: dict[str, str] | None = None, check: bool = False
-) -> subprocess.CompletedProcess[str]:
-    """``bpb report RUNS ARGS`` in a subprocess, its output captured as text."""
-    bpb = str(Path(sys.executable).with_name("bpb"))
-    command = [bpb, "report", str(runs), *args]
-    return subprocess.run(command, capture_output=True, text=True, env=env, check=check)
+@pytest.fixture
+def bpb_report(
+    capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> Callable[..., Done]:
+    """``bpb report RUNS ARGS`` in this process, ``columns`` wide when given; ``check``: it
+    must exit 0."""
+
+    def report(runs: Path, *args: str, columns: str | None = None, check: bool = False) -> Done:
+        with monkeypatch.context() as environment:
+            if columns is not None:
+                environment.setenv("COLUMNS", columns)
+            done = bpb(capfd, "report", str(runs), *args)
+        assert not check or done.returncode == 0, done.stderr
+        return done
+
+    return report
 
 
 def _stopped_run(root: Path, data: Path) -> Path:
@@ -222,14 +232,14 @@ def test_a_report_without_baselines_says_the_floors_are_missing(tmp_path: Path) 
     [("scene_id", "h1_0000"), ("task", "q1"), ("epoch", 3), ("adapter", "baseline:stasis")],
 )
 def test_an_answer_file_copied_in_from_elsewhere_is_refused_not_scored(
-    runs: Path, field: str, value: object
+    bpb_report: Callable[..., Done], runs: Path, field: str, value: object
 ) -> None:
     # An answer file copied from another scene (or task, epoch, run) was scored against the
     # truth of the scene whose folder it sat in: the oracle read 87.5% on q3, without a word.
     target = runs / "baseline_oracle" / "h1" / "scene_0001" / "q3.json"
     record = json.loads(target.read_text())
     target.write_text(json.dumps(record | {field: value}))
-    done = _report(runs, "--json")
+    done = bpb_report(runs, "--json")
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.strip().splitlines() == [
         f"error: {target}: {field} is {value!r}, but a file here holds the answer of h1_0001, "
@@ -238,6 +248,7 @@ def test_an_answer_file_copied_in_from_elsewhere_is_refused_not_scored(
 
 
 def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
+    bpb_report: Callable[..., Done],
     tmp_path: Path,
 ) -> None:
     # A run on the scene's state and one without chain of thought were ranked beside image runs
@@ -257,12 +268,11 @@ def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
         "state); chain of thought on q2: off (no_cot), on (image, image_too, state)): a gap "
         "between them may come from the conditions, not the models; rank only runs asked alike."
     )
-    env = {**os.environ, "COLUMNS": "1000"}
     out = str(tmp_path / "out")
-    shown = _report(runs, "--out", out, "--bootstrap", "10", env=env, check=True).stdout
+    shown = bpb_report(runs, "--out", out, "--bootstrap", "10", columns="1000", check=True).stdout
     assert expected in shown.splitlines()
     assert expected in (tmp_path / "out" / "report.html").read_text()
-    summary = json.loads(_report(runs, "--json", check=True).stdout)
+    summary = json.loads(bpb_report(runs, "--json", check=True).stdout)
     assert summary["different_conditions"] == expected
     write_run(tmp_path / "alike" / "a", "litellm:m", data, answers)
     write_run(tmp_path / "alike" / "b", "litellm:n", data, answers)
@@ -270,7 +280,9 @@ def test_runs_asked_with_another_input_mode_or_chain_of_thought_are_flagged(
     assert alike["different_conditions"] is None
 
 
-def test_a_run_whose_answers_could_not_be_parsed_is_said_so(tmp_path: Path) -> None:
+def test_a_run_whose_answers_could_not_be_parsed_is_said_so(
+    bpb_report: Callable[..., Done], tmp_path: Path
+) -> None:
     # A run whose every answer was a parse error read complete 100%, 0.0% on every task with a
     # 0.0%-0.0% interval, below stasis, and nothing said the scores came from unreadable replies.
     data = write_dataset(tmp_path / "data")
@@ -284,28 +296,31 @@ def test_a_run_whose_answers_could_not_be_parsed_is_said_so(tmp_path: Path) -> N
         "unread: answers that could not be parsed (q1 4 of 4, q2 4 of 4, q3 4 of 4) are scored "
         "wrong: those scores say how the run answered, not what it knows; see the failure gallery"
     )
-    env = {**os.environ, "COLUMNS": "1000"}
     out = str(tmp_path / "out")
-    shown = _report(runs, "--out", out, "--bootstrap", "10", env=env, check=True).stdout
+    shown = bpb_report(runs, "--out", out, "--bootstrap", "10", columns="1000", check=True).stdout
     assert line in shown.splitlines() and "one_bad:" not in shown
     assert line in (tmp_path / "out" / "report.html").read_text()
-    summary = json.loads(_report(runs, "--json", check=True).stdout)
+    summary = json.loads(bpb_report(runs, "--json", check=True).stdout)
     assert summary["unparsed"] == {"unread": line.removeprefix("unread: ")}
 
 
-def test_an_ok_answer_file_without_an_answer_is_refused_not_scored_wrong(runs: Path) -> None:
+def test_an_ok_answer_file_without_an_answer_is_refused_not_scored_wrong(
+    bpb_report: Callable[..., Done], runs: Path
+) -> None:
     # A file saying ok with answer null (bpb writes an ok with its parsed answer) was scored
     # wrong as if answered: the oracle read 0% on q1 at complete 100%, with no word.
     target = runs / "baseline_oracle" / "h2" / "scene_0001" / "q1.json"
     target.write_text(json.dumps(json.loads(target.read_text()) | {"answer": None}))
-    done = _report(runs, "--json")
+    done = bpb_report(runs, "--json")
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.strip().splitlines() == [
         f"error: {target}: status is 'ok' but answer is null: an ok answer file holds one"
     ]
 
 
-def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: Path) -> None:
+def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(
+    bpb_report: Callable[..., Done], runs: Path
+) -> None:
     # Answer files the run's selection does not ask for (a scene outside its horizons, a task
     # it was not asked, an epoch past its --epochs: put there by hand or left by another run)
     # were left out of every figure without a word.
@@ -316,7 +331,7 @@ def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: P
     (run / "h1" / "scene_0001" / "firsthit.json").write_text(json.dumps(record | {"task": "x"}))
     (run / "h9" / "scene_0000").mkdir(parents=True)
     (run / "h9" / "scene_0000" / "q3.json").write_text(source.read_text())
-    done = _report(runs, "--json", check=True)
+    done = bpb_report(runs, "--json", check=True)
     assert done.stderr.strip().splitlines() == [
         f"warning: {run}: 3 answer files outside the run's selection (the scenes, tasks and "
         f"epochs of its run.json), e.g. {source.parent / 'firsthit.json'}: left out of the report"
@@ -329,7 +344,7 @@ def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: P
         "h9/scene_0000/q3.json",
     ):
         (run / stray).unlink()
-    assert _report(runs, "--json", check=True).stderr == ""
+    assert bpb_report(runs, "--json", check=True).stderr == ""
 
 
 @pytest.mark.parametrize(
@@ -341,7 +356,7 @@ def test_answer_files_outside_the_runs_selection_are_said_to_be_left_out(runs: P
     ],
 )
 def test_a_recorded_answer_with_a_wrong_typed_field_is_refused_not_scored_wrong(
-    runs: Path, task: str, edit: Any, field: str
+    bpb_report: Callable[..., Done], runs: Path, task: str, edit: Any, field: str
 ) -> None:
     # An answer file edited so a field held the wrong type (a label "yes", a string for a list)
     # was scored as the model's wrong answer: the oracle read under 100% with no word.
@@ -349,7 +364,7 @@ def test_a_recorded_answer_with_a_wrong_typed_field_is_refused_not_scored_wrong(
     record = json.loads(target.read_text())
     edit(record["answer"])
     target.write_text(json.dumps(record))
-    done = _report(runs, "--json")
+    done = bpb_report(runs, "--json")
     assert done.returncode == 2 and done.stdout == ""
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {target}: answer: {task}: {field}: ")
@@ -359,6 +374,7 @@ def test_a_recorded_answer_with_a_wrong_typed_field_is_refused_not_scored_wrong(
 
 
 def test_a_well_typed_wrong_answer_is_still_scored_wrong_and_a_parse_error_unparsed(
+    bpb_report: Callable[..., Done],
     runs: Path,
 ) -> None:
     target = runs / "baseline_oracle" / "h2" / "scene_0001" / "q2.json"
@@ -366,7 +382,7 @@ def test_a_well_typed_wrong_answer_is_still_scored_wrong_and_a_parse_error_unpar
     for label in record["answer"]["answers"]:
         label["answer"] = "F" if label["answer"] == "T" else "T"  # every wall wrong, well typed
     target.write_text(json.dumps(record))
-    summary = json.loads(_report(runs, "--json", check=True).stdout)
+    summary = json.loads(bpb_report(runs, "--json", check=True).stdout)
     board = {row["run"]: row for row in summary["leaderboard"]}
     assert board["baseline_oracle"]["q2"] == 0.75 and board["baseline_oracle"]["completeness"] == 1
     usage = {row["run"]: row for row in summary["usage"]}

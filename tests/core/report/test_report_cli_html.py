@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
 import shutil
 import subprocess
-import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
@@ -17,20 +18,23 @@ from PIL import Image
 from bpb_core.results import CALL_DTYPES, META_DTYPES
 from bpb_core.scored_units import SCORER_INPUT, SCORER_OUTPUT
 from bpb_tasks.q3.scorer import COLUMNS as Q3_COLUMNS
+from support import inprocess
+from support.inprocess import Done
 from support.web_server import chromium
 
 UNIT_DTYPES = {**META_DTYPES, **SCORER_INPUT, **Q3_COLUMNS, **SCORER_OUTPUT}
 
-BPB = str(Path(sys.executable).with_name("bpb"))
 CHROMIUM_FLAGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
 ]  # fmt: skip
 
 
-def bpb(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "COLUMNS": "160"}
-    return subprocess.run([BPB, *args], capture_output=True, text=True, env=env, timeout=120)
+@pytest.fixture
+def bpb(capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, 160 columns wide."""
+    monkeypatch.setenv("COLUMNS", "160")
+    return functools.partial(inprocess.bpb, capfd)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +43,10 @@ def report_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
     root = tmp_path_factory.mktemp("report")
     runs = write_runs(root)
-    done = bpb("report", str(runs), "--out", str(root / "out"), "--bootstrap", "200")
+    with pytest.MonkeyPatch.context() as monkeypatch, inprocess.streams() as capture:
+        monkeypatch.setenv("COLUMNS", "160")
+        args = ("report", str(runs), "--out", str(root / "out"), "--bootstrap", "200")
+        done = inprocess.bpb(capture, *args)
     assert done.returncode == 0, done.stderr
     (root / "stdout.txt").write_text(done.stdout)
     return root
@@ -54,7 +61,7 @@ def test_terminal_tables_show_the_leaderboard_with_baselines_marked(report_dir: 
     assert "87.5%" in stasis and "71.2%" in stasis  # q1 and total worked out by hand
 
 
-def test_json_summary_for_scripts(report_dir: Path) -> None:
+def test_json_summary_for_scripts(bpb: Callable[..., Done], report_dir: Path) -> None:
     done = bpb("report", str(report_dir / "runs"), "--json", "--bootstrap", "50")
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
@@ -71,7 +78,7 @@ def test_json_summary_for_scripts(report_dir: Path) -> None:
     assert stasis["baseline_stasis"]["motion_stasis"] == 1.0
 
 
-def test_bad_input_is_one_line_and_exit_2(tmp_path: Path) -> None:
+def test_bad_input_is_one_line_and_exit_2(bpb: Callable[..., Done], tmp_path: Path) -> None:
     done = bpb("report", str(tmp_path / "missing"))
     assert done.returncode == 2
     assert done.stderr.strip().count("\n") == 0 and "no such run folder" in done.stderr
@@ -143,13 +150,15 @@ def test_html_renders_charts_and_gallery_in_headless_chromium(
 
 @pytest.mark.parametrize("value", ["nan", "1.5", "-0.1", "abc"])
 def test_a_bad_completeness_threshold_is_exit_2_naming_the_option(
-    report_dir: Path, value: str
+    bpb: Callable[..., Done], report_dir: Path, value: str
 ) -> None:
     done = bpb("report", str(report_dir / "runs"), "--min-complete", value)
     assert done.returncode == 2 and "--min-complete" in done.stderr
 
 
-def test_include_incomplete_puts_the_run_back_marked(report_dir: Path) -> None:
+def test_include_incomplete_puts_the_run_back_marked(
+    bpb: Callable[..., Done], report_dir: Path
+) -> None:
     args = ("report", str(report_dir / "runs"), "--bootstrap", "20", "--json")
     board = {r["run"]: r for r in json.loads(bpb(*args).stdout)["leaderboard"]}
     assert board["litellm_model"]["total_answered"] is None
@@ -160,7 +169,9 @@ def test_include_incomplete_puts_the_run_back_marked(report_dir: Path) -> None:
     assert model["q1_answered"] == 1.0 and model["short"] == "q1, q2, q3"
 
 
-def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(tmp_path: Path) -> None:
+def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(
+    bpb: Callable[..., Done], tmp_path: Path
+) -> None:
     from support.reports_fixture import write_runs
 
     runs = write_runs(tmp_path)
@@ -183,7 +194,7 @@ def test_a_gallery_with_nothing_wrong_says_so_instead_of_no_answers(tmp_path: Pa
     ],
 )
 def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scenes(
-    tmp_path: Path, edit: dict[str, object], field: str
+    bpb: Callable[..., Done], tmp_path: Path, edit: dict[str, object], field: str
 ) -> None:
     from support.reports_fixture import write_runs
 
@@ -197,7 +208,7 @@ def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scene
 
 
 def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
-    tmp_path: Path, dataset: Path
+    bpb: Callable[..., Done], tmp_path: Path, dataset: Path
 ) -> None:
     # The counts are of scene-tasks: stasis, asked each of its 18 twice (36 calls), counts 18;
     # the warning said "scene-task calls" of these figures.
@@ -215,7 +226,7 @@ def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
     assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
 
 
-def _stasis_runs(dataset: Path, folder: Path, **runs: list[str]) -> None:
+def _stasis_runs(bpb: Callable[..., Done], dataset: Path, folder: Path, **runs: list[str]) -> None:
     """One ``baseline:stasis`` run of ``dataset`` per keyword, in ``folder/<keyword>``, with the
     keyword's extra ``bpb run`` options."""
     for name, more in runs.items():
@@ -227,33 +238,33 @@ def _stasis_runs(dataset: Path, folder: Path, **runs: list[str]) -> None:
 
 
 def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
-    tmp_path: Path, dataset: Path
+    bpb: Callable[..., Done], tmp_path: Path, dataset: Path
 ) -> None:
     # Two runs asked as many scenes but not the same ones (--scenes, --sample) were ranked with
     # no warning, while a run asked the same scenes twice (--epochs 2) was warned about as
     # asked "different numbers of scenes (12, 24 ...)".
     runs = tmp_path / "runs"
-    _stasis_runs(dataset, runs, a=["--scenes", "h1_0000"], b=["--scenes", "h1_0001"])
+    _stasis_runs(bpb, dataset, runs, a=["--scenes", "h1_0000"], b=["--scenes", "h1_0001"])
     summary = json.loads(bpb("report", str(runs / "a"), str(runs / "b"), "--json").stdout)
     assert summary["different_scenes"] == (
         "The runs were asked different scenes (3 scene-tasks each, not the same ones): "
         "their scores are means over different scenes; compare them in the paired comparisons."
     )
     again = tmp_path / "again"
-    _stasis_runs(dataset, again, once=[], twice=["--epochs", "2"])
+    _stasis_runs(bpb, dataset, again, once=[], twice=["--epochs", "2"])
     both = bpb("report", str(again / "once"), str(again / "twice"), "--json")
     assert json.loads(both.stdout)["different_scenes"] is None
 
 
 def test_a_two_epoch_run_counts_its_scene_tasks_once_and_states_its_epochs(
-    tmp_path: Path, small_dataset: Path
+    bpb: Callable[..., Done], tmp_path: Path, small_dataset: Path
 ) -> None:
     # With --epochs 2 every count keyed by scene-task came out doubled: the stable subset's
     # "stable scene-tasks" and the leaderboards' expected (documented as scene-task pairs),
     # accuracy's scenes; counts of answers (completeness cells, diagnostics) did not say that
     # they span two epochs.
     runs = tmp_path / "runs"
-    _stasis_runs(small_dataset, runs, once=[], twice=["--epochs", "2"])
+    _stasis_runs(bpb, small_dataset, runs, once=[], twice=["--epochs", "2"])
     folders = [str(runs / "once"), str(runs / "twice")]
     done = bpb("report", *folders, "--json", "--bootstrap", "20")
     once, twice = "once/baseline_stasis", "twice/baseline_stasis"
@@ -286,7 +297,7 @@ def test_a_two_epoch_run_counts_its_scene_tasks_once_and_states_its_epochs(
 
 
 def test_a_run_folder_copied_under_another_name_is_counted_once_and_said_so(
-    tmp_path: Path, dataset: Path
+    bpb: Callable[..., Done], tmp_path: Path, dataset: Path
 ) -> None:
     # A run folder copied under another name was ranked as a second run with the very same
     # scores, as if a second model agreed with the first.
@@ -309,7 +320,9 @@ def test_a_run_folder_copied_under_another_name_is_counted_once_and_said_so(
     )
 
 
-def test_a_run_given_twice_is_counted_once_and_said_so(report_dir: Path, tmp_path: Path) -> None:
+def test_a_run_given_twice_is_counted_once_and_said_so(
+    bpb: Callable[..., Done], report_dir: Path, tmp_path: Path
+) -> None:
     # Given under other paths (or inside a folder also given), a run's calls, tokens, cost and
     # units were summed two or three times and its bootstrap intervals narrowed.
     runs = report_dir / "runs"
@@ -348,7 +361,9 @@ def test_the_reports_gallery_names_tasks_by_their_titles(report_dir: Path) -> No
     assert not re.search(r"<span>Q\d wrong:", page)
 
 
-def test_gallery_ties_follow_scene_ids_with_numbers_read_as_numbers(tmp_path: Path) -> None:
+def test_gallery_ties_follow_scene_ids_with_numbers_read_as_numbers(
+    bpb: Callable[..., Done], tmp_path: Path
+) -> None:
     """Equal scores keep the scenes in id order, numbers compared as numbers: h3_9999 before
     h3_10000, h3 before h10 (sorted as text, h10_0000 came first and h3_10000 before
     h3_9999)."""

@@ -9,13 +9,18 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from bpb_core.registry import Registry
 from bpb_core.web.viewer import Viewer
+from support import inprocess
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 
 
 def bpb(*args: str) -> subprocess.CompletedProcess[str]:
+    """``bpb ARGS`` as a process: its standard output encodes strictly (pytest's capture
+    replaces what it cannot encode, and would hide a lone surrogate printed)."""
     env = {**os.environ, "COLUMNS": "160"}
     return subprocess.run([BPB, *args], capture_output=True, text=True, env=env, timeout=180)
 
@@ -41,13 +46,18 @@ def test_lone_surrogates_in_run_json_and_a_folder_name_are_shown_as_u_fffd(
     assert "baseline_stasis\ufffd" in labels
 
 
-def test_dollar_signs_in_run_names_and_titles_are_drawn_as_text(runs: Path, tmp_path: Path) -> None:
+def test_dollar_signs_in_run_names_and_titles_are_drawn_as_text(
+    runs: Path, tmp_path: Path, capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     import pandas as pd
 
     from bpb_core.report.charts import leaderboards
 
     os.rename(runs / "litellm_model", runs / "price $\\frac{$ run")  # matplotlib math: invalid
-    done = bpb("report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10")
+    monkeypatch.setenv("COLUMNS", "160")
+    done = inprocess.bpb(
+        capfd, "report", str(runs), "--out", str(tmp_path / "out"), "--bootstrap", "10"
+    )
     assert done.returncode == 0, done.stderr
     assert "price $\\frac{$ run" in (tmp_path / "out" / "report.html").read_text()
     board = pd.DataFrame({"run": ["a$", "b$^{$"], "baseline": [False, True], "m": [0.5, 0.2]})

@@ -11,7 +11,9 @@ one was added into the dry run's figures. A ``priced`` that raised (read by --ma
 
 from __future__ import annotations
 
+import functools
 import types
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +22,7 @@ import pytest
 from bpb_core.errors import PluginBug
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.runner import RunOptions, run_eval
+from support.inprocess import Done, bpb
 
 ORIGIN = "plugin 'careless' (careless_hooks) from bpb-careless 0.3"
 ADAPTER = "adapter 'careless:x'"
@@ -82,6 +85,13 @@ FLAWS = [
     ("priced_raise", ["--max-cost", "1"], "priced raised RuntimeError: no price list"),
     ("priced_type", ["--max-cost", "1"], "priced is 'yes'; expected a bool"),
 ]
+
+
+@pytest.fixture
+def run_bpb(site: Path, capfd: pytest.CaptureFixture[str]) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, ``site`` first on ``sys.path`` (conftest's ``run_bpb``
+    runs the console script)."""
+    return functools.partial(bpb, capfd, site=site)
 
 
 @pytest.mark.parametrize(("flaw", "extra", "said"), FLAWS)

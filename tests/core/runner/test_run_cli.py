@@ -1,7 +1,11 @@
-"""``bpb run`` through the real entry point: resume after kill -9, exit codes, dry run."""
+"""``bpb run`` through the real entry point: resume after kill -9, exit codes, dry run.
+
+The commands run in this process (:mod:`support.inprocess`), but for the runs stopped by a
+signal, which are processes of their own."""
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
@@ -9,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -18,6 +23,7 @@ from bpb_core.registry import Registry
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import run_eval
 from support.fake_openai import fake_server
+from support.inprocess import Done, bpb
 
 BPB = str(Path(sys.executable).parent / "bpb")
 KEY = "sk-bpbtest-0123456789abcdefSECRET"
@@ -27,8 +33,12 @@ def _env() -> dict[str, str]:
     return {**os.environ, "OPENAI_API_KEY": KEY, "COLUMNS": "200"}
 
 
-def _bpb(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([BPB, *args], capture_output=True, text=True, env=_env(), timeout=120)
+@pytest.fixture
+def cli(capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Done]:
+    """``bpb ARGS`` in this process, with the environment of :func:`_env`."""
+    monkeypatch.setenv("OPENAI_API_KEY", KEY)
+    monkeypatch.setenv("COLUMNS", "200")
+    return functools.partial(bpb, capfd)
 
 
 def _complete(run_dir: Path) -> set[str]:
@@ -36,7 +46,9 @@ def _complete(run_dir: Path) -> set[str]:
 
 
 @pytest.mark.slow
-def test_kill_9_then_same_command_never_resends_completed(dataset: Path, tmp_path: Path) -> None:
+def test_kill_9_then_same_command_never_resends_completed(
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
+) -> None:
     with fake_server(dataset, {"latency": 0.3}, tmp_path) as server:
         args = [
             "run",
@@ -65,7 +77,7 @@ def test_kill_9_then_same_command_never_resends_completed(dataset: Path, tmp_pat
         done_at_kill = _complete(run_dir)
         counts_at_kill = server.counts()
         assert 5 <= len(done_at_kill) < 18
-        finished = _bpb(*args)
+        finished = cli(*args)
         assert finished.returncode == 0, finished.stderr
         counts = server.counts()
         assert len(_complete(run_dir)) == 18
@@ -82,7 +94,7 @@ def test_kill_9_then_same_command_never_resends_completed(dataset: Path, tmp_pat
 
 @pytest.mark.slow
 def test_sigterm_with_a_low_rpm_stops_once_the_calls_in_flight_finish(
-    dataset: Path, tmp_path: Path
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
 ) -> None:
     # Calls queued for a rate-limit slot used to sleep until their slot before noticing the
     # stop: at --rpm 12 the 16 pairs left took 80 s to leave, at --rpm 6 the tester's ~160 s.
@@ -112,29 +124,33 @@ def test_sigterm_with_a_low_rpm_stops_once_the_calls_in_flight_finish(
         asked = server.counts()
         assert len(asked) == 2 and set(asked) == _complete(run_dir)  # the one in flight is kept
         assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
-        resumed = _bpb(*args)  # the same command (no --rpm, to be quick) sends the rest once
+        resumed = cli(*args)  # the same command (no --rpm, to be quick) sends the rest once
         assert resumed.returncode == 0, resumed.stderr
         counts = server.counts()
         assert len(counts) == 18 and set(counts.values()) == {1}
         assert len(_complete(run_dir)) == 18
 
 
-def test_unknown_adapter_or_task_is_one_line_exit_2(dataset: Path, tmp_path: Path) -> None:
-    bad = _bpb("run", "--data", str(dataset), "--adapter", "nope:x", "--out", str(tmp_path))
+def test_unknown_adapter_or_task_is_one_line_exit_2(
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
+) -> None:
+    bad = cli("run", "--data", str(dataset), "--adapter", "nope:x", "--out", str(tmp_path))
     assert bad.returncode == 2
     assert bad.stderr.strip().count("\n") == 0 and "baseline" in bad.stderr
     assert "litellm" in bad.stderr
-    bad = _bpb("run", "--data", str(dataset), "--tasks", "q1,q9", "--out", str(tmp_path))
+    bad = cli("run", "--data", str(dataset), "--tasks", "q1,q9", "--out", str(tmp_path))
     assert bad.returncode == 2 and "q9" in bad.stderr and "q3" in bad.stderr
-    bad = _bpb(
+    bad = cli(
         "run", "--data", str(dataset), "--adapter", "baseline:psychic", "--out", str(tmp_path)
     )
     assert bad.returncode == 2 and "baseline:oracle" in bad.stderr
 
 
-def test_auth_error_exits_2_with_a_clear_message(dataset: Path, tmp_path: Path) -> None:
+def test_auth_error_exits_2_with_a_clear_message(
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
+) -> None:
     with fake_server(dataset, {"faults": {"*/q1": ["401"] * 20}}, tmp_path) as server:
-        done = _bpb(
+        done = cli(
             "run",
             "--data",
             str(dataset),
@@ -151,9 +167,9 @@ def test_auth_error_exits_2_with_a_clear_message(dataset: Path, tmp_path: Path) 
     assert "authentication failed" in done.stderr and KEY not in done.stderr + done.stdout
 
 
-def test_dry_run_sends_nothing(dataset: Path, tmp_path: Path) -> None:
+def test_dry_run_sends_nothing(cli: Callable[..., Done], dataset: Path, tmp_path: Path) -> None:
     with fake_server(dataset) as server:
-        done = _bpb(
+        done = cli(
             "run",
             "--data",
             str(dataset),
@@ -176,15 +192,17 @@ def test_dry_run_sends_nothing(dataset: Path, tmp_path: Path) -> None:
     assert not (tmp_path / "litellm_openai_fake-model" / "attempts.jsonl").exists()
 
 
-def test_default_run_is_the_baseline_leaderboard(dataset: Path, tmp_path: Path) -> None:
-    done = _bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--cot", "q1")
+def test_default_run_is_the_baseline_leaderboard(
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
+) -> None:
+    done = cli("run", "--data", str(dataset), "--out", str(tmp_path), "--cot", "q1")
     assert done.returncode == 0, done.stderr
     for name in ("stasis", "straight", "random", "oracle"):
         assert f"baseline:{name}" in done.stdout
         assert (tmp_path / f"baseline_{name}" / "scores.csv").exists()
     manifest = json.loads((tmp_path / "baseline_oracle" / "run.json").read_text())
     assert manifest["options"]["cot"] == {"q1": True, "q2": False, "q3": False}
-    changed = _bpb("run", "--data", str(dataset), "--out", str(tmp_path), "--input-mode", "state")
+    changed = cli("run", "--data", str(dataset), "--out", str(tmp_path), "--input-mode", "state")
     assert changed.returncode == 2 and "input_mode" in changed.stderr
 
 
@@ -198,12 +216,12 @@ def _gone_simulator(dataset: Path, tmp_path: Path) -> Path:
 
 
 def test_a_dataset_naming_an_uninstalled_simulator_refuses_the_oracle_only(
-    dataset: Path, tmp_path: Path
+    cli: Callable[..., Done], dataset: Path, tmp_path: Path
 ) -> None:
     # The oracle run started anyway (its folder made, the stasis run before it done) and failed
     # at its first call, on the missing simulator.
     data, out = _gone_simulator(dataset, tmp_path), tmp_path / "out"
-    refused = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis",
+    refused = cli("run", "--data", str(data), "--adapter", "baseline:stasis",
                    "--adapter", "baseline:oracle", "--out", str(out))  # fmt: skip
     assert refused.returncode == 2, refused.stderr
     assert refused.stderr.strip().splitlines() == [
@@ -211,9 +229,9 @@ def test_a_dataset_naming_an_uninstalled_simulator_refuses_the_oracle_only(
         "installed (installed: analytic, pymunk); baseline:oracle runs it"
     ]
     assert not out.exists()  # before any adapter's first call
-    stasis = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out))
+    stasis = cli("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out))
     assert stasis.returncode == 0, stasis.stderr  # it needs no simulator
-    default = _bpb("run", "--data", str(data), "--out", str(tmp_path / "default"))
+    default = cli("run", "--data", str(data), "--out", str(tmp_path / "default"))
     assert default.returncode == 0, default.stderr
     assert "note: left out: " in default.stderr and "baseline:oracle runs it" in default.stderr
     assert (tmp_path / "default" / "baseline_stasis" / "scores.csv").exists()
@@ -221,12 +239,12 @@ def test_a_dataset_naming_an_uninstalled_simulator_refuses_the_oracle_only(
 
 
 def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the_run_folder(
-    tmp_path: Path, registry: Registry
+    cli: Callable[..., Done], tmp_path: Path, registry: Registry
 ) -> None:
     # bpb run made the run folder (run.json, attempts.jsonl, run.lock), then failed on the
     # first scene's "init.png: missing".
     data, out = tmp_path / "bare", tmp_path / "out"
-    made = _bpb("generate", "--out", str(data), "--per-horizon", "2", "--horizons", "1",
+    made = cli("generate", "--out", str(data), "--per-horizon", "2", "--horizons", "1",
                 "--no-images", "--workers", "1")  # fmt: skip
     assert made.returncode == 0, made.stderr
     line = (
@@ -234,7 +252,7 @@ def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the
         "images to show; use --input-mode state"
     )
     for extra in ([], ["--dry-run"], ["--input-mode", "image+state"]):
-        refused = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis",
+        refused = cli("run", "--data", str(data), "--adapter", "baseline:stasis",
                        "--out", str(out), *extra)  # fmt: skip
         assert refused.returncode == 2, refused.stderr
         assert refused.stderr.strip().splitlines() == [f"error: {line}"]
@@ -243,7 +261,7 @@ def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the
         run_eval(data, "baseline:stasis", out, registry=registry)
     assert str(refusal.value) == line
     assert not out.exists()
-    state = _bpb("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out),
+    state = cli("run", "--data", str(data), "--adapter", "baseline:stasis", "--out", str(out),
                  "--input-mode", "state")  # fmt: skip
     assert state.returncode == 0, state.stderr
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -17,8 +15,7 @@ from bpb_core.results import load_results
 from bpb_core.results.tables import accuracy
 from bpb_core.run_folder import iter_answers, read_attempts
 from bpb_core.runner import RunOptions, run_eval
-
-BPB = str(Path(sys.executable).with_name("bpb"))
+from support.inprocess import bpb
 
 
 @dataclasses.dataclass
@@ -96,16 +93,14 @@ def test_epochs_ask_each_pair_k_times_and_the_frame_keeps_an_epoch_column(
 
 
 def test_prompt_prints_the_messages_a_run_sends(
-    dataset: Path, tmp_path: Path, registry: Registry
+    dataset: Path, tmp_path: Path, registry: Registry, capfd: pytest.CaptureFixture[str]
 ) -> None:
     run_eval(dataset, "baseline:oracle", tmp_path / "run", RunOptions(tasks=("q1",)),
              registry=registry)  # fmt: skip
     sent = {e["scene_id"]: e["image_sha256"] for e in read_attempts(tmp_path / "run")}
     folder = dataset / "h3" / "scene_0001"
-    by_path = subprocess.run([BPB, "prompt", str(folder), "--task", "q1"],
-                             capture_output=True, text=True, timeout=120)  # fmt: skip
-    by_id = subprocess.run([BPB, "prompt", "h3_0001", "--data", str(dataset), "--task", "q1"],
-                           capture_output=True, text=True, timeout=120)  # fmt: skip
+    by_path = bpb(capfd, "prompt", str(folder), "--task", "q1")
+    by_id = bpb(capfd, "prompt", "h3_0001", "--data", str(dataset), "--task", "q1")
     assert by_path.returncode == 0, by_path.stderr
     assert by_path.stdout == by_id.stdout
     task = registry.task("q1")
@@ -122,6 +117,5 @@ def test_prompt_prints_the_messages_a_run_sends(
             else:
                 assert part.text in by_path.stdout
     assert "base64" not in by_path.stdout and len(by_path.stdout) < 20_000
-    bad = subprocess.run([BPB, "prompt", "h9_0000", "--data", str(dataset)],
-                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    bad = bpb(capfd, "prompt", "h9_0000", "--data", str(dataset))
     assert bad.returncode == 2 and "no scene with id 'h9_0000'" in bad.stderr

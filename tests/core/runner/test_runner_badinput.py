@@ -93,15 +93,15 @@ def test_a_bad_adapter_is_named_by_the_callers_own_parameter_or_flag(
     tmp_path: Path,
     registry: Registry,
     monkeypatch: pytest.MonkeyPatch,
+    capfd: pytest.CaptureFixture[str],
     spec: str,
     problem: str,
 ) -> None:
     # The library said "--adapter ..." to callers who passed adapter= or adapters=.
     import asyncio
-    import subprocess
-    import sys
 
     import bpb_core
+    from support.inprocess import bpb
 
     monkeypatch.delenv("OPENAI_API_KEY", raising=False)
     out, kw = tmp_path / "out", {"registry": registry}
@@ -116,9 +116,7 @@ def test_a_bad_adapter_is_named_by_the_callers_own_parameter_or_flag(
     with pytest.raises(BadInput) as caught:
         asyncio.run(bpb_core.evaluate_async(dataset, spec, out, **kw))
     assert str(caught.value).startswith(f"adapters {problem}")
-    bpb = str(Path(sys.executable).with_name("bpb"))
-    args = ["run", "--data", str(dataset), "--adapter", spec, "--out", str(out)]
-    done = subprocess.run([bpb, *args], capture_output=True, text=True, timeout=120)
+    done = bpb(capfd, "run", "--data", str(dataset), "--adapter", spec, "--out", str(out))
     assert done.returncode == 2
     [line] = done.stderr.strip().splitlines()
     assert line.startswith(f"error: --adapter {problem}")

@@ -4,10 +4,9 @@ message while nothing is stored."""
 from __future__ import annotations
 
 import asyncio
+import functools
 import re
-import subprocess
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -19,6 +18,7 @@ from bpb_core.run_folder import iter_answers, read_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession
 from bpb_core.web.human_app import human_app
+from support.inprocess import bpb
 
 LOCAL = "http://127.0.0.1"  # the apps answer only requests addressed to loopback names
 
@@ -127,8 +127,9 @@ def test_the_apps_listen_on_loopback_only(monkeypatch: pytest.MonkeyPatch) -> No
 
 
 def test_bad_command_lines_are_one_line_errors(
-    run_bpb: Callable[..., subprocess.CompletedProcess[str]], tmp_path: Path
+    capfd: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
+    run_bpb = functools.partial(bpb, capfd)
     viewed = run_bpb("view", str(tmp_path / "nope"))
     assert viewed.returncode == 2 and "no such run folder" in viewed.stderr
     human = run_bpb("human", "--data", str(tmp_path / "nodata"), "--out", str(tmp_path / "run"))
