@@ -46,5 +46,6 @@ class TinyInstall:
 def install_tiny(site: Path) -> TinyInstall:
     """Write the dist-info into ``site`` and return the environment that finds it."""
     write_dist_info(site, DIST, VERSION, {"tiny": "bpb_tiny.hooks"})
-    path = os.pathsep.join([str(site), str(SOURCE)])
+    # an existing PYTHONPATH (a git worktree's src) stays after the plugin's folders
+    path = os.pathsep.join(filter(None, [str(site), str(SOURCE), os.environ.get("PYTHONPATH")]))
     return TinyInstall(site, {**os.environ, "PYTHONPATH": path, "OPENAI_API_KEY": "dummy"})
