@@ -50,6 +50,14 @@ if TYPE_CHECKING:
 
 
 @runtime_checkable
+class ExpectsWork(Protocol):
+    """A simulator told how many scenes the command will make before it makes the first, so
+    that a one-off cost (compiling a kernel) is paid only when the whole command needs it."""
+
+    def expect_scenes(self, count: int) -> None: ...
+
+
+@runtime_checkable
 class Calibrating(Protocol):
     """A family whose sampling can be tuned to a target (``bpb generate --calibrate``)."""
 

@@ -124,6 +124,7 @@ def generate_dataset(
             try:
                 n_workers = max(1, workers or os.cpu_count() or 1)
                 setup = worker_setup(registry, name, partial, seed, cfg, images)
+                setup = replace(setup, scenes=per_horizon * len(hs))
                 calibration = None
                 if isinstance(maker, Calibrating) and calibrate:
                     results = run_calibration(n_workers, setup, hs, progress)

@@ -20,7 +20,7 @@ from multiprocessing.pool import Pool
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from bpb_core.capabilities import Calibrating
+from bpb_core.capabilities import Calibrating, ExpectsWork
 from bpb_core.dataset.manifest import DatasetWriter, IndexRow, plugin_label, sha256_bytes
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
@@ -313,6 +313,7 @@ class WorkerSetup:
     simulator: str = ""
     simulator_origin: str = ""
     simulator_spec: str = ""
+    scenes: int = 0
 
 
 _SETUP: WorkerSetup | None = None
@@ -336,7 +337,10 @@ def init_worker(setup: WorkerSetup) -> None:
         with blamed(
             setup.simulator_origin or setup.origin, f"creating the simulator {simulator!r}"
         ):
-            _STATE["simulator"] = setup.simulator_cls(**dict(setup.options))
+            made = setup.simulator_cls(**dict(setup.options))
+            if isinstance(made, ExpectsWork) and setup.scenes:
+                made.expect_scenes(setup.scenes)
+            _STATE["simulator"] = made
     except BpbError as exc:
         _STATE["broken"] = exc
 

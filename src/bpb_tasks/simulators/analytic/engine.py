@@ -118,6 +118,7 @@ class AnalyticSimulator:
         self.kernel: bool | None = None  # loaded and running; False: it failed, said once
         self.cached: bool | None = None  # whether numba has it cached, once looked up
         self.spent = 0.0  # the Python engine's estimated CPU seconds in batches so far
+        self.scenes = 1  # batches like the next one this command will run (expect_scenes)
 
     def with_max_events(self, max_events: int) -> AnalyticSimulator:
         """This simulator with another event budget (same precision and engine)."""
@@ -147,7 +148,8 @@ class AnalyticSimulator:
         if self.cached is None:
             self.cached = self.available and is_cached(numba_cache_dir(os.environ))
         seconds = python_seconds(runs, events)
-        if not use_kernel(self.engine, self.available, self.cached, self.spent, seconds):
+        ahead = seconds * self.scenes  # this batch and the command's like it still to come
+        if not use_kernel(self.engine, self.available, self.cached, self.spent, ahead):
             self.spent += seconds
             return False
         from bpb_tasks.simulators.analytic.compiled import kernel_failure
@@ -161,6 +163,12 @@ class AnalyticSimulator:
             clear_own_cache(numba_cache_dir(os.environ))
         self.kernel = failure is None
         return self.kernel
+
+    def expect_scenes(self, count: int) -> None:
+        """The command will make ``count`` scenes (:class:`~bpb_core.capabilities.ExpectsWork`):
+        the engine choice weighs a scene's batch by them, so a command whose scenes together
+        would cost the Python engine more than a compile builds the kernel at its first."""
+        self.scenes = max(1, count)
 
     def run(self, scene: Scene, horizon: float | None = None) -> Outcome:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
