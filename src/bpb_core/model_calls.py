@@ -11,6 +11,7 @@ import hashlib
 import inspect
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -43,6 +44,11 @@ class Message:
 
     role: Literal["system", "user", "assistant"]
     parts: tuple[TextPart | ImagePart, ...]
+
+
+def prompt_text(messages: Iterable[Message], between: str = "\n") -> str:
+    """The text parts of ``messages`` joined by ``between`` (images left out)."""
+    return between.join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
 
 
 @dataclass(frozen=True)

@@ -171,7 +171,7 @@ def prompt_messages(
     """
     from bpb_core.model_calls import Message
 
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: messages()"
+    what = f"{named('task', task)}: messages()"
     with blamed(origin, what):
         messages = task.messages(scene, image, options)
     if isinstance(messages, tuple | list) and all(isinstance(m, Message) for m in messages):
@@ -193,7 +193,7 @@ def parsed_answer(
         PluginBug: The task raised anything else or returned something else, naming
             ``origin`` (who supplied it) and the task.
     """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: parse()"
+    what = f"{named('task', task)}: parse()"
     with blamed(origin, what):
         parsed = task.parse(text, scene, options)
     if isinstance(parsed, ParsedAnswer) and isinstance(parsed.value, dict):
@@ -214,7 +214,7 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
         PluginBug: The task raised or returned something else, naming ``origin`` (who
             supplied it) and the task.
     """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: answer_schema()"
+    what = f"{named('task', task)}: answer_schema()"
     with blamed(origin, what):
         schema = task.answer_schema()
     if isinstance(schema, dict):
@@ -224,9 +224,15 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
     )
 
 
+def named(kind: str, component: object) -> str:
+    """``task 'q1'``: how one-line plugin errors name a component of ``kind`` (by its ``name``,
+    else its class)."""
+    return f"{kind} {getattr(component, 'name', type(component).__name__)!r}"
+
+
 def family_label(family: object) -> str:
     """``scene family 'billiards'``: how one-line plugin errors name a family."""
-    return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
+    return named("scene family", family)
 
 
 def family_model(family: object, attribute: str) -> type | None:
@@ -261,7 +267,7 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
 
     if not isinstance(adapter, Describing):
         return None
-    what = f"{_adapter(adapter)}: settings()"
+    what = f"{named('adapter', adapter)}: settings()"
     with blamed(origin, what):
         settings = adapter.settings()
     return json_values(origin, what, settings, "settings run.json")
@@ -309,7 +315,7 @@ def preflight_problem(adapter: object, origin: str) -> str | None:
 
     if not isinstance(adapter, Preflighting):
         return None
-    what = f"{_adapter(adapter)}: preflight()"
+    what = f"{named('adapter', adapter)}: preflight()"
     with blamed(origin, what):
         problem = adapter.preflight()
     return _checked_line(origin, what, problem)
@@ -327,7 +333,7 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
 
     if not isinstance(adapter, KnowsFamilies):
         return None
-    what = f"{_adapter(adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
+    what = f"{named('adapter', adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
     with blamed(origin, what):
         why = adapter.cannot_answer(family)
     return _checked_line(origin, what, why)
@@ -343,7 +349,7 @@ def price_known(adapter: object, origin: str) -> bool | None:
     """
     from bpb_core.capabilities import Pricing
 
-    what = f"{_adapter(adapter)}: priced"
+    what = f"{named('adapter', adapter)}: priced"
     with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
         if not isinstance(adapter, Pricing):
             return None
@@ -363,7 +369,7 @@ def estimated_input(
         PluginBug: ``estimate()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    what = f"{_adapter(adapter)}: estimate()"
+    what = f"{named('adapter', adapter)}: estimate()"
     with blamed(origin, what):
         estimate = adapter.estimate(messages)
     if isinstance(estimate, tuple | list) and len(estimate) == 2:
@@ -374,10 +380,6 @@ def estimated_input(
         f"{origin}: {what} returned {estimate!r:.80}; expected (input tokens, cost): an int "
         "at least 0 and a finite float at least 0 or None"
     )
-
-
-def _adapter(adapter: object) -> str:
-    return f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}"
 
 
 def _checked_line(origin: str, what: str, line: object) -> str | None:
