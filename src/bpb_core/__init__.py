@@ -16,10 +16,9 @@ from bpb_core.version import __version__
 # module -> the public names it defines (imported on first use)
 _LAZY: dict[str, str] = {
     "bpb_core.hookspecs": "hookimpl hookspec",
-    "bpb_core.registry": "make_registry Registry PluginWarning",
-    "bpb_core.registration": (
-        "lazy TaskInfo SceneFamilyInfo SimulatorInfo AdapterInfo ScorerInfo SuiteInfo "
-        "DiagnosticInfo"
+    "bpb_core.registry": (
+        "make_registry Registry PluginWarning lazy TaskInfo SceneFamilyInfo SimulatorInfo "
+        "AdapterInfo ScorerInfo SuiteInfo DiagnosticInfo"
     ),
     "bpb_core.interfaces": (
         "Task Scene GroundTruth GeneratedScene SceneFamily Simulator ModelAdapter Scorer "
@@ -114,19 +113,17 @@ if TYPE_CHECKING:
         Usage as Usage,
     )
     from bpb_core.picture import ScenePicture as ScenePicture
-    from bpb_core.registration import (
+    from bpb_core.registry import (
         AdapterInfo as AdapterInfo,
         DiagnosticInfo as DiagnosticInfo,
+        PluginWarning as PluginWarning,
+        Registry as Registry,
         SceneFamilyInfo as SceneFamilyInfo,
         ScorerInfo as ScorerInfo,
         SimulatorInfo as SimulatorInfo,
         SuiteInfo as SuiteInfo,
         TaskInfo as TaskInfo,
         lazy as lazy,
-    )
-    from bpb_core.registry import (
-        PluginWarning as PluginWarning,
-        Registry as Registry,
         make_registry as make_registry,
     )
     from bpb_core.reply_json import extract as extract

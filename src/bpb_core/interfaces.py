@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.model_calls import Message, ModelRequest, ModelResponse
-    from bpb_core.registration import SuiteInfo
+    from bpb_core.registry import SuiteInfo
     from bpb_core.scored_units import UnitRow
 
 InputMode = Literal["image", "image+state", "state"]

@@ -34,9 +34,16 @@ from bpb_core.dataset.reader import Dataset, dataset_keys, dataset_simulator_spe
 from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
-from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
+from bpb_core.layout import (
+    FINAL,
+    INDEX,
+    INIT,
+    MANIFEST,
+    check_writable_folder,
+    horizon_label,
+    partial_folder,
+)
 from bpb_core.model_calls import prompt_text
-from bpb_core.partial import partial_folder
 from bpb_core.version import __version__
 
 if TYPE_CHECKING:
