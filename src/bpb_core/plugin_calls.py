@@ -14,8 +14,10 @@ import math
 import random
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
+from bpb_core.model_calls import Message
 
 if TYPE_CHECKING:
     from bpb_core.capabilities import (
@@ -26,7 +28,6 @@ if TYPE_CHECKING:
         TruthOfMany,
     )
     from bpb_core.interfaces import SceneFamily, Simulator, Task
-    from bpb_core.model_calls import Message
 
 
 def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: random.Random) -> Any:
@@ -169,8 +170,6 @@ def prompt_messages(
         PluginBug: The task raised or returned something else, naming ``origin`` (who
             supplied it) and the task.
     """
-    from bpb_core.model_calls import Message
-
     what = f"{named('task', task)}: messages()"
     with blamed(origin, what):
         messages = task.messages(scene, image, options)
@@ -263,8 +262,6 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
         PluginBug: ``settings()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Describing
-
     if not isinstance(adapter, Describing):
         return None
     what = f"{named('adapter', adapter)}: settings()"
@@ -311,8 +308,6 @@ def preflight_problem(adapter: object, origin: str) -> str | None:
         PluginBug: ``preflight()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Preflighting
-
     if not isinstance(adapter, Preflighting):
         return None
     what = f"{named('adapter', adapter)}: preflight()"
@@ -329,8 +324,6 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
         PluginBug: ``cannot_answer()`` raised or returned something other than ``None`` or a
             str, naming ``origin`` (who supplied the adapter).
     """
-    from bpb_core.capabilities import KnowsFamilies
-
     if not isinstance(adapter, KnowsFamilies):
         return None
     what = f"{named('adapter', adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
@@ -347,8 +340,6 @@ def price_known(adapter: object, origin: str) -> bool | None:
         PluginBug: Reading ``priced`` raised or gave something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Pricing
-
     what = f"{named('adapter', adapter)}: priced"
     with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
         if not isinstance(adapter, Pricing):

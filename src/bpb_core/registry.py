@@ -22,11 +22,13 @@ from typing import TYPE_CHECKING, Any, Literal
 import pluggy
 
 from bpb_core import hookspecs
+from bpb_core.capabilities import UsesRegistry
 from bpb_core.errors import BadInput, PluginBug, PluginError, UnknownName, blamed
+from bpb_core.model_calls import AdapterOptions, adapter_problem, article, split_spec
+from bpb_core.scored_units import check_scorer
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
-    from bpb_core.model_calls import AdapterOptions
 
 Kind = Literal["task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic"]
 KINDS: tuple[Kind, ...] = (
@@ -194,12 +196,8 @@ class Registered:
 
     @property
     def origin(self) -> str:
-        """Who to blame for this component: the plugin (entry point name and the module it
-        names) and its distribution, e.g. ``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1``.
-        """
-        where = f" ({self.module})" if self.module and self.module != self.plugin else ""
-        version = f" {self.version}" if self.version and self.version != "unknown" else ""
-        return f"plugin {self.plugin!r}{where} from {self.distribution}{version}"
+        """Who to blame for this component (:attr:`PluginSource.origin`)."""
+        return PluginSource(self.plugin, self.distribution, self.version, self.module).origin
 
 
 ENTRY_POINT_GROUP = "bpb"
@@ -219,6 +217,15 @@ class PluginSource:
     distribution: str
     version: str
     module: str = ""
+
+    @property
+    def origin(self) -> str:
+        """Who to blame for what the plugin supplies: the plugin (entry point name and the module
+        it names) and its distribution, e.g. ``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1``.
+        """
+        where = f" ({self.module})" if self.module and self.module != self.name else ""
+        version = f" {self.version}" if self.version and self.version != "unknown" else ""
+        return f"plugin {self.name!r}{where} from {self.distribution}{version}"
 
 
 class Registry:
@@ -367,8 +374,6 @@ class Registry:
         Raises:
             PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
         """
-        from bpb_core.scored_units import check_scorer
-
         scorer: Scorer = self.build("scorer", name)
         check_scorer(scorer, self.origin("scorer", name))
         return scorer
@@ -404,9 +409,6 @@ class Registry:
             PluginBug: The factory raised, or returned something without an async
                 ``complete(request)``, naming the plugin.
         """
-        from bpb_core.capabilities import UsesRegistry
-        from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
-
         name, model = split_spec(spec, flag)
         factory = self.load("adapter", name)
         with blamed(self.origin("adapter", name), f"the adapter factory for {spec!r}"):
@@ -482,16 +484,6 @@ def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[obje
             )
 
 
-def _article(word: str) -> str:
-    return "an" if word[0] in "aeiou" else "a"
-
-
-def _origin(source: PluginSource) -> str:
-    """``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1.0``, as :attr:`Registered.origin`."""
-    info = ComponentInfo("")
-    return Registered(info, source.name, source.distribution, source.version, source.module).origin
-
-
 def _check_hook_names(pm: pluggy.PluginManager, sources: dict[int, PluginSource]) -> None:
     """Refuse a hook implementation bpb has no hook for (a misspelt ``bpb_model_adapter``),
     naming the plugin, its module and distribution."""
@@ -503,7 +495,7 @@ def _check_hook_names(pm: pluggy.PluginManager, sources: dict[int, PluginSource]
                 continue
             known = ", ".join(hookspecs.HOOK_KINDS)
             raise PluginError(
-                f"{_origin(sources[id(impl.plugin)])}: unknown hook {hook_name!r}; "
+                f"{sources[id(impl.plugin)].origin}: unknown hook {hook_name!r}; "
                 f"bpb's hooks: {known}"
             )
 
@@ -520,7 +512,7 @@ def _collect(
                 returned = impl.function()
                 if isinstance(returned, ComponentInfo):
                     raise PluginError(
-                        f"{_origin(source)}: hook {hook_name} returned one {_RECORDS[kind]}; "
+                        f"{source.origin}: hook {hook_name} returned one {_RECORDS[kind]}; "
                         "yield each record (or return a list of them)"
                     )
                 records = list(returned or ())
@@ -528,7 +520,7 @@ def _collect(
                 raise
             except Exception as exc:
                 problems.append(
-                    f"{_origin(source)}: hook {hook_name} failed: {type(exc).__name__}: {exc}"
+                    f"{source.origin}: hook {hook_name} failed: {type(exc).__name__}: {exc}"
                 )
                 continue
             for info in records:
@@ -541,8 +533,8 @@ def _add(
 ) -> None:
     if not isinstance(info, ComponentInfo) or info.kind != kind:
         raise PluginError(
-            f"{_origin(source)} returned {info!r} from its {kind.replace('_', ' ')} hook; "
-            f"expected {_article(kind)} {kind.replace('_', ' ')} record ({_RECORDS[kind]})"
+            f"{source.origin} returned {info!r} from its {kind.replace('_', ' ')} hook; "
+            f"expected {article(kind)} {kind.replace('_', ' ')} record ({_RECORDS[kind]})"
         )
     existing = table.get(info.name)
     if existing is not None:

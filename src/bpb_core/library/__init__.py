@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import PublishesSchema
 from bpb_core.dataset.generate import generate_dataset
 from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.dataset.reader import Dataset, load_dataset
@@ -32,7 +33,8 @@ from bpb_core.dataset.scene_entry import DatasetScene
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.library.hf_export import HfExport, export_hf
-from bpb_core.plugin_calls import parsed_answer, prompt_messages
+from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
+from bpb_core.registry import make_registry
 from bpb_core.report.build import Report, build_report
 from bpb_core.results.frames import Results, load_frame, load_results
 from bpb_core.results.tables import summary
@@ -138,8 +140,6 @@ class AnswerScore:
 def _task(task: str | Task, registry: Registry | None) -> Task:
     if not isinstance(task, str):
         return task
-    from bpb_core.registry import make_registry
-
     found: Task = (registry or make_registry()).task(task)
     return found
 
@@ -178,8 +178,6 @@ def build_messages(
         BadInput: The scene's files are missing or invalid (names the file), or the input
             mode is none of the three.
     """
-    from bpb_core.registry import make_registry
-
     if isinstance(task, str):
         registry = registry or make_registry()
     found = _task(task, registry)
@@ -209,8 +207,6 @@ def score_answer(
         cot: Parse as a chain-of-thought reply (last valid JSON object); default: the task's.
         registry: Where the task and its scorer come from; default: every installed plugin.
     """
-    from bpb_core.registry import make_registry
-
     registry = registry or make_registry()
     found = _task(task, registry)
     options = prompt_options(found, "image", cot)
@@ -273,9 +269,6 @@ def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict
         BadInput: The task publishes no schema.
         PluginBug: Its ``answer_schema()`` raised or returned no dict, naming the task's plugin.
     """
-    from bpb_core.capabilities import PublishesSchema
-    from bpb_core.plugin_calls import published_schema
-
     found = _task(task, registry)
     if not isinstance(found, PublishesSchema):
         raise BadInput(f"task {found.name!r}: publishes no answer schema")
