@@ -13,76 +13,35 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.version import __version__
 
-_EXPORTS: dict[str, str] = {
-    # plugin system
-    "hookimpl": "bpb_core.hookspecs",
-    "hookspec": "bpb_core.hookspecs",
-    "make_registry": "bpb_core.registry",
-    "Registry": "bpb_core.registry",
-    "PluginWarning": "bpb_core.registry",
-    "lazy": "bpb_core.registration",
-    "TaskInfo": "bpb_core.registration",
-    "SceneFamilyInfo": "bpb_core.registration",
-    "SimulatorInfo": "bpb_core.registration",
-    "AdapterInfo": "bpb_core.registration",
-    "ScorerInfo": "bpb_core.registration",
-    "SuiteInfo": "bpb_core.registration",
-    "DiagnosticInfo": "bpb_core.registration",
-    # interfaces and the values passed between them
-    "Task": "bpb_core.interfaces",
-    "Scene": "bpb_core.interfaces",
-    "GroundTruth": "bpb_core.interfaces",
-    "GeneratedScene": "bpb_core.interfaces",
-    "SceneFamily": "bpb_core.interfaces",
-    "Simulator": "bpb_core.interfaces",
-    "ModelAdapter": "bpb_core.interfaces",
-    "Scorer": "bpb_core.interfaces",
-    "Diagnostic": "bpb_core.interfaces",
-    "PromptOptions": "bpb_core.interfaces",
-    "ParsedAnswer": "bpb_core.interfaces",
-    "UnitRow": "bpb_core.scored_units",
-    "ScenePicture": "bpb_core.picture",
-    "extract": "bpb_core.reply_json",
-    # the library face (pandas is imported when the results functions are used)
-    "generate_dataset": "bpb_core.library",
-    "load_dataset": "bpb_core.library",
-    "export_hf": "bpb_core.library",
-    "HfExport": "bpb_core.library",
-    "Dataset": "bpb_core.library",
-    "DatasetScene": "bpb_core.library",
-    "build_messages": "bpb_core.library",
-    "score_answer": "bpb_core.library",
-    "answer_schema": "bpb_core.library",
-    "AnswerScore": "bpb_core.library",
-    "UnitScore": "bpb_core.library",
-    "EvalResult": "bpb_core.library",
-    "simulate_paths": "bpb_core.library",
-    "run_eval": "bpb_core.library",
-    "run_eval_async": "bpb_core.library",
-    "evaluate": "bpb_core.library",
-    "evaluate_async": "bpb_core.library",
-    "load_results": "bpb_core.library",
-    "load_frame": "bpb_core.library",
-    "Results": "bpb_core.library",
-    "leaderboard": "bpb_core.library",
-    "build_report": "bpb_core.library",
-    # running evaluations
-    "RunOptions": "bpb_core.runner.options",
-    "RetryPolicy": "bpb_core.runner.options",
-    "RunResult": "bpb_core.runner.result",
-    "ProgressEvent": "bpb_core.runner.progress",
-    "ModelRequest": "bpb_core.model_calls",
-    "ModelResponse": "bpb_core.model_calls",
-    "Message": "bpb_core.model_calls",
-    "TextPart": "bpb_core.model_calls",
-    "ImagePart": "bpb_core.model_calls",
-    "Usage": "bpb_core.model_calls",
-    "AdapterOptions": "bpb_core.model_calls",
-    # errors
-    "BpbError": "bpb_core.errors",
-    "BadInput": "bpb_core.errors",
-    "ParseFailure": "bpb_core.errors",
+# module -> the public names it defines (imported on first use)
+_LAZY: dict[str, str] = {
+    "bpb_core.hookspecs": "hookimpl hookspec",
+    "bpb_core.registry": (
+        "make_registry Registry PluginWarning lazy TaskInfo SceneFamilyInfo SimulatorInfo "
+        "AdapterInfo ScorerInfo SuiteInfo DiagnosticInfo"
+    ),
+    "bpb_core.interfaces": (
+        "Task Scene GroundTruth GeneratedScene SceneFamily Simulator ModelAdapter Scorer "
+        "Diagnostic PromptOptions ParsedAnswer"
+    ),
+    "bpb_core.scored_units": "UnitRow",
+    "bpb_core.picture": "ScenePicture",
+    "bpb_core.reply_json": "extract",
+    "bpb_core.library": (
+        "generate_dataset load_dataset export_hf HfExport Dataset DatasetScene "
+        "build_messages score_answer answer_schema AnswerScore UnitScore EvalResult "
+        "simulate_paths run_eval run_eval_async evaluate evaluate_async load_results "
+        "load_frame Results leaderboard build_report"
+    ),
+    "bpb_core.runner.options": "RunOptions RetryPolicy",
+    "bpb_core.runner.result": "RunResult",
+    "bpb_core.runner.progress": "ProgressEvent",
+    "bpb_core.model_calls": (
+        "ModelRequest ModelResponse Message TextPart ImagePart Usage AdapterOptions"
+    ),
+    "bpb_core.errors": "BpbError BadInput ParseFailure",
 }
+_EXPORTS = {name: module for module, names in _LAZY.items() for name in names.split()}
 
 __all__ = ["__version__", *sorted(_EXPORTS)]
 
@@ -106,10 +65,7 @@ if TYPE_CHECKING:
         BpbError as BpbError,
         ParseFailure as ParseFailure,
     )
-    from bpb_core.hookspecs import (
-        hookimpl as hookimpl,
-        hookspec as hookspec,
-    )
+    from bpb_core.hookspecs import hookimpl as hookimpl, hookspec as hookspec
     from bpb_core.interfaces import (
         Diagnostic as Diagnostic,
         GeneratedScene as GeneratedScene,
@@ -156,37 +112,22 @@ if TYPE_CHECKING:
         TextPart as TextPart,
         Usage as Usage,
     )
-    from bpb_core.picture import (
-        ScenePicture as ScenePicture,
-    )
-    from bpb_core.registration import (
+    from bpb_core.picture import ScenePicture as ScenePicture
+    from bpb_core.registry import (
         AdapterInfo as AdapterInfo,
         DiagnosticInfo as DiagnosticInfo,
+        PluginWarning as PluginWarning,
+        Registry as Registry,
         SceneFamilyInfo as SceneFamilyInfo,
         ScorerInfo as ScorerInfo,
         SimulatorInfo as SimulatorInfo,
         SuiteInfo as SuiteInfo,
         TaskInfo as TaskInfo,
         lazy as lazy,
-    )
-    from bpb_core.registry import (
-        PluginWarning as PluginWarning,
-        Registry as Registry,
         make_registry as make_registry,
     )
-    from bpb_core.reply_json import (
-        extract as extract,
-    )
-    from bpb_core.runner.options import (
-        RetryPolicy as RetryPolicy,
-        RunOptions as RunOptions,
-    )
-    from bpb_core.runner.progress import (
-        ProgressEvent as ProgressEvent,
-    )
-    from bpb_core.runner.result import (
-        RunResult as RunResult,
-    )
-    from bpb_core.scored_units import (
-        UnitRow as UnitRow,
-    )
+    from bpb_core.reply_json import extract as extract
+    from bpb_core.runner.options import RetryPolicy as RetryPolicy, RunOptions as RunOptions
+    from bpb_core.runner.progress import ProgressEvent as ProgressEvent
+    from bpb_core.runner.result import RunResult as RunResult
+    from bpb_core.scored_units import UnitRow as UnitRow

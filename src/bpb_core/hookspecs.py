@@ -1,7 +1,7 @@
 """The hooks a bpb plugin can implement.
 
 A plugin is a module (or object) exposed under the ``bpb`` entry-point group. Each hook takes no
-arguments and returns an iterable of registration records (see :mod:`bpb_core.registration`).
+arguments and returns an iterable of registration records (see :mod:`bpb_core.registry`).
 Names must be unique per kind across all installed plugins; a clash is an error naming both
 distributions.
 
@@ -22,19 +22,21 @@ and ``bpb_echo/hooks.py``::
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import pluggy
 
-from bpb_core.registration import (
-    AdapterInfo,
-    DiagnosticInfo,
-    Kind,
-    SceneFamilyInfo,
-    ScorerInfo,
-    SimulatorInfo,
-    SuiteInfo,
-    TaskInfo,
-)
+if TYPE_CHECKING:  # the registry imports this module
+    from bpb_core.registry import (
+        AdapterInfo,
+        DiagnosticInfo,
+        Kind,
+        SceneFamilyInfo,
+        ScorerInfo,
+        SimulatorInfo,
+        SuiteInfo,
+        TaskInfo,
+    )
 
 PROJECT = "bpb"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -47,7 +49,7 @@ def bpb_eval_tasks() -> Iterable[TaskInfo]:  # type: ignore[empty-body]
     answer schema, parser and expected answer.
 
     Returns:
-        :class:`~bpb_core.registration.TaskInfo` records (``family`` names the scene family,
+        :class:`~bpb_core.registry.TaskInfo` records (``family`` names the scene family,
         ``default`` puts the task in ``bpb run``'s default set); ``load()`` gives a class
         implementing :class:`~bpb_core.interfaces.Task`.
     """
@@ -59,7 +61,7 @@ def bpb_scene_families() -> Iterable[SceneFamilyInfo]:  # type: ignore[empty-bod
     pictures.
 
     Returns:
-        :class:`~bpb_core.registration.SceneFamilyInfo` records (``default``: the family
+        :class:`~bpb_core.registry.SceneFamilyInfo` records (``default``: the family
         ``bpb generate`` uses without ``--family``); ``load()`` gives a class implementing
         :class:`~bpb_core.interfaces.SceneFamily`.
     """
@@ -71,7 +73,7 @@ def bpb_simulators() -> Iterable[SimulatorInfo]:  # type: ignore[empty-body]
     horizon.
 
     Returns:
-        :class:`~bpb_core.registration.SimulatorInfo` records (``family`` names the scene
+        :class:`~bpb_core.registry.SimulatorInfo` records (``family`` names the scene
         family); ``load()`` gives a class implementing :class:`~bpb_core.interfaces.Simulator`.
     """
 
@@ -81,7 +83,7 @@ def bpb_model_adapters() -> Iterable[AdapterInfo]:  # type: ignore[empty-body]
     """Register model adapters, addressed as ``name:model`` (split at the first colon).
 
     Returns:
-        :class:`~bpb_core.registration.AdapterInfo` records (``offline``: runs with no network
+        :class:`~bpb_core.registry.AdapterInfo` records (``offline``: runs with no network
         or key, so ``bpb run`` uses its ``models`` by default); ``load()`` gives a factory
         ``factory(model: str, options: AdapterOptions) -> ModelAdapter``.
     """
@@ -92,7 +94,7 @@ def bpb_scorers() -> Iterable[ScorerInfo]:  # type: ignore[empty-body]
     """Register scorers, each bound to one task by name.
 
     Returns:
-        :class:`~bpb_core.registration.ScorerInfo` records; ``load()`` gives a class
+        :class:`~bpb_core.registry.ScorerInfo` records; ``load()`` gives a class
         implementing :class:`~bpb_core.interfaces.Scorer` (and optionally
         :class:`~bpb_core.capabilities.ExplainsErrors` and
         :class:`~bpb_core.capabilities.DrawsOverlay` for the failure gallery).
@@ -106,7 +108,7 @@ def bpb_suites() -> Iterable[SuiteInfo]:  # type: ignore[empty-body]
     Reports show every suite all of whose tasks ran, beside the task scores.
 
     Returns:
-        :class:`~bpb_core.registration.SuiteInfo` records (``weights``: task to weight).
+        :class:`~bpb_core.registry.SuiteInfo` records (``weights``: task to weight).
     """
 
 
@@ -115,7 +117,7 @@ def bpb_diagnostics() -> Iterable[DiagnosticInfo]:  # type: ignore[empty-body]
     """Register diagnostics: tables (and charts) derived from scored results.
 
     Returns:
-        :class:`~bpb_core.registration.DiagnosticInfo` records (``tasks``: shown when any of
+        :class:`~bpb_core.registry.DiagnosticInfo` records (``tasks``: shown when any of
         them ran); ``load()`` gives a class implementing
         :class:`~bpb_core.interfaces.Diagnostic`.
     """

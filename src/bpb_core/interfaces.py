@@ -7,10 +7,8 @@ the family's models, hands them to the family's simulator and to the tasks, and 
 ``scene_id``, ``horizon`` and the truth's ``stable`` flag for itself. Parameters typed ``Any``
 below carry a family's own scene, ground truth or config objects.
 
-Optional capabilities of a scene family are separate protocols (:class:`Calibrating`,
-:class:`Tallying`, :class:`DrawingStats`, :class:`Predicting`, :class:`Picturing`,
-:class:`Comparing`); core checks
-for them with ``isinstance`` and does without when a family lacks one.
+Optional capabilities are separate protocols (:mod:`bpb_core.capabilities`); core checks for
+them with ``isinstance`` and does without when a plugin lacks one.
 """
 
 from __future__ import annotations
@@ -26,7 +24,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.model_calls import Message, ModelRequest, ModelResponse
-    from bpb_core.registration import SuiteInfo
+    from bpb_core.registry import SuiteInfo
     from bpb_core.scored_units import UnitRow
 
 InputMode = Literal["image", "image+state", "state"]

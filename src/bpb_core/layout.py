@@ -4,13 +4,24 @@ Dataset: ``DIR/dataset.json``, ``DIR/index.csv``, ``DIR/stats/``,
 ``DIR/h{t}/scene_{i:04d}/{init.json, final.json, init.png, final.png, trajectory.png}``.
 Run: ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl``,
 ``RUN_DIR/h{t}/scene_{i:04d}/{task}.json``.
+
+A command that writes a folder (a dataset, an export) builds it in a hidden ``.NAME.partial``
+folder beside its target and moves it in at the end, so a failure never leaves a half-made
+folder where a finished one is expected. Two such commands on one target at once would share the
+partial folder, each clearing what the other wrote; so the partial folder is held with an
+exclusive ``flock`` while it is built, and a second command is refused as bad input. The system
+drops the lock when its process dies, so a folder left by an interrupted command is simply
+emptied and reused.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
+import shutil
 from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -118,8 +129,6 @@ def check_writable_folder(path: Path, option: str = "--out") -> None:
         BadInput: ``path`` or an ancestor is a file, or the nearest existing ancestor is not
             writable (one line naming that path and ``option``).
     """
-    from bpb_core.errors import BadInput
-
     for parent in (path, *path.parents):
         if not parent.exists():
             continue
@@ -138,8 +147,6 @@ def check_writable_file(path: Path, option: str) -> None:
         BadInput: ``path`` is a folder or a file that cannot be written, or its folder cannot be
             (one line naming the path and ``option``).
     """
-    from bpb_core.errors import BadInput
-
     if path.is_dir():
         raise BadInput(f"{path}: {option}: a folder, expected a file path")
     if path.exists() and not os.access(path, os.W_OK):
@@ -153,10 +160,59 @@ def make_folder(path: Path, option: str = "--out") -> None:
     Raises:
         BadInput: It cannot be created or written (one line naming the path and ``option``).
     """
-    from bpb_core.errors import BadInput
-
     check_writable_folder(path, option)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise BadInput(f"{path}: {option}: cannot create the folder: {exc.strerror}") from None
+
+
+def partial_path(target: Path) -> Path:
+    """The hidden folder ``target`` is built in: ``.NAME.partial`` beside it."""
+    where = Path(os.path.abspath(target))
+    return where.parent / f".{where.name}.partial"
+
+
+@contextmanager
+def partial_folder(target: Path, command: str) -> Iterator[Path]:
+    """Hold an empty partial folder for ``target`` for the block (the caller moves it in).
+
+    Raises:
+        BadInput: The folder cannot be made (names ``--out``), or another ``command`` is
+            building ``target`` now.
+    """
+    partial = partial_path(target)
+    handle = _open(partial, target)
+    try:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise BadInput(
+                f"{target}: --out: another {command} is writing it now ({partial} is in use); "
+                "wait for it to end, or choose another --out"
+            ) from None
+        for child in list(partial.iterdir()):  # left over from an interrupted command
+            if child.is_dir() and not child.is_symlink():
+                shutil.rmtree(child)
+            else:
+                child.unlink()
+        yield partial
+    finally:
+        os.close(handle)
+
+
+def _open(partial: Path, target: Path) -> int:
+    """A descriptor of ``partial``, made if need be (once more if another command moved it
+    away between the two steps)."""
+    for _ in range(2):
+        try:
+            partial.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise BadInput(f"{target}: --out: cannot create the folder: {exc.strerror}") from None
+        try:
+            return os.open(partial, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except FileNotFoundError:
+            continue
+        except OSError as exc:
+            raise BadInput(f"{partial}: cannot open the folder: {exc.strerror}") from None
+    raise BadInput(f"{target}: --out: another command keeps moving {partial}; try again")

@@ -11,6 +11,7 @@ import hashlib
 import inspect
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -43,6 +44,11 @@ class Message:
 
     role: Literal["system", "user", "assistant"]
     parts: tuple[TextPart | ImagePart, ...]
+
+
+def prompt_text(messages: Iterable[Message], between: str = "\n") -> str:
+    """The text parts of ``messages`` joined by ``between`` (images left out)."""
+    return between.join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
 
 
 @dataclass(frozen=True)
@@ -170,14 +176,15 @@ def adapter_problem(adapter: object) -> str | None:
     kind = type(adapter).__name__
     complete = getattr(adapter, "complete", None)
     if complete is None:
-        return f"{_article(kind)} {kind} without a complete() method"
+        return f"{article(kind)} {kind} without a complete() method"
     if not inspect.iscoroutinefunction(complete):
         made = "not callable" if not callable(complete) else "not async"
-        return f"{_article(kind)} {kind} whose complete() is {made}"
+        return f"{article(kind)} {kind} whose complete() is {made}"
     return None
 
 
-def _article(word: str) -> str:
+def article(word: str) -> str:
+    """``a`` or ``an``, as fits before ``word``."""
     return "an" if word[:1].lower() in "aeiou" else "a"
 
 

@@ -14,8 +14,10 @@ import math
 import random
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
+from bpb_core.model_calls import Message
 
 if TYPE_CHECKING:
     from bpb_core.capabilities import (
@@ -26,7 +28,6 @@ if TYPE_CHECKING:
         TruthOfMany,
     )
     from bpb_core.interfaces import SceneFamily, Simulator, Task
-    from bpb_core.model_calls import Message
 
 
 def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: random.Random) -> Any:
@@ -169,9 +170,7 @@ def prompt_messages(
         PluginBug: The task raised or returned something else, naming ``origin`` (who
             supplied it) and the task.
     """
-    from bpb_core.model_calls import Message
-
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: messages()"
+    what = f"{named('task', task)}: messages()"
     with blamed(origin, what):
         messages = task.messages(scene, image, options)
     if isinstance(messages, tuple | list) and all(isinstance(m, Message) for m in messages):
@@ -193,7 +192,7 @@ def parsed_answer(
         PluginBug: The task raised anything else or returned something else, naming
             ``origin`` (who supplied it) and the task.
     """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: parse()"
+    what = f"{named('task', task)}: parse()"
     with blamed(origin, what):
         parsed = task.parse(text, scene, options)
     if isinstance(parsed, ParsedAnswer) and isinstance(parsed.value, dict):
@@ -214,7 +213,7 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
         PluginBug: The task raised or returned something else, naming ``origin`` (who
             supplied it) and the task.
     """
-    what = f"task {getattr(task, 'name', type(task).__name__)!r}: answer_schema()"
+    what = f"{named('task', task)}: answer_schema()"
     with blamed(origin, what):
         schema = task.answer_schema()
     if isinstance(schema, dict):
@@ -224,9 +223,15 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
     )
 
 
+def named(kind: str, component: object) -> str:
+    """``task 'q1'``: how one-line plugin errors name a component of ``kind`` (by its ``name``,
+    else its class)."""
+    return f"{kind} {getattr(component, 'name', type(component).__name__)!r}"
+
+
 def family_label(family: object) -> str:
     """``scene family 'billiards'``: how one-line plugin errors name a family."""
-    return f"scene family {getattr(family, 'name', type(family).__name__)!r}"
+    return named("scene family", family)
 
 
 def family_model(family: object, attribute: str) -> type | None:
@@ -257,11 +262,9 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
         PluginBug: ``settings()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Describing
-
     if not isinstance(adapter, Describing):
         return None
-    what = f"{_adapter(adapter)}: settings()"
+    what = f"{named('adapter', adapter)}: settings()"
     with blamed(origin, what):
         settings = adapter.settings()
     return json_values(origin, what, settings, "settings run.json")
@@ -305,11 +308,9 @@ def preflight_problem(adapter: object, origin: str) -> str | None:
         PluginBug: ``preflight()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Preflighting
-
     if not isinstance(adapter, Preflighting):
         return None
-    what = f"{_adapter(adapter)}: preflight()"
+    what = f"{named('adapter', adapter)}: preflight()"
     with blamed(origin, what):
         problem = adapter.preflight()
     return _checked_line(origin, what, problem)
@@ -323,11 +324,9 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
         PluginBug: ``cannot_answer()`` raised or returned something other than ``None`` or a
             str, naming ``origin`` (who supplied the adapter).
     """
-    from bpb_core.capabilities import KnowsFamilies
-
     if not isinstance(adapter, KnowsFamilies):
         return None
-    what = f"{_adapter(adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
+    what = f"{named('adapter', adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
     with blamed(origin, what):
         why = adapter.cannot_answer(family)
     return _checked_line(origin, what, why)
@@ -341,9 +340,7 @@ def price_known(adapter: object, origin: str) -> bool | None:
         PluginBug: Reading ``priced`` raised or gave something else, naming ``origin`` (who
             supplied the adapter).
     """
-    from bpb_core.capabilities import Pricing
-
-    what = f"{_adapter(adapter)}: priced"
+    what = f"{named('adapter', adapter)}: priced"
     with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
         if not isinstance(adapter, Pricing):
             return None
@@ -363,7 +360,7 @@ def estimated_input(
         PluginBug: ``estimate()`` raised or returned something else, naming ``origin`` (who
             supplied the adapter).
     """
-    what = f"{_adapter(adapter)}: estimate()"
+    what = f"{named('adapter', adapter)}: estimate()"
     with blamed(origin, what):
         estimate = adapter.estimate(messages)
     if isinstance(estimate, tuple | list) and len(estimate) == 2:
@@ -374,10 +371,6 @@ def estimated_input(
         f"{origin}: {what} returned {estimate!r:.80}; expected (input tokens, cost): an int "
         "at least 0 and a finite float at least 0 or None"
     )
-
-
-def _adapter(adapter: object) -> str:
-    return f"adapter {getattr(adapter, 'name', type(adapter).__name__)!r}"
 
 
 def _checked_line(origin: str, what: str, line: object) -> str | None:

@@ -2,37 +2,203 @@
 
 :func:`make_registry` builds a fresh :class:`Registry`; nothing is discovered at import time.
 The registry is the only code that calls hook implementations.
+
+Plugin hooks yield typed registration records. A record names a component and says how
+to build it; ``load`` is called only when the component is used, so a plugin can register a
+component backed by a heavy library (litellm, pymunk) at no import cost. Fields beyond ``name``,
+``load`` and ``summary`` are plain data that bpb reads without loading the component (which
+family a task asks about, which task a scorer scores).
 """
 
 from __future__ import annotations
 
+import importlib
 import warnings
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
 from importlib import metadata
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import pluggy
 
 from bpb_core import hookspecs
+from bpb_core.capabilities import UsesRegistry
 from bpb_core.errors import BadInput, PluginBug, PluginError, UnknownName, blamed
-from bpb_core.registration import (
-    KINDS,
-    AdapterInfo,
-    ComponentInfo,
-    DiagnosticInfo,
-    Kind,
-    Registered,
-    SceneFamilyInfo,
-    ScorerInfo,
-    SimulatorInfo,
-    SuiteInfo,
-    TaskInfo,
-)
+from bpb_core.model_calls import AdapterOptions, adapter_problem, article, split_spec
+from bpb_core.scored_units import check_scorer
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
-    from bpb_core.model_calls import AdapterOptions
+
+Kind = Literal["task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic"]
+KINDS: tuple[Kind, ...] = (
+    "task",
+    "scene_family",
+    "simulator",
+    "adapter",
+    "scorer",
+    "suite",
+    "diagnostic",
+)
+
+
+def lazy(reference: str) -> Callable[[], Any]:
+    """Return a loader for ``"package.module:attribute"`` that imports only when called."""
+    module_name, _, attribute = reference.partition(":")
+    if not module_name or not attribute:
+        raise ValueError(f"lazy reference must look like 'module:attribute', got {reference!r}")
+
+    def load() -> Any:
+        return getattr(importlib.import_module(module_name), attribute)
+
+    load.__qualname__ = f"lazy({reference!r})"
+    return load
+
+
+def _nothing_to_load() -> None:
+    return None
+
+
+@dataclass(frozen=True)
+class ComponentInfo:
+    """Common fields of every registration record.
+
+    Attributes:
+        name: The name users type (``analytic``, ``litellm``).
+        load: Zero-argument callable returning the component class or factory.
+        summary: One line for ``bpb plugins`` and ``bpb list``.
+    """
+
+    name: str
+    load: Callable[[], Any] = field(default=_nothing_to_load, repr=False, compare=False)
+    summary: str = ""
+
+    kind: Kind = field(init=False, default="task")
+
+
+@dataclass(frozen=True)
+class TaskInfo(ComponentInfo):
+    """A question asked about a scene. ``load()`` returns a :class:`~bpb_core.interfaces.Task`
+    class.
+
+    Attributes:
+        family: The scene family whose scenes the task asks about.
+        default: Asked by ``bpb run`` when ``--tasks`` is not given.
+        title: Heading of the task's charts (default: its name).
+    """
+
+    family: str = ""
+    default: bool = False
+    title: str = ""
+    kind: Kind = field(init=False, default="task")
+
+
+@dataclass(frozen=True)
+class SceneFamilyInfo(ComponentInfo):
+    """A kind of scene. ``load()`` returns a :class:`~bpb_core.interfaces.SceneFamily` class.
+
+    Attributes:
+        default: The family ``bpb generate`` uses without ``--family`` (one family may say so).
+    """
+
+    default: bool = False
+    kind: Kind = field(init=False, default="scene_family")
+
+
+@dataclass(frozen=True)
+class SimulatorInfo(ComponentInfo):
+    """A physics engine for the scenes of one family. ``load()`` returns a
+    :class:`~bpb_core.interfaces.Simulator` class (keyword options such as ``dt``).
+
+    Attributes:
+        family: The scene family whose scenes it simulates.
+    """
+
+    family: str = ""
+    kind: Kind = field(init=False, default="simulator")
+
+
+@dataclass(frozen=True)
+class AdapterInfo(ComponentInfo):
+    """A model provider. Specs are ``name:model``; ``load()`` returns a factory called as
+    ``factory(model, options)`` that builds a :class:`~bpb_core.interfaces.ModelAdapter`.
+
+    Attributes:
+        models: Models worth listing (``stasis``, ``oracle``); empty when any string goes.
+        offline: Needs no network and no key: ``bpb run`` without ``--adapter`` runs every
+            listed model of every offline adapter.
+        catalog: A loader (see :func:`lazy`) of a function returning ``(model, description)``
+            rows for ``bpb list adapters`` (aliases of an adapter that takes any string).
+    """
+
+    models: tuple[str, ...] = ()
+    offline: bool = False
+    catalog: Callable[[], Any] | None = None
+    kind: Kind = field(init=False, default="adapter")
+
+
+@dataclass(frozen=True)
+class ScorerInfo(ComponentInfo):
+    """Scores one task's answers. ``load()`` returns a :class:`~bpb_core.interfaces.Scorer`
+    class.
+
+    Attributes:
+        task: Name of the task whose answers it scores.
+    """
+
+    task: str = ""
+    kind: Kind = field(init=False, default="scorer")
+
+
+@dataclass(frozen=True)
+class SuiteInfo(ComponentInfo):
+    """A weighted total over tasks, shown beside the task scores wherever all its tasks ran.
+    Nothing is loaded: the weights are the suite.
+
+    Attributes:
+        weights: Task name to weight; weights sum to 1.
+        title: Heading of the suite's charts (default: its name).
+    """
+
+    weights: Mapping[str, float] = field(default_factory=dict)
+    title: str = ""
+    kind: Kind = field(init=False, default="suite")
+
+    def __post_init__(self) -> None:
+        if not self.weights:
+            raise ValueError(f"suite {self.name!r}: give at least one task weight")
+        if abs(sum(self.weights.values()) - 1.0) > 1e-9:
+            raise ValueError(f"suite {self.name!r}: weights must sum to 1")
+
+
+@dataclass(frozen=True)
+class DiagnosticInfo(ComponentInfo):
+    """A table (and optionally a chart) derived from scored results. ``load()`` returns a
+    :class:`~bpb_core.interfaces.Diagnostic` class.
+
+    Attributes:
+        tasks: The tasks it looks at; reports show it when any of them ran.
+    """
+
+    tasks: tuple[str, ...] = ()
+    kind: Kind = field(init=False, default="diagnostic")
+
+
+@dataclass(frozen=True)
+class Registered:
+    """A record together with the plugin and distribution that supplied it."""
+
+    info: ComponentInfo
+    plugin: str
+    distribution: str
+    version: str
+    module: str = ""
+
+    @property
+    def origin(self) -> str:
+        """Who to blame for this component (:attr:`PluginSource.origin`)."""
+        return PluginSource(self.plugin, self.distribution, self.version, self.module).origin
+
 
 ENTRY_POINT_GROUP = "bpb"
 LOCAL = "<local>"
@@ -51,6 +217,15 @@ class PluginSource:
     distribution: str
     version: str
     module: str = ""
+
+    @property
+    def origin(self) -> str:
+        """Who to blame for what the plugin supplies: the plugin (entry point name and the module
+        it names) and its distribution, e.g. ``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1``.
+        """
+        where = f" ({self.module})" if self.module and self.module != self.name else ""
+        version = f" {self.version}" if self.version and self.version != "unknown" else ""
+        return f"plugin {self.name!r}{where} from {self.distribution}{version}"
 
 
 class Registry:
@@ -199,8 +374,6 @@ class Registry:
         Raises:
             PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
         """
-        from bpb_core.scored_units import check_scorer
-
         scorer: Scorer = self.build("scorer", name)
         check_scorer(scorer, self.origin("scorer", name))
         return scorer
@@ -236,9 +409,6 @@ class Registry:
             PluginBug: The factory raised, or returned something without an async
                 ``complete(request)``, naming the plugin.
         """
-        from bpb_core.capabilities import UsesRegistry
-        from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
-
         name, model = split_spec(spec, flag)
         factory = self.load("adapter", name)
         with blamed(self.origin("adapter", name), f"the adapter factory for {spec!r}"):
@@ -314,16 +484,6 @@ def _entry_point_plugins(group: str, problems: list[str]) -> Iterator[tuple[obje
             )
 
 
-def _article(word: str) -> str:
-    return "an" if word[0] in "aeiou" else "a"
-
-
-def _origin(source: PluginSource) -> str:
-    """``plugin 'echo' (bpb_echo.hooks) from bpb-echo 0.1.0``, as :attr:`Registered.origin`."""
-    info = ComponentInfo("")
-    return Registered(info, source.name, source.distribution, source.version, source.module).origin
-
-
 def _check_hook_names(pm: pluggy.PluginManager, sources: dict[int, PluginSource]) -> None:
     """Refuse a hook implementation bpb has no hook for (a misspelt ``bpb_model_adapter``),
     naming the plugin, its module and distribution."""
@@ -335,7 +495,7 @@ def _check_hook_names(pm: pluggy.PluginManager, sources: dict[int, PluginSource]
                 continue
             known = ", ".join(hookspecs.HOOK_KINDS)
             raise PluginError(
-                f"{_origin(sources[id(impl.plugin)])}: unknown hook {hook_name!r}; "
+                f"{sources[id(impl.plugin)].origin}: unknown hook {hook_name!r}; "
                 f"bpb's hooks: {known}"
             )
 
@@ -352,7 +512,7 @@ def _collect(
                 returned = impl.function()
                 if isinstance(returned, ComponentInfo):
                     raise PluginError(
-                        f"{_origin(source)}: hook {hook_name} returned one {_RECORDS[kind]}; "
+                        f"{source.origin}: hook {hook_name} returned one {_RECORDS[kind]}; "
                         "yield each record (or return a list of them)"
                     )
                 records = list(returned or ())
@@ -360,7 +520,7 @@ def _collect(
                 raise
             except Exception as exc:
                 problems.append(
-                    f"{_origin(source)}: hook {hook_name} failed: {type(exc).__name__}: {exc}"
+                    f"{source.origin}: hook {hook_name} failed: {type(exc).__name__}: {exc}"
                 )
                 continue
             for info in records:
@@ -373,8 +533,8 @@ def _add(
 ) -> None:
     if not isinstance(info, ComponentInfo) or info.kind != kind:
         raise PluginError(
-            f"{_origin(source)} returned {info!r} from its {kind.replace('_', ' ')} hook; "
-            f"expected {_article(kind)} {kind.replace('_', ' ')} record ({_RECORDS[kind]})"
+            f"{source.origin} returned {info!r} from its {kind.replace('_', ' ')} hook; "
+            f"expected {article(kind)} {kind.replace('_', ' ')} record ({_RECORDS[kind]})"
         )
     existing = table.get(info.name)
     if existing is not None:

@@ -29,6 +29,8 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NamedTuple
 
+from bpb_core.errors import PluginBug, blamed
+
 NAN = math.nan
 INVALID = "?"
 STATUSES = ("ok", "parse_error", "api_error", "missing")
@@ -81,8 +83,6 @@ def check_scorer(scorer: Any, origin: str) -> None:
     Raises:
         PluginBug: Naming ``origin`` (who supplied the scorer) and the attribute.
     """
-    from bpb_core.errors import PluginBug
-
     name = getattr(scorer, "name", type(scorer).__name__)
     rule = getattr(scorer, "scene_rule", None)
     if rule not in SCENE_RULES:
@@ -108,8 +108,6 @@ def unit_rows(scorer: Any, origin: str, answer: Any, truth: Any, scene: Any) -> 
         PluginBug: The scorer raised or returned something else, naming ``origin`` (who
             supplied it) and the scorer.
     """
-    from bpb_core.errors import PluginBug, blamed
-
     name = getattr(scorer, "name", type(scorer).__name__)
     with blamed(origin, f"scorer {name!r}: units()"):
         rows = scorer.units(answer, truth, scene)
@@ -134,8 +132,6 @@ def scored_units(scorer: Any, origin: str, frame: Any) -> Any:
         PluginBug: The scorer raised or returned something else, naming ``origin``.
     """
     import pandas as pd
-
-    from bpb_core.errors import PluginBug, blamed
 
     name = getattr(scorer, "name", type(scorer).__name__)
     with blamed(origin, f"scorer {name!r}: score()"):

@@ -5,8 +5,7 @@ from __future__ import annotations
 import inspect
 
 from bpb_core import hookspecs
-from bpb_core.registration import SuiteInfo
-from bpb_core.registry import Registry
+from bpb_core.registry import Registry, SuiteInfo
 from support.paths import DOCS as DOCS_DIR
 
 DOCS = DOCS_DIR / "plugins.md"

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.partial import partial_path
+from bpb_core.layout import partial_path
 from support.inprocess import bpb
 
 HOLD = (
     "import sys, pathlib\n"
-    "from bpb_core.partial import partial_folder\n"
+    "from bpb_core.layout import partial_folder\n"
     "with partial_folder(pathlib.Path(sys.argv[1]), 'bpb generate') as p:\n"
     "    (p / 'theirs.txt').write_text('being written')\n"
     "    print('held', flush=True); sys.stdin.read()\n"

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import AdapterInfo, lazy
+from bpb_core.registry import AdapterInfo, lazy
 
 
 @hookimpl

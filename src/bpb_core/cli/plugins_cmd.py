@@ -8,7 +8,7 @@ from typing import Any
 import click
 
 from bpb_core.cli.console import load_registry, stdout
-from bpb_core.registration import AdapterInfo, Kind, Registered
+from bpb_core.registry import AdapterInfo, Kind, Registered
 
 LIST_KINDS: dict[str, Kind] = {
     "tasks": "task",

@@ -36,11 +36,10 @@ def human(
     """Answer a dataset's questions in the browser; saved as a normal run (human:NAME),
     resumable, scenes in a seeded order."""
     from bpb_core.runner.options import RunOptions
-    from bpb_core.web.serve import HOST, require_web, serve
+    from bpb_core.web import HOST, require_web, serve
 
     require_web()
-    from bpb_core.web.human import HumanSession
-    from bpb_core.web.human_app import human_app
+    from bpb_core.web.human import HumanSession, human_app
 
     chosen = tuple(_csv(tasks, "--tasks"))
     options = RunOptions(tasks=chosen, horizons=_horizons(horizons), limit=limit)
@@ -54,11 +53,10 @@ def human(
 @click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
 def view(run_dirs: tuple[Path, ...], port: int) -> None:
     """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
-    from bpb_core.web.serve import HOST, require_web, serve
+    from bpb_core.web import HOST, require_web, serve
 
     require_web()
-    from bpb_core.web.viewer import Viewer
-    from bpb_core.web.viewer_app import viewer_app
+    from bpb_core.web.viewer import Viewer, viewer_app
 
     viewer = Viewer.load(list(run_dirs), load_registry())
     stderr().print(f"bpb view: open http://{HOST}:{port}/ (Ctrl-C stops)")

@@ -38,8 +38,7 @@ from bpb_core.errors import (
     blamed,
 )
 from bpb_core.interfaces import SceneFamily
-from bpb_core.layout import MANIFEST, check_writable_folder
-from bpb_core.partial import partial_folder
+from bpb_core.layout import MANIFEST, check_writable_folder, partial_folder
 from bpb_core.plugin_calls import (
     family_label,
     family_model,

@@ -10,7 +10,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
-import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -22,6 +21,7 @@ from bpb_core.dataset.scene_entry import DatasetScene, inside, parse_line, read_
 from bpb_core.errors import BadInput, UnknownScene
 from bpb_core.interfaces import SceneFamily
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey, iter_scene_keys, select_keys
+from bpb_core.model_calls import non_finite
 from bpb_core.plugin_calls import loaded_config, simulator_named
 from bpb_core.scored_units import object_origin
 from bpb_core.simulator_spec import SimulatorSpec, parse_spec
@@ -271,9 +271,9 @@ def _manifest_file(root: Path) -> tuple[dict[str, Any] | None, str | None]:
             f"{path}: not a dataset manifest: a JSON object ({{...}}) expected, "
             f"not {_json_kind(data)}"
         )
-    where = _non_finite(data)
-    if where is not None:
-        raise BadInput(f"{path}: {where}: not a finite number (NaN and infinity are not JSON)")
+    found = non_finite(data)
+    if found is not None:
+        raise BadInput(f"{path}: {found[0]}: not a finite number (NaN and infinity are not JSON)")
     recorded = data.get("dataset_hash")
     if recorded is not None and not isinstance(recorded, str):
         raise BadInput(f"{path}: dataset_hash: a string expected, not {_json_kind(recorded)}")
@@ -304,25 +304,6 @@ def _json_kind(value: object) -> str:
         return "null"
     text = json.dumps(value)
     return f"{text[:40]}..." if len(text) > 40 else text
-
-
-def _non_finite(value: object, where: str = "") -> str | None:
-    """The field path of the first NaN or infinity in ``value`` (``None``: there is none)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return where or "(top level)"
-    if isinstance(value, dict):
-        items: list[tuple[str, object]] = [
-            (f"{where}.{key}" if where else str(key), item) for key, item in value.items()
-        ]
-    elif isinstance(value, list):
-        items = [(f"{where}[{index}]", item) for index, item in enumerate(value)]
-    else:
-        return None
-    for path, item in items:
-        found = _non_finite(item, path)
-        if found is not None:
-            return found
-    return None
 
 
 @dataclass(frozen=True)
@@ -406,11 +387,6 @@ def open_folder(data: Path | DataFolder, registry: Registry | None = None) -> Da
     entry = registry.entries("scene_family").get(family.name)
     origin = entry.origin if entry is not None else object_origin(family)
     return DataFolder(data, recorded, digest, family, origin)
-
-
-def dataset_simulator_spec(root: Path, family: SceneFamily, origin: str) -> SimulatorSpec:
-    """:meth:`DataFolder.simulator_spec` of the folder ``root`` made by ``family``."""
-    return DataFolder(root, manifest_data(root), None, family, origin).simulator_spec()
 
 
 def dataset_family(

@@ -7,6 +7,14 @@ cells of ``index.csv``, and ``init.json`` and ``final.json`` verbatim (so ``bpb 
 the export back, see :mod:`bpb_core.dataset.hf_import`). ``bpb/`` keeps ``dataset.json``,
 ``index.csv`` and ``checksums.sha256`` verbatim (so ``verify()`` checks the scene files an export
 carries). The same dataset gives the same bytes.
+
+The README dataset card has YAML front matter and a Markdown body. The front matter is what the
+Hub and ``datasets`` read: license, one config whose splits are the horizons (``data/h3-*``),
+the features and the rows per split. The body says what a row is, how to load it, how the data
+was generated (config and seed, from ``dataset.json``), which simulator made the ground truth
+and what to cite; the family's words come from its
+:class:`~bpb_core.capabilities.DescribesDataset`. YAML is written by hand with JSON scalars
+(valid YAML), so the export needs no YAML library.
 """
 
 from __future__ import annotations
@@ -14,27 +22,36 @@ from __future__ import annotations
 import csv
 import json
 import shutil
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bpb_core.capabilities import DescribesDataset
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset
+from bpb_core.dataset.reader import DataFolder, Dataset, dataset_keys, load_dataset, manifest_data
 from bpb_core.dataset.scene_entry import read_scene_file
-from bpb_core.errors import NO_ROOM, BadInput, WriteRefused, write_refused, writing
+from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
-from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, check_writable_folder, horizon_label
-from bpb_core.library.answers import build_messages
-from bpb_core.library.hf_card import card_text
-from bpb_core.partial import partial_folder
+from bpb_core.layout import (
+    FINAL,
+    INDEX,
+    INIT,
+    MANIFEST,
+    check_writable_folder,
+    horizon_label,
+    partial_folder,
+)
+from bpb_core.model_calls import prompt_text
+from bpb_core.version import __version__
 
 if TYPE_CHECKING:
     from bpb_core.dataset.scene_entry import DatasetScene
     from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 
+_FEATURE_NAMES = {"Image": "image"}
 MODES: tuple[InputMode, ...] = ("image", "image+state", "state")
 SHARD_ROWS = 1000
 ROW_GROUP = 100
@@ -240,10 +257,9 @@ def _relative(image: Path) -> str:
 
 def _prompt(task: Task, scene: DatasetScene, mode: InputMode, registry: Registry) -> str:
     """The text of the messages ``bpb run`` sends (the image is the ``image`` column)."""
-    messages = build_messages(task, scene, mode, registry=registry)
-    return "\n\n".join(
-        part.text for message in messages for part in message.parts if hasattr(part, "text")
-    )
+    from bpb_core.library import build_messages
+
+    return prompt_text(build_messages(task, scene, mode, registry=registry), "\n\n")
 
 
 def _write_split(
@@ -293,3 +309,112 @@ def _write_side_files(dataset: Dataset, out: Path) -> None:
                 f"{dataset.root / name}: cannot read: {exc.strerror or exc}; the dataset is "
                 "damaged: load_dataset(...).verify() lists what changed"
             ) from None
+
+
+def card_text(
+    dataset: Dataset,
+    features: Mapping[str, Mapping[str, str]],
+    splits: Mapping[str, tuple[int, int]],
+    tasks: Sequence[str],
+    registry: Registry,
+) -> str:
+    """The whole README.md of the export."""
+    words = dataset.family.dataset_card() if isinstance(dataset.family, DescribesDataset) else {}
+    return "\n".join(
+        [
+            "---",
+            *_front_matter(dataset, words, features, splits),
+            "---",
+            "",
+            *_body(dataset, words, splits, tasks, _truth(dataset, registry)),
+        ]
+    )
+
+
+def _truth(dataset: Dataset, registry: Registry) -> list[str]:
+    """Which simulator made the ground truth, as the config names it, and what it is (its
+    registered summary): the family's words hold for every simulator, and only the simulator
+    knows whether its truth is exact or stepped."""
+    origin = registry.origin("scene_family", dataset.family.name)
+    folder = DataFolder(dataset.root, manifest_data(dataset.root), None, dataset.family, origin)
+    spec = folder.simulator_spec()
+    try:
+        summary = registry.get("simulator", spec.name).info.summary
+    except UnknownName:
+        summary = ""
+    what = f": {summary.rstrip('.')}." if summary else "."
+    return ["## Ground truth", "", f"Computed by the simulator `{spec.spec}`{what}", ""]
+
+
+def _front_matter(
+    dataset: Dataset,
+    words: Mapping[str, Any],
+    features: Mapping[str, Mapping[str, str]],
+    splits: Mapping[str, tuple[int, int]],
+) -> list[str]:
+    q = json.dumps
+    lines = [f"pretty_name: {q(words.get('pretty_name') or dataset.family.name)}"]
+    lines.append(f"license: {q(words.get('license') or 'other')}")
+    for key in ("task_categories", "tags"):
+        if words.get(key):
+            lines += [f"{key}:", *(f"- {q(value)}" for value in words[key])]
+    lines += ["configs:", "- config_name: default", "  data_files:"]
+    for split in splits:
+        lines += [f"  - split: {q(split)}", f"    path: {q(f'data/{split}-*')}"]
+    lines += ["dataset_info:", "  features:"]
+    for name, feature in features.items():
+        dtype = _FEATURE_NAMES.get(feature["_type"], feature.get("dtype", "string"))
+        lines += [f"  - name: {q(name)}", f"    dtype: {q(dtype)}"]
+    lines.append("  splits:")
+    for split, (rows, nbytes) in splits.items():
+        lines += [f"  - name: {q(split)}", f"    num_bytes: {nbytes}", f"    num_examples: {rows}"]
+    lines += ["bpb:", f"  version: {q(__version__)}", f"  family: {q(dataset.family.name)}"]
+    lines += [f"  seed: {dataset.manifest.seed}", f"  dataset_hash: {q(dataset.dataset_hash)}"]
+    return lines
+
+
+def _body(
+    dataset: Dataset,
+    words: Mapping[str, Any],
+    splits: Mapping[str, tuple[int, int]],
+    tasks: Sequence[str],
+    truth: list[str],
+) -> list[str]:
+    manifest = dataset.manifest
+    title = words.get("pretty_name") or dataset.family.name
+    counts = ", ".join(f"{split}: {rows}" for split, (rows, _) in splits.items())
+    lines = [f"# {title}", "", str(words.get("description") or "").strip(), "", *truth]
+    lines += [
+        "## Rows",
+        "",
+        f"One row per scene and task ({', '.join(tasks)}); one split per horizon ({counts} rows).",
+        "`image` is the input image models are shown; `prompt_image`, `prompt_image_state` and",
+        "`prompt_state` are the exact prompt texts bpb sends in each input mode; `target` is the",
+        "correct answer as JSON; `stable` and `stability` are the stability annotation;",
+        "`metadata` holds the scene's cells of `index.csv`; `scene` and `truth` are the scene's",
+        "`init.json` and `final.json`, verbatim. `bpb/` keeps `dataset.json`, `index.csv` and",
+        "`checksums.sha256`.",
+        "",
+        "```python",
+        "from datasets import load_dataset",
+        "",
+        'rows = load_dataset("parquet", data_dir="data")  # or the Hub id / this folder',
+        "```",
+        "",
+        "Run models on it with bpb itself: `bpb run --data THIS_FOLDER --adapter ...` scores",
+        "exactly as a run on the source folder.",
+        "",
+        "## Generation",
+        "",
+        f"Made by bpb {manifest.versions.get('bpb', '?')} with seed {manifest.seed},",
+        f"{manifest.per_horizon} scenes per horizon at horizons "
+        f"{', '.join(f'{h:g}' for h in manifest.horizons)} s; dataset hash "
+        f"`{dataset.dataset_hash}`. The same seed and config give the same bytes:",
+        "",
+        "```json",
+        json.dumps({"seed": manifest.seed, "config": manifest.config}, indent=2, sort_keys=True),
+        "```",
+    ]
+    if words.get("citation"):
+        lines += ["", "## Citation", "", "```bibtex", str(words["citation"]).strip(), "```"]
+    return [*lines, ""]

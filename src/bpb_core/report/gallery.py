@@ -20,7 +20,7 @@ from bpb_core.capabilities import DrawsOverlay, ExplainsErrors, Picturing
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.layout import SceneKey
 from bpb_core.picture import ScenePicture
-from bpb_core.registration import SuiteInfo
+from bpb_core.registry import SuiteInfo
 from bpb_core.results.tables import scene_scores
 from bpb_core.scored_units import object_origin
 

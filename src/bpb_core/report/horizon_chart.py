@@ -19,7 +19,7 @@ from bpb_core.report.charts import figure, label, png, run_styles
 from bpb_core.results.completeness import level
 
 if TYPE_CHECKING:
-    from bpb_core.registration import SuiteInfo
+    from bpb_core.registry import SuiteInfo
 
 SHORT_FACE = "#f0f0f0"
 

@@ -16,7 +16,7 @@ import pandas as pd
 
 from bpb_core.capabilities import ReportsMetrics
 from bpb_core.errors import PluginBug, blamed
-from bpb_core.registration import DiagnosticInfo
+from bpb_core.registry import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.datasets import by_dataset
 from bpb_core.results.frames import Results

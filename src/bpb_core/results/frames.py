@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.plugin_calls import parsed_answer
-from bpb_core.registration import SuiteInfo
+from bpb_core.registry import SuiteInfo
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
 from bpb_core.scored_units import (

@@ -24,7 +24,7 @@ import pandas as pd
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, excluded_tasks
 
 if TYPE_CHECKING:
-    from bpb_core.registration import SuiteInfo
+    from bpb_core.registry import SuiteInfo
 
 View = Literal["strict", "answered"]
 VIEWS: tuple[View, ...] = ("strict", "answered")

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.errors import BadInput
-from bpb_core.registration import SuiteInfo
+from bpb_core.registry import SuiteInfo
 from bpb_core.results.tables import RUN_COLUMNS, UNANSWERED, View, scene_scores, tasks_of
 
 FloatArray = np.ndarray[tuple[int, ...], np.dtype[np.float64]]

@@ -3,9 +3,89 @@ browsed pair by pair (``bpb view``).
 
 Both are Starlette apps served by uvicorn on 127.0.0.1 only, with Jinja2 templates rendered with
 autoescaping; the apps themselves answer only requests addressed to 127.0.0.1 or localhost,
-however they are served (:func:`bpb_core.web.serve.loopback_only`). Core knows no task: each
+however they are served (:func:`loopback_only`). Core knows no task: each
 task that people can answer brings its own form widgets
 (:class:`~bpb_core.capabilities.AnswersInBrowser`); answers are stored as a normal run through
 the run-folder code, so ``bpb report`` puts people beside models. Starlette, uvicorn and Jinja2
-come with the ``web`` extra (``pip install 'bpb[web]'``).
+come with the ``web`` extra (``pip install 'bpb[web]'``): this module imports none of them
+until it is used, so :func:`require_web` can say which is missing.
 """
+
+from __future__ import annotations
+
+import functools
+from typing import TYPE_CHECKING, Any
+
+from bpb_core.errors import BadInput
+from bpb_core.model_calls import valid_unicode
+
+if TYPE_CHECKING:
+    import jinja2
+    from starlette.middleware import Middleware
+    from starlette.responses import HTMLResponse
+
+HOST = "127.0.0.1"
+NAMES = (HOST, "localhost")  # the Host headers the apps answer
+
+
+def require_web() -> None:
+    """Raise :class:`BadInput` naming the extra when Starlette, uvicorn or Jinja2 is missing."""
+    import importlib.util
+
+    missing = [m for m in ("starlette", "uvicorn", "jinja2") if importlib.util.find_spec(m) is None]
+    if missing:
+        raise BadInput(f"the web apps need {', '.join(missing)}: pip install 'bpb[web]'")
+
+
+def loopback_only() -> Middleware:
+    """The middleware every app is built with: it answers only requests addressed to this
+    machine by name (``Host`` 127.0.0.1 or localhost, any port); others get a 400. Listening on
+    loopback is not enough: a web page whose own name is made to resolve to 127.0.0.1 (DNS
+    rebinding) reaches the port, and as the same origin it could read the pages and post
+    answers. It is part of the app, not of :func:`serve`, so an app served some other way (a
+    library caller's own uvicorn) has it too."""
+    from starlette.middleware import Middleware
+    from starlette.middleware.trustedhost import TrustedHostMiddleware
+
+    return Middleware(TrustedHostMiddleware, allowed_hosts=list(NAMES))
+
+
+def serve(app: Any, port: int) -> None:
+    """Run ``app`` (built with :func:`loopback_only`) on http://127.0.0.1:``port`` until
+    interrupted: the apps have no login, so no other machine may reach them."""
+    import uvicorn
+
+    uvicorn.run(app, host=HOST, port=port, log_level="warning", access_log=False)
+
+
+@functools.cache
+def environment() -> jinja2.Environment:
+    """Templates of ``bpb_core/web/templates`` with autoescaping on (also for strings); the
+    tasks' form templates are rendered in the same environment."""
+    import jinja2
+
+    return jinja2.Environment(
+        loader=jinja2.PackageLoader("bpb_core.web", "templates"),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+
+
+def render(name: str, **context: Any) -> str:
+    """Template ``name`` rendered with ``context`` (lone surrogates, from a hand-edited log or
+    manifest, as U+FFFD: the page must encode to UTF-8)."""
+    return valid_unicode(environment().get_template(name).render(**context))
+
+
+def render_string(source: str, **context: Any) -> str:
+    """A plugin's template source rendered with ``context`` (autoescaped like core's)."""
+    return valid_unicode(environment().from_string(source).render(**context))
+
+
+def error_page(message: str, status: int = 400) -> HTMLResponse:
+    """The error page of both apps: ``message`` (one line) with the HTTP ``status``."""
+    from starlette.responses import HTMLResponse
+
+    return HTMLResponse(render("error.html", message=message, status=status), status_code=status)

@@ -1,14 +1,22 @@
-"""A person's answering session (``bpb human``): which scene comes next, the page it shows,
-and turning a posted form into stored answers. No web framework here: the app wraps it.
+"""``bpb human``: a person's answering session (which scene comes next, the page it shows, turning
+a posted form into stored answers) and the Starlette app that serves it, one scene at a time.
 
+``GET /`` shows the next unanswered scene (or a closing page), ``POST /answer`` stores it or
+answers 400 with the field at fault, ``GET /image/<scene_id>`` serves the scene's input image.
 The scenes come in an order shuffled by the seed; a (scene, task) answered before is never asked
 again, so closing the browser and starting again resumes. Every posted field is checked before
 anything is stored: a bad form stores nothing and says which field is wrong. Each page carries
 the session's random token, so a page of another site cannot post answers into the run.
+
+A task's browser form hooks (:class:`~bpb_core.capabilities.AnswersInBrowser`) are called
+checked: each runs under :func:`~bpb_core.errors.blamed` and its value is checked, so a task's
+mistake is one line naming its plugin (:class:`~bpb_core.errors.PluginBug`, shown as an error
+page) instead of a bare 500, or an answer stored that is no answer.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import random
 import re
@@ -19,26 +27,41 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from markupsafe import Markup
+from PIL import Image
+from starlette.applications import Starlette
+from starlette.exceptions import HTTPException
+from starlette.requests import Request
+from starlette.responses import HTMLResponse, RedirectResponse, Response
+from starlette.routing import Route
+
 from bpb_core.capabilities import AnswersInBrowser
-from bpb_core.errors import BadInput, ParseFailure
+from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
-from bpb_core.model_calls import TextPart
-from bpb_core.plugin_calls import parsed_answer, prompt_messages
+from bpb_core.model_calls import prompt_text
+from bpb_core.plugin_calls import named, parsed_answer, prompt_messages
 from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
 from bpb_core.runner.asking import asking
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.web.task_forms import form_answer, form_context, form_html
+from bpb_core.web import error_page, loopback_only, render, render_string
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 
+
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 MAX_FIELDS = 200
 MAX_VALUE = 200
 MAX_MS = 24 * 3600 * 1000
+# A field's name and value as posted (percent-encoded: up to 12 bytes a character); the parser
+# stops reading past it, so a post cannot make the app hold more than MAX_FIELDS of these
+# (Starlette's defaults, 1000 fields of 1 MB, let any web page make it hold a gigabyte).
+MAX_FIELD_BYTES = 16 * MAX_VALUE + 1024
+RESERVED = ("prefix", "image_width", "image_height")
+"""Template values core adds to a task's :meth:`~AnswersInBrowser.form_context`."""
 
 
 class FormError(ValueError):
@@ -112,9 +135,7 @@ class HumanSession:
         for name, task in self.tasks.items():
             origin = self.registry.origin("task", name)
             messages = prompt_messages(task, origin, scene, image, self._prompt_options(name))
-            prompts[name] = "\n".join(
-                p.text for m in messages for p in m.parts if isinstance(p, TextPart)
-            )
+            prompts[name] = prompt_text(messages)
             assert isinstance(task, AnswersInBrowser)
             forms[name] = form_context(task, origin, scene, image)
         done = len({sid for sid, _ in completed(self.run_dir)})
@@ -233,3 +254,140 @@ def _milliseconds(key: str, value: str) -> int:
     if not (value.isascii() and value.isdigit()) or int(value) > MAX_MS:
         raise FormError(f"{key}: expected whole milliseconds from 0 to {MAX_MS}")
     return int(value)
+
+
+def form_context(
+    task: AnswersInBrowser, origin: str, scene: Any, image: bytes | None
+) -> dict[str, Any]:
+    """``task.form_context(scene, image)``, checked: a dict of template values named by str,
+    none of them one core adds (:data:`RESERVED`).
+
+    Raises:
+        PluginBug: The task raised or returned something else, naming ``origin``.
+    """
+    what = f"{named('task', task)}: form_context()"
+    with blamed(origin, what):
+        context = task.form_context(scene, image)
+    if not isinstance(context, dict) or not all(isinstance(k, str) for k in context):
+        raise PluginBug(
+            f"{origin}: {what} returned {type(context).__name__}; expected a dict of template "
+            "values named by str"
+        )
+    taken = sorted(set(RESERVED) & set(context))
+    if taken:
+        raise PluginBug(f"{origin}: {what} returned {taken[0]!r}, a value core sets itself")
+    return context
+
+
+def form_html(task: AnswersInBrowser, origin: str, context: dict[str, Any], **core: Any) -> str:
+    """The task's ``form_template`` rendered with ``context`` and core's values (``core``).
+
+    Raises:
+        PluginBug: The template is no str or does not render, naming ``origin``.
+    """
+    what = f"{named('task', task)}: form_template"
+    with blamed(origin, what):
+        source = task.form_template
+        if not isinstance(source, str):
+            raise PluginBug(f"{origin}: {what} is {type(source).__name__}; expected a str")
+        return render_string(source, **context, **core)
+
+
+def form_answer(
+    task: AnswersInBrowser, origin: str, fields: Mapping[str, str], scene: Any
+) -> dict[str, Any]:
+    """``task.read_form(fields, scene)``, checked: a dict JSON can hold (the answer's text).
+    A ``ValueError`` passes through: it is how a task says which field is wrong.
+
+    Raises:
+        ValueError: The task refused a field (its message names it).
+        PluginBug: The task raised anything else or returned something else, naming ``origin``.
+    """
+    what = f"{named('task', task)}: read_form()"
+    with blamed(origin, what, passing=(ValueError,)):
+        answer = task.read_form(fields, scene)
+    try:
+        if not isinstance(answer, dict):
+            raise TypeError(f"a {type(answer).__name__}")
+        json.dumps(answer, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise PluginBug(
+            f"{origin}: {what} returned no answer JSON can hold ({exc}); expected a dict in the "
+            "task's answer format"
+        ) from exc
+    return answer
+
+
+def human_app(session: HumanSession) -> Starlette:
+    """The app answering ``session``'s dataset."""
+
+    async def index(request: Request) -> Response:
+        ref = session.next_scene()
+        if ref is None:
+            return HTMLResponse(render("human_done.html", session=session))
+        scene = ref.load()
+        width, height = _image_size(ref.image())
+        try:
+            page = session.page(ref)
+            forms = {
+                name: Markup(session.form(name, context, width, height))
+                for name, context in page.forms.items()
+            }
+        except PluginBug as exc:  # one line naming the plugin, not a bare 500
+            return error_page(str(exc), 500)
+        html = render(
+            "human.html",
+            session=session,
+            page=page,
+            scene=scene,
+            forms=forms,
+            shown=f"{time.time():.3f}",
+            width=width,
+            height=height,
+        )
+        return HTMLResponse(html)
+
+    async def answer(request: Request) -> Response:
+        try:
+            form = await request.form(
+                max_files=0, max_fields=MAX_FIELDS, max_part_size=MAX_FIELD_BYTES
+            )
+        except HTTPException as exc:  # too many or too long fields, a malformed body
+            return error_page(f"form: {exc.detail}")
+        fields = {k: v for k, v in form.multi_items() if isinstance(v, str)}
+        if len(fields) != len(form.multi_items()):
+            return error_page("form: repeated or file fields")
+        try:
+            shown = float(fields.get("shown", ""))
+        except ValueError:
+            return error_page("shown: expected the time the page was shown")
+        if not 0 < shown <= time.time() + 5:
+            return error_page("shown: not a time this page could have been shown")
+        try:
+            session.submit(fields, shown)
+        except FormError as exc:
+            return error_page(str(exc))
+        except PluginBug as exc:  # nothing stored
+            return error_page(str(exc), 500)
+        return RedirectResponse("/", status_code=303)
+
+    async def image(request: Request) -> Response:
+        sid = request.path_params["scene_id"]
+        for ref in session.order:
+            if ref.scene_id == sid:
+                return Response(ref.image(), media_type="image/png")
+        return error_page(f"scene {sid!r}: not in this session", 404)
+
+    return Starlette(
+        routes=[
+            Route("/", index),
+            Route("/answer", answer, methods=["POST"]),
+            Route("/image/{scene_id}", image),
+        ],
+        middleware=[loopback_only()],
+    )
+
+
+def _image_size(png: bytes) -> tuple[int, int]:
+    with Image.open(io.BytesIO(png)) as img:
+        return img.size

@@ -1,5 +1,9 @@
-"""What ``bpb view`` shows: the (run, scene, task) pairs of some runs, filtered, and everything
-about one pair. No web framework here: the app wraps it.
+"""``bpb view``: the (run, scene, task) pairs of some runs, filtered, everything about one pair,
+and the Starlette app that serves them.
+
+``GET /`` lists pairs (query parameters ``model``, ``task``, ``horizon``, ``stable``,
+``verdict``, ``page``), ``GET /pair/<run>/<scene_id>/<task>`` shows one, ``GET /image/...`` and
+``GET /overlay/...`` serve its pictures. An unknown filter value is a 400 naming it.
 
 Pairs come from the results frames (:func:`~bpb_core.results.frames.load_results`); a pair is
 ``correct`` when every scored unit of it is, ``unanswered`` when the run has no answer for it
@@ -17,16 +21,23 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+from urllib.parse import urlencode
 
 import pandas as pd
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import HTMLResponse, Response
+from starlette.routing import Route
 
+from bpb_core.errors import PluginBug
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import SceneKey
-from bpb_core.model_calls import TextPart
+from bpb_core.model_calls import prompt_text
 from bpb_core.plugin_calls import prompt_messages
 from bpb_core.report.gallery import drawing
 from bpb_core.results.frames import Results, load_results
 from bpb_core.run_folder import AnswerRecord, read_answer, read_attempts
+from bpb_core.web import error_page, loopback_only, render
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -201,8 +212,7 @@ class Viewer:
             prompt = PromptOptions(mode, cot, bool(options.get("force_numeric", False)), level)  # type: ignore[arg-type]
             origin = self.registry.origin("task", task)
             messages = prompt_messages(component, origin, scene, image, prompt)
-            text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
-            out.append((level, text))
+            out.append((level, prompt_text(messages)))
         return out
 
 
@@ -245,3 +255,69 @@ def _page(value: str) -> int:
     if not (value.isascii() and value.isdigit()) or not 1 <= int(value) <= 1_000_000:
         raise QueryError("page: expected a page number")
     return int(value)
+
+
+def viewer_app(viewer: Viewer) -> Starlette:
+    """The app browsing ``viewer``'s runs."""
+    run_ids = {run.label: i for i, run in enumerate(viewer.results.runs)}
+
+    async def index(request: Request) -> Response:
+        query = dict(request.query_params)
+        try:
+            rows, total = viewer.select(query)
+        except QueryError as exc:
+            return error_page(str(exc))
+        page = int(query.get("page") or 1)
+        keep = {k: v for k, v in query.items() if k != "page" and v}
+        html = render(
+            "view_index.html",
+            viewer=viewer,
+            rows=rows.to_dict(orient="records"),
+            run_ids=run_ids,
+            total=total,
+            page=page,
+            pages=max(1, -(-total // PAGE_SIZE)),
+            query=keep,
+            choices=viewer.choices(),
+            link=lambda **change: "?" + urlencode({**keep, **change}),
+        )
+        return HTMLResponse(html)
+
+    async def pair(request: Request) -> Response:
+        p = request.path_params
+        try:
+            view = viewer.pair(int(p["run"]), p["scene_id"], p["task"])
+        except QueryError as exc:
+            return error_page(str(exc), 404)
+        except PluginBug as exc:  # one line naming the plugin, not a bare 500
+            return error_page(str(exc), 500)
+        return HTMLResponse(render("view_pair.html", view=view))
+
+    async def image(request: Request) -> Response:
+        p = request.path_params
+        try:
+            return Response(viewer.image(int(p["run"]), p["scene_id"]), media_type="image/png")
+        except QueryError as exc:
+            return error_page(str(exc), 404)
+
+    async def overlay(request: Request) -> Response:
+        p = request.path_params
+        try:
+            png = viewer.overlay(int(p["run"]), p["scene_id"], p["task"])
+        except QueryError as exc:
+            return error_page(str(exc), 404)
+        except PluginBug as exc:
+            return error_page(str(exc), 500)
+        if not png:
+            return error_page("the scene family draws no picture", 404)
+        return Response(png, media_type="image/png")
+
+    return Starlette(
+        routes=[
+            Route("/", index),
+            Route("/pair/{run:int}/{scene_id}/{task}", pair),
+            Route("/image/{run:int}/{scene_id}", image),
+            Route("/overlay/{run:int}/{scene_id}/{task}", overlay),
+        ],
+        middleware=[loopback_only()],
+    )

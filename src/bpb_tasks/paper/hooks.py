@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import DiagnosticInfo, SuiteInfo, lazy
+from bpb_core.registry import DiagnosticInfo, SuiteInfo, lazy
 
 PAPER_WEIGHTS = {"q1": 0.3, "q2": 0.3, "q3": 0.4}
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import DiagnosticInfo, ScorerInfo, TaskInfo, lazy
+from bpb_core.registry import DiagnosticInfo, ScorerInfo, TaskInfo, lazy
 
 
 @hookimpl

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import SimulatorInfo, lazy
+from bpb_core.registry import SimulatorInfo, lazy
 
 
 @hookimpl

@@ -21,8 +21,7 @@ from bpb_core.bench.sim import bench_simulators, with_scaling
 from bpb_core.bench.sim_report import SimBench, SimRow
 from bpb_core.errors import BadInput, UnknownName
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import SceneFamilyInfo, SimulatorInfo
-from bpb_core.registry import Registry, make_registry
+from bpb_core.registry import Registry, SceneFamilyInfo, SimulatorInfo, make_registry
 from bpb_core.simulate import simulate_lines
 from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.bench_compare import random_scenes
@@ -353,7 +352,7 @@ def test_bench_sim_refuses_outputs_it_cannot_write_before_simulating(
 
 DIVERGING = """
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import SimulatorInfo
+from bpb_core.registry import SimulatorInfo
 
 
 class Diverging:

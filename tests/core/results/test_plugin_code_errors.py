@@ -31,7 +31,7 @@ from bpb_core import (
     score_answer,
 )
 from bpb_core.errors import PluginBug
-from bpb_core.library.answers import mark
+from bpb_core.library import mark
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.report.build import build_report
 from bpb_core.report.parts import report_parts

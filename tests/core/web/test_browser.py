@@ -17,10 +17,8 @@ from bpb_core.report.build import build_report
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import evaluate
 from bpb_core.runner.options import RunOptions
-from bpb_core.web.human import HumanSession
-from bpb_core.web.human_app import human_app
-from bpb_core.web.viewer import Viewer
-from bpb_core.web.viewer_app import viewer_app
+from bpb_core.web.human import HumanSession, human_app
+from bpb_core.web.viewer import Viewer, viewer_app
 from bpb_tasks.billiards.config import load_config
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from support.web_server import chromium, serving

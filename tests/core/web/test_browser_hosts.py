@@ -9,8 +9,7 @@ from typing import Any
 import pytest
 
 from bpb_core.registry import Registry
-from bpb_core.web.viewer import Viewer
-from bpb_core.web.viewer_app import viewer_app
+from bpb_core.web.viewer import Viewer, viewer_app
 from support.web_server import chromium, serving
 
 sync_api = pytest.importorskip("playwright.sync_api")

@@ -16,8 +16,7 @@ from bpb_core.errors import BadInput
 from bpb_core.registry import Registry
 from bpb_core.run_folder import iter_answers, read_manifest
 from bpb_core.runner.options import RunOptions
-from bpb_core.web.human import HumanSession
-from bpb_core.web.human_app import human_app
+from bpb_core.web.human import HumanSession, human_app
 from support.inprocess import bpb
 
 LOCAL = "http://127.0.0.1"  # the apps answer only requests addressed to loopback names
@@ -118,7 +117,7 @@ def test_the_closing_page_comes_when_every_scene_is_answered(
 def test_the_apps_listen_on_loopback_only(monkeypatch: pytest.MonkeyPatch) -> None:
     import uvicorn
 
-    from bpb_core.web import serve as serving
+    from bpb_core import web as serving
 
     seen: dict[str, object] = {}
     monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw))

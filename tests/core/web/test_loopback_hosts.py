@@ -12,10 +12,8 @@ import pytest
 
 from bpb_core.registry import Registry
 from bpb_core.runner.options import RunOptions
-from bpb_core.web.human import HumanSession
-from bpb_core.web.human_app import human_app
-from bpb_core.web.viewer import Viewer
-from bpb_core.web.viewer_app import viewer_app
+from bpb_core.web.human import HumanSession, human_app
+from bpb_core.web.viewer import Viewer, viewer_app
 from support.web_server import serving
 
 

@@ -9,8 +9,7 @@ from pathlib import Path
 from starlette.testclient import TestClient
 
 from bpb_core.registry import Registry
-from bpb_core.web.viewer import Viewer
-from bpb_core.web.viewer_app import viewer_app
+from bpb_core.web.viewer import Viewer, viewer_app
 
 MODEL = 2  # litellm_model, after baseline_oracle and baseline_stasis
 

@@ -1,7 +1,7 @@
 """The ``bpb`` entry point of bpb-tiny: registers the slider family, its simulator, task,
 scorer and diagnostic.
 
-Only records are built here; every ``load`` is :func:`~bpb_core.registration.lazy`, so listing
+Only records are built here; every ``load`` is :func:`~bpb_core.registry.lazy`, so listing
 plugins imports none of pandas, Pillow or matplotlib.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registration import (
+from bpb_core.registry import (
     DiagnosticInfo,
     SceneFamilyInfo,
     ScorerInfo,
