@@ -31,10 +31,12 @@ if TYPE_CHECKING:
 
 # Okabe-Ito: distinguishable with every common colour-vision deficiency and in greyscale order.
 _MODEL_COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000"]
-_BASELINE_GREYS = ["#4d4d4d", "#969696", "#737373", "#bdbdbd"]
-_BASELINE_LINES = ["--", ":", "-.", (0, (6, 2, 1, 2))]
-_BASELINE_HATCHES = ["//", "..", "xx", "\\\\"]
-_BASELINE_MARKERS = ["s", "^", "D", "v"]
+_BASELINE_STYLES: list[dict[str, Any]] = [
+    {"color": "#4d4d4d", "ls": "--", "hatch": "//", "marker": "s"},
+    {"color": "#969696", "ls": ":", "hatch": "..", "marker": "^"},
+    {"color": "#737373", "ls": "-.", "hatch": "xx", "marker": "D"},
+    {"color": "#bdbdbd", "ls": (0, (6, 2, 1, 2)), "hatch": "\\\\", "marker": "v"},
+]
 SHORT_FACE = "#f0f0f0"
 
 
@@ -109,13 +111,7 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     ordered = runs.assign(run=runs["run"].astype(str)).drop_duplicates("run").sort_values("run")
     for row in ordered.itertuples():
         if row.baseline:
-            k = baselines % len(_BASELINE_GREYS)
-            styles[str(row.run)] = {
-                "color": _BASELINE_GREYS[k],
-                "ls": _BASELINE_LINES[k],
-                "hatch": _BASELINE_HATCHES[k],
-                "marker": _BASELINE_MARKERS[k],
-            }
+            styles[str(row.run)] = dict(_BASELINE_STYLES[baselines % len(_BASELINE_STYLES)])
             baselines += 1
         else:
             colour = _MODEL_COLOURS[models % len(_MODEL_COLOURS)]
