@@ -182,7 +182,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
     horizon = horizon_cells(tables["accuracy_answered"], rule)
     console.print(_cell_table("Accuracy by horizon (answered only; \\[answered share])", *horizon))
     if not tables["metadata"].empty:
-        from bpb_core.results.metadata import metadata_by_horizon
+        from bpb_core.results.tables import metadata_by_horizon
 
         wide = metadata_by_horizon(tables["metadata"])
         console.print(_frame_table("Adapters' own measurements by horizon", wide, percent=False))

@@ -28,7 +28,7 @@ def show_summary(
 
     from bpb_core.cli.console import stderr, stdout
     from bpb_core.errors import BpbError
-    from bpb_core.results.scores_csv import write_scores
+    from bpb_core.results.frames import write_scores
 
     try:
         frame = write_scores(run_dirs, registry, folders)

@@ -18,19 +18,19 @@ With several datasets, chart and table names start with the dataset's short hash
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.errors import BadInput, WriteRefused, writing
-from bpb_core.report import gallery, html
+from bpb_core.errors import BadInput, PluginBug, WriteRefused, blamed, writing
+from bpb_core.report import charts as ch, gallery, html
 from bpb_core.report.exports import part_json, write_exports
-from bpb_core.report.figures import chart_notes, chart_pngs
 from bpb_core.report.parts import Completeness, ReportPart, report_parts, report_tables
 from bpb_core.report.sections import headline, sections
 from bpb_core.results.frames import Results, load_results
+from bpb_core.results.tables import metrics
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic
@@ -79,12 +79,9 @@ class Report:
         """JSON-ready summary for scripts. One dataset: its leaderboards, intervals, accuracy
         by horizon, completeness, usage and diagnostics at the top level. Several: the same
         per dataset under ``datasets`` (never one leaderboard)."""
-        rule = {
-            "min_complete": self.completeness.min_complete,
-            "include_incomplete": self.completeness.include_incomplete,
-        }
+        rule = asdict(self.completeness)
         files = {name: str(path) for name, path in self.files.items()}
-        parts = [part_json(p, self.completeness) for p in self.parts]
+        parts = [part_json(p) for p in self.parts]
         if len(parts) == 1:
             return {**parts[0], "completeness_rule": rule, "files": files}
         return {"datasets": parts, "completeness_rule": rule, "files": files}
@@ -227,3 +224,75 @@ def _export_frames(report: Report, out: Path) -> dict[str, Path]:
         with writing(files[f"{name}.parquet"]):
             frame.to_parquet(files[f"{name}.parquet"], index=False)
     return files
+
+
+def unasked(part: ReportPart, scores: list[str]) -> dict[str, list[str]]:
+    """Per task or suite of ``scores``, the runs not asked it (a suite: not all its tasks)."""
+    need = {s.name: set(s.weights) for s in part.results.suites}
+    out: dict[str, list[str]] = {}
+    for metric in scores:
+        tasks = need.get(metric, {metric})
+        out[metric] = [run.label for run in part.results.runs if not tasks <= set(run.tasks)]
+    return out
+
+
+def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> dict[str, bytes]:
+    """Leaderboards (answered only, incomplete tasks left out), accuracy by horizon (grouped
+    bars, incomplete cells greyed), then each diagnostic's chart."""
+    tables, suites = part.tables, part.results.suites
+    board = tables["leaderboard_answered"]
+    order = board["run"].astype(str).tolist()
+    scores = metrics(part.results.units, suites)
+    pngs = {
+        "Leaderboards": ch.leaderboards(
+            board, scores, tables["bootstrap_answered"], names,
+            xlabel="mean accuracy over horizons, answered only (%)",
+            unasked=unasked(part, scores),
+        ),
+        "Accuracy by horizon": ch.accuracy_by_horizon(
+            tables["accuracy_answered"], order, suites, names, min_complete=rule.min_complete
+        ),
+    }  # fmt: skip
+    for task, notes in part.metric_notes.items():
+        table = part.tables[f"{task}_metrics"]
+        shown = [m for m in notes if table[m].notna().any()]
+        if not shown:
+            continue
+        title = f"{names.get(task, task)}: metrics beside accuracy"
+        pngs[title] = ch.leaderboards(
+            table, shown, None, {m: f"{task} {m.replace('_', ' ')}" for m in shown},
+            xlabel="answered only (%)", no_value="no value (undefined, or too incomplete)",
+        )  # fmt: skip
+    for diagnostic in part.diagnostics:
+        table = tables[diagnostic.name]
+        left_out = [] if rule.include_incomplete else part.left_out(diagnostic.name)
+        if "run" in table.columns and left_out:
+            table = table[~table["run"].astype(str).isin(left_out)]
+        png = _chart(part, diagnostic, table) if not table.empty else None
+        if png is not None:
+            pngs[diagnostic.title] = png
+    return pngs
+
+
+def _chart(part: ReportPart, diagnostic: Diagnostic, table: pd.DataFrame) -> bytes | None:
+    origin = part.origin(diagnostic.name)
+    with blamed(origin, f"diagnostic {diagnostic.name!r}: chart()"):
+        png = diagnostic.chart(table)
+    if png is not None and not isinstance(png, bytes):
+        raise PluginBug(
+            f"{origin}: diagnostic {diagnostic.name!r}: chart() returned "
+            f"{type(png).__name__}; expected PNG bytes or None"
+        )
+    return png
+
+
+def chart_notes(part: ReportPart, rule: Completeness) -> dict[str, str]:
+    """A line under each chart that leaves runs out, naming them."""
+    if rule.include_incomplete:
+        return {}
+    notes = {}
+    for diagnostic in part.diagnostics:
+        left_out = part.left_out(diagnostic.name)
+        if left_out:
+            notes[diagnostic.title] = f"left out as too incomplete: {', '.join(left_out)}"
+    return notes

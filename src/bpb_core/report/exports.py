@@ -23,17 +23,10 @@ from bpb_core.report.sections import (
     headline_cells,
     horizon_cells,
 )
-from bpb_core.results.completeness import (
-    completeness_records,
-    incomplete_lines,
-    unparsed_lines,
-)
-from bpb_core.results.tables import summary_records
+from bpb_core.results.completeness import incomplete_lines, unparsed_lines
 
 if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
-
-PAPER_TABLES = ("leaderboard", "by_horizon")
 
 
 def paper_tables(part: ReportPart, rule: Completeness) -> dict[str, pd.DataFrame]:
@@ -88,7 +81,6 @@ def latex(frame: pd.DataFrame, caption: str) -> str:
     styler = styler.format_index(escape="latex", axis=1)
     align = "l" + "r" * (len(frame.columns) - 1)
     caption = caption.replace("%", "\\%")
-    frame = frame.replace("–", "--", regex=True)  # an en dash any TeX engine reads
     return styler.to_latex(
         hrules=True, column_format=align, caption=caption, position="t", position_float="centering"
     )
@@ -128,10 +120,10 @@ def records(frame: pd.DataFrame) -> list[dict[str, Any]]:
     return out
 
 
-def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
+def part_json(part: ReportPart) -> dict[str, Any]:
     """The JSON summary of one part (one dataset)."""
     tables, results = part.tables, part.results
-    options = {"min_complete": rule.min_complete, "include_incomplete": rule.include_incomplete}
+    cells = ["run", "task", "horizon", "answered", "expected", "completeness", "level", "epochs"]
     by_horizon = tables["accuracy"].merge(
         tables["accuracy_answered"][["run", "task", "horizon", "accuracy", "scenes"]],
         on=["run", "task", "horizon"], suffixes=("_strict", "_answered"),
@@ -139,7 +131,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
     return {
         "dataset": part.dataset,
         "dataset_path": part.path,
-        "leaderboard": summary_records(results.units, results.suites, **options),
+        "leaderboard": records(tables["summary"]),
         "leaderboard_answered": records(tables["leaderboard_answered"]),
         "suites": {s.name: dict(s.weights) for s in results.suites},
         "bootstrap": records(tables["bootstrap"]),
@@ -147,7 +139,7 @@ def part_json(part: ReportPart, rule: Completeness) -> dict[str, Any]:
         "stable": records(tables["leaderboard_stable"]),
         "stable_exclusions": records(tables["stable_exclusions"]),
         "by_horizon": records(by_horizon),
-        "completeness": completeness_records(tables["accuracy"], rule.min_complete),
+        "completeness": records(tables["accuracy"][cells]),
         "incomplete": incomplete_lines(results),
         "unparsed": unparsed_lines(results),
         "different_scenes": different_scenes_note(part),

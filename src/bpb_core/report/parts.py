@@ -8,7 +8,7 @@ tables on its own. :func:`report_tables` is pure (frames in, frames out).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,20 +18,19 @@ from bpb_core.capabilities import ReportsMetrics
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.registry import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
-from bpb_core.results.datasets import by_dataset
 from bpb_core.results.frames import Results
-from bpb_core.results.metadata import metadata_table
 from bpb_core.results.tables import (
     RUN_COLUMNS,
     UNANSWERED,
     accuracy,
     by_horizon,
     leaderboard,
+    metadata_table,
     stable_exclusions,
     summary,
+    usage,
 )
 from bpb_core.results.uncertainty import all_pairs, bootstrap_ci
-from bpb_core.results.usage import usage
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
@@ -68,10 +67,12 @@ class ReportPart:
         """Who supplied ``diagnostic`` (its name when not known)."""
         return self.origins.get(diagnostic, f"diagnostic {diagnostic!r}")
 
-    def too_incomplete(self, tasks: Sequence[str]) -> list[str]:
-        """Runs with a task of ``tasks`` left out of the leaderboards (a cell too incomplete)."""
+    def left_out(self, diagnostic: str) -> list[str]:
+        """Runs a diagnostic's chart leaves out: a task the diagnostic looks at is left out of
+        the leaderboards (a cell too incomplete); its table keeps them, with their
+        completeness."""
         board = self.tables["leaderboard_answered"]
-        wanted = set(tasks)
+        wanted = set(self.diagnostic_tasks.get(diagnostic, ()))
         return [
             str(run) for run, short in zip(board["run"], board["short"], strict=True)
             if wanted & set(str(short).split(", "))
@@ -119,6 +120,32 @@ def report_parts(
     return tuple(parts)
 
 
+def by_dataset(results: Results) -> list[Results]:
+    """``results`` split by dataset (the hash each run records): runs on different datasets
+    answered different questions, so they are never ranked together. Datasets in the order
+    their first run was read."""
+    datasets = list(dict.fromkeys(run.dataset_id for run in results.runs))
+    if len(datasets) <= 1:
+        return [results]
+    parts = []
+    for dataset in datasets:
+        runs = tuple(run for run in results.runs if run.dataset_id == dataset)
+        units = _only(results.units, dataset)
+        calls = _only(results.calls, dataset)
+        tasks = {str(t) for t in units["task"].unique()}
+        suites = tuple(s for s in results.suites if set(s.weights) <= tasks)
+        parts.append(Results(units, calls, runs, suites))
+    return parts
+
+
+def _only(frame: pd.DataFrame, dataset: str) -> pd.DataFrame:
+    part = frame[frame["dataset"] == dataset].reset_index(drop=True)
+    for name in part.columns:
+        if isinstance(part[name].dtype, pd.CategoricalDtype):
+            part[name] = part[name].cat.remove_unused_categories()
+    return part
+
+
 def _table(diagnostic: Diagnostic, origin: str, results: Results) -> pd.DataFrame:
     with blamed(origin, f"diagnostic {diagnostic.name!r}: table()"):
         table = diagnostic.table(results)
@@ -158,14 +185,14 @@ def report_tables(
     """
     rule = completeness or Completeness()
     units, calls, suites = results.units, results.calls, results.suites
-    keep = {"min_complete": rule.min_complete, "include_incomplete": rule.include_incomplete}
+    keep = asdict(rule)
     tables = {
         "summary": summary(units, suites, **keep),
-        "leaderboard": leaderboard(units, suites, **keep),  # type: ignore[arg-type]
-        "leaderboard_answered": leaderboard(units, suites, view="answered", **keep),  # type: ignore[arg-type]
-        "leaderboard_stable": leaderboard(units, suites, stable_only=True, **keep),  # type: ignore[arg-type]
-        "by_horizon": by_horizon(units, **keep),  # type: ignore[arg-type]
-        "by_horizon_answered": by_horizon(units, view="answered", **keep),  # type: ignore[arg-type]
+        "leaderboard": leaderboard(units, suites, **keep),
+        "leaderboard_answered": leaderboard(units, suites, view="answered", **keep),
+        "leaderboard_stable": leaderboard(units, suites, stable_only=True, **keep),
+        "by_horizon": by_horizon(units, **keep),
+        "by_horizon_answered": by_horizon(units, view="answered", **keep),
         "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed, view="answered"),
         "stable_exclusions": stable_exclusions(units),
         "usage": usage(calls),

@@ -17,6 +17,7 @@ from markupsafe import Markup
 from bpb_core.report import html
 from bpb_core.report.html import Cell
 from bpb_core.results.completeness import incomplete_lines, level, unparsed_lines, worst_cells
+from bpb_core.results.tables import metadata_by_horizon
 
 if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
@@ -206,15 +207,9 @@ def incomplete_notes(part: ReportPart) -> Markup:
     return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
 
 
-def horizon_table(acc: pd.DataFrame, rule: Completeness) -> Markup:
-    """Accuracy by horizon, one row per (run, task): partial cells carry their completeness,
-    short cells are greyed and left out of the mean."""
-    head, rows = horizon_cells(acc, rule)
-    return html.cells(head, rows, "no answers")
-
-
 def horizon_cells(acc: pd.DataFrame, rule: Completeness) -> tuple[list[str], Rows]:
-    """The by-horizon table's header and (baseline, cells) rows."""
+    """The by-horizon table's header and (baseline, cells) rows, one row per (run, task):
+    partial cells carry their completeness, short cells are greyed and left out of the mean."""
     horizons = sorted(float(h) for h in acc["horizon"].unique())
     head = ["run", "task", *(f"h{h:g}" for h in horizons), "mean"]
     rows = []
@@ -264,14 +259,18 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     tables = part.tables
     pairs = tables["pairs"]
     scores = [*part.results.tasks, *(s.name for s in part.results.suites)]
-    answered = tables["accuracy_answered"]
     key = Markup(
         "<p class='muted'>A small number after a value is the share of the cell's scenes "
         "answered (under 100%); a greyed cell is under {} and left out.</p>"
     ).format(pct(rule.min_complete))
     out = [
-        ("Accuracy by horizon (answered only)", key + horizon_table(answered, rule)),
-        ("Accuracy by horizon (strict)", key + horizon_table(tables["accuracy"], rule)),
+        *(
+            (f"Accuracy by horizon ({view})", key + html.cells(*cells, "no answers"))
+            for view, cells in (
+                ("answered only", horizon_cells(tables["accuracy_answered"], rule)),
+                ("strict", horizon_cells(tables["accuracy"], rule)),
+            )
+        ),
         (
             "Leaderboard on stable scenes (strict)",
             html.table(
@@ -319,8 +318,6 @@ def _dropped(table: pd.DataFrame) -> tuple[str, ...]:
 
 
 def _metadata_section(frame: pd.DataFrame) -> tuple[str, Markup]:
-    from bpb_core.results.metadata import metadata_by_horizon
-
     note = Markup(
         "<p class='muted'>What adapters measured about their own answers (see each adapter's "
         "docs), per horizon: the median over scenes of each number, the share of scenes where "

@@ -60,28 +60,6 @@ def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str
     return out
 
 
-def completeness_records(acc: pd.DataFrame, min_complete: float) -> list[dict[str, object]]:
-    """JSON-ready cells: run, task, horizon, answered, expected (answers), completeness, level,
-    epochs (the answers asked per scene-task)."""
-    cells = acc[["run", "task", "horizon", "answered", "expected", "completeness", "epochs"]].copy()
-    cells["level"] = cell_levels(acc, min_complete)
-    records: list[dict[str, object]] = []
-    for row in cells.to_dict(orient="records"):
-        records.append(
-            {
-                "run": str(row["run"]),
-                "task": str(row["task"]),
-                "horizon": float(row["horizon"]),
-                "answered": int(row["answered"]),
-                "expected": int(row["expected"]),
-                "completeness": float(row["completeness"]),
-                "level": str(row["level"]),
-                "epochs": int(row["epochs"]),
-            }
-        )
-    return records
-
-
 REJECTED = ("RequestRejected:",)
 """How the error of a call the API refused (a 4xx other than a rate limit) begins: re-running
 sends the same request again, so it is not counted with infrastructure failures."""

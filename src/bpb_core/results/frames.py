@@ -13,7 +13,8 @@ them vectorised and returns two frames with explicit dtypes:
 
 It also names the suites that apply: installed suites all of whose tasks appear in the units.
 Everything else (accuracies, leaderboards, diagnostics, reports) is derived from these frames.
-Nothing here prints.
+Nothing here prints; :func:`write_scores` writes each run's ``scores.csv`` at the end of
+``bpb run``.
 """
 
 from __future__ import annotations
@@ -28,8 +29,10 @@ from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.plugin_calls import parsed_answer
 from bpb_core.registry import SuiteInfo
+from bpb_core.results.completeness import incomplete_lines
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
-from bpb_core.run_folder import AnswerRecord, answer_path, read_answer
+from bpb_core.results.tables import summary
+from bpb_core.run_folder import AnswerRecord, answer_path, read_answer, write_bytes_atomic
 from bpb_core.scored_units import (
     SCORER_INPUT,
     SCORER_OUTPUT,
@@ -157,6 +160,27 @@ def load_frame(
 ) -> pd.DataFrame:
     """The scored units frame of :func:`load_results` (one row per scored unit)."""
     return load_results(run_dirs, registry=registry).units
+
+
+def write_scores(
+    run_dirs: Sequence[Path], registry: Registry | None = None, folders: Iterable[DataFolder] = ()
+) -> pd.DataFrame | None:
+    """Write ``scores.csv`` (scored units) into each run folder and return the summary table
+    (``None`` when there is nothing to score); ``attrs["incomplete"]`` maps each run with
+    unanswered calls to the line saying so. ``folders``: the runs' datasets, already read."""
+    if not run_dirs:
+        return None
+    results = load_results(list(run_dirs), registry=registry, folders=folders)
+    frame = results.units
+    written = frame
+    if (frame["epoch"] == 1).all():  # without --epochs the file keeps its columns
+        written = frame.drop(columns="epoch")
+    for run in results.runs:
+        text = written[written["run"] == run.label].to_csv(index=False)
+        write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
+    table = summary(frame, results.suites)
+    table.attrs["incomplete"] = incomplete_lines(results)  # what the summary must say
+    return table
 
 
 def _reasons(truth: object, run: RunFolder) -> str:

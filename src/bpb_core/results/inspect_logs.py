@@ -5,27 +5,37 @@ A log of a bpb task records in its task metadata the dataset (``bpb_dataset``, i
 horizons and limit asked) and, per sample, the scene, the task and bpb's own score (the parsed
 answer and its status). :func:`with_inspect_runs` turns every such log among the paths given to
 ``bpb report`` / :func:`~bpb_core.results.frames.load_results` into a run folder in the cache
-(``$BPB_CACHE_DIR/inspect/...``, see :mod:`bpb_core.results.inspect_cache`): the logs of one
-model on one dataset and input mode become one run (the newest log wins for a task asked
-twice), whose answer files are scored like any run's.
+(``$BPB_CACHE_DIR/inspect/...``, see :func:`cache_folder`): the logs of one model on one
+dataset and input mode become one run (the newest log wins for a task asked twice), whose
+answer files are scored like any run's.
 Reading logs needs ``inspect_ai`` (``pip install 'bpb[inspect]'``), imported only when a log
 is given.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import json
-from collections.abc import Iterable
+import os
+import shutil
+import tempfile
+import threading
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+from bpb_core.dataset.hf_import import cache_root
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST, SceneKey
-from bpb_core.results.inspect_cache import PREFIX, cache_folder
 from bpb_core.run_folder import AnswerRecord, UsageRecord, write_answer, write_manifest
 
 LOG_SUFFIXES = (".eval", ".json")
+PREFIX = "inspect"
+_HELD: dict[str, int] = {}
+"""Per ``where``: the descriptor holding this process's shared lock on its cache folder."""
+_GUARD = threading.Lock()
 
 
 def with_inspect_runs(items: Iterable[Path | str]) -> list[Path]:
@@ -191,3 +201,91 @@ def _manifest(
         "source": "inspect_ai",
         "inspect_logs": [str(log.location) for log in logs],
     }
+
+
+def cache_folder(where: str, state: str, build: Callable[[Path], None]) -> Path:
+    """The folder ``<where>-<state>`` under ``$BPB_CACHE_DIR/inspect``, made by ``build`` (given
+    an empty folder) unless made already, and held by this process. ``where`` names the logs'
+    folders, ``state`` the logs as they are (paths, sizes, modification times). It is built in a
+    hidden temporary folder and renamed into place whole, so a reader never sees half of one, and
+    a reader finding it made uses it. Every process using a folder holds a shared ``flock`` on it
+    until it exits or reads a newer state of the same logs (``bpb view`` reads answer files long
+    after loading them). Once a reader has its folder, the other states of its logs that no
+    process holds are removed; the system drops a dead process's locks, so what a killed reader
+    held goes at the next reading.
+
+    Raises:
+        OSError: The folder keeps being removed while taken (other processes reading other
+            states of the same logs, over and over).
+    """
+    base = cache_root() / PREFIX
+    root = base / f"{where}-{state}"
+    for _ in range(5):
+        if not root.is_dir():
+            _build(root, build)
+        handle = _hold(root)
+        if handle is not None:
+            _keep(where, handle)
+            _prune(base, where, root.name)
+            return root
+    raise OSError(f"{root}: removed each time it was made; try again")
+
+
+def _build(root: Path, build: Callable[[Path], None]) -> None:
+    root.parent.mkdir(parents=True, exist_ok=True)
+    building = Path(tempfile.mkdtemp(prefix=f".{root.name}.", dir=root.parent))
+    try:
+        build(building)
+        with contextlib.suppress(OSError):  # another caller made it meanwhile, from the same logs
+            building.rename(root)  # whole or not at all
+    finally:
+        shutil.rmtree(building, ignore_errors=True)
+
+
+def _hold(root: Path) -> int | None:
+    """A descriptor of ``root`` with a shared lock on it; ``None`` when ``root`` was removed
+    (or replaced) before the lock was taken."""
+    try:
+        handle = os.open(root, os.O_RDONLY | os.O_DIRECTORY)
+    except FileNotFoundError:
+        return None
+    fcntl.flock(handle, fcntl.LOCK_SH)
+    try:
+        now, held = os.stat(root), os.fstat(handle)
+        if (now.st_dev, now.st_ino) == (held.st_dev, held.st_ino):
+            return handle
+    except FileNotFoundError:
+        pass
+    os.close(handle)
+    return None
+
+
+def _keep(where: str, handle: int) -> None:
+    """Hold ``handle``'s folder for the process, letting go of the one held before for these
+    logs."""
+    with _GUARD:
+        before = _HELD.get(where)
+        _HELD[where] = handle
+    if before is not None:
+        os.close(before)
+
+
+def _prune(base: Path, where: str, keep: str) -> None:
+    """Remove the other states of ``where`` that no process holds (each taken with an exclusive
+    lock first, which fails while a reader holds it)."""
+    for path in base.glob(f"{where}-*"):
+        if path.name == keep:
+            continue
+        try:
+            handle = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+        except OSError:
+            continue  # removed by another reader meanwhile
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            gone = path.with_name(f".{path.name}.{os.getpid()}.gone")
+            path.rename(gone)  # out of readers' sight before it is emptied
+            shutil.rmtree(gone, ignore_errors=True)
+        except OSError:  # in use (BlockingIOError), or taken by another reader
+            continue
+        finally:
+            os.close(handle)

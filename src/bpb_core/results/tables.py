@@ -11,10 +11,17 @@ A scene's score for a task is the share of its units that are right (``mean``) o
 are right (``all``), as the task's scorer says. A task's accuracy at a horizon is the mean over
 scenes; the leaderboard score is the mean over horizons; a suite's score is the weighted sum of
 its tasks' leaderboard scores (NaN for a run that lacks one of them).
+
+Beside them: tokens, cost and latency per run (:func:`usage`) and the adapters' own
+measurements per run and horizon (:func:`metadata_table`).
 """
 
 from __future__ import annotations
 
+import json
+import math
+import statistics
+from collections import defaultdict
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -27,7 +34,6 @@ if TYPE_CHECKING:
     from bpb_core.registry import SuiteInfo
 
 View = Literal["strict", "answered"]
-VIEWS: tuple[View, ...] = ("strict", "answered")
 UNANSWERED = ("api_error", "missing")
 RUN_COLUMNS = ["run", "adapter", "model", "baseline"]
 SCENE_KEYS = ["run", "task", "horizon", "index", "scene_id", "epoch"]
@@ -212,22 +218,113 @@ def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: An
     return strict
 
 
-def summary_records(
-    units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any
-) -> list[dict[str, object]]:
-    """:func:`summary` as JSON-ready dicts (NaN becomes ``None``)."""
-    table = summary(units, suites, **options)
-    records: list[dict[str, object]] = []
-    for row in table.to_dict(orient="records"):
-        records.append({str(k): _plain(v) for k, v in row.items()})
-    return records
+def usage(calls: pd.DataFrame) -> pd.DataFrame:
+    """Tokens (incl. reasoning), cost, latency, retries and failures per run.
+
+    ``cost`` sums the calls whose cost is known; ``cost_unknown`` counts the others (NaN cost
+    is never read as 0). Missing calls (no answer file) are counted, not measured.
+    """
+    made = calls[calls["status"] != "missing"]
+    grouped = made.groupby(RUN_COLUMNS, observed=True)
+    out = grouped.agg(
+        calls=("status", "size"),
+        input_tokens=("input_tokens", "sum"),
+        output_tokens=("output_tokens", "sum"),
+        reasoning_tokens=("reasoning_tokens", "sum"),
+        cached_tokens=("cached_tokens", "sum"),
+        cost=("cost", lambda c: c.sum(min_count=1)),
+        cost_unknown=("cost", lambda c: int(c.isna().sum())),
+        latency_mean=("latency", "mean"),
+        latency_median=("latency", "median"),
+        retries=("retries", "sum"),
+    )
+    status = calls.groupby([*RUN_COLUMNS, "status"], observed=True).size().unstack(fill_value=0)
+    for name in ("ok", "parse_error", "api_error", "missing"):
+        out[name] = (
+            status[name].reindex(out.index).fillna(0).astype("int64") if name in status else 0
+        )
+    out["tokens_per_call"] = (out["input_tokens"] + out["output_tokens"]) / out["calls"]
+    return out.reset_index()
 
 
-def _plain(value: object) -> object:
-    if isinstance(value, (np.floating, float)):
-        return None if np.isnan(value) else float(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
+Value = bool | float | str  # one measurement as an answer file holds it (JSON)
+
+METADATA_COLUMNS: dict[str, str] = {
+    "run": "str",
+    "horizon": "float64",
+    "measure": "str",
+    "scenes": "int64",
+    "median": "float64",
+    "mean": "float64",
+    "max": "float64",
+}
+
+
+def metadata_table(calls: pd.DataFrame) -> pd.DataFrame:
+    """One row per (run, horizon, measure) found in ``calls["metadata"]``; empty (with the
+    columns of :data:`METADATA_COLUMNS`) when no answer carries any.
+
+    The adapters' own measurements (``metadata`` of each answer), summarised per run and horizon.
+
+    An adapter may return named numbers, yes/no values or strings with a reply (an offline
+    adapter's error in reading its input, say). Core does not know what they mean: each numeric
+    measure gets its count of scenes, median, mean and maximum per (run, horizon); each yes/no
+    measure (JSON ``true``/``false``) its count of scenes and the share that is true (``mean``; no
+    median); each text measure (a reason, a label) its count of scenes.
+
+    Everything is per scene, however many answers it has (one per task, again per ``--epochs``):
+    ``scenes`` counts the scenes whose answers carry the measure, each once, and a scene's value is
+    the mean over its answers (the share of them that hold, for a yes/no measure); median, mean and
+    maximum are taken over those per-scene values.
+    """
+    values: dict[tuple[str, float, str], dict[str, list[Value]]] = defaultdict(
+        lambda: defaultdict(list)
+    )
+    parsed: dict[str, dict[str, Value]] = {}  # the tasks of a scene often carry the same text
+    rows = calls.loc[calls["metadata"].notna(), ["run", "horizon", "scene_id", "metadata"]]
+    for run, horizon, scene_id, text in rows.itertuples(index=False):
+        if text not in parsed:
+            parsed[text] = json.loads(text)
+        for name, value in parsed[text].items():
+            values[(str(run), float(horizon), str(name))][str(scene_id)].append(value)
+    records = [_summary(key, by_scene) for key, by_scene in sorted(values.items())]
+    frame = pd.DataFrame(records, columns=list(METADATA_COLUMNS))
+    return frame.astype(METADATA_COLUMNS)
+
+
+def _summary(key: tuple[str, float, str], by_scene: dict[str, list[Value]]) -> dict[str, object]:
+    """One measure's row: each scene once, its value the mean over its answers."""
+    run, horizon, measure = key
+    row: dict[str, object] = {"run": run, "horizon": horizon, "measure": measure}
+    row["scenes"] = len(by_scene)
+    found = [v for answers in by_scene.values() for v in answers]
+    numeric = all(isinstance(v, int | float) and math.isfinite(v) for v in found)
+    if not numeric:  # a text (or a mix with one): only counted
+        return row | {"median": math.nan, "mean": math.nan, "max": math.nan}
+    scenes = sorted(statistics.fmean(map(float, answers)) for answers in by_scene.values())
+    if all(isinstance(v, bool) for v in found):  # a yes/no: its share, no median
+        return row | {"median": math.nan, "mean": statistics.fmean(scenes), "max": math.nan}
+    middle, mean = statistics.median(scenes), statistics.fmean(scenes)
+    return row | {"median": middle, "mean": mean, "max": scenes[-1]}
+
+
+def metadata_by_horizon(table: pd.DataFrame) -> pd.DataFrame:
+    """:func:`metadata_table` as one row per (run, measure) and one column per horizon
+    (``h1``...): the median of a numeric measure, the share of a yes/no one, the count of a text
+    one (its ``statistic`` column says which), to read beside the accuracy by horizon."""
+    if table.empty:
+        return pd.DataFrame(columns=["run", "measure", "statistic"])
+    share = table["median"].isna() & table["mean"].notna()
+    counted = table["scenes"].astype("float64")
+    value = table["median"].where(table["median"].notna(), table["mean"].where(share, counted))
+    statistic = pd.Series("count", index=table.index).mask(share, "share")
+    frame = table.assign(
+        value=value,
+        statistic=statistic.mask(table["median"].notna(), "median"),
+        column=[f"h{h:g}" for h in table["horizon"]],
+    )
+    wide = frame.pivot_table(
+        index=["run", "measure", "statistic"], columns="column", values="value", sort=False
+    )
+    order = [f"h{h:g}" for h in sorted(table["horizon"].unique())]
+    return wide[order].reset_index().rename_axis(columns=None)

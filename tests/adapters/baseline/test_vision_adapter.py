@@ -8,7 +8,7 @@ from pathlib import Path
 from bpb_core.registry import Registry
 from bpb_core.report.build import build_report
 from bpb_core.results import load_results, summary
-from bpb_core.results.metadata import metadata_by_horizon
+from bpb_core.results.tables import metadata_by_horizon
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import evaluate
 from bpb_core.runner.options import RunOptions

@@ -14,8 +14,7 @@ import pytest
 
 from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
-from bpb_core.report.build import Completeness, build_report
-from bpb_core.report.figures import unasked
+from bpb_core.report.build import Completeness, build_report, unasked
 from bpb_core.report.sections import headline_cells
 from support.inprocess import Done, bpb
 from support.reports_fixture import all_answers, oracle_answer, write_dataset, write_run

@@ -14,7 +14,7 @@ from bpb_core import AdapterInfo, ModelRequest, ModelResponse, hookimpl
 from bpb_core.registry import make_registry
 from bpb_core.report.build import build_report
 from bpb_core.results import load_results
-from bpb_core.results.metadata import metadata_by_horizon, metadata_table
+from bpb_core.results.tables import metadata_by_horizon, metadata_table
 from bpb_core.runner import RunOptions, run_eval
 
 

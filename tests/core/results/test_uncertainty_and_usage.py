@@ -11,9 +11,8 @@ from hypothesis import given, settings, strategies as st
 
 from bpb_core.registry import Registry
 from bpb_core.results import Results, load_results
-from bpb_core.results.tables import leaderboard
+from bpb_core.results.tables import leaderboard, usage
 from bpb_core.results.uncertainty import bootstrap_ci, paired_comparison, sign_test
-from bpb_core.results.usage import usage
 
 
 @pytest.fixture
