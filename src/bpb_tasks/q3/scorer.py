@@ -22,7 +22,7 @@ from bpb_core.picture import ScenePicture, font, shape
 from bpb_core.scored_units import INVALID, NAN, UnitRow, entries
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.questions.ids import ball_id
+from bpb_tasks.questions.answers import ball_id
 from bpb_tasks.questions.labels import collect
 
 XY = tuple[float, float]

@@ -3,12 +3,17 @@
 A question supplies its text, JSON example, validator and ground-truth cut; this base class turns
 them into the :class:`~bpb_core.interfaces.Task` methods. The text every question starts with
 (table, balls, pockets, physics, horizon) is :mod:`bpb_tasks.questions.prompt`.
+:class:`LabelQuestion` is what q1 and q2 share on top: one ``T``/``F`` per unit.
 """
 
 from __future__ import annotations
 
+import json
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from typing import Any, ClassVar
+
+from pydantic import BaseModel
 
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
@@ -16,6 +21,7 @@ from bpb_core.model_calls import ImagePart, Message, TextPart
 from bpb_core.reply_json import extract
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.questions.answers import schema_of
 from bpb_tasks.questions.prompt import common_prompt, reply_instruction
 
 
@@ -98,3 +104,41 @@ class BilliardsQuestion(ABC):
         except Exception as exc:  # a validator bug must still surface as a parse failure
             raise ParseFailure(f"{self.name}: {type(exc).__name__}: {exc}") from None
         return ParsedAnswer(value, rule)
+
+
+class LabelQuestion(BilliardsQuestion):
+    """Base of q1 and q2: one ``T``/``F`` per unit (object ball, wall), ticked in the browser.
+
+    Attributes:
+        key: The key naming the unit in an answer item (``id``, ``wall``).
+        schema: The strict model of the normalised answer (:mod:`bpb_tasks.questions.answers`).
+    """
+
+    key: ClassVar[str] = ""
+    schema: ClassVar[type[BaseModel]]
+
+    @abstractmethod
+    def units(self, scene: Scene) -> list[Any]:
+        """The units to label, in answer order."""
+
+    def field(self, unit: Any) -> str:
+        """The browser form's field of ``unit``."""
+        return str(unit)
+
+    def example(self, scene: Scene) -> str:
+        units = self.units(scene)
+        items = [{self.key: u, "answer": "T" if n == 0 else "F"} for n, u in enumerate(units)]
+        return json.dumps({"answers": items})
+
+    def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
+        """Ticked units are ``T``, the others ``F``."""
+        from bpb_tasks.questions.browser import read_ticks
+
+        units = self.units(scene)
+        ticked = read_ticks(fields, [self.field(u) for u in units])
+        answers = [{self.key: u, "answer": "T" if self.field(u) in ticked else "F"} for u in units]
+        return {"answers": answers}
+
+    def answer_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the normalised answer (``docs/schemas/<name>.answer.schema.json``)."""
+        return schema_of(self.schema, self.name)
