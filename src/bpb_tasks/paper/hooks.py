@@ -47,17 +47,17 @@ DIAGNOSTICS = {
         ("q2",),
     ),
     "q3_distance": (
-        "q3.diagnostics:Q3Distance",
+        "q3.scorer:Q3Distance",
         "Q3 position error (m): mean, median, p90, max",
         ("q3",),
     ),
     "q3_distance_by_horizon": (
-        "q3.diagnostics:Q3DistanceByHorizon",
+        "q3.scorer:Q3DistanceByHorizon",
         "Q3 position error per horizon",
         ("q3",),
     ),
     "q3_tolerance": (
-        "q3.diagnostics:Q3Tolerance",
+        "q3.scorer:Q3Tolerance",
         "Q3 accuracy if right within k radii",
         ("q3",),
     ),

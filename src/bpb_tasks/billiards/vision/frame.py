@@ -2,7 +2,7 @@
 frame read from the image's axes.
 
 The prompt states the horizon, table, ball ids, radius, friction, restitution and pockets (see
-:mod:`bpb_tasks.questions.prompt`, whose wording :func:`read_prompt` reads). The renderer draws a
+:mod:`bpb_tasks.questions.question`, whose wording :func:`read_prompt` reads). The renderer draws a
 one-pixel x axis under the table and a y axis left of it, with a tick every
 :data:`~bpb_tasks.billiards.render_canvas.TICK_MINOR` metres starting at 0. The longest ink row
 and column are the axes; the ticks next to them give the origin and the scale (where x = 0 and
