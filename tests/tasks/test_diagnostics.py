@@ -12,8 +12,8 @@ import pytest
 from bpb_core.registry import Registry
 from bpb_core.results import load_results
 from bpb_tasks.paper.stasis import stasis_index
-from bpb_tasks.q3.diagnostics import distance_errors, tolerance_curve
-from bpb_tasks.questions.label_diagnostics import confusion
+from bpb_tasks.q3.scorer import distance_errors, tolerance_curve
+from bpb_tasks.questions.labels import confusion
 
 
 @pytest.fixture

@@ -88,8 +88,10 @@ def _registry() -> Registry:
 class PluginLookup:
     """Tasks, families and simulators looked up by name, in the registry that built the
     adapter (:class:`bpb_core.capabilities.UsesRegistry`) or else the installed plugins, and
-    kept once built. A dataclass using it declares ``_registry`` and ``_components``."""
+    kept once built; and the offline reply. A dataclass using it declares ``name``,
+    ``_registry`` and ``_components``."""
 
+    name: str
     _registry: Registry | None
     _components: dict[str, Any]
 
@@ -107,6 +109,28 @@ class PluginLookup:
         if key not in self._components:
             self._components[key] = build(self._plugins())
         return self._components[key]
+
+    def _family(self, name: str) -> SceneFamily:
+        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
+        return family
+
+    def _task(self, name: str) -> Task:
+        task: Task = self._component(f"t:{name}", lambda r: r.task(name))
+        return task
+
+    def _reply(
+        self, text: str, started: float, metadata: dict[str, Any] | None = None
+    ) -> ModelResponse:
+        """The answer ``text``, computed locally since ``started`` (it really costs nothing)."""
+        return ModelResponse(
+            text=text,
+            usage=Usage(0, 0, 0, 0),
+            cost=0.0,
+            latency=time.perf_counter() - started,
+            model_id=self.name,
+            finish_reason="stop",
+            metadata=metadata or {},
+        )
 
     def _simulator(self, request: ModelRequest, family: SceneFamily, origin: str) -> Simulator:
         """The simulator the request names, else the one the family's default config names
@@ -160,7 +184,7 @@ class BaselineAdapter(PluginLookup):
 
     def _predict(self, request: ModelRequest, rng: random.Random) -> Any:
         name = str(request.family)
-        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
+        family = self._family(name)
         origin = self._plugins().origin("scene_family", name)
         if self.model == ORACLE:
             simulator = self._simulator(request, family, origin)
@@ -178,19 +202,12 @@ class BaselineAdapter(PluginLookup):
             raise RequestRejected(f"{self.name} needs the scene and its family in the request")
         rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
         truth = self._predict(request, rng)
-        task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
+        task = self._task(request.task)
         oracle = self.model == ORACLE
         text = expected_text(
             self._plugins(), request.task, task, truth, request.scene, check=oracle
         )
-        return ModelResponse(
-            text=text,
-            usage=Usage(0, 0, 0, 0),
-            cost=0.0,  # a local computation really costs nothing
-            latency=time.perf_counter() - started,
-            model_id=self.name,
-            finish_reason="stop",
-        )
+        return self._reply(text, started)
 
 
 def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter | VisionAdapter:

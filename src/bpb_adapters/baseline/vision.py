@@ -28,11 +28,11 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from bpb_adapters.baseline.adapter import PluginLookup, expected_text
 from bpb_core.capabilities import BoundsPerception, Perceiving
 from bpb_core.errors import PluginBug, RequestRejected, blamed
-from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart, Usage
+from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPart
 from bpb_core.plugin_calls import perception, simulated_truth
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import SceneFamily, Simulator, Task
+    from bpb_core.interfaces import SceneFamily, Simulator
     from bpb_core.registry import Registry
 
 T = TypeVar("T")
@@ -137,7 +137,7 @@ class VisionAdapter(PluginLookup):
             return f"unknown: the image could not be read: {reason}", {"perception_failed": reason}
         simulator = self._simulator(request, family, origin)
         truth = simulated_truth(family, origin, perceived, simulator)
-        task: Task = self._component(f"t:{request.task}", lambda r: r.task(request.task))
+        task = self._task(request.task)
         measured = self._measure(family, origin, image, prompt, perceived, request, simulator)
         return expected_text(self._plugins(), request.task, task, truth), measured
 
@@ -146,15 +146,5 @@ class VisionAdapter(PluginLookup):
         started = time.perf_counter()
         if request.family is None:
             raise RequestRejected(f"{self.name} needs the scene's family in the request")
-        name = str(request.family)
-        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
-        text, metadata = self._answer(request, family)
-        return ModelResponse(
-            text=text,
-            usage=Usage(0, 0, 0, 0),
-            cost=0.0,
-            latency=time.perf_counter() - started,
-            model_id=self.name,
-            finish_reason="stop",
-            metadata=metadata,
-        )
+        text, metadata = self._answer(request, self._family(str(request.family)))
+        return self._reply(text, started, metadata)

@@ -21,11 +21,9 @@ import uuid
 from collections import OrderedDict
 from typing import Any
 
-from bpb_adapters.litellm_adapter import args as model_args, prices, wire
-from bpb_adapters.litellm_adapter.aliases import resolve
+from bpb_adapters.litellm_adapter import prices, wire
+from bpb_adapters.litellm_adapter.aliases import preflight, provider_of, quick_preflight, resolve
 from bpb_adapters.litellm_adapter.errors import map_error
-from bpb_adapters.litellm_adapter.estimate import estimate
-from bpb_adapters.litellm_adapter.preflight import preflight, provider_of, quick_preflight
 from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
     AdapterOptions,
@@ -102,7 +100,7 @@ class LiteLLMAdapter:
         bad = non_finite(self.args)
         if bad is not None:  # sent as JSON, which has no NaN: every call would fail
             raise BadInput(f"model argument {bad[0]}: must be a finite number, got {bad[1]!r}")
-        tag = options.label if options.label is not None else model_args.label(self.args)
+        tag = options.label if options.label is not None else wire.label(self.args)
         self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base
         self._uris = _DataUris()
@@ -135,7 +133,7 @@ class LiteLLMAdapter:
     def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
         """Input tokens and input cost of ``messages`` by the provider's rules."""
         provider = provider_of(self._litellm, self.model, self._api_base)
-        return estimate(self._litellm, self.model, provider, messages, self.priced)
+        return prices.estimate(self._litellm, self.model, provider, messages, self.priced)
 
     def preflight(self) -> str | None:
         """Provider known, key present, route modules importable (one line if not)."""
@@ -149,7 +147,7 @@ class LiteLLMAdapter:
         (a resume may change the api_base: it does not shape answers)."""
         return {
             "model": self.model,
-            "model_args": model_args.recorded(self.args),
+            "model_args": wire.recorded(self.args),
             "api_base": self._api_base,
         }
 
@@ -256,8 +254,3 @@ def response_format(request: ModelRequest) -> dict[str, Any]:
     response schema (and drops, reported as dropped, for one that does not)."""
     name = re.sub(r"[^A-Za-z0-9_-]", "_", f"{request.task}_answer")
     return {"type": "json_schema", "json_schema": {"name": name, "schema": request.response_schema}}
-
-
-def make_adapter(model: str, options: AdapterOptions) -> LiteLLMAdapter:
-    """Build ``litellm:<model>``."""
-    return LiteLLMAdapter(model, options)

@@ -12,7 +12,7 @@ from bpb_core.registry import AdapterInfo, lazy
 def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "litellm",
-        lazy("bpb_adapters.litellm_adapter.adapter:make_adapter"),
+        lazy("bpb_adapters.litellm_adapter.adapter:LiteLLMAdapter"),
         "Any litellm model string (openai/..., anthropic/..., gemini/...) or a known alias",
-        catalog=lazy("bpb_adapters.litellm_adapter.catalog:catalog"),
+        catalog=lazy("bpb_adapters.litellm_adapter.aliases:catalog"),
     )

@@ -1,18 +1,30 @@
-"""Price overrides, registered with litellm so its own cost function applies them.
+"""Prices: overrides registered with litellm, and the input tokens and cost of a request before
+it is sent (``bpb run --dry-run``).
 
 An override is USD per token: ``{"input": .., "output": .., "cache_read": .., "reasoning": ..}``
 (``cache_read`` and ``reasoning`` optional; cached input costs ``input`` unless ``cache_read``
 is given, reasoning tokens ``output`` unless ``reasoning`` is). litellm then prices cached input
 and reasoning output exactly as it does for models in its bundled map. An override applies to
 the model id process-wide (litellm keeps one map).
+
+Text is counted with litellm's token counter (the provider's tokenizer where litellm has one,
+else tiktoken's). Images follow each provider's documented rule:
+
+- OpenAI and OpenAI-compatible providers: 85 + 170 per 512-pixel tile after scaling to fit
+  2048 x 768 (high detail);
+- Anthropic: width x height / 750 after scaling the long edge to at most 1568 pixels;
+- Gemini: 258 for an image within 384 x 384, else 258 per 768 x 768 tile.
 """
 
 from __future__ import annotations
 
+import math
+import struct
 from collections.abc import Mapping
 from typing import Any
 
-from bpb_core.model_calls import known_cost
+from bpb_core.model_calls import ImagePart, Message, TextPart, known_cost
+from bpb_core.runner.dry_run import image_tokens as openai_image_tokens
 
 _FIELDS = {
     "input": "input_cost_per_token",
@@ -58,3 +70,53 @@ def register(litellm: Any, model: str, provider: str | None, override: Mapping[s
     entry = litellm_entry(override, provider)
     bare = model.split("/", 1)[-1]
     litellm.register_model({model: dict(entry), bare: dict(entry)})
+
+
+def _size(png: bytes) -> tuple[int, int] | None:
+    if len(png) < 24 or png[:8] != b"\x89PNG\r\n\x1a\n":
+        return None
+    width, height = struct.unpack(">II", png[16:24])
+    return int(width), int(height)
+
+
+def image_tokens(provider: str | None, png: bytes) -> int:
+    """Tokens one PNG costs with ``provider`` (OpenAI's rule for providers without their own)."""
+    size = _size(png)
+    if size is None or provider not in ("anthropic", "gemini"):
+        return openai_image_tokens(png)
+    width, height = size
+    if provider == "anthropic":
+        scale = min(1.0, 1568 / max(width, height))
+        return max(1, math.ceil(width * scale * height * scale / 750))
+    if width <= 384 and height <= 384:
+        return 258
+    return 258 * math.ceil(width / 768) * math.ceil(height / 768)
+
+
+def text_tokens(litellm: Any, model: str, text: str) -> int:
+    """Tokens of ``text`` by litellm's counter for ``model`` (characters / 4 if it fails)."""
+    try:
+        return int(litellm.token_counter(model=model, text=text))
+    except Exception:  # an unmapped tokenizer: the rough rule
+        return len(text) // 4
+
+
+def estimate(
+    litellm: Any, model: str, provider: str | None, messages: tuple[Message, ...], priced: bool
+) -> tuple[int, float | None]:
+    """Input tokens of ``messages`` and their input cost (``None`` without a price)."""
+    text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
+    tokens = text_tokens(litellm, model, text)
+    tokens += sum(
+        image_tokens(provider, p.data)
+        for m in messages
+        for p in m.parts
+        if isinstance(p, ImagePart)
+    )
+    if not priced:
+        return tokens, None
+    try:
+        prompt_cost, _ = litellm.cost_per_token(model=model, prompt_tokens=tokens)
+    except Exception:  # litellm raises many types for unmapped models: no price known
+        return tokens, None
+    return tokens, float(prompt_cost)

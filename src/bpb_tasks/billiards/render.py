@@ -3,6 +3,20 @@
 All three share one canvas (:class:`~bpb_tasks.billiards.render_canvas.CanvasSpec`): the same
 size, scale and ball radius, so they overlay exactly. They are drawn in palette mode (see
 :mod:`bpb_tasks.billiards.render_palette`); :func:`render_pngs` returns encoded PNG bytes.
+
+The cue velocity arrow of ``init.png`` is the longest arrow, at most the wanted length, whose
+shaft stays on the cloth and off the pockets and whose head keeps a clearance. A candidate length
+is checked at points every 5 mm along the arrow (:func:`_clear`). The check tries the tip first
+(where a too-long arrow fails) and then proves the whole shaft clear from its two ends (the shaft
+is straight, so it stays in the box its ends are in, and it is far from a pocket whose distance
+to the segment is larger than the pocket circle); only when the proof is not certain by a margin
+far above rounding error are the points checked one by one. The answer is the same as checking
+every point, so the images do not change.
+
+The trajectory image draws each :class:`~bpb_tasks.billiards.outcome.Segment` straight (friction
+acts along the velocity), so a path is a polyline through the segment end points. Ball-ball
+contacts are marked by a red ring at the contact point, wall contacts by a blue diamond at the
+centre, pocketings by a white cross.
 """
 
 from __future__ import annotations
@@ -12,25 +26,31 @@ from collections.abc import Iterable
 
 from PIL import Image, ImageDraw
 
-from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards import render_canvas as st
 from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.outcome import CUE_ID, Outcome
+from bpb_tasks.billiards.outcome import CUE_ID, Event, Outcome, Segment
 from bpb_tasks.billiards.png import encode_palette_png
-from bpb_tasks.billiards.render_arrow import arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.render_palette import (
     GHOST_ALPHA,
+    Palette,
     base,
     header_y,
     palette_for,
     stamp,
     text_patch,
 )
-from bpb_tasks.billiards.render_trajectory import draw_markers, draw_paths
 from bpb_tasks.billiards.scene import Scene
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
 Point = tuple[float, float]
+
+ARROW_CLEARANCE = 0.012
+"""Metres the arrow keeps from the cushions and from every pocket's edge."""
+ARROW_MIN = 0.05
+"""The shortest arrow drawn (metres beyond the ball), even where nothing longer fits."""
+_SAFE = 1e-9
+"""Metres of margin for the two-ends proof (rounding errors are about 1e-16 m)."""
 
 
 def paste_balls(
@@ -189,3 +209,174 @@ def render_pngs(scene: Scene, outcome: Outcome, config: DatasetConfig) -> dict[s
         "final.png": encode_palette_png(render_final(scene, outcome, spec), level),
         "trajectory.png": encode_palette_png(render_trajectory(scene, outcome, spec), level),
     }
+
+
+def arrow_length(spec: CanvasSpec, pos: Point, direction: Point, wanted: float) -> float:
+    """The longest arrow (metres beyond the cue ball's edge), at most ``wanted``, whose shaft
+    and head stay on the cloth and off the pockets (down to :data:`ARROW_MIN`)."""
+    length = wanted
+    while length > ARROW_MIN and not _clear(spec, pos, direction, length):
+        length -= 0.005
+    return max(length, ARROW_MIN)
+
+
+def _clear(spec: CanvasSpec, pos: Point, direction: Point, length: float) -> bool:
+    """Whether the shaft stays on the cloth and off the pockets, and the head (its
+    half-width plus :data:`ARROW_CLEARANCE`) too."""
+    head = 10 * spec.scale / spec.ppm + ARROW_CLEARANCE  # the head's half-width, in metres
+    r = spec.radius_m
+    steps = max(2, math.ceil(length / 0.005))
+
+    def point(k: int) -> Point:
+        d = r * 1.15 + (length + r - r * 1.15) * k / steps
+        return pos[0] + direction[0] * d, pos[1] + direction[1] * d
+
+    tip = point(steps)
+    if not _point_clear(spec, tip, head):
+        return False
+    first = point(0)
+    if _surely_clear(spec, first, tip, head):
+        return True
+    return all(_point_clear(spec, point(k), 0.0) for k in range(steps))
+
+
+def _point_clear(spec: CanvasSpec, p: Point, room: float) -> bool:
+    """Whether ``p`` is ``room`` inside the cushions and ``room`` off every pocket circle."""
+    x, y = p
+    if not (room <= x <= spec.width_m - room and room <= y <= spec.height_m - room):
+        return False
+    limit = spec.pocket_radius_m + room
+    for px, py in spec.pockets:
+        dx, dy = x - px, y - py
+        # hypot(dx, dy) >= |dx| and >= |dy|: only a pocket this close in x and y can be hit
+        if -limit < dx < limit and -limit < dy < limit and math.hypot(dx, dy) < limit:
+            return False
+    return True
+
+
+def _surely_clear(spec: CanvasSpec, a: Point, b: Point, head: float) -> bool:
+    """Whether every point of segment ``a``-``b`` is clear (room 0), with :data:`_SAFE` to
+    spare; ``False`` means "not proven", not "blocked"."""
+    lo, hi = _SAFE, spec.width_m - _SAFE
+    if not (lo <= min(a[0], b[0]) and max(a[0], b[0]) <= hi):
+        return False
+    hi = spec.height_m - _SAFE
+    if not (lo <= min(a[1], b[1]) and max(a[1], b[1]) <= hi):
+        return False
+    limit = spec.pocket_radius_m + head + _SAFE
+    return all(_segment_distance(a, b, c) > limit for c in spec.pockets)
+
+
+def _segment_distance(a: Point, b: Point, c: Point) -> float:
+    """Distance from ``c`` to the segment ``a``-``b``."""
+    ex, ey = b[0] - a[0], b[1] - a[1]
+    cx, cy = c[0] - a[0], c[1] - a[1]
+    norm = ex * ex + ey * ey
+    t = 0.0 if norm == 0 else min(1.0, max(0.0, (cx * ex + cy * ey) / norm))
+    return math.hypot(cx - t * ex, cy - t * ey)
+
+
+def segment_end(seg: Segment) -> Point:
+    """Where the ball of ``seg`` is at ``seg.t1`` (or where it stopped, if earlier)."""
+    speed = math.hypot(*seg.vel)
+    dt = seg.t1 - seg.t0
+    if speed == 0 or dt <= 0:
+        return seg.pos
+    if seg.decel > 0:
+        dt = min(dt, speed / seg.decel)
+    dist = speed * dt - 0.5 * seg.decel * dt * dt
+    return seg.pos[0] + seg.vel[0] / speed * dist, seg.pos[1] + seg.vel[1] / speed * dist
+
+
+def path_points(segments: tuple[Segment, ...]) -> list[Point]:
+    """Table points of a ball's path: the start of each moving segment and the final end."""
+    points: list[Point] = []
+    for seg in segments:
+        end = segment_end(seg)
+        if end == seg.pos:
+            continue
+        if not points or points[-1] != seg.pos:
+            points.append(seg.pos)
+        points.append(end)
+    return points
+
+
+def draw_paths(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
+    """Draw every moving ball's path, the cue ball's last (on top)."""
+    draw = ImageDraw.Draw(img)
+    s = spec.scale
+    halo = pal.ink(st.HALO)
+    order = sorted(outcome.segments, key=lambda i: (i == 0, i))
+    for ball_id in order:
+        pts = [spec.to_px(*p) for p in path_points(outcome.segments[ball_id])]
+        if len(pts) < 2:
+            continue
+        draw.line(pts, fill=halo, width=round(6 * s), joint="curve")
+        draw.line(pts, fill=pal.ink(st.ball_colour(ball_id)), width=round(3 * s), joint="curve")
+
+
+def draw_markers(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
+    """Mark every contact and pocketing (drawn last, above the balls, so none is hidden)."""
+    draw = ImageDraw.Draw(img)
+    for event in outcome.events:
+        _mark(img, draw, spec, pal, event)
+
+
+def _mark(
+    img: Image.Image, draw: ImageDraw.ImageDraw, spec: CanvasSpec, pal: Palette, event: Event
+) -> None:
+    if not event.positions:
+        return
+    s, halo = spec.scale, pal.ink(st.HALO)
+    if event.kind == "ball" and len(event.positions) >= 2:
+        (ax, ay), (bx, by) = event.positions[:2]
+        x, y = spec.to_px((ax + bx) / 2, (ay + by) / 2)
+        r = 7 * s
+        draw.ellipse((x - r - 2, y - r - 2, x + r + 2, y + r + 2), outline=halo, width=round(5 * s))
+        draw.ellipse(
+            (x - r, y - r, x + r, y + r), outline=pal.ink(st.MARK_BALL), width=round(3 * s)
+        )
+    elif event.kind == "wall":
+        x, y = spec.to_px(*event.positions[0])
+        r = 7 * s
+        width = max(1, round(2 * s))
+        wall_diamond(img, (x, y), r, pal.ink(st.MARK_WALL), halo, width)
+    elif event.kind == "pocket":
+        x, y = spec.to_px(*event.positions[0])
+        r = 8 * s
+        for ink, width in ((halo, 6), (pal.ink(st.MARK_POCKET), 3)):
+            for dx in (-r, r):
+                draw.line(((x - dx, y - r), (x + dx, y + r)), fill=ink, width=round(width * s))
+
+
+def wall_diamond(
+    img: Image.Image, centre: Point, r: float, fill: int, outline: int, width: int
+) -> None:
+    """The wall marker: a diamond of half-diagonal ``r`` at ``centre`` (pixels), outlined
+    ``width`` wide inside its edge.
+
+    Drawn on a crop around it and pasted back: Pillow outlines a polygon more than a pixel wide
+    through a mask as large as the image drawn on (a megabyte here), and the crop's is small.
+    The crop's pixels are the canvas's: Pillow rounds polygon corners to whole pixels, and the
+    crop moves them by whole pixels.
+    """
+    x, y = centre
+    pad = 2 * width + 2
+    box = (
+        max(0, math.floor(x - r) - pad),
+        max(0, math.floor(y - r) - pad),
+        min(img.width, math.ceil(x + r) + pad + 1),
+        min(img.height, math.ceil(y + r) + pad + 1),
+    )
+    if box[0] >= box[2] or box[1] >= box[3]:
+        return
+    crop = img.crop(box)
+    dx, dy = box[0], box[1]
+    diamond = [
+        (x - dx, y - r - dy),
+        (x + r - dx, y - dy),
+        (x - dx, y + r - dy),
+        (x - r - dx, y - dy),
+    ]
+    ImageDraw.Draw(crop).polygon(diamond, fill=fill, outline=outline, width=width)
+    img.paste(crop, box[:2])

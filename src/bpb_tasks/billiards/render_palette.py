@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 from PIL import Image, ImageChops, ImageDraw
 
-from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards import render_canvas as st
 from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
 
 FLAT: tuple[st.RGB, ...] = (

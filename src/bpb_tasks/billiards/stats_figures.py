@@ -1,21 +1,24 @@
 """The dataset's ``stats/`` figures: cue-speed histograms and collision counts per horizon.
 
-Drawn on Pillow with :mod:`bpb_tasks.billiards.chart_canvas` (two simple charts do not need a
-plotting library: importing matplotlib and laying out its figures took about 2 s of a fresh
-``bpb generate``, these take milliseconds) and saved without metadata, so the files are
-byte-identical across runs.
+Drawn on Pillow (two simple charts do not need a plotting library, nor the import of one) on a
+small chart canvas: a plot box with data limits, bars in data coordinates, a frame with outward
+ticks, "nice" tick values (steps of 1, 2, 2.5 and 5 times a power of ten) and horizontal or
+vertical text, all in DejaVu Sans (the font of the scene images). The files are saved without
+metadata, so they are byte-identical across runs.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
 import numpy as np
 from PIL import Image, ImageDraw
 
-from bpb_tasks.billiards import chart_canvas as cc, render_style as st
+from bpb_tasks.billiards import render_canvas as st
 
 SPEED_HIST = "stats/cue_speed_hist.png"
 COLLISIONS = "stats/collisions.png"
@@ -77,7 +80,7 @@ def speed_histograms(
     """One histogram of sampled cue speeds per horizon, stacked in one column (readable at
     one column width: 3.4 in wide, 7-9 pt text), each with its own speed axis."""
     n = len(horizons)
-    img, draw = cc.new_chart(COLUMN_WIDTH, 0.55 + 1.05 * n)
+    img, draw = new_chart(COLUMN_WIDTH, 0.55 + 1.05 * n)
     top, bottom, left, right = 44, 40, 70, img.width - 14
     pitch = (img.height - top - bottom) / max(n, 1)
     spans = spans or [None] * n
@@ -85,8 +88,8 @@ def speed_histograms(
         y0 = round(top + k * pitch)
         box = (left, y0, right, round(y0 + pitch) - 34)
         _histogram(img, draw, box, values, span, f"t = {h:g} s, n = {len(values)}")
-    cc.text(draw, (img.width / 2, 22), "Sampled cue-ball initial speeds", cc.pt(9))
-    cc.text(draw, ((left + right) / 2, img.height - 14), "cue speed (m/s)", cc.pt(8))
+    text(draw, (img.width / 2, 22), "Sampled cue-ball initial speeds", pt(9))
+    text(draw, ((left + right) / 2, img.height - 14), "cue speed (m/s)", pt(8))
     _save(img, path)
 
 
@@ -103,17 +106,17 @@ def _histogram(
     lo, hi = float(edges[0]), float(edges[-1])
     margin = (hi - lo) * 0.05
     top = 1.5 * max(int(counts.max(initial=0)), 1)  # room for the label above the tallest bar
-    ax = cc.Axes(*box, xlim=(lo - margin, hi + margin), ylim=(0.0, top))
+    ax = Axes(*box, xlim=(lo - margin, hi + margin), ylim=(0.0, top))
     for count, a, b in zip(counts.tolist(), edges[:-1].tolist(), edges[1:].tolist(), strict=True):
         _, y0, x1, y1 = ax.bar(draw, a, b, count, BLUE)
         if count:
             draw.line((x1, y0, x1, y1), fill=st.PAGE, width=1)  # white edge between bars
-    xs = cc.nice_ticks(*ax.xlim, 9)
-    ys = cc.nice_ticks(0, top, 5, integer=True)
-    size = cc.pt(7)
-    cc.frame(draw, ax, [(x, cc.tick_text(x)) for x in xs], [(y, f"{y:g}") for y in ys], size)
-    cc.text(draw, (ax.x1 - 6, ax.y0 + 6), label, cc.pt(8), anchor="rt")
-    cc.vertical_text(img, (14, (ax.y0 + ax.y1) / 2), "scenes", size)
+    xs = nice_ticks(*ax.xlim, 9)
+    ys = nice_ticks(0, top, 5, integer=True)
+    size = pt(7)
+    frame(draw, ax, [(x, tick_text(x)) for x in xs], [(y, f"{y:g}") for y in ys], size)
+    text(draw, (ax.x1 - 6, ax.y0 + 6), label, pt(8), anchor="rt")
+    vertical_text(img, (14, (ax.y0 + ax.y1) / 2), "scenes", size)
 
 
 def collision_bars(
@@ -121,25 +124,25 @@ def collision_bars(
 ) -> None:
     """Grouped bars: scenes with and without a cue-ball collision, per horizon."""
     n = len(horizons)
-    img, draw = cc.new_chart(max(4.0, 1.1 * n + 2.0), 3.2)
+    img, draw = new_chart(max(4.0, 1.1 * n + 2.0), 3.2)
     width, top = 0.38, max([*hits, *misses, 1]) * 1.18
     margin = (n - 1 + 2 * width) * 0.05
-    ax = cc.Axes(
+    ax = Axes(
         86, 52, img.width - 16, img.height - 74,
         xlim=(-width - margin, n - 1 + width + margin), ylim=(0.0, top),
     )  # fmt: skip
-    value_size = cc.pt(8)
+    value_size = pt(8)
     for x, hit, miss in zip(range(n), hits, misses, strict=True):
         for left, count, colour in ((x - width, hit, RED), (x, miss, GREY)):
             x0, y0, x1, _ = ax.bar(draw, left, left + width, count, colour)
-            cc.text(draw, ((x0 + x1) / 2, y0 - 4), str(count), value_size, anchor="mb")
-    ys = cc.nice_ticks(0, top, 7, integer=True)
+            text(draw, ((x0 + x1) / 2, y0 - 4), str(count), value_size, anchor="mb")
+    ys = nice_ticks(0, top, 7, integer=True)
     xs = [(float(x), f"{h:g} s") for x, h in enumerate(horizons)]
-    cc.frame(draw, ax, xs, [(y, f"{y:g}") for y in ys], cc.pt(9))
+    frame(draw, ax, xs, [(y, f"{y:g}") for y in ys], pt(9))
     _legend(draw, ax.x0 + 14, ax.y0 + 16, value_size)
-    cc.text(draw, ((ax.x0 + ax.x1) / 2, 24), "Cue-ball collision vs no collision", cc.pt(11))
-    cc.text(draw, ((ax.x0 + ax.x1) / 2, img.height - 20), "horizon", cc.pt(9))
-    cc.vertical_text(img, (20, (ax.y0 + ax.y1) / 2), "scenes", cc.pt(9))
+    text(draw, ((ax.x0 + ax.x1) / 2, 24), "Cue-ball collision vs no collision", pt(11))
+    text(draw, ((ax.x0 + ax.x1) / 2, img.height - 20), "horizon", pt(9))
+    vertical_text(img, (20, (ax.y0 + ax.y1) / 2), "scenes", pt(9))
     _save(img, path)
 
 
@@ -147,5 +150,110 @@ def _legend(draw: ImageDraw.ImageDraw, x: float, y: float, size: int) -> None:
     """Colour swatches and names of the two bar kinds, side by side from ``(x, y)``."""
     for name, colour in (("collision", RED), ("no collision", GREY)):
         draw.rectangle((x, y - size // 3, x + 2 * size, y + size // 3), fill=colour)
-        cc.text(draw, (x + 2.6 * size, y), name, size, anchor="lm")
+        text(draw, (x + 2.6 * size, y), name, size, anchor="lm")
         x += 2.6 * size + st.font(size).getlength(name) + 2 * size
+
+
+DPI = 150
+TICK = 7  # pixels: 3.5 pt outward ticks
+
+
+def pt(points: float) -> int:
+    """Pixels of ``points`` at :data:`DPI`."""
+    return round(points * DPI / 72)
+
+
+def nice_ticks(lo: float, hi: float, most: int, integer: bool = False) -> list[float]:
+    """At most ``most`` evenly spaced round values in ``[lo, hi]`` (the finest step that fits)."""
+    span = max(hi - lo, 1e-12)
+    best: list[float] = [lo]
+    for power in range(math.floor(math.log10(span)) + 1, math.floor(math.log10(span)) - 3, -1):
+        for mantissa in (5.0, 2.5, 2.0, 1.0):
+            step = mantissa * 10.0**power
+            if integer and (step < 1 or step != round(step)):
+                continue
+            first = math.ceil(lo / step - 1e-9)
+            ticks = [k * step for k in range(first, math.floor(hi / step + 1e-9) + 1)]
+            if len(ticks) > most:
+                return best
+            best = ticks
+    return best
+
+
+def tick_text(value: float) -> str:
+    """A tick label: as few digits as the value needs (``0.4``, ``2.5``, ``10``)."""
+    return f"{round(value, 6):g}"
+
+
+@dataclass(frozen=True)
+class Axes:
+    """A plot box in pixels (``x0, y0`` top left, ``x1, y1`` bottom right) and its data limits."""
+
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    xlim: tuple[float, float]
+    ylim: tuple[float, float]
+
+    def px(self, x: float, y: float) -> tuple[float, float]:
+        """Pixel coordinates of data point ``(x, y)``."""
+        (a, b), (c, d) = self.xlim, self.ylim
+        return (
+            self.x0 + (x - a) / (b - a) * (self.x1 - self.x0),
+            self.y1 - (y - c) / (d - c) * (self.y1 - self.y0),
+        )
+
+    def bar(
+        self, draw: ImageDraw.ImageDraw, left: float, right: float, top: float, fill: st.RGB
+    ) -> tuple[float, float, float, float]:
+        """A bar from 0 up to ``top`` between ``left`` and ``right``; its pixel box."""
+        x0, y0 = self.px(left, top)
+        x1, y1 = self.px(right, 0.0)
+        box = (round(x0), round(y0), round(x1) - 1, round(y1) - 1)
+        if top > 0:
+            draw.rectangle(box, fill=fill)
+        return box
+
+
+def new_chart(width_in: float, height_in: float) -> tuple[Image.Image, ImageDraw.ImageDraw]:
+    """A white RGB canvas of the given size in inches at :data:`DPI`."""
+    img = Image.new("RGB", (round(width_in * DPI), round(height_in * DPI)), st.PAGE)
+    return img, ImageDraw.Draw(img)
+
+
+def frame(
+    draw: ImageDraw.ImageDraw,
+    ax: Axes,
+    xticks: Sequence[tuple[float, str]],
+    yticks: Sequence[tuple[float, str]],
+    size: int,
+) -> None:
+    """The plot box's outline and its outward ticks with labels (``size`` pixel text)."""
+    font = st.font(size)
+    for x, label in xticks:
+        px = round(ax.px(x, ax.ylim[0])[0])
+        draw.line((px, ax.y1, px, ax.y1 + TICK), fill=st.INK, width=2)
+        draw.text((px, ax.y1 + TICK + 3), label, fill=st.INK, font=font, anchor="mt")
+    for y, label in yticks:
+        py = round(ax.px(ax.xlim[0], y)[1])
+        draw.line((ax.x0 - TICK, py, ax.x0, py), fill=st.INK, width=2)
+        draw.text((ax.x0 - TICK - 4, py), label, fill=st.INK, font=font, anchor="rm")
+    draw.rectangle((ax.x0, ax.y0, ax.x1, ax.y1), outline=st.INK, width=2)
+
+
+def text(
+    draw: ImageDraw.ImageDraw, at: tuple[float, float], words: str, size: int, anchor: str = "mm"
+) -> None:
+    """``words`` in ink at ``at`` (a Pillow text anchor such as ``mm`` or ``rt``)."""
+    draw.text(at, words, fill=st.INK, font=st.font(size), anchor=anchor)
+
+
+def vertical_text(img: Image.Image, centre: tuple[float, float], words: str, size: int) -> None:
+    """``words`` reading bottom to top, centred on ``centre``."""
+    font = st.font(size)
+    left, top, right, bottom = font.getbbox(words)
+    patch = Image.new("RGB", (int(right - left) + 4, int(bottom - top) + 4), st.PAGE)
+    ImageDraw.Draw(patch).text((2 - left, 2 - top), words, fill=st.INK, font=font)
+    turned = patch.rotate(90, expand=True)
+    img.paste(turned, (round(centre[0] - turned.width / 2), round(centre[1] - turned.height / 2)))

@@ -3,7 +3,7 @@
 It looks at the three billiards questions together: true contacts (Q1 balls, Q2 walls) labelled
 ``F``, and balls that truly moved more than one radius (or were pocketed) predicted within one
 radius of where they started (Q3). Only answered units count (see
-:mod:`bpb_tasks.questions.label_diagnostics`).
+:mod:`bpb_tasks.questions.labels`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.results.tables import RUN_COLUMNS
-from bpb_tasks.questions.label_diagnostics import labelled
+from bpb_tasks.questions.labels import labelled
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ScoredResults

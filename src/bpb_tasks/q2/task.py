@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, field_validator
@@ -12,10 +10,8 @@ from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene import WALLS, Scene, Wall
 from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.questions.answers import TF, Item, load, upper
-from bpb_tasks.questions.browser import read_ticks
-from bpb_tasks.questions.question import BilliardsQuestion
-from bpb_tasks.questions.schemas import Q2Schema, schema_of
+from bpb_tasks.questions.answers import TF, Item, Q2Schema, load, upper
+from bpb_tasks.questions.question import LabelQuestion
 
 
 class WallAnswer(Item):
@@ -37,26 +33,18 @@ class Q2Answer(BaseModel):
     answers: list[WallAnswer]
 
 
-def validate_q2(value: Any, scene: Scene) -> dict[str, Any]:
-    """Validate a Q2 answer: one T/F per wall, in TOP, BOTTOM, LEFT, RIGHT order."""
-    answer = load(Q2Answer, "q2", value)
-    walls = [a.wall for a in answer.answers]
-    if len(walls) != len(set(walls)) or set(walls) != set(WALLS):
-        raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {walls}")
-    by_wall = {a.wall: a.answer for a in answer.answers}
-    return {"answers": [{"wall": w, "answer": by_wall[w]} for w in WALLS]}
-
-
-class Q2Task(BilliardsQuestion):
+class Q2Task(LabelQuestion):
     """Cue-ball contacts with each wall (chain of thought on by default)."""
 
     name: ClassVar[str] = "q2"
     default_cot: ClassVar[bool] = True
     title: ClassVar[str] = "Wall contacts"
+    key: ClassVar[str] = "wall"
+    schema = Q2Schema
 
-    def example(self, scene: Scene) -> str:
-        items = [{"wall": w, "answer": "T" if w == "TOP" else "F"} for w in WALLS]
-        return json.dumps({"answers": items})
+    def units(self, scene: Scene) -> list[Wall]:
+        """The walls: TOP, BOTTOM, LEFT, RIGHT."""
+        return list(WALLS)
 
     def question(self, scene: Scene, options: PromptOptions) -> str:
         return (
@@ -66,7 +54,13 @@ class Q2Task(BilliardsQuestion):
         )
 
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
-        return validate_q2(value, scene)
+        """Validate a Q2 answer: one T/F per wall, in TOP, BOTTOM, LEFT, RIGHT order."""
+        answer = load(Q2Answer, "q2", value)
+        walls = [a.wall for a in answer.answers]
+        if len(walls) != len(set(walls)) or set(walls) != set(WALLS):
+            raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {walls}")
+        by_wall = {a.wall: a.answer for a in answer.answers}
+        return {"answers": [{"wall": w, "answer": by_wall[w]} for w in WALLS]}
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
         return {"answers": [label.model_dump() for label in truth.q2]}
@@ -74,12 +68,3 @@ class Q2Task(BilliardsQuestion):
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
         """The walls to tick (``bpb human``)."""
         return {"horizon": f"{scene.horizon:g}", "walls": list(WALLS)}
-
-    def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
-        """Ticked walls are ``T``, the others ``F``."""
-        ticked = read_ticks(fields, WALLS)
-        return {"answers": [{"wall": w, "answer": "T" if w in ticked else "F"} for w in WALLS]}
-
-    def answer_schema(self) -> dict[str, Any]:
-        """The JSON Schema of the normalised answer (``docs/schemas/q2.answer.schema.json``)."""
-        return schema_of(Q2Schema, self.name)

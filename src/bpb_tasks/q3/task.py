@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, field_validator
@@ -12,11 +12,10 @@ from pydantic import BaseModel, ConfigDict, field_validator
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.questions.answers import Item, check_ids, load, read_id
+from bpb_tasks.billiards.truth import BallPosition, FinalState
+from bpb_tasks.questions.answers import Item, Q3Schema, check_ids, load, read_id, schema_of
 from bpb_tasks.questions.browser import drag_context, read_positions
 from bpb_tasks.questions.question import BilliardsQuestion
-from bpb_tasks.questions.schemas import Q3Schema, schema_of
 
 
 class PositionAnswer(Item):
@@ -51,20 +50,10 @@ class Q3Answer(BaseModel):
     predictions: list[PositionAnswer]
 
 
-def validate_q3(value: Any, scene: Scene) -> dict[str, Any]:
-    """Validate a Q3 answer: every ball once, at least one number, positions on the table."""
-    answer = load(Q3Answer, "q3", value)
-    check_ids("q3", [p.id for p in answer.predictions], [b.id for b in scene.balls])
-    if all(p.pos is None for p in answer.predictions):
-        raise ParseFailure("q3: predictions: at least one position must be numeric")
-    width, height = scene.table.width, scene.table.height
-    for p in answer.predictions:
-        if p.pos is not None and not (0 <= p.pos[0] <= width and 0 <= p.pos[1] <= height):
-            raise ParseFailure(f"q3: predictions: ball {p.id} at {list(p.pos)} is off the table")
-    items = sorted(answer.predictions, key=lambda p: p.id)
-    return {
-        "predictions": [{"id": p.id, "pos": None if p.pos is None else list(p.pos)} for p in items]
-    }
+def _listed(predictions: Sequence[PositionAnswer | BallPosition]) -> dict[str, Any]:
+    """The answer format of ``predictions`` (``pos`` a list, or ``None``)."""
+    listed = [{"id": p.id, "pos": None if p.pos is None else list(p.pos)} for p in predictions]
+    return {"predictions": listed}
 
 
 class Q3Task(BilliardsQuestion):
@@ -105,15 +94,20 @@ class Q3Task(BilliardsQuestion):
         return f"{text}. Answer as JSON:\n{self.example_for(scene, options)}"
 
     def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
-        return validate_q3(value, scene)
+        """Validate a Q3 answer: every ball once, at least one number, positions on the table."""
+        answer = load(Q3Answer, "q3", value)
+        check_ids("q3", [p.id for p in answer.predictions], [b.id for b in scene.balls])
+        if all(p.pos is None for p in answer.predictions):
+            raise ParseFailure("q3: predictions: at least one position must be numeric")
+        width, height = scene.table.width, scene.table.height
+        for p in answer.predictions:
+            if p.pos is not None and not (0 <= p.pos[0] <= width and 0 <= p.pos[1] <= height):
+                where = f"ball {p.id} at {list(p.pos)}"
+                raise ParseFailure(f"q3: predictions: {where} is off the table")
+        return _listed(sorted(answer.predictions, key=lambda p: p.id))
 
     def expected(self, truth: FinalState) -> dict[str, Any]:
-        return {
-            "predictions": [
-                {"id": p.id, "pos": None if p.pos is None else list(p.pos)}
-                for p in truth.predictions
-            ]
-        }
+        return _listed(truth.predictions)
 
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
         """Draggable markers and pocket drop zones on the image (``bpb human``)."""

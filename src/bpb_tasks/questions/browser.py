@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from importlib import resources
 from typing import Any
 
-from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards import render_canvas as st
 from bpb_tasks.billiards.scene import Scene
 
 POCKETED = "pocket"
@@ -43,8 +43,12 @@ def colour(ball_id: int) -> str:
 
 
 def _frame(scene: Scene, image: bytes | None) -> dict[str, float] | None:
-    from bpb_tasks.billiards.vision.frame import find_frame, image_keys
-    from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed, PromptFacts
+    from bpb_tasks.billiards.vision.frame import (
+        PerceptionFailed,
+        PromptFacts,
+        find_frame,
+        image_keys,
+    )
 
     if image is None:
         return None

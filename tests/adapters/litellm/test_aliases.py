@@ -6,8 +6,7 @@ from __future__ import annotations
 import pytest
 
 from bpb_adapters.litellm_adapter.adapter import _import_litellm
-from bpb_adapters.litellm_adapter.aliases import ALIASES, PAPER_MODELS, PROVIDERS
-from bpb_adapters.litellm_adapter.preflight import provider_of
+from bpb_adapters.litellm_adapter.aliases import ALIASES, PAPER_MODELS, PROVIDERS, provider_of
 from bpb_adapters.litellm_adapter.prices import has_price
 from support.paths import DOCS
 

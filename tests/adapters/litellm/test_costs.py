@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from bpb_adapters.litellm_adapter.estimate import image_tokens
+from bpb_adapters.litellm_adapter.prices import image_tokens
 from support.fake_openai import fake_server
 from support.inprocess import Done, bpb
 from support.runner_scenes import png_bytes

@@ -12,13 +12,12 @@ import pytest
 from PIL import Image, ImageChops, ImageDraw
 
 from bpb_core.dataset import load_dataset
-from bpb_tasks.billiards import render_style
+from bpb_tasks.billiards import render_canvas as render_style
 from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
 from bpb_tasks.billiards.outcome import Event, Outcome, Segment
 from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
-from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
+from bpb_tasks.billiards.render_canvas import CanvasSpec, background, ball_colour, draw_legend
 from bpb_tasks.billiards.render_palette import FLAT, base, header_y, palette_for
-from bpb_tasks.billiards.render_style import ball_colour
 from bpb_tasks.billiards.scene import Ball, Scene
 
 BPB = str(Path(sys.executable).with_name("bpb"))

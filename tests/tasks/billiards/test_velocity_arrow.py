@@ -7,7 +7,7 @@ import math
 from hypothesis import given, settings, strategies as st
 
 from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.render_arrow import ARROW_MIN, arrow_length
+from bpb_tasks.billiards.render import ARROW_MIN, arrow_length
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 
 SPEC = CanvasSpec.from_config(DatasetConfig())

@@ -16,9 +16,9 @@ from bpb_tasks.billiards.png import encode_palette_png
 from bpb_tasks.billiards.render import render_init
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Ball, Physics, Pockets, Scene, Table
+from bpb_tasks.billiards.vision.frame import PerceptionFailed, read_prompt
 from bpb_tasks.billiards.vision.perceive import perceive, perception_error
-from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed, read_prompt
-from bpb_tasks.questions.prompt import common_prompt
+from bpb_tasks.questions.question import common_prompt
 
 HALF_PIXEL_DIAGONAL_MM = 1000 * math.sqrt(0.5) / 600  # sprites are pasted at whole pixels
 

@@ -11,7 +11,7 @@ from bpb_tasks.billiards.png import encode_palette_png
 from bpb_tasks.billiards.render import render_init
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.questions.prompt import common_prompt
+from bpb_tasks.questions.question import common_prompt
 
 PX = 1 / 600  # metres per pixel at the default image scale
 

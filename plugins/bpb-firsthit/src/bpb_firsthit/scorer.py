@@ -17,7 +17,7 @@ from bpb_core.scored_units import INVALID
 from bpb_firsthit.task import first_hit
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.questions.ids import ball_id
+from bpb_tasks.questions.answers import ball_id
 
 NONE = "none"
 

@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 from bpb_core import ParseFailure, PromptOptions
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.questions.ids import ball_id
+from bpb_tasks.questions.answers import ball_id
 from bpb_tasks.questions.question import BilliardsQuestion
 
 CUE = 0

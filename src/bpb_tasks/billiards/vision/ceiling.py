@@ -16,8 +16,7 @@ from bpb_core.errors import BpbError
 from bpb_tasks.billiards.render_canvas import CanvasSpec
 from bpb_tasks.billiards.scene import Scene
 from bpb_tasks.billiards.truth import FinalState
-from bpb_tasks.billiards.vision.frame import canvas_of, find_frame, image_keys
-from bpb_tasks.billiards.vision.prompt_facts import read_prompt
+from bpb_tasks.billiards.vision.frame import canvas_of, find_frame, image_keys, read_prompt
 
 
 def pixel_grid(png: bytes, prompt: str) -> CanvasSpec:

@@ -1,33 +1,95 @@
-"""The table frame read from the axes: where x = 0 and y = 0 are and how many pixels a metre is.
+"""What is read before the balls: the facts the common prompt states in words, and the table
+frame read from the image's axes.
 
-The renderer draws a one-pixel x axis under the table and a y axis left of it, with a tick every
+The prompt states the horizon, table, ball ids, radius, friction, restitution and pockets (see
+:mod:`bpb_tasks.questions.question`, whose wording :func:`read_prompt` reads). The renderer draws a
+one-pixel x axis under the table and a y axis left of it, with a tick every
 :data:`~bpb_tasks.billiards.render_canvas.TICK_MINOR` metres starting at 0. The longest ink row
-and column are the axes; the ticks next to them give the origin and the scale, and the canvas
-the renderer drew on follows from them and the prompt's table and pockets.
+and column are the axes; the ticks next to them give the origin and the scale (where x = 0 and
+y = 0 are and how many pixels a metre is), and the canvas the renderer drew on follows from them
+and the prompt's table and pockets.
 """
 
 from __future__ import annotations
 
 import io
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 from PIL import Image
 
-from bpb_tasks.billiards import render_style as st
+from bpb_tasks.billiards import render_canvas as st
 from bpb_tasks.billiards.render_canvas import TICK_MINOR, CanvasSpec
-from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed, PromptFacts
+from bpb_tasks.billiards.scene import Physics, Pockets, Table
 
+_NUM = r"([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)"
 Keys = NDArray[np.int32]
 Frame1D = tuple[NDArray[np.float64], float]
 GAP = 60  # pixels of an axis line the cue arrow may hide
 
 
-def colour_key(rgb: st.RGB) -> int:
-    """One integer per colour, as :func:`image_keys` makes them."""
-    return (rgb[0] << 16) | (rgb[1] << 8) | rgb[2]
+class PerceptionFailed(ValueError):
+    """The image or the prompt could not be read; the message says what was missing."""
+
+
+@dataclass(frozen=True)
+class PromptFacts:
+    """What the prompt says about the scene besides the picture."""
+
+    scene_id: str
+    horizon: float
+    table: Table
+    physics: Physics
+    pockets: Pockets
+    ids: tuple[int, ...]
+
+
+def _find(pattern: str, text: str, what: str) -> re.Match[str]:
+    match = re.search(pattern, text)
+    if match is None:
+        raise PerceptionFailed(f"the prompt does not state the {what}")
+    return match
+
+
+def _pockets(text: str) -> Pockets:
+    if "Pockets: none" in text:
+        return Pockets(radius=0.0, centers=[])
+    stated = rf"Pockets: \d+ pockets of radius {_NUM} m centred at (.*?)\. A ball"
+    match = _find(stated, text, "pockets")
+    centres = [(float(x), float(y)) for x, y in re.findall(rf"\({_NUM}, {_NUM}\)", match.group(2))]
+    return Pockets(radius=float(match.group(1)), centers=centres)
+
+
+def read_prompt(text: str) -> PromptFacts:
+    """The scene's stated facts.
+
+    Raises:
+        PerceptionFailed: A fact is missing from ``text`` (names it).
+    """
+    scene_id = _find(r"\(scene ([^)\s]+)\)", text, "scene id").group(1)
+    horizon = float(_find(rf"until t = {_NUM} s", text, "horizon").group(1))
+    size = _find(rf"Table: {_NUM} m along x by {_NUM} m along y", text, "table size")
+    ids = _find(r"Balls: (\d+) balls with ids (\d+)\.\.(\d+)", text, "ball ids")
+    radius = float(_find(rf"radius R = {_NUM} m", text, "ball radius").group(1))
+    friction = _find(rf"mu = {_NUM} and g = {_NUM} m/s", text, "friction")
+    stated = re.search(rf"wall collisions are with restitution {_NUM}", text)
+    restitution = float(stated.group(1)) if stated else 1.0
+    return PromptFacts(
+        scene_id,
+        horizon,
+        Table(width=float(size.group(1)), height=float(size.group(2))),
+        Physics(
+            ball_radius=radius,
+            mu=float(friction.group(1)),
+            g=float(friction.group(2)),
+            wall_restitution=restitution,
+        ),
+        _pockets(text),
+        tuple(range(int(ids.group(2)), int(ids.group(3)) + 1)),
+    )
 
 
 def near(keys: Keys, rgb: st.RGB, tolerance: int = 6) -> NDArray[np.bool_]:
@@ -58,9 +120,15 @@ def image_keys(png: bytes) -> Keys:
     """
     try:
         with Image.open(io.BytesIO(png)) as img:
-            rgb = np.asarray(img.convert("RGB"), dtype=np.int32)
+            rgb = img.convert("RGB")
     except (OSError, ValueError) as exc:
         raise PerceptionFailed(f"the image cannot be read: {exc}") from None
+    return image_keys_of(rgb.tobytes(), rgb.size)
+
+
+def image_keys_of(raw: bytes, size: tuple[int, int]) -> Keys:
+    """Colour keys of raw RGB bytes of ``size``."""
+    rgb = np.frombuffer(raw, dtype=np.uint8).reshape(size[1], size[0], 3).astype(np.int32)
     return (rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]
 
 

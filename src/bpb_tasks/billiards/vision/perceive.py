@@ -11,10 +11,15 @@ import math
 
 from bpb_tasks.billiards.outcome import CUE_ID
 from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.vision.balls import find_balls
-from bpb_tasks.billiards.vision.cue import read_direction, read_speed
-from bpb_tasks.billiards.vision.frame import canvas_of, find_frame, image_keys
-from bpb_tasks.billiards.vision.prompt_facts import PerceptionFailed, PromptFacts, read_prompt
+from bpb_tasks.billiards.vision.balls import find_balls, read_direction, read_speed
+from bpb_tasks.billiards.vision.frame import (
+    PerceptionFailed,
+    PromptFacts,
+    canvas_of,
+    find_frame,
+    image_keys,
+    read_prompt,
+)
 
 Point = tuple[float, float]
 SEPARATION = 1e-6  # metres added when moving a pair apart, beyond touching
