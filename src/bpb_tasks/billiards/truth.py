@@ -8,8 +8,7 @@ those labels are to flipping. :func:`final_json_schema` publishes the model as a
 
 from __future__ import annotations
 
-import functools
-from typing import Any, Literal, cast
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -166,37 +165,27 @@ def final_state(scene: Scene, outcome: Outcome, simulator: str = "analytic") -> 
     def rounded(pos: tuple[float, float] | None) -> tuple[float, float] | None:
         return None if pos is None else (round(pos[0], 4) + 0.0, round(pos[1], 4) + 0.0)
 
-    return FinalState(
-        scene_id=scene.scene_id,
-        horizon=outcome.horizon,
-        q1=[_q1_label(i, "T" if i in contacts else "F") for i in object_ids],
-        q2=[_q2_label(w, "T" if w in walls else "F") for w in WALLS],
-        predictions=[
-            BallPosition(id=b.id, pos=rounded(outcome.positions[b.id]))
-            for b in sorted(scene.balls, key=lambda b: b.id)
-        ],
-        events=[  # the simulator's kind and wall names, checked by the model
-            EventRecord(
-                t=e.t,
-                kind=cast(EventKind, e.kind),
-                ids=list(e.ids),
-                wall=cast("Wall | None", e.wall),
-                positions=list(e.positions),
-            )
-            for e in outcome.events
-        ],
-        simulator=simulator,
+    # one validation of plain values (the model checks the simulator's kinds and wall names)
+    return FinalState.model_validate(
+        {
+            "scene_id": scene.scene_id,
+            "horizon": outcome.horizon,
+            "q1": [{"id": i, "answer": "T" if i in contacts else "F"} for i in object_ids],
+            "q2": [{"wall": w, "answer": "T" if w in walls else "F"} for w in WALLS],
+            "predictions": [
+                {"id": b.id, "pos": rounded(outcome.positions[b.id])}
+                for b in sorted(scene.balls, key=lambda b: b.id)
+            ],
+            "events": [
+                {
+                    "t": e.t,
+                    "kind": e.kind,
+                    "ids": list(e.ids),
+                    "wall": e.wall,
+                    "positions": list(e.positions),
+                }
+                for e in outcome.events
+            ],
+            "simulator": simulator,
+        }
     )
-
-
-@functools.lru_cache(maxsize=1024)
-def _q1_label(ball: int, answer: TF) -> Q1Label:
-    """One shared (frozen) label per ball and answer: a scene's ten labels are a quarter of
-    its ground truth's validation time, and take a few values only."""
-    return Q1Label(id=ball, answer=answer)
-
-
-@functools.lru_cache(maxsize=16)
-def _q2_label(wall: Wall, answer: TF) -> Q2Label:
-    """One shared (frozen) label per wall and answer (see :func:`_q1_label`)."""
-    return Q2Label(wall=wall, answer=answer)
