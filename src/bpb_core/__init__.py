@@ -69,8 +69,8 @@ _EXPORTS: dict[str, str] = {
     # running evaluations
     "RunOptions": "bpb_core.runner.options",
     "RetryPolicy": "bpb_core.runner.options",
-    "RunResult": "bpb_core.runner.result",
-    "ProgressEvent": "bpb_core.runner.progress",
+    "RunResult": "bpb_core.runner.options",
+    "ProgressEvent": "bpb_core.runner.options",
     "ModelRequest": "bpb_core.model_calls",
     "ModelResponse": "bpb_core.model_calls",
     "Message": "bpb_core.model_calls",
@@ -178,13 +178,9 @@ if TYPE_CHECKING:
         extract as extract,
     )
     from bpb_core.runner.options import (
+        ProgressEvent as ProgressEvent,
         RetryPolicy as RetryPolicy,
         RunOptions as RunOptions,
-    )
-    from bpb_core.runner.progress import (
-        ProgressEvent as ProgressEvent,
-    )
-    from bpb_core.runner.result import (
         RunResult as RunResult,
     )
     from bpb_core.scored_units import (

@@ -39,7 +39,7 @@ def prompt(
     from bpb_core.cli.console import load_registry
     from bpb_core.interfaces import PromptOptions
     from bpb_core.model_calls import ImagePart
-    from bpb_core.runner.preview import describe_image, preview_messages
+    from bpb_core.runner.dry_run import describe_image, preview_messages
 
     registry = load_registry()
     chosen = registry.task(task).default_cot if cot is None else cot

@@ -21,8 +21,7 @@ if TYPE_CHECKING:
     from bpb_core.dataset.reader import DataFolder
     from bpb_core.model_calls import AdapterOptions
     from bpb_core.registry import Registry
-    from bpb_core.runner.options import RunOptions
-    from bpb_core.runner.result import RunResult
+    from bpb_core.runner.options import RunOptions, RunResult
 
 DEFAULT_OUT = "runs"
 QUICK_PER_HORIZON = 10

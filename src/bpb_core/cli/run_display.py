@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 
-from bpb_core.runner.progress import ProgressEvent
+from bpb_core.runner.options import ProgressEvent
 
 if TYPE_CHECKING:
     from rich.progress import Progress as RichBar, TaskID
@@ -41,7 +41,7 @@ class _Row:
 
 
 class RichProgress:
-    """Draws :class:`~bpb_core.runner.progress.ProgressEvent` s as rich progress bars."""
+    """Draws :class:`~bpb_core.runner.options.ProgressEvent` s as rich progress bars."""
 
     def __init__(self, bar: RichBar) -> None:
         self._bar = bar

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.dataset.hf_import import resolve_data
 from bpb_core.results.frames import Results, load_results
 from bpb_core.runner import run as runner
-from bpb_core.runner.result import RunResult
+from bpb_core.runner.options import RunResult
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
 @dataclass
 class EvalResult(RunResult):
-    """A :class:`~bpb_core.runner.result.RunResult` with the run folder's scored results.
+    """A :class:`~bpb_core.runner.options.RunResult` with the run folder's scored results.
 
     Attributes:
         results: Everything :func:`~bpb_core.results.frames.load_results` reads from the run

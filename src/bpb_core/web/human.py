@@ -25,10 +25,9 @@ from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import TextPart
 from bpb_core.plugin_calls import parsed_answer, prompt_messages
 from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
-from bpb_core.runner.asking import asking
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
-from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.scenes import SceneRef, asking
 from bpb_core.web.task_forms import form_answer, form_context, form_html
 
 if TYPE_CHECKING:
