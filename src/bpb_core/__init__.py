@@ -33,9 +33,7 @@ _LAZY: dict[str, str] = {
         "simulate_paths run_eval run_eval_async evaluate evaluate_async load_results "
         "load_frame Results leaderboard build_report"
     ),
-    "bpb_core.runner.options": "RunOptions RetryPolicy",
-    "bpb_core.runner.result": "RunResult",
-    "bpb_core.runner.progress": "ProgressEvent",
+    "bpb_core.runner.options": "RunOptions RetryPolicy RunResult ProgressEvent",
     "bpb_core.model_calls": (
         "ModelRequest ModelResponse Message TextPart ImagePart Usage AdapterOptions"
     ),
@@ -127,7 +125,10 @@ if TYPE_CHECKING:
         make_registry as make_registry,
     )
     from bpb_core.reply_json import extract as extract
-    from bpb_core.runner.options import RetryPolicy as RetryPolicy, RunOptions as RunOptions
-    from bpb_core.runner.progress import ProgressEvent as ProgressEvent
-    from bpb_core.runner.result import RunResult as RunResult
+    from bpb_core.runner.options import (
+        ProgressEvent as ProgressEvent,
+        RetryPolicy as RetryPolicy,
+        RunOptions as RunOptions,
+        RunResult as RunResult,
+    )
     from bpb_core.scored_units import UnitRow as UnitRow

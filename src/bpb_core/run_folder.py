@@ -221,7 +221,7 @@ def read_attempts(run_dir: Path) -> Iterator[dict[str, Any]]:
 
 def live_run(run_dir: Path) -> str | None:
     """The pid of another process running in ``run_dir`` now (it holds the folder's lock,
-    :mod:`bpb_core.runner.lock`), else ``None``.
+    :mod:`bpb_core.runner.manifest`), else ``None``.
 
     A run writes its pid into the lock file and empties it when it ends; a non-empty file is
     probed with a shared lock, which fails while a live run holds its exclusive one (a run

@@ -25,8 +25,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
     "bench": ("bpb_core.cli.bench", "bench", "Benchmarks (speed against error)."),
     "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
-    "generate": ("bpb_core.cli.generate_cmd", "generate", "Generate a dataset (scenes, images)."),
-    "export": ("bpb_core.cli.export_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
+    "generate": ("bpb_core.cli.dataset_cmd", "generate", "Generate a dataset (scenes, images)."),
+    "export": ("bpb_core.cli.dataset_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
     "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
     "prompt": ("bpb_core.cli.prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
     "human": ("bpb_core.cli.web_cmd", "human", "Answer the questions in the browser (a run)."),
@@ -149,8 +149,3 @@ def _report_error(exc: BaseException) -> int:
         f"internal error: {type(exc).__name__}: {exc} (set BPB_DEBUG=1 for a traceback)", err=True
     )
     return 3
-
-
-def command_help(name: str) -> Any:
-    """One-line help registered for ``name`` (used in docs tests)."""
-    return COMMANDS[name][2]

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from bpb_core.cli.params import force_numeric_option, input_mode_option
+from bpb_core.cli.params import counted, force_numeric_option, input_mode_option
 
 
 @click.command("prompt")
@@ -18,11 +18,10 @@ from bpb_core.cli.params import force_numeric_option, input_mode_option
 @input_mode_option
 @click.option("--cot/--no-cot", "cot", default=None, help="Chain of thought (default: the task's).")
 @force_numeric_option
-@click.option(
+@counted(
     "--escalation",
-    type=click.IntRange(min=0),
     default=0,
-    show_default=True,
+    low=0,
     help="The re-ask level (0 first ask; 1, 2 after malformed answers).",
 )
 def prompt(
@@ -39,7 +38,7 @@ def prompt(
     from bpb_core.cli.console import load_registry
     from bpb_core.interfaces import PromptOptions
     from bpb_core.model_calls import ImagePart
-    from bpb_core.runner.preview import describe_image, preview_messages
+    from bpb_core.runner.dry_run import describe_image, preview_messages
 
     registry = load_registry()
     chosen = registry.task(task).default_cot if cot is None else cot

@@ -12,12 +12,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
+from rich.markup import escape
+from rich.table import Table
 
 from bpb_core.cli.console import load_registry, stderr, stdout
+from bpb_core.cli.params import counted
 
 if TYPE_CHECKING:
     import pandas as pd
-    from rich.table import Table
 
     from bpb_core.report.build import Report, ReportPart
     from bpb_core.report.html import Cell
@@ -44,14 +46,7 @@ USAGE_COLUMNS = {
     "--out", type=click.Path(path_type=Path), help="Write charts, CSV/Parquet and report.html here."
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON (for scripts).")
-@click.option(
-    "--bootstrap",
-    "n_boot",
-    default=2000,
-    show_default=True,
-    type=click.IntRange(10),
-    help="Bootstrap resamples.",
-)
+@counted("--bootstrap", "n_boot", default=2000, low=10, help="Bootstrap resamples.")
 @click.option("--seed", default=0, show_default=True, help="Bootstrap seed.")
 @click.option(
     "--min-complete",
@@ -66,14 +61,7 @@ USAGE_COLUMNS = {
     is_flag=True,
     help="Keep tasks with a cell under --min-complete in the leaderboards (still marked).",
 )
-@click.option(
-    "--gallery",
-    "gallery_size",
-    default=8,
-    show_default=True,
-    type=click.IntRange(0),
-    help="Failure gallery size.",
-)
+@counted("--gallery", "gallery_size", default=8, low=0, help="Failure gallery size.")
 def report(
     run_dirs: tuple[Path, ...],
     out: Path | None,
@@ -94,8 +82,6 @@ def report(
     and one self-contained report.html with a failure gallery.
     """
     import warnings
-
-    from rich.markup import escape
 
     from bpb_core.report.build import Completeness, build_report
     from bpb_core.results.reading import DuplicateRunWarning, StrayAnswerWarning
@@ -147,8 +133,6 @@ def _print_tables(built: Report) -> None:
 
 
 def _print_part(part: ReportPart, built: Report) -> None:
-    from rich.markup import escape
-
     from bpb_core.report.sections import (
         different_conditions_note,
         different_scenes_note,
@@ -205,8 +189,6 @@ def _print_part(part: ReportPart, built: Report) -> None:
 def _cell_table(title: str, head: list[str], rows: Rows) -> Table:
     """A rich table of report cells: partial cells carry their answered share in brackets,
     short ones are dim."""
-    from rich.table import Table
-
     table = Table(title=title)
     for name in head:
         left = name in ("run", "task")
@@ -219,8 +201,6 @@ def _cell_table(title: str, head: list[str], rows: Rows) -> Table:
 
 
 def _cell_text(cell: Cell) -> str:
-    from rich.markup import escape
-
     text = escape(cell.text) + (escape(f" [{cell.note}]") if cell.note else "")
     if cell.css == "short":
         return f"[dim]{text}[/]"
@@ -230,8 +210,6 @@ def _cell_text(cell: Cell) -> str:
 def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[str]) -> Table:
     """A rich table of ``frame``; ``percent`` is True (every float column), False, or the
     columns shown as percentages."""
-    from rich.table import Table
-
     table = Table(title=title)
     columns = [c for c in frame.columns if c != "baseline"]
     for name in columns:
@@ -248,8 +226,6 @@ def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[st
 
 
 def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
-    from rich.table import Table
-
     table = Table(title=f"All scenes vs the stable subset (strict {suite})")
     for name in ("run", f"{suite}, all", f"{suite}, stable", "stable scene-tasks"):
         table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
@@ -279,8 +255,7 @@ def _exclusions(frame: pd.DataFrame) -> str:
 
 
 def _name(run: str, baseline: bool) -> str:
-    from rich.markup import escape  # run names carry option sets in brackets: [effort=high]
-
+    """``run`` as rich text (run names carry option sets in brackets: [effort=high])."""
     return f"[dim]{escape(run)} (baseline)[/]" if baseline else escape(run)
 
 

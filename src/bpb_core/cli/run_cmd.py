@@ -12,8 +12,20 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
+from rich.markup import escape
 
-from bpb_core.cli.params import FiniteFloat, force_numeric_option, input_mode_option, positive
+from bpb_core.cli.console import load_registry, stderr
+from bpb_core.cli.params import (
+    FiniteFloat,
+    counted,
+    csv_list,
+    force_numeric_option,
+    horizons,
+    horizons_option,
+    input_mode_option,
+    limit_option,
+    positive,
+)
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
@@ -21,34 +33,15 @@ if TYPE_CHECKING:
     from bpb_core.dataset.reader import DataFolder
     from bpb_core.model_calls import AdapterOptions
     from bpb_core.registry import Registry
-    from bpb_core.runner.options import RunOptions
-    from bpb_core.runner.result import RunResult
+    from bpb_core.runner.options import RunOptions, RunResult
 
 DEFAULT_OUT = "runs"
 QUICK_PER_HORIZON = 10
 
 
-def _csv(value: str | None, option: str) -> list[str]:
-    if value is None:
-        return []
-    items = [v.strip() for v in value.split(",") if v.strip()]
-    if not items:
-        raise BadInput(f"{option}: empty list")
-    return items
-
-
-def _horizons(value: str | None) -> tuple[float, ...] | None:
-    if value is None:
-        return None
-    try:
-        return tuple(float(h) for h in _csv(value, "--horizons"))
-    except ValueError:
-        raise BadInput(f"--horizons: expected numbers like 1,2,3, got {value!r}") from None
-
-
 def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[str, bool]:
     if per_task is not None:
-        chosen = set(_csv(per_task, "--cot")) if per_task.strip().lower() != "none" else set()
+        chosen = set(csv_list(per_task, "--cot")) if per_task.strip().lower() != "none" else set()
         unknown = chosen - set(tasks)
         if unknown:
             raise BadInput(f"--cot: {sorted(unknown)} not among --tasks {tasks}")
@@ -92,9 +85,6 @@ def _adapter_options(
 def _offline_adapters(registry: Registry, data: DataFolder) -> list[str]:
     """Every model of every offline adapter that can answer the dataset's scene family (and
     whose simulator, if it runs one, is installed)."""
-    from rich.markup import escape
-
-    from bpb_core.cli.console import stderr
     from bpb_core.plugin_calls import answer_refusal
     from bpb_core.runner.run import adapter_origin, check_simulator_for
 
@@ -134,7 +124,6 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     quick = out / "data"
     if (quick / "dataset.json").exists():
         return quick
-    from bpb_core.cli.console import stderr
     from bpb_core.dataset import generate_dataset
 
     stderr().print(
@@ -161,17 +150,15 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     multiple=True,
     help="NAME:MODEL, repeatable (default: every offline adapter's models, e.g. the baselines).",
 )
-@click.option("--horizons", help="Comma-separated horizons to include (default: all).")
-@click.option("--limit", type=click.IntRange(min=1), help="First N scenes per horizon.")
+@horizons_option
+@limit_option
 @click.option("--scenes", help="Only these scene ids, comma-separated (h1_0003,h2_0010).")
 @click.option(
     "--sample", type=click.IntRange(min=1), help="A random sample of N scenes (seeded by --seed)."
 )
-@click.option(
+@counted(
     "--epochs",
-    type=click.IntRange(min=1),
     default=1,
-    show_default=True,
     help="Ask every (scene, task) K times (repeated samples, stored and scored apart).",
 )
 @click.option(
@@ -181,7 +168,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     show_default=True,
     help="Sampling temperature (the paper: 0).",
 )
-@click.option("--concurrency", type=click.IntRange(min=1), default=8, show_default=True)
+@counted("--concurrency", default=8)
 @click.option("--rpm", type=positive(), help="Requests per minute cap.")
 @click.option("--tpm", type=positive(), help="Tokens per minute cap (in + out).")
 @click.option(
@@ -221,20 +208,8 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 @click.option("--dry-run", is_flag=True, help="Count calls and estimate tokens; send nothing.")
 @click.option("--max-cost", type=positive(), help="Stop sending once USD spent.")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option(
-    "--retries",
-    type=click.IntRange(min=0),
-    default=6,
-    show_default=True,
-    help="Retries after 429/5xx/timeouts/connection errors.",
-)
-@click.option(
-    "--reasks",
-    type=click.IntRange(min=0),
-    default=2,
-    show_default=True,
-    help="Escalating re-asks after a malformed answer.",
-)
+@counted("--retries", default=6, low=0, help="Retries after 429/5xx/timeouts/connection errors.")
+@counted("--reasks", default=2, low=0, help="Escalating re-asks after a malformed answer.")
 @click.option(
     "--prices",
     type=click.Path(path_type=Path, dir_okay=False),
@@ -260,33 +235,31 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
-    from bpb_core.cli.console import load_registry
+    from bpb_core.cli.run_file import prepare, refuse_unpriced
     from bpb_core.dataset.reader import open_folder
     from bpb_core.layout import check_writable_folder
     from bpb_core.runner.options import RetryPolicy, RunOptions
 
     check_writable_folder(kw["out"], "--out")  # before any work: a file or unwritable path
     registry = load_registry()
-    tasks = _csv(kw["tasks"], "--tasks")
+    tasks = csv_list(kw["tasks"], "--tasks")
     _check_names(registry, tasks, list(kw["adapters"]))
     out: Path = kw["out"]
     plans = _plans(kw, list(kw["adapters"]))
     _check_names(registry, [], [p.spec for p in plans])
     check = not kw["dry_run"]  # a dry run sends nothing, so it needs no key
-    ready = _prepare(registry, plans, check) if plans else []  # preflight: before any call
+    ready = prepare(registry, plans, check=check) if plans else []  # preflight: before any call
     data = open_folder(_data(kw["data"], out, kw["seed"], registry), registry)  # read once
     tasks = tasks or registry.tasks_for(data.family.name, default_only=True)
     if not ready:
-        ready = _prepare(registry, _plans(kw, _offline_adapters(registry, data)), check)
+        ready = prepare(registry, _plans(kw, _offline_adapters(registry, data)), check=check)
     if kw["max_cost"] is not None and not kw["allow_unpriced"] and not kw["dry_run"]:
-        from bpb_core.cli.run_file import refuse_unpriced
-
         refuse_unpriced(ready)
     options = RunOptions(
         tasks=tuple(tasks),
-        horizons=_horizons(kw["horizons"]),
+        horizons=horizons(kw["horizons"]),
         limit=kw["limit"],
-        scenes=tuple(_csv(kw["scenes"], "--scenes")) if kw["scenes"] is not None else None,
+        scenes=tuple(csv_list(kw["scenes"], "--scenes")) if kw["scenes"] is not None else None,
         sample=kw["sample"],
         epochs=kw["epochs"],
         temperature=kw["temperature"],
@@ -304,7 +277,7 @@ def run(**kw: Any) -> None:
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
     if kw["dry_run"]:
-        from bpb_core.cli.dry_run_table import show_dry_run
+        from bpb_core.cli.run_output import show_dry_run
 
         show_dry_run(data, out, ready, options, registry)
         return
@@ -316,18 +289,12 @@ def run(**kw: Any) -> None:
     raise click.exceptions.Exit(_finish(results, registry, data))
 
 
-def _prepare(registry: Registry, plans: list[AdapterPlan], check: bool) -> list[Prepared]:
-    from bpb_core.cli.run_file import prepare
-
-    return prepare(registry, plans, check=check)
-
-
 def _run_all(
     data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> list[RunResult]:
     import dataclasses
 
-    from bpb_core.cli.run_display import RichProgress, make_bar
+    from bpb_core.cli.run_output import RichProgress, make_bar
     from bpb_core.runner import run_eval, slug
 
     results = []
@@ -352,10 +319,7 @@ def _run_all(
 
 
 def _finish(results: list[RunResult], registry: Registry, data: DataFolder) -> int:
-    from rich.markup import escape
-
-    from bpb_core.cli.console import stderr
-    from bpb_core.cli.run_summary import show_summary
+    from bpb_core.cli.run_output import show_summary
 
     show_summary([r.run_dir for r in results], registry, [data])
     code = 0

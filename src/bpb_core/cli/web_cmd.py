@@ -7,8 +7,8 @@ from pathlib import Path
 
 import click
 
+from bpb_core.cli import params
 from bpb_core.cli.console import load_registry, stderr
-from bpb_core.cli.run_cmd import _csv, _horizons
 
 PORT_HELP = "Port on 127.0.0.1 (the apps never listen on other interfaces)."
 PORTS = click.IntRange(0, 65535)
@@ -19,8 +19,8 @@ PORTS = click.IntRange(0, 65535)
 @click.option("--out", required=True, type=click.Path(path_type=Path), help="Run folder.")
 @click.option("--name", default="anonymous", show_default=True, help="Who answers (human:NAME).")
 @click.option("--tasks", help="Comma-separated tasks (default: the family's default tasks).")
-@click.option("--horizons", help="Comma-separated horizons to include (default: all).")
-@click.option("--limit", type=click.IntRange(1), help="First N scenes per horizon.")
+@params.horizons_option
+@params.limit_option
 @click.option("--seed", default=0, show_default=True, help="Seed of the scene order.")
 @click.option("--port", default=8765, show_default=True, type=PORTS, help=PORT_HELP)
 def human(
@@ -41,8 +41,8 @@ def human(
     require_web()
     from bpb_core.web.human import HumanSession, human_app
 
-    chosen = tuple(_csv(tasks, "--tasks"))
-    options = RunOptions(tasks=chosen, horizons=_horizons(horizons), limit=limit)
+    chosen = tuple(params.csv_list(tasks, "--tasks"))
+    options = RunOptions(tasks=chosen, horizons=params.horizons(horizons), limit=limit)
     session = HumanSession(data, out, name, load_registry(), options, seed)
     stderr().print(f"bpb human: open http://{HOST}:{port}/ (Ctrl-C stops; answers are kept)")
     serve(human_app(session), port)

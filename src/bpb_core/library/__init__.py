@@ -39,8 +39,7 @@ from bpb_core.report.build import Report, build_report
 from bpb_core.results.frames import Results, load_frame, load_results
 from bpb_core.results.tables import summary
 from bpb_core.runner import run as runner
-from bpb_core.runner.options import check_input_mode
-from bpb_core.runner.result import RunResult
+from bpb_core.runner.options import RunResult, check_input_mode
 from bpb_core.scored_units import (
     check_scorer,
     input_frame,
@@ -277,7 +276,7 @@ def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict
 
 @dataclass
 class EvalResult(RunResult):
-    """A :class:`~bpb_core.runner.result.RunResult` with the run folder's scored results.
+    """A :class:`~bpb_core.runner.options.RunResult` with the run folder's scored results.
 
     Attributes:
         results: Everything :func:`~bpb_core.results.frames.load_results` reads from the run

@@ -1,8 +1,13 @@
 """Evaluation runs: ask model adapters a dataset's tasks, resumably (:func:`run_eval`)."""
 
-from bpb_core.runner.options import RetryPolicy, RunOptions
-from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
-from bpb_core.runner.result import RunResult
+from bpb_core.runner.options import (
+    NoProgress,
+    Progress,
+    ProgressEvent,
+    RetryPolicy,
+    RunOptions,
+    RunResult,
+)
 from bpb_core.runner.run import evaluate, run_eval, run_eval_async, slug
 
 __all__ = [

@@ -27,10 +27,9 @@ from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
 from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
 from bpb_core.run_folder import AnswerRecord, write_answer
-from bpb_core.runner.limits import sleep_unless
-from bpb_core.runner.progress import ProgressEvent
+from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import NotSent, RunState, Tally
+from bpb_core.runner.state import NotSent, RunState, Tally, sleep_unless
 
 
 @dataclass

@@ -1,20 +1,30 @@
-"""``run.json``: what a run was asked to do, with what software, and when.
+"""The run folder as a session opens it: ``run.json`` and the folder's lock.
 
-Resuming a run folder with different answer-shaping settings (adapter, its model arguments,
-dataset, input mode, chain of thought, force-numeric, temperature) would mix incomparable
-answers, so it is refused as bad input. The guard is kept twice: in ``run.json`` (written
-atomically) and as a configuration hash on every line of the attempts log, which guards a
-folder that lost its ``run.json``.
+``run.json`` records what a run was asked to do, with what software, and when. Resuming a run
+folder with different answer-shaping settings (adapter, its model arguments, dataset, input
+mode, chain of thought, force-numeric, temperature) would mix incomparable answers, so it is
+refused as bad input. The guard is kept twice: in ``run.json`` (written atomically) and as a
+configuration hash on every line of the attempts log, which guards a folder that lost its
+``run.json``.
+
+One ``bpb run`` per run folder at a time: two runs writing one folder would pay every call twice
+and interleave their answers. The first run holds an exclusive ``flock`` on ``RUN_DIR/run.lock``
+(holding its pid) until it ends; a second run on the folder is refused as bad input naming the
+holder's pid. The operating system drops the lock when its process dies, however it dies, so a
+lock left by a dead run is simply taken over.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import fcntl
 import hashlib
 import json
+import os
 import platform
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
@@ -22,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import DataFolder, open_folder
 from bpb_core.errors import BadInput
-from bpb_core.layout import ATTEMPTS, RUN_MANIFEST
+from bpb_core.layout import ATTEMPTS, RUN_LOCK, RUN_MANIFEST
 from bpb_core.run_folder import AnswerRecord, iter_answers, read_manifest, write_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
@@ -31,6 +41,7 @@ from bpb_core.version import __version__
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
     from bpb_core.runner.state import RunState
+
 
 _GUARDED = (
     "adapter",
@@ -238,3 +249,41 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
         "error": None if state.auth_error is None else str(state.auth_error),
     }
     write_manifest(run_dir, manifest)
+
+
+def _holder(handle: int) -> str:
+    os.lseek(handle, 0, os.SEEK_SET)
+    text = os.read(handle, 64).decode("ascii", "replace").strip()
+    return text or "unknown"
+
+
+@contextmanager
+def run_lock(run_dir: Path) -> Iterator[None]:
+    """Hold the run folder's lock for the block.
+
+    Raises:
+        BadInput: Another live process holds the folder (one line naming its pid), or the
+            folder cannot hold a lock file (names the path).
+    """
+    path = run_dir / RUN_LOCK
+    try:
+        handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot create the run lock: {exc.strerror or exc}") from None
+    try:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise BadInput(
+                f"{run_dir}: in use by another bpb run (pid {_holder(handle)}); wait for it to "
+                "finish or stop it, then re-run to resume"
+            ) from None
+        os.ftruncate(handle, 0)
+        os.pwrite(handle, f"{os.getpid()}\n".encode("ascii"), 0)
+        try:
+            yield
+        finally:
+            os.ftruncate(handle, 0)
+            fcntl.flock(handle, fcntl.LOCK_UN)
+    finally:
+        os.close(handle)

@@ -1,11 +1,14 @@
-"""Options of an evaluation run: what is asked, how, and how hard bpb tries."""
+"""The values a run takes and gives: its options (what is asked, how, and how hard bpb tries),
+the progress events it reports while it runs, and what it did (:class:`RunResult`)."""
 
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import get_args
+from pathlib import Path
+from typing import Literal, Protocol, get_args
 
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
@@ -132,3 +135,76 @@ def check_options(options: RunOptions) -> None:
     _number("retry.base_delay", retry.base_delay, zero=True)
     _number("retry.max_delay", retry.max_delay, zero=True)
     _number("retry.timeout_growth", retry.timeout_growth)
+
+
+EventKind = Literal["planned", "skipped", "retry", "done", "warning"]
+
+
+@dataclass(frozen=True)
+class ProgressEvent:
+    """Something happened to one (scene, task) of one adapter.
+
+    ``planned`` carries ``count`` calls to make; ``skipped`` ``count`` calls already complete
+    from an earlier run; ``retry`` one failed attempt about to be repeated; ``done`` a final
+    ``status`` with the tokens and cost of all its attempts; ``warning`` something the user
+    should know about the whole run, in ``reason`` (sent once per adapter, e.g. a requested
+    parameter the provider route dropped).
+    """
+
+    adapter: str
+    task: str
+    kind: EventKind
+    count: int = 1
+    status: str | None = None
+    tokens: int = 0
+    cost: float | None = None
+    reason: str | None = None
+
+
+class Progress(Protocol):
+    """Receives progress events (the CLI draws them; the library never prints)."""
+
+    def update(self, event: ProgressEvent) -> None:
+        """Handle one event; must be quick (it runs on the event loop)."""
+        ...
+
+
+class NoProgress:
+    """Ignores every event."""
+
+    def update(self, event: ProgressEvent) -> None:
+        return None
+
+
+@dataclass
+class RunResult:
+    """What a finished (or stopped) run did.
+
+    Attributes:
+        run_dir: The run folder.
+        adapter: Adapter spec.
+        statuses: Per task, how many (scene, task) pairs ended ok / parse_error / api_error,
+            plus ``done_before`` (complete from an earlier run) and ``not_sent``.
+        cost: USD spent in this invocation (``None`` if any reply had no price).
+        tokens: Input + output tokens in this invocation.
+        stopped: Why the run stopped early (``max-cost``, ``auth``), or ``None``.
+        error: The authentication error message when ``stopped`` is ``auth``.
+    """
+
+    run_dir: Path
+    adapter: str
+    statuses: dict[str, Counter[str]] = field(default_factory=dict)
+    cost: float | None = 0.0
+    tokens: int = 0
+    stopped: str | None = None
+    error: str | None = None
+
+    @property
+    def api_errors(self) -> int:
+        """Pairs that ended with an infrastructure error (resumable)."""
+        return sum(c["api_error"] for c in self.statuses.values())
+
+    @property
+    def not_sent(self) -> int:
+        """Pairs never sent (stopped by the cost cap or an auth failure)."""
+        return sum(c["not_sent"] for c in self.statuses.values())

@@ -3,9 +3,13 @@
 :func:`run_eval` runs one adapter into one run folder; :func:`evaluate` runs several, each into
 ``OUT/<slug>/``. Re-running the same call resumes: (scene, task) pairs whose answer file says
 ``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. The (scene,
-task) pairs are sent in a seeded random order (:mod:`bpb_core.runner.order`), so a run stopped
-early holds a uniform sample; they stream through a bounded window, so memory does not grow with
-the dataset.
+task) pairs are sent in a seeded random order (:func:`~bpb_core.runner.drive.call_order`), so a
+run stopped early holds a uniform sample; they stream through a bounded window, so memory does
+not grow with the dataset.
+
+The synchronous entry points work wherever they are called: a script, a worker thread, or code
+already running inside an event loop (a Jupyter cell, an async web handler), where
+``asyncio.run`` refuses to start (:func:`~bpb_core.runner.drive.run_sync`).
 """
 
 from __future__ import annotations
@@ -27,26 +31,18 @@ from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.asking import Asking, asking
-from bpb_core.runner.drive import drive
-from bpb_core.runner.history import read_history, recover_answers
-from bpb_core.runner.limits import RateLimiter, TokenBudget
-from bpb_core.runner.lock import run_lock
-from bpb_core.runner.manifest import finish_manifest, start_manifest
-from bpb_core.runner.options import RunOptions
-from bpb_core.runner.order import Pair, call_order
-from bpb_core.runner.progress import NoProgress, Progress, ProgressEvent
-from bpb_core.runner.result import RunResult
-from bpb_core.runner.scenes import SceneRef, check_images
-from bpb_core.runner.state import RunState
-from bpb_core.runner.sync import run_sync
+from bpb_core.runner.drive import Pair, call_order, drive, run_sync
+from bpb_core.runner.history import History, read_history, recover_answers
+from bpb_core.runner.manifest import finish_manifest, run_lock, start_manifest
+from bpb_core.runner.options import NoProgress, Progress, ProgressEvent, RunOptions, RunResult
+from bpb_core.runner.scenes import Asking, SceneRef, asking, check_images
+from bpb_core.runner.state import RateLimiter, RunState, TokenBudget
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ModelAdapter, Task
     from bpb_core.registry import Registry
     from bpb_core.run_folder import AnswerRecord
-    from bpb_core.runner.history import History
 
 
 def slug(spec: str) -> str:
@@ -99,32 +95,6 @@ def check_simulator_for(
     if folder.recorded is not None:  # without one, the family's default simulator (built in)
         made_with = folder.simulator_spec()
         check_simulator(folder.root / MANIFEST, made_with.name, registry, f"; {spec} runs it")
-
-
-def _state(
-    adapter: ModelAdapter,
-    spec: str,
-    tasks: dict[str, Task],
-    options: RunOptions,
-    run_dir: Path,
-    progress: Progress,
-    asked: Asking,
-) -> RunState:
-    return RunState(
-        adapter=adapter,
-        spec=spec,
-        tasks=tasks,
-        options=options,
-        run_dir=run_dir,
-        log=AttemptLog(run_dir),
-        progress=progress,
-        limiter=RateLimiter(options.rpm),
-        budget=TokenBudget(options.tpm),
-        slots=asyncio.Semaphore(options.concurrency),
-        rng=random.Random(options.seed),
-        family=asked.family.name,
-        simulator=asked.simulator,
-    )
 
 
 async def run_eval_async(
@@ -193,12 +163,26 @@ async def _session(
 ) -> RunResult:
     """One session on a locked run folder: guard, recover, send the rest, record the end."""
     options, refs = asked.options, asked.scenes
-    setup = (asked, spec, run_dir, registry, settings)
-    opened = await asyncio.to_thread(_opening, *setup)
+    opened = await asyncio.to_thread(_opening, asked, spec, run_dir, registry, settings)
     history, held, manifest = opened
-    state = _state(model, spec, asked.tasks, options, run_dir, progress, asked)
-    state.origins = _origins(registry, spec, model, asked.tasks)
-    state.config_hash, state.history = manifest["config_hash"], history
+    state = RunState(
+        adapter=model,
+        spec=spec,
+        tasks=asked.tasks,
+        options=options,
+        run_dir=run_dir,
+        log=AttemptLog(run_dir),
+        progress=progress,
+        limiter=RateLimiter(options.rpm),
+        budget=TokenBudget(options.tpm),
+        slots=asyncio.Semaphore(options.concurrency),
+        rng=random.Random(options.seed),
+        family=asked.family.name,
+        simulator=asked.simulator,
+        config_hash=manifest["config_hash"],
+        history=history,
+        origins=_origins(registry, spec, model, asked.tasks),
+    )
     ended = False
     try:
         done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}

@@ -41,10 +41,9 @@ from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import prompt_text
 from bpb_core.plugin_calls import named, parsed_answer, prompt_messages
 from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
-from bpb_core.runner.asking import asking
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
-from bpb_core.runner.scenes import SceneRef
+from bpb_core.runner.scenes import SceneRef, asking
 from bpb_core.web import error_page, loopback_only, render, render_string
 
 if TYPE_CHECKING:

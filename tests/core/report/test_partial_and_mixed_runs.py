@@ -131,7 +131,7 @@ def test_a_run_still_running_is_reported_as_running_not_as_to_resume(tmp_path: P
             sys.executable,
             "-c",
             "import sys, pathlib\n"
-            "from bpb_core.runner.lock import run_lock\n"
+            "from bpb_core.runner.manifest import run_lock\n"
             "with run_lock(pathlib.Path(sys.argv[1])):\n"
             "    print('held', flush=True); sys.stdin.read()\n",
             str(run_dir),

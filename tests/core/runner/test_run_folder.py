@@ -14,7 +14,7 @@ from bpb_core.run_folder import (
     read_attempts,
     write_answer,
 )
-from bpb_core.runner.limits import RateLimiter, TokenBudget
+from bpb_core.runner.state import RateLimiter, TokenBudget
 
 
 def test_torn_last_line_is_skipped_and_closed_before_appending(tmp_path: Path) -> None:

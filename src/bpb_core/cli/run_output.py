@@ -1,0 +1,193 @@
+"""What ``bpb run`` prints: the live progress rows (one per adapter and task), the table of
+what a dry run would send (from :mod:`bpb_core.runner.dry_run`), and the summary of scores at
+the end (from :mod:`bpb_core.results`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress as RichBar, TextColumn
+from rich.table import Table
+
+from bpb_core.cli.console import stderr, stdout
+from bpb_core.errors import BpbError
+from bpb_core.runner import slug
+from bpb_core.runner.dry_run import dry_run
+from bpb_core.runner.options import ProgressEvent
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from rich.progress import TaskID
+
+    from bpb_core.cli.run_file import Prepared
+    from bpb_core.dataset.reader import DataFolder
+    from bpb_core.registry import Registry
+    from bpb_core.runner.options import RunOptions
+
+
+@dataclass
+class _Row:
+    task_id: TaskID
+    total: int = 0
+    done_before: int = 0
+    ok: int = 0
+    parse_error: int = 0
+    api_error: int = 0
+    not_sent: int = 0
+    retries: int = 0
+    tokens: int = 0
+    cost: float | None = 0.0
+
+    def fields(self) -> dict[str, Any]:
+        cost = "$?" if self.cost is None else f"${self.cost:.4f}"
+        failed = self.parse_error + self.api_error
+        text = (
+            f"ok {self.ok} failed {failed} (parse {self.parse_error}, api {self.api_error}) "
+            f"retrying {self.retries} tok {self.tokens:,} {cost}"
+        )
+        if self.done_before:
+            text += f" | {self.done_before} done before"
+        if self.not_sent:
+            text += f" | {self.not_sent} not sent"
+        return {"stats": text}
+
+
+class RichProgress:
+    """Draws :class:`~bpb_core.runner.options.ProgressEvent` s as rich progress bars."""
+
+    def __init__(self, bar: RichBar) -> None:
+        self._bar = bar
+        self._rows: dict[tuple[str, str], _Row] = {}
+
+    def _row(self, event: ProgressEvent) -> _Row:
+        key = (event.adapter, event.task)
+        if key not in self._rows:
+            name = escape(f"{event.adapter} {event.task}")
+            task_id = self._bar.add_task(name, total=0, stats="")
+            self._rows[key] = _Row(task_id)
+        return self._rows[key]
+
+    def update(self, event: ProgressEvent) -> None:
+        """Apply one event to its row (a warning is printed above the bars)."""
+        if event.kind == "warning":
+            text = escape(f"{event.adapter}: {event.reason}")
+            self._bar.console.print(f"[yellow]warning:[/] {text}")
+            return
+        row = self._row(event)
+        if event.kind == "planned":
+            row.total += event.count
+        elif event.kind == "skipped":
+            row.done_before += event.count
+        elif event.kind == "retry":
+            row.retries += 1
+        elif event.kind == "done":
+            status = event.status or "ok"
+            setattr(row, status, getattr(row, status, 0) + 1)
+            row.tokens += event.tokens
+            if row.cost is not None:
+                row.cost = None if event.cost is None else row.cost + event.cost
+        finished = row.ok + row.parse_error + row.api_error + row.not_sent
+        self._bar.update(row.task_id, total=row.total, completed=finished, **row.fields())
+
+
+def make_bar() -> RichBar:
+    """A rich progress bar on stderr with the run's columns."""
+    return RichBar(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[stats]}"),
+        console=stderr(),
+        transient=False,
+    )
+
+
+def show_dry_run(
+    data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
+) -> None:
+    """Print, per adapter and task, the calls a run would send, those already done, and the
+    estimated input tokens and USD (nothing is sent)."""
+    table = Table(
+        "adapter",
+        "task",
+        "calls",
+        "already done",
+        "est. input tokens",
+        "est. input USD",
+        title="bpb run --dry-run (nothing sent; output tokens not included)",
+    )
+    for item in ready:
+        plan = dry_run(data, out / slug(item.name), options, registry, item.adapter, item.origin)
+        for task in options.tasks:
+            cost = plan.input_cost.get(task, 0.0)
+            table.add_row(
+                escape(item.name),
+                task,
+                str(plan.calls.get(task, 0)),
+                str(plan.done.get(task, 0)),
+                f"{plan.input_tokens.get(task, 0):,}",
+                "no price" if cost is None else f"${cost:.4f}",
+            )
+    stdout().print(table)
+
+
+_NOT_SCORES = (
+    "run", "adapter", "model", "baseline", "expected", "epochs", "completeness", "worst_cell",
+)  # fmt: skip
+
+
+def show_summary(
+    run_dirs: list[Path], registry: Registry, folders: Iterable[DataFolder] = ()
+) -> None:
+    """Write ``scores.csv`` into each run folder and print the leaderboard summary
+    (``folders``: the runs' datasets, already read)."""
+    from bpb_core.results.frames import write_scores
+
+    try:
+        frame = write_scores(run_dirs, registry, folders)
+    except BpbError as exc:
+        stderr().print(f"[yellow]warning:[/] could not score the run: {exc}")
+        return
+    if frame is None or frame.empty:
+        return
+    stdout().print(_table(frame))
+    for run, line in frame.attrs.get("incomplete", {}).items():
+        stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
+    parents = sorted({str(d.parent) for d in run_dirs})
+    where = " ".join(parents) if parents else "RUN_DIR"
+    stderr().print(
+        f"next: bpb report {where} --out {parents[0] if parents else '.'}/report "
+        "(charts, failure gallery, HTML)",
+        highlight=False,
+    )
+
+
+def _table(frame: pd.DataFrame) -> Table:
+    """Answered-only scores and completeness first, the strict score beside each."""
+    names = [
+        c for c in frame.columns
+        if c not in _NOT_SCORES and c != "short" and not c.endswith("_answered")
+    ]  # fmt: skip
+    table = Table(title="bpb run: scores (answered only; strict in brackets)")
+    for column in ("adapter", "complete", *names, "left out"):
+        table.add_column(column, justify="left" if column == "adapter" else "right")
+    for _, row in frame.iterrows():
+        cells = [escape(str(row["adapter"])), _pct(row["completeness"])]
+        for name in names:
+            answered, strict = row[f"{name}_answered"], row[name]
+            if not math.isnan(float(answered)):
+                cells.append(f"{_pct(answered)} ({_pct(strict)})")
+            else:  # too incomplete, or not asked (a suite with a task the run lacks)
+                cells.append("left out" if row["short"] else "–")
+        cells.append(escape(str(row["short"])) or "–")
+        table.add_row(*cells)
+    return table
+
+
+def _pct(value: float) -> str:
+    return "–" if math.isnan(float(value)) else f"{100 * value:.1f}%"
