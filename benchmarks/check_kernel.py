@@ -14,7 +14,7 @@ import time
 from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import simulate_many
+from bpb_tasks.simulators.analytic.compiled import outcomes_many
 
 
 def main(count: int, seed: int = 2026, chunk: int = 2000) -> None:
@@ -29,16 +29,19 @@ def main(count: int, seed: int = 2026, chunk: int = 2000) -> None:
             d = draw(scene_rng(seed, horizon, i), cfg)
             scenes.append(build_scene(d, horizon, i, cfg, speed=0.2 + 11.8 * d.u))
         t0 = time.perf_counter()
-        batch = simulate_many(scenes)
+        batch = outcomes_many(scenes)
         t_kernel += time.perf_counter() - t0
         for k, s in enumerate(scenes):
             t0 = time.perf_counter()
             ref = python.run(s)
             t_python += time.perf_counter() - t0
             events += len(ref.events)
-            same = batch.contacts[k] == ref.cue_contacts() and batch.walls[k] == ref.cue_walls()
+            same = (
+                batch[k].cue_contacts() == ref.cue_contacts()
+                and batch[k].cue_walls() == ref.cue_walls()
+            )
             for ball, pos in ref.positions.items():
-                other = batch.positions[k][ball]
+                other = batch[k].positions[ball]
                 if (pos is None) != (other is None):
                     same = False
                 elif pos is not None and other is not None:

@@ -3,7 +3,7 @@
 Usage: ``python benchmarks/kernel_speed.py [COUNT] [ROUNDS]`` (default 10,000 ``bpb bench sim``
 scenes, seed 0, 3 rounds). Per round, interleaved: the Python engine scene by scene
 (``AnalyticSimulator(engine="python").run``), the kernel's batch entry point on arrays prepared
-beforehand (``run_many_arrays``: the compiled event loop alone), ``simulate_many`` (arrays built
+beforehand (``run_many_arrays``: the compiled event loop alone), ``outcomes_many`` (arrays built
 from the scene models and labels and final positions read back) and the kernel scene by scene
 (``AnalyticSimulator(engine="kernel").run``, an ``Outcome`` with events and segments per scene).
 CPU seconds (``time.process_time``); the best round counts.
@@ -18,7 +18,7 @@ import numpy as np
 
 from bpb_tasks.billiards.bench_compare import random_scenes
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import scene_arrays, simulate_many, table_params
+from bpb_tasks.simulators.analytic.compiled import outcomes_many, scene_arrays, table_params
 from bpb_tasks.simulators.analytic.kernel import run_many_arrays
 
 
@@ -37,10 +37,10 @@ def main(count: int, rounds: int) -> None:
         "kernel alone (run_many_arrays)": lambda: run_many_arrays(
             pos, vel, starts, prm, pockets, ends, 100_000
         ),
-        "simulate_many (models in, labels out)": lambda: simulate_many(scenes),
+        "outcomes_many (models in, outcomes out)": lambda: outcomes_many(scenes),
         "kernel, per scene (Outcome)": lambda: [kernel.run(s) for s in scenes],
     }
-    simulate_many(scenes[:10])
+    outcomes_many(scenes[:10])
     best = dict.fromkeys(ways, float("inf"))
     for _ in range(rounds):
         for name, way in ways.items():
