@@ -21,6 +21,7 @@ here, because conftest modules share one name across folders and are never impor
 
 from __future__ import annotations
 
+import fcntl
 import os
 import subprocess
 import sys
@@ -47,19 +48,27 @@ def pytest_configure(config: pytest.Config) -> None:
 
     folder = Path(tempfile.gettempdir()) / f"bpb-tests-numba-{os.getuid()}" / cache_folder().name
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    # pytest-xdist's workers get COLUMNS=80 and LINES=24; a bpb command piped has neither
+    for name in ("COLUMNS", "LINES"):
+        os.environ.pop(name, None)
 
 
 @pytest.fixture(scope="session", autouse=True)
 def compiled_code() -> None:
     """numba's cache filled before any test (:mod:`support.compiled_code`), in a process of
-    its own: this one keeps numba unloaded."""
-    done = subprocess.run(
-        [sys.executable, "-m", "support.compiled_code"],
-        cwd=Path(__file__).parent,
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
+    its own: this one keeps numba unloaded. pytest-xdist's workers take turns under a lock on
+    the cache folder, so the first builds and the others load what it built."""
+    folder = Path(os.environ["NUMBA_CACHE_DIR"])
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder.with_name(folder.name + ".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = subprocess.run(
+            [sys.executable, "-m", "support.compiled_code"],
+            cwd=Path(__file__).parent,
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
     assert done.returncode == 0, done.stderr
 
 
