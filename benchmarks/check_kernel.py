@@ -11,8 +11,8 @@ import math
 import sys
 import time
 
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.sampler import build_scene, draw, scene_rng
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.compiled import outcomes_many
 

@@ -25,7 +25,7 @@ from pathlib import Path
 from PIL import Image
 
 from bpb_core.dataset import generate_dataset
-from bpb_tasks.billiards.png import DEFAULT_LEVEL, encode_palette_png
+from bpb_tasks.billiards.render.png import DEFAULT_LEVEL, encode_palette_png
 
 
 def encode_cpu(paths: list[Path]) -> tuple[float, float]:

@@ -10,7 +10,7 @@ creating files costs no disk time). A run's CPU is the operating system's count 
 and the workers it reaped (user + system). Right after each run, a fresh process decodes that
 dataset's 3,000 scene PNGs (not counted) and encodes them alone, counting only that: with
 Pillow at zlib level 1 (how bpb stored them until stop 31, issue 12's yardstick) and with bpb's
-own writer (``bpb_tasks.billiards.png``, zlib-ng at its default level: how bpb stores them
+own writer (``bpb_tasks.billiards.render.png``, zlib-ng at its default level: how bpb stores them
 now). Every run of one checkout must write the same ``checksums.sha256``; the script stops
 otherwise.
 """

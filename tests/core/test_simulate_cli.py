@@ -22,8 +22,8 @@ from bpb_core.dataset import generate_dataset
 from bpb_core.registry import PluginSource, make_registry
 from bpb_core.simulate import simulate_lines
 from bpb_tasks.billiards.bench_compare import random_scene
-from bpb_tasks.billiards.scene import DEFAULT_RADIUS, Scene, table_box
-from bpb_tasks.billiards.truth import FinalState, final_state
+from bpb_tasks.billiards.scene.model import DEFAULT_RADIUS, Scene, table_box
+from bpb_tasks.billiards.truth.final import FinalState, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from support.processes import HAS_PROC, as_in_a_terminal, ctrl_c, ctrl_c_at_worker_start
 
@@ -108,7 +108,7 @@ def test_stability_of_a_scene_whose_second_past_the_horizon_crosses_the_event_ca
     now stops at the cap, and the first event after the horizon, which came before it, gives
     the uncapped gap."""
     pytest.importorskip("numba")  # the pure-Python engine takes about 100 s for it
-    from bpb_tasks.billiards.stability import kernel_horizon_gap
+    from bpb_tasks.billiards.stability.annotation import kernel_horizon_gap
 
     radius, gap = 0.028575, 1.4e-5
     narrow = Scene.model_validate(

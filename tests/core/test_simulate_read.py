@@ -14,7 +14,7 @@ from bpb_core import simulate
 from bpb_core.errors import BadInput
 from bpb_core.simulate import read_scene, simulate_lines
 from bpb_tasks.billiards.bench_compare import random_scene
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")

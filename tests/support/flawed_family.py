@@ -57,7 +57,7 @@ from bpb_core import (
     hookimpl,
 )
 from bpb_tasks.billiards.family import BilliardsFamily, BilliardsTally
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.question import BilliardsQuestion
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from bpb_tasks.billiards.outcome import Outcome, Segment
-from bpb_tasks.billiards.scene import DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.scene.model import DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.truth.outcome import Outcome, Segment
 
 R = DEFAULT_RADIUS
 

@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.layout import scene_dir, scene_id
-from bpb_tasks.billiards.scene import WALLS, Ball, Scene
-from bpb_tasks.billiards.truth import BallPosition, FinalState, Q1Label, Q2Label, Stability
+from bpb_tasks.billiards.scene.model import WALLS, Ball, Scene
+from bpb_tasks.billiards.truth.final import BallPosition, FinalState, Q1Label, Q2Label, Stability
 from support.questions import questions
 
 Pos = tuple[float, float]

@@ -12,8 +12,8 @@ from PIL import Image
 
 from bpb_core.layout import scene_dir, scene_id
 from bpb_core.registry import make_registry
-from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.truth import final_state
+from bpb_tasks.billiards.scene.model import Ball, Scene
+from bpb_tasks.billiards.truth.final import final_state
 
 RADIUS = 0.028575
 

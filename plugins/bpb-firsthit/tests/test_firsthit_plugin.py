@@ -17,8 +17,8 @@ from bpb_firsthit.task import FirstHitTask, first_hit
 from hypothesis import given, settings, strategies as st
 
 from bpb_core import ParseFailure, PromptOptions, make_registry
-from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.truth import EventRecord, FinalState
+from bpb_tasks.billiards.scene.model import Ball, Scene
+from bpb_tasks.billiards.truth.final import EventRecord, FinalState
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 SCENE = Scene(

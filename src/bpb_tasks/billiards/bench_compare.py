@@ -17,8 +17,8 @@ import math
 import random
 from collections.abc import Iterator
 
-from bpb_tasks.billiards.outcome import Outcome
-from bpb_tasks.billiards.scene import DEFAULT_POCKETS, DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.scene.model import DEFAULT_POCKETS, DEFAULT_RADIUS, Scene
+from bpb_tasks.billiards.truth.outcome import Outcome
 
 CONTESTANTS = (
     "analytic",
@@ -116,7 +116,7 @@ def q3_wrong(outcome: Outcome, reference: Outcome, radius: float) -> int:
 
 def compare(outcome: Outcome, reference: Outcome, scene: Scene) -> dict[str, float]:
     """``error`` (m) and the disagreement counts ``q1``, ``q2``, ``pocketed`` and ``q3``."""
-    from bpb_tasks.billiards.stability import labels
+    from bpb_tasks.billiards.stability.annotation import labels
 
     ours, theirs = labels(outcome), labels(reference)
     q1, q2, pocketed = (float(a != b) for a, b in zip(ours, theirs, strict=True))

@@ -22,13 +22,18 @@ from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
 from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards import bench_compare, card
-from bpb_tasks.billiards.calibrate import Calibration, calibrate_horizon
-from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping, horizon_key, load_config
-from bpb_tasks.billiards.outcome import CUE_ID, Outcome
-from bpb_tasks.billiards.render import IMAGE_NAMES
-from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState, final_state
+from bpb_tasks.billiards.render.images import IMAGE_NAMES
+from bpb_tasks.billiards.scene.calibrate import Calibration, calibrate_horizon
+from bpb_tasks.billiards.scene.config import (
+    DatasetConfig,
+    config_from_mapping,
+    horizon_key,
+    load_config,
+)
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.scene.sampler import build_scene, draw, scene_rng
+from bpb_tasks.billiards.truth.final import FinalState, final_state
+from bpb_tasks.billiards.truth.outcome import CUE_ID, Outcome
 
 INDEX_COLUMNS = (
     "cue_speed",
@@ -73,7 +78,7 @@ class MadeScene:
             "final.json": (self.truth.model_dump_json(indent=2) + "\n").encode(),
         }
         if images:
-            from bpb_tasks.billiards.render import render_pngs
+            from bpb_tasks.billiards.render.images import render_pngs
 
             blobs.update(render_pngs(self.scene, self.outcome, self.config))
         return blobs
@@ -188,7 +193,7 @@ class BilliardsFamily:
         self, config: DatasetConfig, simulator: Simulator, seed: int, horizon: float, index: int
     ) -> MadeScene:
         """Sample, simulate and annotate scene ``index`` at ``horizon``."""
-        from bpb_tasks.billiards.stability import annotate
+        from bpb_tasks.billiards.stability.annotation import annotate
 
         scene = self.sample(scene_rng(seed, horizon, index), horizon, index, config)
         outcome: Outcome = simulator.run(scene)
@@ -225,7 +230,7 @@ class BilliardsFamily:
         final = final_state(scene, outcome, simulator=getattr(simulator, "name", "unknown"))
         if not stability:
             return final
-        from bpb_tasks.billiards.stability import annotate
+        from bpb_tasks.billiards.stability.annotation import annotate
 
         return final.model_copy(update={"stability": annotate(scene, outcome, simulator=simulator)})
 
@@ -271,14 +276,14 @@ class BilliardsFamily:
         self, root: Path, config: DatasetConfig, tallies: Mapping[float, Any]
     ) -> list[str]:
         """Cue-speed histograms and collision counts per horizon under ``root/stats``."""
-        from bpb_tasks.billiards.stats_figures import write_stats
+        from bpb_tasks.billiards.render.stats_figures import write_stats
 
         ranges = {h: t.speed_range for h, t in tallies.items()}
         return write_stats(root, tallies, ranges)
 
     def predict(self, name: str, scene: Scene, rng: random.Random) -> FinalState:
         """The ``stasis``, ``straight`` or ``random`` prediction for ``scene``."""
-        from bpb_tasks.billiards.predictors import PREDICTORS
+        from bpb_tasks.billiards.truth.predictors import PREDICTORS
 
         return PREDICTORS[name](scene, rng)
 
@@ -311,7 +316,7 @@ class BilliardsFamily:
 
     def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
         """The scene's trajectory image (or a plain table) for the failure gallery."""
-        from bpb_tasks.billiards.picture import scene_picture
+        from bpb_tasks.billiards.render.picture import scene_picture
 
         return scene_picture(dataset, folder, scene)
 

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.results.tables import RUN_COLUMNS
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import ball_id
 from bpb_tasks.questions.labels import ConfusionDiagnostic, LabelScorer, labelled, outcomes, rates
 

@@ -7,8 +7,8 @@ from typing import Any, ClassVar
 from pydantic import BaseModel, ConfigDict, field_validator
 
 from bpb_core.interfaces import PromptOptions
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import TF, Item, Q1Schema, check_ids, load, read_id, upper
 from bpb_tasks.questions.browser import colour
 from bpb_tasks.questions.question import LabelQuestion

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import wall_name
 from bpb_tasks.questions.labels import ConfusionDiagnostic, LabelScorer
 

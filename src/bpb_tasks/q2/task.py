@@ -8,8 +8,8 @@ from pydantic import BaseModel, ConfigDict, field_validator
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
-from bpb_tasks.billiards.scene import WALLS, Scene, Wall
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import WALLS, Scene, Wall
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import TF, Item, Q2Schema, load, upper
 from bpb_tasks.questions.question import LabelQuestion
 

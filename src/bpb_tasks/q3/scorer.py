@@ -28,8 +28,8 @@ from PIL import ImageDraw, ImageFont
 from bpb_core.picture import ScenePicture, font, shape
 from bpb_core.results.tables import RUN_COLUMNS, UNANSWERED
 from bpb_core.scored_units import INVALID, NAN, UnitRow, entries
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import ball_id
 from bpb_tasks.questions.labels import collect
 

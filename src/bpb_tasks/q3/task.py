@@ -11,8 +11,8 @@ from pydantic import BaseModel, ConfigDict, field_validator
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import BallPosition, FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import BallPosition, FinalState
 from bpb_tasks.questions.answers import Item, Q3Schema, check_ids, load, read_id, schema_of
 from bpb_tasks.questions.browser import drag_context, read_positions
 from bpb_tasks.questions.question import BilliardsQuestion

@@ -24,7 +24,7 @@ from typing import Any, Literal, TypeVar
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from bpb_core.errors import ParseFailure
-from bpb_tasks.billiards.scene import WALLS, Wall
+from bpb_tasks.billiards.scene.model import WALLS, Wall
 
 TF = Literal["T", "F"]
 M = TypeVar("M", bound=BaseModel)

@@ -14,8 +14,8 @@ from collections.abc import Mapping, Sequence
 from importlib import resources
 from typing import Any
 
-from bpb_tasks.billiards import render_canvas as st
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.render import canvas as st
+from bpb_tasks.billiards.scene.model import Scene
 
 POCKETED = "pocket"
 MAX_VALUE = 64  # characters a posted value may have

@@ -31,8 +31,8 @@ import pandas as pd
 
 from bpb_core.results.tables import RUN_COLUMNS
 from bpb_core.scored_units import INVALID, UnitRow, entries
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import ScoredResults

@@ -8,7 +8,7 @@ The common prompt, built from the scene alone, states the constants and laws of 
 physics, the table coordinates, the ball radius, the pockets and the horizon (SPEC section 5);
 each task adds its question, the JSON format with an example, and the reply instruction
 (reasoning first or JSON only). Nothing in it reads ground truth: the functions take a
-:class:`~bpb_tasks.billiards.scene.Scene` and prompt options only.
+:class:`~bpb_tasks.billiards.scene.model.Scene` and prompt options only.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 from bpb_core.model_calls import ImagePart, Message, TextPart
 from bpb_core.reply_json import extract
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import schema_of
 
 

@@ -26,7 +26,7 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   ended a ball off the table, and at twice it a ball squeezed between a cushion and a fast
   stack of balls now and then went through.
 * Final positions lie on the table as a scene file's balls do, ``R`` from every cushion
-  (:func:`bpb_tasks.billiards.scene.table_box`): a ball the horizon catches mid-bounce, sunk
+  (:func:`bpb_tasks.billiards.scene.model.table_box`): a ball the horizon catches mid-bounce, sunk
   into a cushion by part of a step's travel that pymunk would push out over the next steps, is
   put back against it. A ball whose centre crosses a cushion has left the table: the run fails
   with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (about ``dt``, named by
@@ -46,8 +46,8 @@ import sys
 from typing import Any
 
 from bpb_core.errors import BadInput
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.scene import Scene, table_box
+from bpb_tasks.billiards.scene.model import Scene, table_box
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.engine import SimulationError
 
 MAX_STEPS = 10_000_000  # about an hour of stepping: refuse rather than run for days

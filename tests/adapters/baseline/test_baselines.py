@@ -12,7 +12,7 @@ from bpb_core.results import load_results, summary
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner import evaluate, run_eval, slug
 from bpb_core.runner.options import RunOptions
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 
 BASELINES = ["baseline:oracle", "baseline:stasis", "baseline:straight", "baseline:random"]
 

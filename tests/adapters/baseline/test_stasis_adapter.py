@@ -7,7 +7,7 @@ import json
 
 from bpb_core import ModelRequest
 from bpb_core.registry import Registry
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.scene.model import Ball, Scene
 
 
 def _scene() -> Scene:

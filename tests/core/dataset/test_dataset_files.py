@@ -14,7 +14,7 @@ from bpb_core.dataset.jobs import Job, produce, worker_setup
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry
-from bpb_tasks.billiards.config import DatasetConfig
+from bpb_tasks.billiards.scene.config import DatasetConfig
 from support.dataset_small import SMALL
 from support.paths import tree
 

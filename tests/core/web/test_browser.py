@@ -19,8 +19,8 @@ from bpb_core.runner import evaluate
 from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession, human_app
 from bpb_core.web.viewer import Viewer, viewer_app
-from bpb_tasks.billiards.config import load_config
-from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.scene.config import load_config
 from support.web_server import chromium, serving
 
 sync_api = pytest.importorskip("playwright.sync_api")

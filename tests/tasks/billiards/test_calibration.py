@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from bpb_core.dataset import generate_dataset, load_dataset
-from bpb_tasks.billiards.calibrate import calibrate_horizon, calibration_draws, collision_rate
-from bpb_tasks.billiards.config import CalibrationConfig, DatasetConfig
+from bpb_tasks.billiards.scene.calibrate import calibrate_horizon, calibration_draws, collision_rate
+from bpb_tasks.billiards.scene.config import CalibrationConfig, DatasetConfig
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 
 
@@ -35,7 +35,7 @@ def test_kernel_batch_rate_equals_the_scene_by_scene_rate(horizon: float) -> Non
 @pytest.mark.slow
 def test_realised_rate_is_half_within_one_and_a_half_points_at_every_horizon() -> None:
     """10,000 dataset scenes per horizon (seed 0, as ``bpb generate`` draws them)."""
-    from bpb_tasks.billiards.sampler import draw, scene_rng
+    from bpb_tasks.billiards.scene.sampler import draw, scene_rng
 
     cfg, kernel = DatasetConfig(), AnalyticSimulator()
     for horizon in (1.0, 2.0, 3.0, 4.0, 5.0):

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from bpb_core.errors import BadInput
-from bpb_tasks.billiards.config import (
+from bpb_tasks.billiards.scene.config import (
     DEFAULT_SPEED_RANGES,
     DatasetConfig,
     SpeedRange,

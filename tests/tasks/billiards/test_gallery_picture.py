@@ -14,9 +14,9 @@ from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry
 from bpb_core.results import load_results
 from bpb_core.runner import run_eval
-from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
-from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.q3.scorer import TRUTH_COLOUR, Q3Scorer
 
 

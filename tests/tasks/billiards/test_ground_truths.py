@@ -8,7 +8,7 @@ import pytest
 
 from bpb_tasks.billiards.bench_compare import random_scene
 from bpb_tasks.billiards.family import BilliardsFamily
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from support.phys_helpers import scene
 

@@ -12,13 +12,18 @@ import pytest
 from PIL import Image, ImageChops, ImageDraw
 
 from bpb_core.dataset import load_dataset
-from bpb_tasks.billiards import render_canvas as render_style
-from bpb_tasks.billiards.config import DatasetConfig, config_from_mapping
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.render import render_final, render_init, render_pngs, render_trajectory
-from bpb_tasks.billiards.render_canvas import CanvasSpec, background, ball_colour, draw_legend
-from bpb_tasks.billiards.render_palette import FLAT, base, header_y, palette_for
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.render import canvas as render_style
+from bpb_tasks.billiards.render.canvas import CanvasSpec, background, ball_colour, draw_legend
+from bpb_tasks.billiards.render.images import (
+    render_final,
+    render_init,
+    render_pngs,
+    render_trajectory,
+)
+from bpb_tasks.billiards.render.palette import FLAT, base, header_y, palette_for
+from bpb_tasks.billiards.scene.config import DatasetConfig, config_from_mapping
+from bpb_tasks.billiards.scene.model import Ball, Scene
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 
 BPB = str(Path(sys.executable).with_name("bpb"))
 CONFIG = DatasetConfig()
@@ -190,9 +195,9 @@ def test_the_palette_has_each_flat_colour_at_its_ink_and_a_fresh_process_compute
         i = palette.ink(rgb)
         assert tuple(colours[3 * i : 3 * i + 3]) == rgb
     code = (
-        "from bpb_tasks.billiards.config import DatasetConfig\n"
-        "from bpb_tasks.billiards.render_canvas import CanvasSpec\n"
-        "from bpb_tasks.billiards.render_palette import palette_for\n"
+        "from bpb_tasks.billiards.scene.config import DatasetConfig\n"
+        "from bpb_tasks.billiards.render.canvas import CanvasSpec\n"
+        "from bpb_tasks.billiards.render.palette import palette_for\n"
         "print(bytes(palette_for(CanvasSpec.from_config(DatasetConfig())).image.getpalette()).hex())"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

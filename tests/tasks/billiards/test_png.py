@@ -15,11 +15,11 @@ import pytest
 from hypothesis import given, settings, strategies as strat
 from PIL import Image
 
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.png import DEFAULT_LEVEL, encode_palette_png
-from bpb_tasks.billiards.render import render_init
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import render_init
+from bpb_tasks.billiards.render.png import DEFAULT_LEVEL, encode_palette_png
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.model import Ball, Scene
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
 

@@ -13,11 +13,11 @@ import math
 from hypothesis import example, given, settings, strategies as st
 from PIL import Image, ImageDraw
 
-from bpb_tasks.billiards import render_canvas as style
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.render import ARROW_CLEARANCE, ARROW_MIN, arrow_length, wall_diamond
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_palette import palette_for, text_patch
+from bpb_tasks.billiards.render import canvas as style
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import ARROW_CLEARANCE, ARROW_MIN, arrow_length, wall_diamond
+from bpb_tasks.billiards.render.palette import palette_for, text_patch
+from bpb_tasks.billiards.scene.config import DatasetConfig
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
 INKS = (style.INK, style.MUTED, style.ARROW, style.MARK_BALL, style.PAGE)

@@ -7,9 +7,9 @@ import math
 from hypothesis import given, settings, strategies as st
 
 from bpb_core.registry import make_registry
-from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
-from bpb_tasks.billiards.sampler import scene_rng
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.sampler import scene_rng
 
 CONFIG = DatasetConfig()
 FAMILY = BilliardsFamily()

@@ -10,8 +10,8 @@ import pytest
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import read_model
-from bpb_tasks.billiards.scene import Scene, scene_json_schema
-from bpb_tasks.billiards.truth import FinalState, final_json_schema
+from bpb_tasks.billiards.scene.model import Scene, scene_json_schema
+from bpb_tasks.billiards.truth.final import FinalState, final_json_schema
 from support.paths import DOCS
 
 SCHEMAS = DOCS / "schemas"
@@ -78,7 +78,7 @@ def test_the_dataset_cards_examples_load(tmp_path: Path) -> None:
     valid (their ``"..."`` list entries left out)."""
     import re
 
-    from bpb_tasks.billiards.config import load_config
+    from bpb_tasks.billiards.scene.config import load_config
 
     card = (DOCS / "dataset-card.md").read_text()
     blocks = re.findall(r"```(json|toml)\n(.*?)```", card, re.S)

@@ -9,11 +9,10 @@ import numpy as np
 import pytest
 
 from bpb_tasks.billiards.bench_compare import random_scene
-from bpb_tasks.billiards.config import DatasetConfig
 from bpb_tasks.billiards.family import BilliardsFamily
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.stability import (
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.stability.annotation import (
     Tally,
     annotate,
     copy_budget,
@@ -24,13 +23,14 @@ from bpb_tasks.billiards.stability import (
     unvalidated_copy,
     upper_bound,
 )
-from bpb_tasks.billiards.stability_margins import (
+from bpb_tasks.billiards.stability.margins import (
     events_horizon_gap,
     horizon_gap,
     near_miss_gap,
     pair_margins,
 )
-from bpb_tasks.billiards.truth import OVERLAP, UNFINISHED, final_state
+from bpb_tasks.billiards.truth.final import OVERLAP, UNFINISHED, final_state
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
 from support.phys_helpers import PRESSING_BREAK, R, rack, scene
@@ -181,7 +181,7 @@ def kernel_tally(
     s: Scene, base: Outcome, ids: list[int], pos: np.ndarray, vel: np.ndarray, budget: int
 ) -> Tally:
     """The tally of copies run in the kernel, as :func:`annotate` makes it."""
-    from bpb_tasks.billiards.stability_kernel import copy_labels
+    from bpb_tasks.billiards.stability.kernel import copy_labels
 
     copies, finals = copy_labels(s, ids, pos, vel, budget)
     nominal = np.array([base.positions[i] or (np.nan, np.nan) for i in ids])

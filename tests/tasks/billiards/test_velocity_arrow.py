@@ -6,9 +6,9 @@ import math
 
 from hypothesis import given, settings, strategies as st
 
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.render import ARROW_MIN, arrow_length
-from bpb_tasks.billiards.render_canvas import CanvasSpec
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import ARROW_MIN, arrow_length
+from bpb_tasks.billiards.scene.config import DatasetConfig
 
 SPEC = CanvasSpec.from_config(DatasetConfig())
 

@@ -11,11 +11,11 @@ from hypothesis import assume, given, settings, strategies as st
 from PIL import Image
 
 from bpb_core.interfaces import PromptOptions
-from bpb_tasks.billiards.config import config_from_mapping
-from bpb_tasks.billiards.png import encode_palette_png
-from bpb_tasks.billiards.render import render_init
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.scene import Ball, Physics, Pockets, Scene, Table
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import render_init
+from bpb_tasks.billiards.render.png import encode_palette_png
+from bpb_tasks.billiards.scene.config import config_from_mapping
+from bpb_tasks.billiards.scene.model import Ball, Physics, Pockets, Scene, Table
 from bpb_tasks.billiards.vision.frame import PerceptionFailed, read_prompt
 from bpb_tasks.billiards.vision.perceive import perceive, perception_error
 from bpb_tasks.questions.question import common_prompt

@@ -6,11 +6,11 @@ from __future__ import annotations
 from bpb_core.capabilities import BoundsPerception
 from bpb_core.interfaces import PromptOptions
 from bpb_core.registry import Registry
-from bpb_tasks.billiards.config import config_from_mapping
-from bpb_tasks.billiards.png import encode_palette_png
-from bpb_tasks.billiards.render import render_init
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import render_init
+from bpb_tasks.billiards.render.png import encode_palette_png
+from bpb_tasks.billiards.scene.config import config_from_mapping
+from bpb_tasks.billiards.scene.model import Ball, Scene
 from bpb_tasks.questions.question import common_prompt
 
 PX = 1 / 600  # metres per pixel at the default image scale

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.q3.task import Q3Task
 from support.questions import questions
 from support.runner_scenes import make_scene

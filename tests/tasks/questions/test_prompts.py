@@ -15,7 +15,7 @@ from bpb_core.model_calls import ImagePart, Message, ModelRequest, ModelResponse
 from bpb_core.registry import Registry
 from bpb_core.runner import run_eval
 from bpb_core.runner.options import RunOptions
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.truth.final import FinalState
 from support.questions import questions
 from support.runner_scenes import make_scene, png_bytes
 

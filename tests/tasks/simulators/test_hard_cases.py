@@ -7,8 +7,8 @@ import math
 
 import pytest
 
-from bpb_tasks.billiards.scene import Ball
-from bpb_tasks.billiards.truth import final_state
+from bpb_tasks.billiards.scene.model import Ball
+from bpb_tasks.billiards.truth.final import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator, SimulationError
 from support.phys_helpers import R, kinds, scene, state_at
 
@@ -229,7 +229,7 @@ def test_a_rack_break_leaving_balls_crawling_into_each_other_ends(sim: AnalyticS
     # share of each exchange (2e-31 m/s) stopped it within the same instant while ball 5 kept
     # its speed, so the same contact came back at the same time for ever (over 100,000 events).
     # An approach slower than the rounding of the two speeds is not a collision.
-    from bpb_tasks.billiards.scene import Scene
+    from bpb_tasks.billiards.scene.model import Scene
 
     rows = [(1.3, 0.5), (1.3494933518262806, 0.471425), (1.3494933518262806, 0.528575)]
     rows += [(1.3989867036525614, y) for y in (0.44285, 0.5, 0.55715)]

@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.outcome import Outcome
-from bpb_tasks.billiards.sampler import build_scene, draw, scene_rng
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.scene.sampler import build_scene, draw, scene_rng
+from bpb_tasks.billiards.truth.outcome import Outcome
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.compiled import outcomes_many
 from support.phys_helpers import scene

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
-from bpb_tasks.billiards.outcome import Outcome
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.stability_margins import pair_margins
-from bpb_tasks.billiards.truth import final_state
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.stability.margins import pair_margins
+from bpb_tasks.billiards.truth.final import final_state
+from bpb_tasks.billiards.truth.outcome import Outcome
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from support.phys_helpers import PRESSING_BREAK, R, rack, seg_state, state_at
 

@@ -10,14 +10,14 @@ from bpb_core.errors import BadInput
 from bpb_core.registry import make_registry
 from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.bench_compare import random_scene, random_scenes
-from bpb_tasks.billiards.scene import table_box
-from bpb_tasks.billiards.stability import annotate
-from bpb_tasks.billiards.stability_margins import (
+from bpb_tasks.billiards.scene.model import table_box
+from bpb_tasks.billiards.stability.annotation import annotate
+from bpb_tasks.billiards.stability.margins import (
     capped_horizon_gap,
     events_horizon_gap,
     pair_margins,
 )
-from bpb_tasks.billiards.truth import final_state
+from bpb_tasks.billiards.truth.final import final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 from bpb_tasks.simulators.analytic.engine import SimulationError
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator, _PymunkRun, stable_dt

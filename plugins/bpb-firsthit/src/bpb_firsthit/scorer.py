@@ -15,8 +15,8 @@ import pandas as pd
 from bpb_core import UnitRow
 from bpb_core.scored_units import INVALID
 from bpb_firsthit.task import first_hit
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import ball_id
 
 NONE = "none"

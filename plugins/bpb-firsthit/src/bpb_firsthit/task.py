@@ -11,8 +11,8 @@ import json
 from typing import Any, ClassVar
 
 from bpb_core import ParseFailure, PromptOptions
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import ball_id
 from bpb_tasks.questions.question import BilliardsQuestion
 

@@ -1,7 +1,7 @@
 """The balls read from the image: every centre and id, and the cue ball's velocity.
 
 Ball centres and ids come from template matching against the renderer's own ball sprites. Each
-id has its own fill colour (:func:`~bpb_tasks.billiards.render_canvas.ball_colour`), drawn flat
+id has its own fill colour (:func:`~bpb_tasks.billiards.render.canvas.ball_colour`), drawn flat
 between the dark rim and the white badge. The template of ball ``i`` is the set of pixels of the
 renderer's own sprite that carry that colour as the canvas's palette draws it; the image's pixels
 of that colour are matched against it at every offset within a few pixels of their median (a
@@ -11,11 +11,11 @@ it, not the rest). Ids sharing a colour (more than 8 balls) cannot be told apart
 perception failure, named.
 
 The cue ball's speed is the one printed in the header, its direction the arrow's. The header note
-(:func:`~bpb_tasks.billiards.render.speed_note`) is right-aligned in the header line. Its digits
-are read one place at a time: the note is drawn with the renderer's own font and text patch with
-each digit in that place and compared with the image over that place's columns, keeping the
-digit that differs least; the whole reading must then match the note. The arrow is the only
-thing drawn in the arrow colour; its direction weighs the principal axis of those pixels against
+(:func:`~bpb_tasks.billiards.render.images.speed_note`) is right-aligned in the header line. Its
+digits are read one place at a time: the note is drawn with the renderer's own font and text patch
+with each digit in that place and compared with the image over that place's columns, keeping the
+digit that differs least; the whole reading must then match the note. The arrow is the only thing
+drawn in the arrow colour; its direction weighs the principal axis of those pixels against
 the line from the cue ball's centre to their centroid (:func:`_combined`). The notes of every
 digit in every place are drawn once per canvas (cached), so reading a note costs a few array
 comparisons.
@@ -29,10 +29,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from bpb_tasks.billiards import render_canvas as st
-from bpb_tasks.billiards.render import speed_note
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_palette import header_y, stamp, text_patch
+from bpb_tasks.billiards.render import canvas as st
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.images import speed_note
+from bpb_tasks.billiards.render.palette import header_y, stamp, text_patch
 from bpb_tasks.billiards.vision.frame import (
     Keys,
     PerceptionFailed,

@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bpb_core.errors import BpbError
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.scene import Scene
-from bpb_tasks.billiards.truth import FinalState
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.billiards.vision.frame import canvas_of, find_frame, image_keys, read_prompt
 
 

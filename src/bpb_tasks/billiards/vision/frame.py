@@ -4,7 +4,7 @@ frame read from the image's axes.
 The prompt states the horizon, table, ball ids, radius, friction, restitution and pockets (see
 :mod:`bpb_tasks.questions.question`, whose wording :func:`read_prompt` reads). The renderer draws a
 one-pixel x axis under the table and a y axis left of it, with a tick every
-:data:`~bpb_tasks.billiards.render_canvas.TICK_MINOR` metres starting at 0. The longest ink row
+:data:`~bpb_tasks.billiards.render.canvas.TICK_MINOR` metres starting at 0. The longest ink row
 and column are the axes; the ticks next to them give the origin and the scale (where x = 0 and
 y = 0 are and how many pixels a metre is), and the canvas the renderer drew on follows from them
 and the prompt's table and pockets.
@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 from PIL import Image
 
-from bpb_tasks.billiards import render_canvas as st
-from bpb_tasks.billiards.render_canvas import TICK_MINOR, CanvasSpec
-from bpb_tasks.billiards.scene import Physics, Pockets, Table
+from bpb_tasks.billiards.render import canvas as st
+from bpb_tasks.billiards.render.canvas import TICK_MINOR, CanvasSpec
+from bpb_tasks.billiards.scene.model import Physics, Pockets, Table
 
 _NUM = r"([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)"
 Keys = NDArray[np.int32]

@@ -1,7 +1,7 @@
 """A scene read from the image and prompt a model is given, and how far it is from the truth.
 
-:func:`perceive` returns a valid :class:`~bpb_tasks.billiards.scene.Scene`: centres that come out
-overlapping or off the table by a rounding are moved apart or inside (the renderer pastes each
+:func:`perceive` returns a valid :class:`~bpb_tasks.billiards.scene.model.Scene`: centres that come
+out overlapping or off the table by a rounding are moved apart or inside (the renderer pastes each
 ball at a whole pixel, so a touching pair may be read up to a pixel too close).
 """
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import math
 
-from bpb_tasks.billiards.outcome import CUE_ID
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.scene.model import Ball, Scene
+from bpb_tasks.billiards.truth.outcome import CUE_ID
 from bpb_tasks.billiards.vision.balls import find_balls, read_direction, read_speed
 from bpb_tasks.billiards.vision.frame import (
     PerceptionFailed,

@@ -1,8 +1,8 @@
 """Scenes in, outcomes out: the Python side of the compiled event kernel.
 
-:func:`kernel_outcome` simulates one :class:`~bpb_tasks.billiards.scene.Scene` with
+:func:`kernel_outcome` simulates one :class:`~bpb_tasks.billiards.scene.model.Scene` with
 :func:`~bpb_tasks.simulators.analytic.kernel.run_arrays` and builds the same
-:class:`~bpb_tasks.billiards.outcome.Outcome` the reference engine does. :func:`outcomes_many`
+:class:`~bpb_tasks.billiards.truth.outcome.Outcome` the reference engine does. :func:`outcomes_many`
 is the batch API behind ``AnalyticSimulator.run_many``: many scenes in one compiled call, their
 outcomes without motion pieces; the stability copies take :func:`run_batch`'s arrays.
 :func:`kernel_failure` loads (or builds) the kernel's entry points, or says why numba could not.
@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from bpb_core.errors import BpbError
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.billiards.scene.model import WALLS, Scene
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
 from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
@@ -68,12 +68,12 @@ def kernel_failure(scene: Scene) -> str | None:
     through each as the real calls do: ``None`` when they run, else what went wrong (numba
     cannot read a cache file of them, say); numba keeps what it loaded, so the calls after this
     one take it."""
-    from bpb_tasks.billiards.stability import perturbation_arrays
-    from bpb_tasks.billiards.stability_kernel import copy_labels
+    from bpb_tasks.billiards.stability.annotation import perturbation_arrays
+    from bpb_tasks.billiards.stability.kernel import copy_labels
 
     if not HAVE_NUMBA:
         return "numba could not be imported"
-    from bpb_tasks.billiards.scene import Ball
+    from bpb_tasks.billiards.scene.model import Ball
 
     table = scene.table  # one ball at rest mid-table: one event at most
     still = Ball.model_construct(id=0, pos=(table.width / 2, table.height / 2), vel=(0.0, 0.0))

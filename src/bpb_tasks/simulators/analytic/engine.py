@@ -54,8 +54,8 @@ import os
 from collections.abc import Sequence
 
 from bpb_core.errors import BadInput, BpbError
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.scene import WALLS, Scene
+from bpb_tasks.billiards.scene.model import WALLS, Scene
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.kernel_cache import (
     clear_own_cache,
     is_cached,

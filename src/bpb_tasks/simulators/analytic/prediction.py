@@ -11,7 +11,7 @@ from __future__ import annotations
 import heapq
 from typing import Any
 
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.simulators.analytic.motion import Body, Motion, line_contact, point_segment_gap2
 from bpb_tasks.simulators.analytic.numeric import Number, Numeric
 from bpb_tasks.simulators.analytic.roots import first_contact

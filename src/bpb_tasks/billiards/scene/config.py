@@ -3,7 +3,7 @@
 A config file (JSON or TOML, ``bpb generate --config FILE``) holds any subset of
 :class:`DatasetConfig`'s fields; missing fields take the defaults below, and the full resolved
 config is recorded in the dataset manifest. The default per-horizon cue-speed ranges were
-calibrated by :func:`bpb_tasks.billiards.calibrate.calibrate_ranges` so that about half the
+calibrated by :func:`bpb_tasks.billiards.scene.calibrate.calibrate_ranges` so that about half the
 scenes at each horizon have a cue-ball collision.
 """
 
@@ -20,8 +20,8 @@ from pydantic import Field, field_validator, model_validator
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import validate_mapping
-from bpb_tasks.billiards.png import DEFAULT_LEVEL
-from bpb_tasks.billiards.scene import MAX_SPEED, Physics, Pockets, StrictModel, Table
+from bpb_tasks.billiards.render.png import DEFAULT_LEVEL
+from bpb_tasks.billiards.scene.model import MAX_SPEED, Physics, Pockets, StrictModel, Table
 
 
 class SpeedRange(StrictModel):
@@ -47,7 +47,7 @@ class ImageConfig(StrictModel):
             ``px_per_m``, the pockets and a narrow table (:func:`needed_margins`); given, they
             must be at least that (checked before generating).
         compress_level: zlib-ng level of the PNG encoder (0-9; 2, the default, gives smaller
-            files than Pillow's level 1, faster; see :mod:`bpb_tasks.billiards.png`).
+            files than Pillow's level 1, faster; see :mod:`bpb_tasks.billiards.render.png`).
     """
 
     px_per_m: float = Field(600.0, ge=100, le=3000)
@@ -67,7 +67,7 @@ HEADER_SPAN = 820  # px at 600 px per metre from the header's start (60 px left 
 
 def needed_margins(px_per_m: float, pocket_radius: float, table_width: float) -> dict[str, int]:
     """The smallest margins (px) that hold the header, axes, ticks, labels and the pockets and
-    rails beyond the table's edge, as :mod:`~bpb_tasks.billiards.render_canvas` draws them:
+    rails beyond the table's edge, as :mod:`~bpb_tasks.billiards.render.canvas` draws them:
     text scales with ``px_per_m / 600``, the axes sit just outside the rails and pockets, and
     the header runs past the table's right edge when the table is narrower than it."""
     s = px_per_m / 600.0
@@ -90,7 +90,7 @@ MAX_IMAGE_PIXELS = 30_000_000
 
 
 class CalibrationConfig(StrictModel):
-    """How :func:`~bpb_tasks.billiards.calibrate.calibrate_ranges` searches speed ranges.
+    """How :func:`~bpb_tasks.billiards.scene.calibrate.calibrate_ranges` searches speed ranges.
 
     Attributes:
         target: Wanted share of scenes with a cue-ball collision.

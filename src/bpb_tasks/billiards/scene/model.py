@@ -1,8 +1,8 @@
 """The billiards scene: the model of ``init.json`` (SPEC section 4).
 
 This pydantic model is half of the data contract of a billiards dataset (the other half,
-``final.json``, is :mod:`bpb_tasks.billiards.truth`); :func:`scene_json_schema` publishes it as a
-JSON Schema.
+``final.json``, is :mod:`bpb_tasks.billiards.truth.final`); :func:`scene_json_schema` publishes it
+as a JSON Schema.
 """
 
 from __future__ import annotations

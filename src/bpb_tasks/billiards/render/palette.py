@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 from PIL import Image, ImageChops, ImageDraw
 
-from bpb_tasks.billiards import render_canvas as st
-from bpb_tasks.billiards.render_canvas import CanvasSpec, background, draw_legend
+from bpb_tasks.billiards.render import canvas as st
+from bpb_tasks.billiards.render.canvas import CanvasSpec, background, draw_legend
 
 FLAT: tuple[st.RGB, ...] = (
     st.PAGE, st.INK, st.MUTED, st.CLOTH, st.GRID, st.RAIL, st.CUSHION, st.POCKET, st.ARROW,

@@ -1,5 +1,6 @@
-"""Reference predictions of the billiards family, as :class:`~bpb_tasks.billiards.truth.FinalState`
-values (the ``baseline`` adapter answers each task from them):
+"""Reference predictions of the billiards family, as
+:class:`~bpb_tasks.billiards.truth.final.FinalState` values (the ``baseline`` adapter answers each
+task from them):
 
 - ``stasis``: nothing moves and nothing is hit.
 - ``straight``: the cue ball rolls with friction and wall reflections (and may drop into a pocket)
@@ -16,8 +17,8 @@ import functools
 import random
 from collections.abc import Callable
 
-from bpb_tasks.billiards.scene import WALLS, Scene
-from bpb_tasks.billiards.truth import BallPosition, FinalState, Q1Label, Q2Label, final_state
+from bpb_tasks.billiards.scene.model import WALLS, Scene
+from bpb_tasks.billiards.truth.final import BallPosition, FinalState, Q1Label, Q2Label, final_state
 from bpb_tasks.simulators.analytic import AnalyticSimulator
 
 Predictor = Callable[[Scene, random.Random], FinalState]

@@ -18,7 +18,7 @@ from typing import Protocol
 import numpy as np
 from PIL import Image, ImageDraw
 
-from bpb_tasks.billiards import render_canvas as st
+from bpb_tasks.billiards.render import canvas as st
 
 SPEED_HIST = "stats/cue_speed_hist.png"
 COLLISIONS = "stats/collisions.png"

@@ -2,7 +2,7 @@
 
 An :class:`Outcome` is plain frozen data: the state at the horizon, every event up to it, and
 the piecewise motion of every ball (for rendering).
-:func:`bpb_tasks.billiards.truth.final_state` turns it into the ``final.json`` model.
+:func:`bpb_tasks.billiards.truth.final.final_state` turns it into the ``final.json`` model.
 """
 
 from __future__ import annotations

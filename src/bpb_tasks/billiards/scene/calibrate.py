@@ -4,7 +4,7 @@ For each horizon a fixed calibration sample of draws (seeded by ``calibration.se
 of any dataset seed) is simulated at cue speeds ``high * (low_ratio + u * (1 - low_ratio))``. The
 share of scenes in which the cue ball touches another ball grows with ``high``; a bisection on
 ``high`` finds the value where it meets ``calibration.target``. The result is deterministic, so the
-defaults shipped in :mod:`bpb_tasks.billiards.config` can be recomputed and checked.
+defaults shipped in :mod:`bpb_tasks.billiards.scene.config` can be recomputed and checked.
 
 With the compiled kernel (the analytic simulator on float64 with numba) each evaluation is one
 batch call on arrays built straight from the draws, rounded exactly as :func:`build_scene` rounds
@@ -21,9 +21,9 @@ import numpy as np
 
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import Simulator
-from bpb_tasks.billiards.config import DatasetConfig, SpeedRange, horizon_key
-from bpb_tasks.billiards.sampler import Draw, build_scene, draw, scene_rng
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.config import DatasetConfig, SpeedRange, horizon_key
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.scene.sampler import Draw, build_scene, draw, scene_rng
 
 MAX_HIGH = 64.0  # m/s; a bracket search beyond this means the target cannot be reached
 

@@ -1,5 +1,5 @@
 """The billiards ground truth: the model of ``final.json`` (SPEC section 4), and how it is
-derived from a simulated :class:`~bpb_tasks.billiards.outcome.Outcome`.
+derived from a simulated :class:`~bpb_tasks.billiards.truth.outcome.Outcome`.
 
 ``q1`` and ``q2`` hold the cue ball's contacts with each object ball and each wall, ``predictions``
 every ball's position at the horizon, ``events`` the full event log and ``stability`` how close
@@ -12,8 +12,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from bpb_tasks.billiards.outcome import CUE_ID, Outcome
-from bpb_tasks.billiards.scene import WALLS, Scene, StrictModel, Vec, Wall
+from bpb_tasks.billiards.scene.model import WALLS, Scene, StrictModel, Vec, Wall
+from bpb_tasks.billiards.truth.outcome import CUE_ID, Outcome
 
 TF = Literal["T", "F"]
 

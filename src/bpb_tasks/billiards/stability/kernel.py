@@ -1,20 +1,20 @@
 """The stability annotation's perturbed copies in the compiled kernel.
 
-:func:`copy_labels` runs every copy of a scene through the kernel in one call
-(:func:`copy_masks`) and gives what the Python engine's runs give
-:func:`~bpb_tasks.billiards.stability.tally`: each copy's labels (``None`` when it did not
-finish within its event budget) and final positions. In compiled code the labels are bit masks
-(cue contacts, cue walls, pocketed balls; one bit per ball index or wall), so a scene holds at
-most :data:`~bpb_tasks.billiards.stability.KERNEL_MAX_BALLS` balls here.
+:func:`copy_labels` runs every copy of a scene through the kernel in one call (:func:`copy_masks`)
+and gives what the Python engine's runs give
+:func:`~bpb_tasks.billiards.stability.annotation.tally`: each copy's labels (``None`` when it did
+not finish within its event budget) and final positions. In compiled code the labels are bit masks
+(cue contacts, cue walls, pocketed balls; one bit per ball index or wall), so a scene holds at most
+:data:`~bpb_tasks.billiards.stability.annotation.KERNEL_MAX_BALLS` balls here.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from bpb_tasks.billiards.outcome import CUE_ID
-from bpb_tasks.billiards.scene import WALLS, Scene
-from bpb_tasks.billiards.stability import Labels
+from bpb_tasks.billiards.scene.model import WALLS, Scene
+from bpb_tasks.billiards.stability.annotation import Labels
+from bpb_tasks.billiards.truth.outcome import CUE_ID
 from bpb_tasks.simulators.analytic.compiled import table_params
 from bpb_tasks.simulators.analytic.kernel import buffers, run_into
 from bpb_tasks.simulators.analytic.kernel_predict import BALL, WALL, Arr

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 from bpb_core.errors import BadInput
 from bpb_core.layout import scene_id
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.scene import Ball, Scene
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.model import Ball, Scene
 
 MAX_TRIES_PER_BALL = 10_000
 

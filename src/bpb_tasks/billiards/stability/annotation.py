@@ -16,12 +16,12 @@ deterministic. For each perturbation the labels are compared with the nominal on
 ``stable`` means no label flipped in any perturbation, the Q3 spread is within the bound and no
 two balls overlap in the nominal run (a pressing contact, which the event model does not
 resolve; the analytic engine only). The deterministic margins
-(:mod:`bpb_tasks.billiards.stability_margins`) are recorded alongside; ``stable`` does not depend
+(:mod:`bpb_tasks.billiards.stability.margins`) are recorded alongside; ``stable`` does not depend
 on them (a ``horizon_gap`` left unmeasured at the event cap, or where pymunk's run past the
 horizon stopped, included).
 Perturbed copies skip scene validation (a copy may touch a wall or another ball); with the
 analytic engine's compiled kernel they run as one batch there
-(:mod:`bpb_tasks.billiards.stability_kernel`). Either way every written number comes from the
+(:mod:`bpb_tasks.billiards.stability.kernel`). Either way every written number comes from the
 same Python functions, so the annotation does not depend on whether numba is installed.
 """
 
@@ -36,9 +36,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bpb_core.interfaces import Simulator
-from bpb_tasks.billiards.outcome import CUE_ID, Outcome
-from bpb_tasks.billiards.scene import Ball, Scene
-from bpb_tasks.billiards.stability_margins import (
+from bpb_tasks.billiards.scene.model import Ball, Scene
+from bpb_tasks.billiards.stability.margins import (
     capped_horizon_gap,
     events_horizon_gap,
     horizon_gap,
@@ -48,7 +47,8 @@ from bpb_tasks.billiards.stability_margins import (
     pocket_gap,
     times_horizon_gap,
 )
-from bpb_tasks.billiards.truth import UNFINISHED, Stability
+from bpb_tasks.billiards.truth.final import UNFINISHED, Stability
+from bpb_tasks.billiards.truth.outcome import CUE_ID, Outcome
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
 from bpb_tasks.simulators.pymunk_sim import PymunkSimulator
 
@@ -136,7 +136,7 @@ def _copies(
         budget = copy_budget(len(base.events), simulator.max_events)
         events = len(base.events)
         if len(ids) <= KERNEL_MAX_BALLS and simulator.takes_kernel(scene, len(pos), events):
-            from bpb_tasks.billiards.stability_kernel import copy_labels
+            from bpb_tasks.billiards.stability.kernel import copy_labels
 
             return copy_labels(scene, ids, pos, vel, budget)
         simulator = simulator.with_max_events(budget)
@@ -193,7 +193,7 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
     it is loaded, else from the analytic engine's events or another simulator's outcome. The
     analytic engine's run stops at its event cap instead of failing the scene, which ran to
     its horizon within it: the gap is then measured on the events up to the cap
-    (:func:`~bpb_tasks.billiards.stability_margins.capped_horizon_gap`; ``None`` when they
+    (:func:`~bpb_tasks.billiards.stability.margins.capped_horizon_gap`; ``None`` when they
     do not decide it), on both paths alike. pymunk's run stops, by the same rule, where it
     would fail: a ball through a cushion, its step budget."""
     if isinstance(simulator, AnalyticSimulator) and simulator.kernel_loaded():

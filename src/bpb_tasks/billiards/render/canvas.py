@@ -5,7 +5,7 @@ Ball sprites are drawn once per process with 4x supersampling (antialiased edges
 and pasted per scene; fonts are TrueType files read from disk (DejaVu from matplotlib's package
 data or the system), falling back to Pillow's built-in font. The background (page, rails, cloth,
 grid, pockets, axes with ticks and labels) is drawn once per process in RGB;
-:mod:`bpb_tasks.billiards.render_palette` turns it into the 8-bit palette image that every scene
+:mod:`bpb_tasks.billiards.render.palette` turns it into the 8-bit palette image that every scene
 image starts from.
 """
 
@@ -19,7 +19,7 @@ from pathlib import Path
 
 from PIL import Image, ImageDraw, ImageFont
 
-from bpb_tasks.billiards.config import HEADER_SPAN, DatasetConfig
+from bpb_tasks.billiards.scene.config import HEADER_SPAN, DatasetConfig
 
 RGB = tuple[int, int, int]
 Font = ImageFont.FreeTypeFont | ImageFont.ImageFont
@@ -253,7 +253,7 @@ def draw_legend(img: Image.Image, spec: CanvasSpec) -> None:
     draw = ImageDraw.Draw(img)
     s = spec.scale
     face = font(round(14 * s))
-    y = spec.top / 2 - 14 * s  # the header line (render_palette.header_y)
+    y = spec.top / 2 - 14 * s  # the header line (palette.header_y)
     x = float(spec.header_right)
     items = (
         ("pocketed", "pocket"),

@@ -14,7 +14,7 @@ from PIL import Image, ImageDraw
 
 from bpb_core.layout import MANIFEST
 from bpb_core.picture import ScenePicture, font
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.scene.model import Scene
 
 PLAIN_PX_PER_M = 400.0
 PLAIN_MARGIN = 40

@@ -15,12 +15,12 @@
   stops the same way where it would fail (a ball through a cushion, its step budget).
 * ``pocket_gap``: the nearest pocket-edge pass: over moving balls and the pockets their centres
   pass without entering, the smallest ``closest distance - pocket radius``.
-* ``overlap``: the deepest overlap of two balls, ``2R - closest distance`` over every pair
-  (touched or not), when it exceeds the contact tolerance
-  (:data:`~bpb_tasks.billiards.scene.TOUCH_TOLERANCE`); ``None`` otherwise. An event model keeps
-  balls apart up to rounding (at most 2e-14 m over 3,000 generated scenes), except in a pressing
-  contact, which it does not model (the dataset card's known limitation): there the ground truth
-  shows two balls inside each other.
+* ``overlap``: the deepest overlap of two balls, ``2R - closest distance`` over every pair (touched
+  or not), when it exceeds the contact tolerance
+  (:data:`~bpb_tasks.billiards.scene.model.TOUCH_TOLERANCE`); ``None`` otherwise. An event model
+  keeps balls apart up to rounding (at most 2e-14 m over 3,000 generated scenes), except in a
+  pressing contact, which it does not model (the dataset card's known limitation): there the ground
+  truth shows two balls inside each other.
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ import itertools
 import math
 from collections.abc import Sequence
 
-from bpb_tasks.billiards.outcome import Event, Outcome, Segment
-from bpb_tasks.billiards.scene import TOUCH_TOLERANCE
+from bpb_tasks.billiards.scene.model import TOUCH_TOLERANCE
+from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.numeric import FLOAT64
 from bpb_tasks.simulators.analytic.roots import critical_points, horner
 

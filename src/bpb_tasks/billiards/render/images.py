@@ -1,8 +1,8 @@
 """The three scene images: the initial state, the state at the horizon and the trajectories.
 
-All three share one canvas (:class:`~bpb_tasks.billiards.render_canvas.CanvasSpec`): the same
+All three share one canvas (:class:`~bpb_tasks.billiards.render.canvas.CanvasSpec`): the same
 size, scale and ball radius, so they overlay exactly. They are drawn in palette mode (see
-:mod:`bpb_tasks.billiards.render_palette`); :func:`render_pngs` returns encoded PNG bytes.
+:mod:`bpb_tasks.billiards.render.palette`); :func:`render_pngs` returns encoded PNG bytes.
 
 The cue velocity arrow of ``init.png`` is the longest arrow, at most the wanted length, whose
 shaft stays on the cloth and off the pockets and whose head keeps a clearance. A candidate length
@@ -13,10 +13,10 @@ to the segment is larger than the pocket circle); only when the proof is not cer
 far above rounding error are the points checked one by one. The answer is the same as checking
 every point, so the images do not change.
 
-The trajectory image draws each :class:`~bpb_tasks.billiards.outcome.Segment` straight (friction
-acts along the velocity), so a path is a polyline through the segment end points. Ball-ball
-contacts are marked by a red ring at the contact point, wall contacts by a blue diamond at the
-centre, pocketings by a white cross.
+The trajectory image draws each :class:`~bpb_tasks.billiards.truth.outcome.Segment` straight
+(friction acts along the velocity), so a path is a polyline through the segment end points.
+Ball-ball contacts are marked by a red ring at the contact point, wall contacts by a blue diamond at
+the centre, pocketings by a white cross.
 """
 
 from __future__ import annotations
@@ -26,12 +26,9 @@ from collections.abc import Iterable
 
 from PIL import Image, ImageDraw
 
-from bpb_tasks.billiards import render_canvas as st
-from bpb_tasks.billiards.config import DatasetConfig
-from bpb_tasks.billiards.outcome import CUE_ID, Event, Outcome, Segment
-from bpb_tasks.billiards.png import encode_palette_png
-from bpb_tasks.billiards.render_canvas import CanvasSpec
-from bpb_tasks.billiards.render_palette import (
+from bpb_tasks.billiards.render import canvas as st
+from bpb_tasks.billiards.render.canvas import CanvasSpec
+from bpb_tasks.billiards.render.palette import (
     GHOST_ALPHA,
     Palette,
     base,
@@ -40,7 +37,10 @@ from bpb_tasks.billiards.render_palette import (
     stamp,
     text_patch,
 )
-from bpb_tasks.billiards.scene import Scene
+from bpb_tasks.billiards.render.png import encode_palette_png
+from bpb_tasks.billiards.scene.config import DatasetConfig
+from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.truth.outcome import CUE_ID, Event, Outcome, Segment
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
 Point = tuple[float, float]
