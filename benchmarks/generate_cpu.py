@@ -25,7 +25,8 @@ from pathlib import Path
 from PIL import Image
 
 from bpb_core.dataset import generate_dataset
-from bpb_tasks.billiards.render.png import DEFAULT_LEVEL, encode_palette_png
+from bpb_tasks.billiards.render.png import encode_palette_png
+from bpb_tasks.billiards.scene.config import ImageConfig
 
 
 def encode_cpu(paths: list[Path]) -> tuple[float, float]:
@@ -42,7 +43,7 @@ def encode_cpu(paths: list[Path]) -> tuple[float, float]:
     pillow = time.process_time() - started
     started = time.process_time()
     for img in images:
-        encode_palette_png(img, DEFAULT_LEVEL)
+        encode_palette_png(img, ImageConfig().compress_level)
     return pillow, time.process_time() - started
 
 

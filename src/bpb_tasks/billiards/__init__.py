@@ -1,1 +1,2 @@
-"""The built-in ``billiards`` scene family: sampling, speed calibration, rendering and stats."""
+"""The built-in ``billiards`` scene family: ``scene`` (model, config, sampling, calibration),
+``truth``, ``stability``, ``render`` and ``vision``; ``family`` ties them together."""

@@ -14,7 +14,6 @@ from PIL import Image
 from zlib_ng import zlib_ng
 
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
-DEFAULT_LEVEL = 2
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
@@ -23,7 +22,7 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
     return b"".join((struct.pack(">I", len(data)), kind, data, struct.pack(">I", crc)))
 
 
-def encode_palette_png(img: Image.Image, level: int = DEFAULT_LEVEL) -> bytes:
+def encode_palette_png(img: Image.Image, level: int) -> bytes:
     """PNG bytes of a palette image, deflated by zlib-ng at ``level`` (0-9; the same bytes for
     equal images and zlib-ng version).
 

@@ -20,7 +20,6 @@ from pydantic import Field, field_validator, model_validator
 
 from bpb_core.errors import BadInput
 from bpb_core.validated_files import validate_mapping
-from bpb_tasks.billiards.render.png import DEFAULT_LEVEL
 from bpb_tasks.billiards.scene.model import MAX_SPEED, Physics, Pockets, StrictModel, Table
 
 
@@ -55,7 +54,7 @@ class ImageConfig(StrictModel):
     margin_right: int = Field(48, ge=20)
     margin_top: int = Field(84, ge=20)
     margin_bottom: int = Field(96, ge=40)
-    compress_level: int = Field(DEFAULT_LEVEL, ge=0, le=9)
+    compress_level: int = Field(2, ge=0, le=9)
 
 
 MARGINS = ("margin_left", "margin_right", "margin_top", "margin_bottom")
