@@ -91,39 +91,18 @@ def scaled_scene(scene: Scene, factor: float) -> Scene:
     return scene.model_copy(update={"balls": balls})
 
 
-def position_error(outcome: Outcome, reference: Outcome) -> float:
-    """Largest distance between final positions of balls on the table in both."""
-    gaps = [
-        math.dist(p, q)
-        for ball, q in reference.positions.items()
-        if q is not None and (p := outcome.positions.get(ball)) is not None
-    ]
-    return max(gaps, default=0.0)
-
-
-def q3_wrong(outcome: Outcome, reference: Outcome, radius: float) -> int:
-    """Balls that Q3 scoring would mark wrong: more than ``radius`` off, or pocketed in one
-    outcome only."""
-    count = 0
-    for ball, q in reference.positions.items():
-        p = outcome.positions.get(ball)
-        if (p is None) != (q is None) or (
-            p is not None and q is not None and math.dist(p, q) > radius
-        ):
-            count += 1
-    return count
-
-
 def compare(outcome: Outcome, reference: Outcome, scene: Scene) -> dict[str, float]:
-    """``error`` (m) and the disagreement counts ``q1``, ``q2``, ``pocketed`` and ``q3``."""
+    """``error`` (m): the largest distance between final positions of balls on the table in
+    both; the disagreement counts ``q1``, ``q2``, ``pocketed``; and ``q3``: the balls that Q3
+    scoring would mark wrong (more than a ball radius off, or pocketed in one outcome only)."""
     from bpb_tasks.billiards.stability.annotation import labels
 
     ours, theirs = labels(outcome), labels(reference)
     q1, q2, pocketed = (float(a != b) for a, b in zip(ours, theirs, strict=True))
-    return {
-        "error": position_error(outcome, reference),
-        "q1": q1,
-        "q2": q2,
-        "pocketed": pocketed,
-        "q3": float(q3_wrong(outcome, reference, scene.physics.ball_radius)),
-    }
+    error, q3 = 0.0, 0
+    for ball, q in reference.positions.items():
+        p = outcome.positions.get(ball)
+        gap = math.dist(p, q) if p is not None and q is not None else None
+        error = max(error, gap or 0.0)
+        q3 += (p is None) != (q is None) or (gap is not None and gap > scene.physics.ball_radius)
+    return {"error": error, "q1": q1, "q2": q2, "pocketed": pocketed, "q3": float(q3)}

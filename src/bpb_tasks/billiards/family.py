@@ -11,6 +11,7 @@ picture and the simulator comparison of ``bpb bench sim``.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import random
 from collections.abc import Mapping, Sequence
@@ -88,23 +89,6 @@ class MadeScene:
 def _simulator_name(spec: str) -> str:
     """The simulator's name in a config's ``simulator`` spec (parsed once, not per scene)."""
     return parse_spec(spec, "simulator").name
-
-
-def _same_table_runs(scenes: Sequence[Scene]) -> list[list[Scene]]:
-    """``scenes`` cut into runs of consecutive scenes on the same table, physics and pockets
-    (a batch call takes one table)."""
-    runs: list[list[Scene]] = []
-    for scene in scenes:
-        first = runs[-1][0] if runs else None
-        if first is not None and (first.table, first.physics, first.pockets) == (
-            scene.table,
-            scene.physics,
-            scene.pockets,
-        ):
-            runs[-1].append(scene)
-        else:
-            runs.append([scene])
-    return runs
 
 
 @dataclass
@@ -237,12 +221,14 @@ class BilliardsFamily:
     def ground_truths(
         self, scenes: Sequence[Scene], simulator: Simulator, horizon: float | None = None
     ) -> list[FinalState]:
-        """``final.json`` of each scene (no stability), each run of scenes on one table
-        simulated by one call of the simulator's ``run_many`` when it has one."""
+        """``final.json`` of each scene (no stability), each run of consecutive scenes on one
+        table, physics and pockets simulated by one call of the simulator's ``run_many`` when it
+        has one (a batch call takes one table)."""
         from bpb_core.capabilities import RunsMany
 
         outcomes: list[Outcome] = []
-        for group in _same_table_runs(scenes):
+        for _, run in itertools.groupby(scenes, lambda s: (s.table, s.physics, s.pockets)):
+            group = list(run)
             if isinstance(simulator, RunsMany):
                 outcomes += simulator.run_many(group, horizon)
             else:
@@ -265,7 +251,8 @@ class BilliardsFamily:
             key: {"low": c.range.low, "high": c.range.high, "rate": c.rate, "samples": c.samples}
             for key, c in found.items()
         }
-        return config.with_ranges({key: c.range for key, c in found.items()}), record
+        ranges = {**config.speed_ranges, **{key: c.range for key, c in found.items()}}
+        return config.model_copy(update={"speed_ranges": ranges}), record
 
     def new_tally(self, config: DatasetConfig, horizon: float) -> BilliardsTally:
         """An empty tally for ``horizon``."""

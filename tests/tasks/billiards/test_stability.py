@@ -25,8 +25,6 @@ from bpb_tasks.billiards.stability.annotation import (
 )
 from bpb_tasks.billiards.stability.margins import (
     events_horizon_gap,
-    horizon_gap,
-    near_miss_gap,
     pair_margins,
 )
 from bpb_tasks.billiards.truth.final import OVERLAP, UNFINISHED, final_state
@@ -127,7 +125,7 @@ def test_compiled_horizon_gap_is_the_reference_to_the_bit() -> None:
     gaps, capped = [], []
     for i in range(60):
         s = random_scene(8, i, balls=2 + i % 9, speeds=(0.05, 3.0))
-        expected = horizon_gap(PYTHON.run(s, s.horizon + 1.0), s.horizon)
+        expected = events_horizon_gap(PYTHON.run(s, s.horizon + 1.0).events, s.horizon)
         gap = kernel_horizon_gap(s, s.horizon, PYTHON.max_events)
         assert (gap is None) == (expected is None)
         if gap is not None and expected is not None:
@@ -171,7 +169,9 @@ def test_the_horizon_gap_run_stops_at_the_event_cap_instead_of_failing_the_scene
         kernel = AnalyticSimulator(engine="kernel", max_events=cap)
         assert python == annotate(s, base, simulator=kernel, samples=8)
         assert python.stable and python.flip_rate == 0.0
-        found.append((python.horizon_gap, horizon_gap(later, 3.0), later.events[cap].kind))
+        found.append(
+            (python.horizon_gap, events_horizon_gap(later.events, 3.0), later.events[cap].kind)
+        )
     (gap, uncapped, kind), (unmeasured, beyond, stop) = found
     assert kind == "wall" and gap == uncapped and gap == pytest.approx(0.1117, abs=1e-4)
     assert stop == "stop" and unmeasured is None and beyond == pytest.approx(0.883, abs=1e-3)
@@ -198,11 +198,14 @@ def test_near_miss_gap_on_named_cases() -> None:
         scene([(0.5, 0.5, 0.1, 0.0), (1.0, 0.5, 0.0, 0.0)]),
         scene([(0.5, 0.5, 1.0, 0.0), (1.0, 0.5, 0.0, 0.0), (1.5, 0.8, 0.0, 0.0)], mu=0.0),
     ]
+    gaps = []
     for case in cases:
-        assert pair_margins(PYTHON.run(case), R)[1] is None
-    assert near_miss_gap(PYTHON.run(cases[0]), R) is None
-    assert near_miss_gap(PYTHON.run(cases[1]), R) == pytest.approx(0.1 - 2 * R, abs=1e-12)
-    graze = near_miss_gap(PYTHON.run(cases[2]), R)
+        gap, overlap = pair_margins(PYTHON.run(case), R)
+        assert overlap is None
+        gaps.append(gap)
+    assert gaps[0] is None
+    assert gaps[1] == pytest.approx(0.1 - 2 * R, abs=1e-12)
+    graze = gaps[2]
     assert graze is not None and 0 < graze < 1e-9
 
 

@@ -40,7 +40,7 @@ from bpb_tasks.billiards.render.palette import (
 from bpb_tasks.billiards.render.png import encode_palette_png
 from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.billiards.scene.model import Scene
-from bpb_tasks.billiards.truth.outcome import CUE_ID, Event, Outcome, Segment
+from bpb_tasks.billiards.truth.outcome import CUE_ID, Outcome, Segment
 
 IMAGE_NAMES = ("init.png", "final.png", "trajectory.png")
 Point = tuple[float, float]
@@ -318,35 +318,28 @@ def draw_paths(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcom
 def draw_markers(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
     """Mark every contact and pocketing (drawn last, above the balls, so none is hidden)."""
     draw = ImageDraw.Draw(img)
-    for event in outcome.events:
-        _mark(img, draw, spec, pal, event)
-
-
-def _mark(
-    img: Image.Image, draw: ImageDraw.ImageDraw, spec: CanvasSpec, pal: Palette, event: Event
-) -> None:
-    if not event.positions:
-        return
     s, halo = spec.scale, pal.ink(st.HALO)
-    if event.kind == "ball" and len(event.positions) >= 2:
-        (ax, ay), (bx, by) = event.positions[:2]
-        x, y = spec.to_px((ax + bx) / 2, (ay + by) / 2)
-        r = 7 * s
-        draw.ellipse((x - r - 2, y - r - 2, x + r + 2, y + r + 2), outline=halo, width=round(5 * s))
-        draw.ellipse(
-            (x - r, y - r, x + r, y + r), outline=pal.ink(st.MARK_BALL), width=round(3 * s)
-        )
-    elif event.kind == "wall":
-        x, y = spec.to_px(*event.positions[0])
-        r = 7 * s
-        width = max(1, round(2 * s))
-        wall_diamond(img, (x, y), r, pal.ink(st.MARK_WALL), halo, width)
-    elif event.kind == "pocket":
-        x, y = spec.to_px(*event.positions[0])
-        r = 8 * s
-        for ink, width in ((halo, 6), (pal.ink(st.MARK_POCKET), 3)):
-            for dx in (-r, r):
-                draw.line(((x - dx, y - r), (x + dx, y + r)), fill=ink, width=round(width * s))
+    for event in outcome.events:
+        if not event.positions:
+            continue
+        if event.kind == "ball" and len(event.positions) >= 2:
+            (ax, ay), (bx, by) = event.positions[:2]
+            x, y = spec.to_px((ax + bx) / 2, (ay + by) / 2)
+            r = 7 * s
+            ring = (x - r - 2, y - r - 2, x + r + 2, y + r + 2)
+            draw.ellipse(ring, outline=halo, width=round(5 * s))
+            draw.ellipse(
+                (x - r, y - r, x + r, y + r), outline=pal.ink(st.MARK_BALL), width=round(3 * s)
+            )
+        elif event.kind == "wall":
+            x, y = spec.to_px(*event.positions[0])
+            wall_diamond(img, (x, y), 7 * s, pal.ink(st.MARK_WALL), halo, max(1, round(2 * s)))
+        elif event.kind == "pocket":
+            x, y = spec.to_px(*event.positions[0])
+            r = 8 * s
+            for ink, width in ((halo, 6), (pal.ink(st.MARK_POCKET), 3)):
+                for dx in (-r, r):
+                    draw.line(((x - dx, y - r), (x + dx, y + r)), fill=ink, width=round(width * s))
 
 
 def wall_diamond(

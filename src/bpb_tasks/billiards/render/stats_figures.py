@@ -63,10 +63,6 @@ def write_stats(
     return [SPEED_HIST, COLLISIONS]
 
 
-def _save(img: Image.Image, path: Path) -> None:
-    img.save(path, format="PNG", optimize=False)
-
-
 COLUMN_WIDTH = 3.4
 """Inches: one column of a two-column paper, so the figure prints at its own size."""
 
@@ -90,7 +86,7 @@ def speed_histograms(
         _histogram(img, draw, box, values, span, f"t = {h:g} s, n = {len(values)}")
     text(draw, (img.width / 2, 22), "Sampled cue-ball initial speeds", pt(9))
     text(draw, ((left + right) / 2, img.height - 14), "cue speed (m/s)", pt(8))
-    _save(img, path)
+    img.save(path, format="PNG", optimize=False)
 
 
 def _histogram(
@@ -143,7 +139,7 @@ def collision_bars(
     text(draw, ((ax.x0 + ax.x1) / 2, 24), "Cue-ball collision vs no collision", pt(11))
     text(draw, ((ax.x0 + ax.x1) / 2, img.height - 20), "horizon", pt(9))
     vertical_text(img, (20, (ax.y0 + ax.y1) / 2), "scenes", pt(9))
-    _save(img, path)
+    img.save(path, format="PNG", optimize=False)
 
 
 def _legend(draw: ImageDraw.ImageDraw, x: float, y: float, size: int) -> None:

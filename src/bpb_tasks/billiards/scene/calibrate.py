@@ -22,7 +22,6 @@ import numpy as np
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import Simulator
 from bpb_tasks.billiards.scene.config import DatasetConfig, SpeedRange, horizon_key
-from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.scene.sampler import Draw, build_scene, draw, scene_rng
 
 MAX_HIGH = 64.0  # m/s; a bracket search beyond this means the target cannot be reached
@@ -51,9 +50,10 @@ def collision_rate(
     Raises:
         SimulationError: ``simulator`` cannot finish a draw (naming it and its cue speed).
     """
-    from bpb_tasks.simulators.analytic.engine import SimulationError
+    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError
 
-    if _compiled(simulator, build_scene(draws[0], horizon, 0, config, speed=1.0), len(draws)):
+    first = build_scene(draws[0], horizon, 0, config, speed=1.0)
+    if isinstance(simulator, AnalyticSimulator) and simulator.takes_kernel(first, len(draws)):
         return _kernel_rate(draws, horizon, speeds, config)
     hits = 0
     for i, d in enumerate(draws):
@@ -66,12 +66,6 @@ def collision_rate(
             said.option = exc.option  # generation names where the option is set
             raise said from None
     return hits / len(draws)
-
-
-def _compiled(simulator: Simulator, scene: Scene, runs: int) -> bool:
-    from bpb_tasks.simulators.analytic.engine import AnalyticSimulator
-
-    return isinstance(simulator, AnalyticSimulator) and simulator.takes_kernel(scene, runs)
 
 
 def _kernel_rate(

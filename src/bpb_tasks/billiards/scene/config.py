@@ -239,10 +239,6 @@ class DatasetConfig(StrictModel):
             )
         return found
 
-    def with_ranges(self, ranges: Mapping[str, SpeedRange]) -> DatasetConfig:
-        """A copy whose speed ranges are updated with ``ranges``."""
-        return self.model_copy(update={"speed_ranges": {**self.speed_ranges, **ranges}})
-
 
 def horizon_key(horizon: float) -> str:
     """The ``speed_ranges`` key of a horizon: ``"3"`` for 3.0, ``"2.5"`` for 2.5."""
@@ -276,10 +272,11 @@ def load_config(path: str | Path | None) -> DatasetConfig:
         raise BadInput(
             f"{path}: cannot read config: not UTF-8 text ({exc.reason} at byte {exc.start})"
         ) from None
+    toml = path.suffix.lower() == ".toml"
     try:
-        data = tomllib.loads(text) if path.suffix.lower() == ".toml" else json.loads(text)
+        data = tomllib.loads(text) if toml else json.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise BadInput(f"{path}: not valid {_format(path)}: {exc}") from None
+        raise BadInput(f"{path}: not valid {'TOML' if toml else 'JSON'}: {exc}") from None
     if not isinstance(data, dict):
         raise BadInput(f"{path}: (top level): expected an object of config fields")
     return config_from_mapping(data, str(path))
@@ -287,7 +284,3 @@ def load_config(path: str | Path | None) -> DatasetConfig:
 
 def _count(pixels: float) -> str:
     return f"{pixels:,.0f}" if pixels < 1e12 else f"{pixels:.3g}"
-
-
-def _format(path: Path) -> str:
-    return "TOML" if path.suffix.lower() == ".toml" else "JSON"

@@ -40,7 +40,6 @@ from bpb_tasks.billiards.scene.model import Ball, Scene
 from bpb_tasks.billiards.stability.margins import (
     capped_horizon_gap,
     events_horizon_gap,
-    horizon_gap,
     min_event_gap,
     min_graze_cos,
     pair_margins,
@@ -205,7 +204,7 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
         events, stopped = simulator.events_until_failure(scene, horizon + 1.0)
         gap = events_horizon_gap(events, horizon)
         return gap if stopped is None else capped_horizon_gap(gap, stopped, horizon)
-    return horizon_gap(simulator.run(scene, horizon + 1.0), horizon)
+    return events_horizon_gap(simulator.run(scene, horizon + 1.0).events, horizon)
 
 
 def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float | None:
@@ -222,13 +221,8 @@ def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float |
 
 def labels(outcome: Outcome) -> Labels:
     """Q1 contacts, Q2 walls and the pocketed balls of an outcome."""
-    return labels_of(outcome.cue_contacts(), outcome.cue_walls(), outcome.positions)
-
-
-def labels_of(contacts: set[int], walls: set[str], positions: Positions) -> Labels:
-    """The labels from cue contacts, cue walls and final positions."""
-    pocketed = frozenset(i for i, p in positions.items() if p is None)
-    return frozenset(contacts), frozenset(walls), pocketed
+    pocketed = frozenset(i for i, p in outcome.positions.items() if p is None)
+    return frozenset(outcome.cue_contacts()), frozenset(outcome.cue_walls()), pocketed
 
 
 def flipped(reference: Labels, other: Labels) -> Iterator[str]:

@@ -107,11 +107,6 @@ def min_event_gap(outcome: Outcome) -> float | None:
     return min(gaps) if gaps else None
 
 
-def horizon_gap(outcome: Outcome, horizon: float) -> float | None:
-    """Time between ``horizon`` and the nearest non-stop event of ``outcome``."""
-    return events_horizon_gap(outcome.events, horizon)
-
-
 def events_horizon_gap(
     events: Sequence[Event], horizon: float, *, finished: bool = True
 ) -> float | None:
@@ -141,11 +136,6 @@ def capped_horizon_gap(best: float | None, last: float, horizon: float) -> float
     step; so always when a non-stop event after the horizon was processed), else ``None``:
     not measured."""
     return best if best is not None and best <= last - horizon else None
-
-
-def near_miss_gap(outcome: Outcome, radius: float) -> float | None:
-    """Smallest gap over the trajectories of pairs that never touched (see module docstring)."""
-    return pair_margins(outcome, radius)[0]
 
 
 def pair_margins(outcome: Outcome, radius: float) -> tuple[float | None, float | None]:
