@@ -22,12 +22,12 @@ from typing import Any
 from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
 from bpb_core.simulator_spec import parse_spec
+from bpb_core.validated_files import validate_mapping
 from bpb_tasks.billiards import bench_compare, card
 from bpb_tasks.billiards.render.images import IMAGE_NAMES
 from bpb_tasks.billiards.scene.calibrate import Calibration, calibrate_horizon
 from bpb_tasks.billiards.scene.config import (
     DatasetConfig,
-    config_from_mapping,
     horizon_key,
     load_config,
 )
@@ -148,7 +148,7 @@ class BilliardsFamily:
             return source
         if source is None or isinstance(source, str | Path):
             return load_config(source)
-        return config_from_mapping(source)
+        return validate_mapping(DatasetConfig, source, "config")
 
     def check_config(self, config: DatasetConfig, horizons: Sequence[float]) -> None:
         """Every horizon needs a cue-speed range (unless calibrated first), and the image
@@ -265,8 +265,7 @@ class BilliardsFamily:
         """Cue-speed histograms and collision counts per horizon under ``root/stats``."""
         from bpb_tasks.billiards.render.stats_figures import write_stats
 
-        ranges = {h: t.speed_range for h, t in tallies.items()}
-        return write_stats(root, tallies, ranges)
+        return write_stats(root, tallies)
 
     def predict(self, name: str, scene: Scene, rng: random.Random) -> FinalState:
         """The ``stasis``, ``straight`` or ``random`` prediction for ``scene``."""

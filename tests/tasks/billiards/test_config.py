@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from bpb_core.errors import BadInput
+from bpb_core.validated_files import validate_mapping
 from bpb_tasks.billiards.scene.config import (
     DEFAULT_SPEED_RANGES,
     DatasetConfig,
     SpeedRange,
-    config_from_mapping,
     load_config,
 )
 
@@ -89,10 +89,12 @@ def test_speed_range_keys_are_read_as_horizons(tmp_path: Path) -> None:
 
 def test_margins_left_out_fit_the_text_and_given_ones_are_checked_before_generating() -> None:
     assert DatasetConfig().image.margin_left == 116  # the paper's canvas is unchanged
-    bigger = config_from_mapping({"image": {"px_per_m": 800}, "pockets": {"radius": 0.08}})
+    bigger = DatasetConfig.model_validate({"image": {"px_per_m": 800}, "pockets": {"radius": 0.08}})
     assert bigger.image.margin_left > 116 and bigger.image.margin_top > 84
     bigger.check_margins()
-    narrow = config_from_mapping({"image": {"margin_left": 40}})  # an older manifest still loads
+    narrow = DatasetConfig.model_validate(
+        {"image": {"margin_left": 40}}
+    )  # an older manifest still loads
     with pytest.raises(BadInput, match=r"image\.margin_left: 40 px cuts off .* at least 116"):
         narrow.check_margins()
 
@@ -149,7 +151,7 @@ def test_a_wrong_typed_field_is_refused_naming_it(data: st.DataObject) -> None:
     value = data.draw(WRONG[TYPED_FIELDS[field]])
     text = json.dumps(_nested(field, value))
     with pytest.raises(BadInput) as caught:
-        config_from_mapping(json.loads(text), "c.json")
+        validate_mapping(DatasetConfig, json.loads(text), "c.json")
     message = str(caught.value)
     assert message.startswith(f"c.json: {field}: Input should be a valid "), (text, message)
     assert "\n" not in message

@@ -21,7 +21,7 @@ from bpb_tasks.billiards.render.images import (
     render_trajectory,
 )
 from bpb_tasks.billiards.render.palette import FLAT, base, header_y, palette_for
-from bpb_tasks.billiards.scene.config import DatasetConfig, config_from_mapping
+from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.billiards.scene.model import Ball, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 
@@ -147,7 +147,7 @@ def _header_box(spec: CanvasSpec, header: str, legend: bool) -> tuple[int, int, 
 @pytest.mark.parametrize("width", [1.0, 0.3, 2.0])
 def test_the_header_title_and_legend_do_not_overlap_on_narrow_tables(width: float) -> None:
     """On a 1 m table the legend used to end at the table's edge, over the title."""
-    config = config_from_mapping({"table": {"width": width, "height": 1.0}})
+    config = DatasetConfig.model_validate({"table": {"width": width, "height": 1.0}})
     spec = CanvasSpec.from_config(config)
     title = _header_box(spec, "Trajectories, t = 0 to 12.5 s", legend=False)
     legend = _header_box(spec, "", legend=True)
@@ -166,7 +166,7 @@ def test_the_header_is_what_drawing_the_whole_canvas_gives(
     """Only the header's band is drawn and mapped to the palette, over the mapped background:
     the pixels are those of the whole canvas drawn in RGB and mapped, as the dataset's images
     always were, on any canvas (a header near the top edge, larger and smaller text)."""
-    spec = CanvasSpec.from_config(config_from_mapping({"image": image}))
+    spec = CanvasSpec.from_config(DatasetConfig.model_validate({"image": image}))
     whole = background(spec).copy()
     if header:
         font = render_style.font(round(19 * spec.scale), True)

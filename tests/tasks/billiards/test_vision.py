@@ -14,7 +14,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.render.canvas import CanvasSpec
 from bpb_tasks.billiards.render.images import render_init
 from bpb_tasks.billiards.render.png import encode_palette_png
-from bpb_tasks.billiards.scene.config import config_from_mapping
+from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.billiards.scene.model import Ball, Physics, Pockets, Scene, Table
 from bpb_tasks.billiards.vision.frame import PerceptionFailed, read_prompt
 from bpb_tasks.billiards.vision.perceive import perceive, perception_error
@@ -28,7 +28,7 @@ def _prompt(scene: Scene) -> str:
 
 
 def _png(scene: Scene, **image: object) -> bytes:
-    config = config_from_mapping({"image": image} if image else {})
+    config = DatasetConfig.model_validate({"image": image} if image else {})
     return encode_palette_png(render_init(scene, CanvasSpec.from_config(config)), 1)
 
 

@@ -9,7 +9,7 @@ from bpb_core.registry import Registry
 from bpb_tasks.billiards.render.canvas import CanvasSpec
 from bpb_tasks.billiards.render.images import render_init
 from bpb_tasks.billiards.render.png import encode_palette_png
-from bpb_tasks.billiards.scene.config import config_from_mapping
+from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.billiards.scene.model import Ball, Scene
 from bpb_tasks.questions.question import common_prompt
 
@@ -25,7 +25,9 @@ def _ceiling(registry: Registry, offset_px: float) -> dict[str, bool]:
         Ball(id=2, pos=(1.5, 0.2)),
     ]
     scene = Scene(scene_id="h1_0000", horizon=1.0, balls=balls)
-    png = encode_palette_png(render_init(scene, CanvasSpec.from_config(config_from_mapping({}))), 1)
+    png = encode_palette_png(
+        render_init(scene, CanvasSpec.from_config(DatasetConfig.model_validate({}))), 1
+    )
     prompt = common_prompt(scene, PromptOptions("image", True, False, 0))
     family = registry.scene_family("billiards")
     assert isinstance(family, BoundsPerception)

@@ -31,28 +31,19 @@ GREY = (127, 140, 141)
 class Tally(Protocol):
     """Per-horizon counts (see :class:`bpb_tasks.billiards.family.BilliardsTally`)."""
 
+    speed_range: tuple[float, float]
     scenes: int
     collisions: int
     speeds: list[float]
 
 
-def write_stats(
-    root: Path,
-    tallies: Mapping[float, Tally],
-    ranges: Mapping[float, tuple[float, float]] | None = None,
-) -> list[str]:
-    """Write both figures under ``root/stats`` and return their relative paths.
-
-    Args:
-        root: Dataset folder.
-        tallies: Per-horizon counts and cue speeds.
-        ranges: Per-horizon sampled speed range; histogram bins then span exactly it.
-    """
+def write_stats(root: Path, tallies: Mapping[float, Tally]) -> list[str]:
+    """Write both figures under ``root/stats`` (per horizon: counts, cue speeds and the sampled
+    speed range, which the histogram's bins span) and return their relative paths."""
     (root / "stats").mkdir(exist_ok=True)
     hs = sorted(tallies)
     # init.json rounds velocity components, so a speed may leave its range by up to ~1e-4 m/s
-    padded = {h: (lo - 1e-3, hi + 1e-3) for h, (lo, hi) in (ranges or {}).items()}
-    spans = [padded.get(h) for h in hs]
+    spans = [(tallies[h].speed_range[0] - 1e-3, tallies[h].speed_range[1] + 1e-3) for h in hs]
     speed_histograms(root / SPEED_HIST, hs, [tallies[h].speeds for h in hs], spans)
     collision_bars(
         root / COLLISIONS,
@@ -71,7 +62,7 @@ def speed_histograms(
     path: Path,
     horizons: Sequence[float],
     speeds: Sequence[Sequence[float]],
-    spans: Sequence[tuple[float, float] | None] | None = None,
+    spans: Sequence[tuple[float, float]],
 ) -> None:
     """One histogram of sampled cue speeds per horizon, stacked in one column (readable at
     one column width: 3.4 in wide, 7-9 pt text), each with its own speed axis."""
@@ -79,7 +70,6 @@ def speed_histograms(
     img, draw = new_chart(COLUMN_WIDTH, 0.55 + 1.05 * n)
     top, bottom, left, right = 44, 40, 70, img.width - 14
     pitch = (img.height - top - bottom) / max(n, 1)
-    spans = spans or [None] * n
     for k, (h, values, span) in enumerate(zip(horizons, speeds, spans, strict=True)):
         y0 = round(top + k * pitch)
         box = (left, y0, right, round(y0 + pitch) - 34)
@@ -94,10 +84,10 @@ def _histogram(
     draw: ImageDraw.ImageDraw,
     box: tuple[int, int, int, int],
     values: Sequence[float],
-    span: tuple[float, float] | None,
+    span: tuple[float, float],
     label: str,
 ) -> None:
-    """One panel: ``BINS`` bars over ``span`` (default: the values' range), labelled ``label``."""
+    """One panel: ``BINS`` bars over ``span``, labelled ``label``."""
     counts, edges = np.histogram(np.asarray(values, dtype=float), bins=BINS, range=span)
     lo, hi = float(edges[0]), float(edges[-1])
     margin = (hi - lo) * 0.05

@@ -245,15 +245,6 @@ def horizon_key(horizon: float) -> str:
     return f"{horizon:g}"
 
 
-def config_from_mapping(data: Mapping[str, Any], source: str = "config") -> DatasetConfig:
-    """Validate ``data`` into a :class:`DatasetConfig`.
-
-    Raises:
-        BadInput: ``"<source>: <field>: what is wrong"`` for the first invalid field.
-    """
-    return validate_mapping(DatasetConfig, data, source)
-
-
 def load_config(path: str | Path | None) -> DatasetConfig:
     """Read a JSON or TOML config file (``None`` gives the defaults).
 
@@ -279,7 +270,7 @@ def load_config(path: str | Path | None) -> DatasetConfig:
         raise BadInput(f"{path}: not valid {'TOML' if toml else 'JSON'}: {exc}") from None
     if not isinstance(data, dict):
         raise BadInput(f"{path}: (top level): expected an object of config fields")
-    return config_from_mapping(data, str(path))
+    return validate_mapping(DatasetConfig, data, str(path))
 
 
 def _count(pixels: float) -> str:
