@@ -19,18 +19,6 @@ from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.billiards.vision.frame import canvas_of, find_frame, image_keys, read_prompt
 
 
-def pixel_grid(png: bytes, prompt: str) -> CanvasSpec:
-    """The canvas geometry of ``png`` as read from its axes and ``prompt``.
-
-    Raises:
-        PerceptionFailed: The frame cannot be found.
-    """
-    facts = read_prompt(prompt)
-    keys = image_keys(png)
-    frame = find_frame(keys, facts)
-    return canvas_of(frame, facts, (keys.shape[1], keys.shape[0]))
-
-
 def snapped(scene: Scene, spec: CanvasSpec) -> Scene:
     """``scene`` with every centre moved to the whole pixel its sprite is pasted at (no
     validation: two balls may then overlap by up to a pixel)."""
@@ -51,7 +39,9 @@ def perception_ceiling(
     simulated."""
     truth = truth_of(scene)
     try:
-        seen = truth_of(snapped(scene, pixel_grid(png, prompt)))
+        facts, keys = read_prompt(prompt), image_keys(png)
+        spec = canvas_of(find_frame(keys, facts), facts, (keys.shape[1], keys.shape[0]))
+        seen = truth_of(snapped(scene, spec))
     except (ValueError, BpbError):  # the simulator refused the snapped scene (an event cap)
         return {}
     return {
