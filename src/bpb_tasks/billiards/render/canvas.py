@@ -58,20 +58,15 @@ def ball_colour(ball_id: int) -> RGB:
     return BALL_COLOURS[1 + (ball_id - 1) % (len(BALL_COLOURS) - 1)]
 
 
-def _font_candidates(bold: bool) -> list[Path]:
-    name = "DejaVuSans-Bold.ttf" if bold else "DejaVuSans.ttf"
-    found: list[Path] = []
-    spec = importlib.util.find_spec("matplotlib")  # locates the package without importing it
-    if spec is not None and spec.origin:
-        found.append(Path(spec.origin).parent / "mpl-data" / "fonts" / "ttf" / name)
-    found.append(Path("/usr/share/fonts/truetype/dejavu") / name)
-    return found
-
-
 @functools.cache
 def font(size: int, bold: bool = False) -> Font:
     """DejaVu Sans at ``size`` pixels, or Pillow's default font when no TTF is found."""
-    for path in _font_candidates(bold):
+    name = "DejaVuSans-Bold.ttf" if bold else "DejaVuSans.ttf"
+    found = [Path("/usr/share/fonts/truetype/dejavu") / name]
+    spec = importlib.util.find_spec("matplotlib")  # locates the package without importing it
+    if spec is not None and spec.origin:
+        found.insert(0, Path(spec.origin).parent / "mpl-data" / "fonts" / "ttf" / name)
+    for path in found:
         if path.is_file():
             return ImageFont.truetype(str(path), size)
     return ImageFont.load_default(size)
@@ -191,16 +186,12 @@ def background(spec: CanvasSpec) -> Image.Image:
         py = spec.to_px(0, y)[1]
         draw.line((x0, py, x1, py), fill=GRID, width=1)
     draw.rectangle((x0, y0, x1, y1), outline=CUSHION, width=max(2, rail // 5))
-    _pockets(draw, spec)
-    _axes(img, spec, max(rail, round(spec.pocket_radius_m * spec.ppm)) + round(6 * spec.scale))
-    return img
-
-
-def _pockets(draw: ImageDraw.ImageDraw, spec: CanvasSpec) -> None:
     r = spec.pocket_radius_m * spec.ppm
     for cx, cy in spec.pockets:
         px, py = spec.to_px(cx, cy)
         draw.ellipse((px - r, py - r, px + r, py + r), fill=POCKET)
+    _axes(img, spec, max(rail, round(spec.pocket_radius_m * spec.ppm)) + round(6 * spec.scale))
+    return img
 
 
 def _axes(img: Image.Image, spec: CanvasSpec, offset: int) -> None:

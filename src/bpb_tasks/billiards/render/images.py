@@ -288,27 +288,23 @@ def segment_end(seg: Segment) -> Point:
     return seg.pos[0] + seg.vel[0] / speed * dist, seg.pos[1] + seg.vel[1] / speed * dist
 
 
-def path_points(segments: tuple[Segment, ...]) -> list[Point]:
-    """Table points of a ball's path: the start of each moving segment and the final end."""
-    points: list[Point] = []
-    for seg in segments:
-        end = segment_end(seg)
-        if end == seg.pos:
-            continue
-        if not points or points[-1] != seg.pos:
-            points.append(seg.pos)
-        points.append(end)
-    return points
-
-
 def draw_paths(img: Image.Image, spec: CanvasSpec, pal: Palette, outcome: Outcome) -> None:
-    """Draw every moving ball's path, the cue ball's last (on top)."""
+    """Draw every moving ball's path, the cue ball's last (on top): a polyline through the start
+    of each moving segment and the final end."""
     draw = ImageDraw.Draw(img)
     s = spec.scale
     halo = pal.ink(st.HALO)
     order = sorted(outcome.segments, key=lambda i: (i == 0, i))
     for ball_id in order:
-        pts = [spec.to_px(*p) for p in path_points(outcome.segments[ball_id])]
+        points: list[Point] = []
+        for seg in outcome.segments[ball_id]:
+            end = segment_end(seg)
+            if end == seg.pos:
+                continue
+            if not points or points[-1] != seg.pos:
+                points.append(seg.pos)
+            points.append(end)
+        pts = [spec.to_px(*p) for p in points]
         if len(pts) < 2:
             continue
         draw.line(pts, fill=halo, width=round(6 * s), joint="curve")

@@ -100,7 +100,8 @@ def _histogram(
     xs = nice_ticks(*ax.xlim, 9)
     ys = nice_ticks(0, top, 5, integer=True)
     size = pt(7)
-    frame(draw, ax, [(x, tick_text(x)) for x in xs], [(y, f"{y:g}") for y in ys], size)
+    # tick labels with as few digits as the value needs (0.4, 2.5, 10)
+    frame(draw, ax, [(x, f"{round(x, 6):g}") for x in xs], [(y, f"{y:g}") for y in ys], size)
     text(draw, (ax.x1 - 6, ax.y0 + 6), label, pt(8), anchor="rt")
     vertical_text(img, (14, (ax.y0 + ax.y1) / 2), "scenes", size)
 
@@ -125,19 +126,17 @@ def collision_bars(
     ys = nice_ticks(0, top, 7, integer=True)
     xs = [(float(x), f"{h:g} s") for x, h in enumerate(horizons)]
     frame(draw, ax, xs, [(y, f"{y:g}") for y in ys], pt(9))
-    _legend(draw, ax.x0 + 14, ax.y0 + 16, value_size)
+    lx: float = ax.x0 + 14  # the legend: the two bar kinds' swatches and names, from (lx, ly)
+    ly = ax.y0 + 16
+    for name, colour in (("collision", RED), ("no collision", GREY)):
+        swatch = (lx, ly - value_size // 3, lx + 2 * value_size, ly + value_size // 3)
+        draw.rectangle(swatch, fill=colour)
+        text(draw, (lx + 2.6 * value_size, ly), name, value_size, anchor="lm")
+        lx += 2.6 * value_size + st.font(value_size).getlength(name) + 2 * value_size
     text(draw, ((ax.x0 + ax.x1) / 2, 24), "Cue-ball collision vs no collision", pt(11))
     text(draw, ((ax.x0 + ax.x1) / 2, img.height - 20), "horizon", pt(9))
     vertical_text(img, (20, (ax.y0 + ax.y1) / 2), "scenes", pt(9))
     img.save(path, format="PNG", optimize=False)
-
-
-def _legend(draw: ImageDraw.ImageDraw, x: float, y: float, size: int) -> None:
-    """Colour swatches and names of the two bar kinds, side by side from ``(x, y)``."""
-    for name, colour in (("collision", RED), ("no collision", GREY)):
-        draw.rectangle((x, y - size // 3, x + 2 * size, y + size // 3), fill=colour)
-        text(draw, (x + 2.6 * size, y), name, size, anchor="lm")
-        x += 2.6 * size + st.font(size).getlength(name) + 2 * size
 
 
 DPI = 150
@@ -164,11 +163,6 @@ def nice_ticks(lo: float, hi: float, most: int, integer: bool = False) -> list[f
                 return best
             best = ticks
     return best
-
-
-def tick_text(value: float) -> str:
-    """A tick label: as few digits as the value needs (``0.4``, ``2.5``, ``10``)."""
-    return f"{round(value, 6):g}"
 
 
 @dataclass(frozen=True)
