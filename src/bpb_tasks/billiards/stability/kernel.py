@@ -2,10 +2,10 @@
 
 :func:`copy_labels` runs every copy of a scene through the kernel in one call (:func:`copy_masks`)
 and gives what the Python engine's runs give
-:func:`~bpb_tasks.billiards.stability.annotation.tally`: each copy's labels (``None`` when it did
-not finish within its event budget) and final positions. In compiled code the labels are bit masks
-(cue contacts, cue walls, pocketed balls; one bit per ball index or wall), so a scene holds at most
-:data:`~bpb_tasks.billiards.stability.annotation.KERNEL_MAX_BALLS` balls here.
+:func:`~bpb_tasks.billiards.stability.annotation.tally_copies`: each copy's labels (``None``
+when it did not finish within its event budget) and final positions. In compiled code the labels
+are bit masks (cue contacts, cue walls, pocketed balls; one bit per ball index or wall), so a
+scene holds at most :data:`~bpb_tasks.billiards.stability.annotation.KERNEL_MAX_BALLS` balls here.
 """
 
 from __future__ import annotations
