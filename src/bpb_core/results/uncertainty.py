@@ -171,28 +171,14 @@ def paired_comparison(
     a_point, _ = _horizon_means(left, tasks, suites, None, 0)
     b_point, _ = _horizon_means(right, tasks, suites, None, 0)
     lo, hi = _interval(reps, level)
-    rows = []
-    for j, metric in enumerate([*tasks, *(s.name for s in suites)]):
-        column = diff[metric].dropna()
-        wins, losses = int((column > 0).sum()), int((column < 0).sum())
-        rows.append(
-            {
-                "a": a,
-                "b": b,
-                "metric": metric,
-                "a_score": a_point[j],
-                "b_score": b_point[j],
-                "diff": point[j],
-                "lo": lo[j],
-                "hi": hi[j],
-                "scenes": len(column),
-                "wins": wins,
-                "losses": losses,
-                "ties": len(column) - wins - losses,
-                "p_value": sign_test(wins, losses),
-            }
-        )
-    return pd.DataFrame(rows)
+    names = [*tasks, *(s.name for s in suites)]
+    scenes = diff[names].notna().sum().to_numpy()
+    wins, losses = (diff[names] > 0).sum().to_numpy(), (diff[names] < 0).sum().to_numpy()
+    columns = {"a": a, "b": b, "metric": names, "a_score": a_point, "b_score": b_point}
+    columns |= {"diff": point, "lo": lo, "hi": hi, "scenes": scenes, "wins": wins}
+    columns |= {"losses": losses, "ties": scenes - wins - losses}
+    columns["p_value"] = [sign_test(int(w), int(n)) for w, n in zip(wins, losses, strict=True)]
+    return pd.DataFrame(columns)
 
 
 def _datasets(units: pd.DataFrame, run: str) -> set[str]:
