@@ -217,12 +217,10 @@ def _export_frames(report: Report, out: Path) -> dict[str, Path]:
     for name in ("units", "calls"):
         frames = [getattr(p.results, name) for p in report.parts]
         frame = frames[0] if len(frames) == 1 else pd.concat(frames, ignore_index=True)
-        files[f"{name}.csv"] = out / f"{name}.csv"
-        with writing(files[f"{name}.csv"]):
-            frame.to_csv(files[f"{name}.csv"], index=False)
-        files[f"{name}.parquet"] = out / f"{name}.parquet"
-        with writing(files[f"{name}.parquet"]):
-            frame.to_parquet(files[f"{name}.parquet"], index=False)
+        for suffix, write in ((".csv", frame.to_csv), (".parquet", frame.to_parquet)):
+            files[name + suffix] = out / (name + suffix)
+            with writing(files[name + suffix]):
+                write(files[name + suffix], index=False)
     return files
 
 

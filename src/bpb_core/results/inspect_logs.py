@@ -151,6 +151,8 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
     score = next(iter((sample.scores or {}).values()), None)
     extra = (score.metadata or {}) if score is not None else {}
     status = str(extra.get("status") or "api_error")
+    choices = sample.output.choices if sample.output else None  # none when the call failed
+    failed = None if sample.error is None else str(sample.error.message)
     usage = UsageRecord()
     for used in (sample.model_usage or {}).values():
         usage.input_tokens += used.input_tokens or 0
@@ -166,24 +168,14 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
         status=status if status in ("ok", "parse_error") else "api_error",
         answer=json.loads(score.answer) if score is not None and score.answer else None,
         rule=extra.get("rule"),
-        finish_reason=_finish_reason(sample),
+        finish_reason=str(choices[0].stop_reason) if choices else None,
         attempts=1,
         usage=usage,
         latency=float(sample.total_time or 0.0),
-        error=(score.explanation if score is not None else None) or _error(sample),
+        error=(score.explanation if score is not None else None) or failed,
         input_mode=str(meta.get("input_mode") or "image"),
         cot=bool(meta.get("cot")),
     )
-
-
-def _finish_reason(sample: Any) -> str | None:
-    """The reply's stop reason; none when the call failed (an output with no choices)."""
-    choices = sample.output.choices if sample.output else None
-    return str(choices[0].stop_reason) if choices else None
-
-
-def _error(sample: Any) -> str | None:
-    return None if sample.error is None else str(sample.error.message)
 
 
 def _manifest(

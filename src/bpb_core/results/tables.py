@@ -239,10 +239,8 @@ def usage(calls: pd.DataFrame) -> pd.DataFrame:
         retries=("retries", "sum"),
     )
     status = calls.groupby([*RUN_COLUMNS, "status"], observed=True).size().unstack(fill_value=0)
-    for name in ("ok", "parse_error", "api_error", "missing"):
-        out[name] = (
-            status[name].reindex(out.index).fillna(0).astype("int64") if name in status else 0
-        )
+    names = ["ok", "parse_error", "api_error", "missing"]
+    out[names] = status.reindex(index=out.index, columns=names, fill_value=0).astype("int64")
     out["tokens_per_call"] = (out["input_tokens"] + out["output_tokens"]) / out["calls"]
     return out.reset_index()
 
