@@ -81,22 +81,13 @@ def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
         for key, group in sorted(groups.items()):
             _write_run(folder, key, group)
 
-    root = cache_folder(_digest(_folders(paths)), _digest(_states(paths)), build)
+    # which logs: their folders (a new log there replaces the cache folder); and the logs as
+    # they are now: their paths, sizes and modification times
+    where = _digest(sorted({str(path.resolve().parent) for path in paths}))
+    stats = [(path.resolve(), path.stat()) for path in paths]
+    state = _digest(sorted(f"{p}\t{s.st_size}\t{s.st_mtime_ns}" for p, s in stats))
+    root = cache_folder(where, state, build)
     return [root / _run_name(key) for key in sorted(groups)]
-
-
-def _folders(paths: list[Path]) -> list[str]:
-    """Which logs: the folders holding them (a new log there replaces the cache folder)."""
-    return sorted({str(path.resolve().parent) for path in paths})
-
-
-def _states(paths: list[Path]) -> list[str]:
-    """The logs as they are now: their paths, sizes and modification times."""
-    lines = []
-    for path in paths:
-        stat = path.stat()
-        lines.append(f"{path.resolve()}\t{stat.st_size}\t{stat.st_mtime_ns}")
-    return sorted(lines)
 
 
 def _digest(lines: list[str]) -> str:
