@@ -161,7 +161,16 @@ def write_report(
         origins = {task: registry.scorer_entry(task).origin for task in scorers}
         cases += gallery.build_cases(part.results, scorers, gallery_size, origins)
         answered += len(gallery.scene_totals(part.results.units, part.results.suites))
-        pages.append(_page_part(part, pngs, report.completeness))
+        pages.append(
+            {
+                "name": f"{part.short_id} ({part.path})",
+                "runs": run_items(part),
+                "headline": headline(part, report.completeness),
+                "charts": pngs,
+                "chart_notes": chart_notes(part, report.completeness),
+                "sections": sections(part, report.completeness),
+            }
+        )
     for i, case in enumerate(cases):
         if case.png:
             name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
@@ -172,17 +181,6 @@ def write_report(
     )
     files["html"] = _write(out / "report.html", page.encode("utf-8"))
     return files
-
-
-def _page_part(part: ReportPart, pngs: dict[str, bytes], rule: Completeness) -> dict[str, Any]:
-    return {
-        "name": f"{part.short_id} ({part.path})",
-        "runs": run_items(part),
-        "headline": headline(part, rule),
-        "charts": pngs,
-        "chart_notes": chart_notes(part, rule),
-        "sections": sections(part, rule),
-    }
 
 
 def run_items(part: ReportPart) -> list[dict[str, Any]]:
@@ -217,12 +215,10 @@ def _export_frames(report: Report, out: Path) -> dict[str, Path]:
     for name in ("units", "calls"):
         frames = [getattr(p.results, name) for p in report.parts]
         frame = frames[0] if len(frames) == 1 else pd.concat(frames, ignore_index=True)
-        files[f"{name}.csv"] = out / f"{name}.csv"
-        with writing(files[f"{name}.csv"]):
-            frame.to_csv(files[f"{name}.csv"], index=False)
-        files[f"{name}.parquet"] = out / f"{name}.parquet"
-        with writing(files[f"{name}.parquet"]):
-            frame.to_parquet(files[f"{name}.parquet"], index=False)
+        for suffix, write in ((".csv", frame.to_csv), (".parquet", frame.to_parquet)):
+            files[name + suffix] = out / (name + suffix)
+            with writing(files[name + suffix]):
+                write(files[name + suffix], index=False)
     return files
 
 

@@ -163,7 +163,9 @@ def leaderboards(
         ax.set_yticks(list(ys), names_of(ranked), fontsize=8)
         ax.set_xlim(0, 114)
         ax.set_xticks([0, 20, 40, 60, 80, 100])
-        _floors(ax, ranked, styles, metric)
+        for row in ranked[ranked["baseline"].astype(bool)].to_dict(orient="records"):
+            style = styles[str(row["run"])]  # the floors and the ceiling across the panel
+            ax.axvline(100 * float(row[metric]), color=style["color"], ls="--", lw=0.8, zorder=0)
         missing = board.loc[board[metric].isna(), "run"].astype(str).tolist()
         others = set(unasked.get(metric, ()))
         left_out = [run for run in missing if run not in others]
@@ -174,12 +176,6 @@ def leaderboards(
         ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)
     return png(fig)
-
-
-def _floors(ax: Any, ranked: pd.DataFrame, styles: dict[str, dict[str, Any]], metric: str) -> None:
-    for row in ranked[ranked["baseline"].astype(bool)].to_dict(orient="records"):
-        style = styles[str(row["run"])]
-        ax.axvline(100 * float(row[metric]), color=style["color"], ls="--", lw=0.8, zorder=0)
 
 
 def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> Any:
@@ -235,17 +231,14 @@ def accuracy_by_horizon(
         _panel(ax, data, runs, horizons, styles, min_complete)
         ax.set_title(titles.get(name, name), fontsize=9)
     fig.suptitle(f"Accuracy by horizon ({view})", fontsize=10)
-    handles = [_handle(styles[r], label(r, _is_baseline(accuracy, r))) for r in runs]
+    baseline = accuracy.assign(run=accuracy["run"].astype(str)).groupby("run")["baseline"].first()
+    handles = [_handle(styles[r], label(r, bool(baseline[r]))) for r in runs]
     fig.legend(
         handles=handles, loc="outside lower center", ncols=min(len(runs), 3), fontsize=7,
         title=f"* under 100% answered; pale = under {100 * min_complete:.0f}%, left out",
         title_fontsize=7, frameon=False,
     )  # fmt: skip
     return png(fig)
-
-
-def _is_baseline(accuracy: pd.DataFrame, run: str) -> bool:
-    return bool(accuracy.loc[accuracy["run"] == run, "baseline"].iloc[0])
 
 
 def _handle(style: dict[str, Any], text: str) -> Any:

@@ -50,14 +50,10 @@ def paper_tables(part: ReportPart, rule: Completeness) -> dict[str, pd.DataFrame
     return out
 
 
-def _text(cell: Cell) -> str:
-    return f"{cell.text} ({cell.note})" if cell.note else cell.text
-
-
 def _frame(head: list[str], rows: Rows) -> pd.DataFrame:
     data = []
     for baseline, cells in rows:
-        texts = [_text(c) for c in cells]
+        texts = [f"{c.text} ({c.note})" if c.note else c.text for c in cells]
         texts[0] += " (baseline)" if baseline else ""
         data.append(texts)
     return pd.DataFrame(data, columns=head, dtype="str")

@@ -11,6 +11,7 @@ import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pandas as pd
 from markupsafe import Markup
 
@@ -95,7 +96,8 @@ def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Row
         run, short = str(row["run"]), str(row["short"])
         found = worst.loc[run].to_dict() if run in worst.index else {}
         least = {t: float(found.get(t, 1.0)) for t in tasks}
-        of = {s.name: _least([least.get(t, 1.0) for t in s.weights]) for s in suites}
+        # a suite's least complete cell; NaN when a task of it was not asked
+        of = {s.name: float(np.min([least.get(t, 1.0) for t in s.weights])) for s in suites}
         cells = [Cell(run), completeness_cell(float(row["completeness"]), rule)]
         cells += [score_cell(float(row[m]), least[m], rule) for m in tasks]
         cells += [score_cell(float(row[s.name]), of[s.name], rule) for s in suites]
@@ -106,11 +108,6 @@ def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Row
         cells += [completeness_cell(float(row["worst_cell"]), rule), Cell(short or "–")]
         rows.append((bool(row["baseline"]), cells))
     return head, rows
-
-
-def _least(shares: list[float]) -> float:
-    """The least of ``shares``, NaN when one is NaN (a task the run was not asked)."""
-    return math.nan if any(math.isnan(x) for x in shares) else min(shares)
 
 
 def _interval(ci: pd.DataFrame, run: str, metric: str) -> Cell:

@@ -51,13 +51,10 @@ def worst_cells(acc: pd.DataFrame) -> pd.DataFrame:
 
 def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str]]:
     """Per run, the tasks with a cell under ``min_complete`` (empty lists left out)."""
-    worst = worst_cells(acc)
-    out: dict[str, list[str]] = {}
-    for run, row in worst.iterrows():
-        short = [str(task) for task, value in row.items() if value < min_complete]
-        if short:
-            out[str(run)] = short
-    return out
+    short = worst_cells(acc) < min_complete
+    return {
+        str(run): [str(t) for t in row.index[row]] for run, row in short.iterrows() if row.any()
+    }
 
 
 REJECTED = ("RequestRejected:",)

@@ -145,9 +145,12 @@ def load_results(
     extra = _extra_columns(scorers.values())
     units = _Columns({**META_DTYPES, **SCORER_INPUT, **extra, **SCORER_OUTPUT})
     calls = _Columns(CALL_DTYPES)
-    tasks = _parsers(registry, scorers)
+    known = registry.names("task")  # the task and who supplied it, to check recorded answers
+    tasks = {
+        n: (registry.task(n), registry.origin("task", n)) if n in known else None for n in scorers
+    }
     for run in runs:
-        _read_one(run, _Readers(scorers, origins, tasks), units, calls)
+        _read_one(run, scorers, origins, tasks, units, calls)
         warn_stray_answers(run)
     unit_frame = _score(units.frame(), scorers, origins)
     present = set(scorers)
@@ -250,26 +253,14 @@ class _Columns:
         return pd.DataFrame(columns)
 
 
-@dataclass(frozen=True)
-class _Readers:
-    """Per task: its scorer, who supplied the scorer, and the task with who supplied it (to
-    check recorded answers; ``None`` for a task no installed plugin registers)."""
-
-    scorers: dict[str, Scorer]
-    origins: dict[str, str]
-    tasks: dict[str, tuple[Task, str] | None]
-
-
-def _parsers(registry: Registry, scorers: dict[str, Scorer]) -> dict[str, tuple[Task, str] | None]:
-    found: dict[str, tuple[Task, str] | None] = {}
-    for name in scorers:
-        known = name in registry.names("task")
-        found[name] = (registry.task(name), registry.origin("task", name)) if known else None
-    return found
-
-
-def _read_one(run: RunFolder, readers: _Readers, units: _Columns, calls: _Columns) -> None:
-    scorers, origins = readers.scorers, readers.origins
+def _read_one(
+    run: RunFolder,
+    scorers: dict[str, Scorer],
+    origins: dict[str, str],
+    tasks: dict[str, tuple[Task, str] | None],
+    units: _Columns,
+    calls: _Columns,
+) -> None:
     for key in run.scene_keys:
         scene, truth = run.truth(key)
         meta = {**run.meta, "horizon": key.horizon, "index": key.index}
@@ -278,7 +269,7 @@ def _read_one(run: RunFolder, readers: _Readers, units: _Columns, calls: _Column
         for task, epoch in [(t, e) for e in range(1, run.epochs + 1) for t in run.tasks]:
             meta["epoch"] = epoch
             record = _placed(run, key, task, epoch)
-            _check_answer(run, key, epoch, record, readers.tasks[task], scene)
+            _check_answer(run, key, epoch, record, tasks[task], scene)
             status = "missing" if record is None else record.status
             answer = None if record is None else record.answer
             scorer = scorers[task]

@@ -81,22 +81,13 @@ def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
         for key, group in sorted(groups.items()):
             _write_run(folder, key, group)
 
-    root = cache_folder(_digest(_folders(paths)), _digest(_states(paths)), build)
+    # which logs: their folders (a new log there replaces the cache folder); and the logs as
+    # they are now: their paths, sizes and modification times
+    where = _digest(sorted({str(path.resolve().parent) for path in paths}))
+    stats = [(path.resolve(), path.stat()) for path in paths]
+    state = _digest(sorted(f"{p}\t{s.st_size}\t{s.st_mtime_ns}" for p, s in stats))
+    root = cache_folder(where, state, build)
     return [root / _run_name(key) for key in sorted(groups)]
-
-
-def _folders(paths: list[Path]) -> list[str]:
-    """Which logs: the folders holding them (a new log there replaces the cache folder)."""
-    return sorted({str(path.resolve().parent) for path in paths})
-
-
-def _states(paths: list[Path]) -> list[str]:
-    """The logs as they are now: their paths, sizes and modification times."""
-    lines = []
-    for path in paths:
-        stat = path.stat()
-        lines.append(f"{path.resolve()}\t{stat.st_size}\t{stat.st_mtime_ns}")
-    return sorted(lines)
 
 
 def _digest(lines: list[str]) -> str:
@@ -151,6 +142,8 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
     score = next(iter((sample.scores or {}).values()), None)
     extra = (score.metadata or {}) if score is not None else {}
     status = str(extra.get("status") or "api_error")
+    choices = sample.output.choices if sample.output else None  # none when the call failed
+    failed = None if sample.error is None else str(sample.error.message)
     usage = UsageRecord()
     for used in (sample.model_usage or {}).values():
         usage.input_tokens += used.input_tokens or 0
@@ -166,24 +159,14 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
         status=status if status in ("ok", "parse_error") else "api_error",
         answer=json.loads(score.answer) if score is not None and score.answer else None,
         rule=extra.get("rule"),
-        finish_reason=_finish_reason(sample),
+        finish_reason=str(choices[0].stop_reason) if choices else None,
         attempts=1,
         usage=usage,
         latency=float(sample.total_time or 0.0),
-        error=(score.explanation if score is not None else None) or _error(sample),
+        error=(score.explanation if score is not None else None) or failed,
         input_mode=str(meta.get("input_mode") or "image"),
         cot=bool(meta.get("cot")),
     )
-
-
-def _finish_reason(sample: Any) -> str | None:
-    """The reply's stop reason; none when the call failed (an output with no choices)."""
-    choices = sample.output.choices if sample.output else None
-    return str(choices[0].stop_reason) if choices else None
-
-
-def _error(sample: Any) -> str | None:
-    return None if sample.error is None else str(sample.error.message)
 
 
 def _manifest(

@@ -227,9 +227,7 @@ def _same_dataset(manifest: dict[str, Any], folder: DataFolder, run_path: Path) 
 
 def _option(manifest: dict[str, Any], name: str) -> Any:
     options = manifest.get("options")
-    if name in manifest:
-        return manifest[name]
-    return options.get(name) if isinstance(options, dict) else None
+    return manifest.get(name, options.get(name) if isinstance(options, dict) else None)
 
 
 def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:

@@ -59,11 +59,9 @@ def stable_exclusions(units: pd.DataFrame) -> pd.DataFrame:
     ``not annotated``. Columns ``reason`` and ``scenes`` (distinct scene ids)."""
     scenes = units.drop_duplicates("scene_id")[["stable", "unstable_reasons"]]
     unstable = scenes[scenes["stable"].fillna(True).eq(False)]
-    counts: dict[str, int] = {}
-    for cell in unstable["unstable_reasons"].fillna(""):
-        for reason in filter(None, str(cell).split(",")):
-            counts[reason] = counts.get(reason, 0) + 1
-    rows = [*sorted(counts.items()), ("any", len(unstable))]
+    reasons = unstable["unstable_reasons"].fillna("").astype(str).str.split(",").explode()
+    counts = reasons[reasons != ""].value_counts()
+    rows = [*sorted((str(k), int(v)) for k, v in counts.items()), ("any", len(unstable))]
     rows.append(("not annotated", int(scenes["stable"].isna().sum())))
     return pd.DataFrame(rows, columns=["reason", "scenes"])
 
@@ -239,10 +237,8 @@ def usage(calls: pd.DataFrame) -> pd.DataFrame:
         retries=("retries", "sum"),
     )
     status = calls.groupby([*RUN_COLUMNS, "status"], observed=True).size().unstack(fill_value=0)
-    for name in ("ok", "parse_error", "api_error", "missing"):
-        out[name] = (
-            status[name].reindex(out.index).fillna(0).astype("int64") if name in status else 0
-        )
+    names = ["ok", "parse_error", "api_error", "missing"]
+    out[names] = status.reindex(index=out.index, columns=names, fill_value=0).astype("int64")
     out["tokens_per_call"] = (out["input_tokens"] + out["output_tokens"]) / out["calls"]
     return out.reset_index()
 

@@ -79,13 +79,14 @@ def render(name: str, **context: Any) -> str:
     return valid_unicode(environment().get_template(name).render(**context))
 
 
-def render_string(source: str, **context: Any) -> str:
-    """A plugin's template source rendered with ``context`` (autoescaped like core's)."""
-    return valid_unicode(environment().from_string(source).render(**context))
-
-
 def error_page(message: str, status: int = 400) -> HTMLResponse:
     """The error page of both apps: ``message`` (one line) with the HTTP ``status``."""
     from starlette.responses import HTMLResponse
 
     return HTMLResponse(render("error.html", message=message, status=status), status_code=status)
+
+
+async def plugin_bug_page(request: Any, exc: Exception) -> HTMLResponse:
+    """Both apps' handler of a :class:`~bpb_core.errors.PluginBug`: its one line naming the
+    plugin, as a 500 page (not a bare 500)."""
+    return error_page(str(exc), 500)

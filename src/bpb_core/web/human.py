@@ -38,13 +38,13 @@ from starlette.routing import Route
 from bpb_core.capabilities import AnswersInBrowser
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
-from bpb_core.model_calls import prompt_text
+from bpb_core.model_calls import prompt_text, valid_unicode
 from bpb_core.plugin_calls import named, parsed_answer, prompt_messages
 from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef, asking
-from bpb_core.web import error_page, loopback_only, render, render_string
+from bpb_core.web import environment, error_page, loopback_only, plugin_bug_page, render
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Task
@@ -150,9 +150,15 @@ class HumanSession:
         component = self.tasks[task]
         assert isinstance(component, AnswersInBrowser)
         origin = self.registry.origin("task", task)
-        return form_html(
-            component, origin, context, prefix=f"{task}.", image_width=width, image_height=height
-        )
+        what = f"{named('task', component)}: form_template"
+        core = {"prefix": f"{task}.", "image_width": width, "image_height": height}
+        with blamed(origin, what):
+            source = component.form_template
+            if not isinstance(source, str):
+                raise PluginBug(f"{origin}: {what} is {type(source).__name__}; expected a str")
+            # autoescaped like core's templates
+            page = environment().from_string(source).render(**context, **core)
+            return valid_unicode(page)
 
     def _prompt_options(self, task: str) -> PromptOptions:
         cot = self.options.cot.get(task, self.tasks[task].default_cot)
@@ -278,20 +284,6 @@ def form_context(
     return context
 
 
-def form_html(task: AnswersInBrowser, origin: str, context: dict[str, Any], **core: Any) -> str:
-    """The task's ``form_template`` rendered with ``context`` and core's values (``core``).
-
-    Raises:
-        PluginBug: The template is no str or does not render, naming ``origin``.
-    """
-    what = f"{named('task', task)}: form_template"
-    with blamed(origin, what):
-        source = task.form_template
-        if not isinstance(source, str):
-            raise PluginBug(f"{origin}: {what} is {type(source).__name__}; expected a str")
-        return render_string(source, **context, **core)
-
-
 def form_answer(
     task: AnswersInBrowser, origin: str, fields: Mapping[str, str], scene: Any
 ) -> dict[str, Any]:
@@ -326,14 +318,11 @@ def human_app(session: HumanSession) -> Starlette:
             return HTMLResponse(render("human_done.html", session=session))
         scene = ref.load()
         width, height = _image_size(ref.image())
-        try:
-            page = session.page(ref)
-            forms = {
-                name: Markup(session.form(name, context, width, height))
-                for name, context in page.forms.items()
-            }
-        except PluginBug as exc:  # one line naming the plugin, not a bare 500
-            return error_page(str(exc), 500)
+        page = session.page(ref)
+        forms = {
+            name: Markup(session.form(name, context, width, height))
+            for name, context in page.forms.items()
+        }
         html = render(
             "human.html",
             session=session,
@@ -366,8 +355,6 @@ def human_app(session: HumanSession) -> Starlette:
             session.submit(fields, shown)
         except FormError as exc:
             return error_page(str(exc))
-        except PluginBug as exc:  # nothing stored
-            return error_page(str(exc), 500)
         return RedirectResponse("/", status_code=303)
 
     async def image(request: Request) -> Response:
@@ -384,6 +371,7 @@ def human_app(session: HumanSession) -> Starlette:
             Route("/image/{scene_id}", image),
         ],
         middleware=[loopback_only()],
+        exception_handlers={PluginBug: plugin_bug_page},  # nothing stored
     )
 
 

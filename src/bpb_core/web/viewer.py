@@ -37,7 +37,7 @@ from bpb_core.plugin_calls import prompt_messages
 from bpb_core.report.gallery import drawing
 from bpb_core.results.frames import Results, load_results
 from bpb_core.run_folder import AnswerRecord, read_answer, read_attempts
-from bpb_core.web import error_page, loopback_only, render
+from bpb_core.web import error_page, loopback_only, plugin_bug_page, render
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -285,32 +285,22 @@ def viewer_app(viewer: Viewer) -> Starlette:
 
     async def pair(request: Request) -> Response:
         p = request.path_params
-        try:
-            view = viewer.pair(int(p["run"]), p["scene_id"], p["task"])
-        except QueryError as exc:
-            return error_page(str(exc), 404)
-        except PluginBug as exc:  # one line naming the plugin, not a bare 500
-            return error_page(str(exc), 500)
+        view = viewer.pair(int(p["run"]), p["scene_id"], p["task"])
         return HTMLResponse(render("view_pair.html", view=view))
 
     async def image(request: Request) -> Response:
         p = request.path_params
-        try:
-            return Response(viewer.image(int(p["run"]), p["scene_id"]), media_type="image/png")
-        except QueryError as exc:
-            return error_page(str(exc), 404)
+        return Response(viewer.image(int(p["run"]), p["scene_id"]), media_type="image/png")
 
     async def overlay(request: Request) -> Response:
         p = request.path_params
-        try:
-            png = viewer.overlay(int(p["run"]), p["scene_id"], p["task"])
-        except QueryError as exc:
-            return error_page(str(exc), 404)
-        except PluginBug as exc:
-            return error_page(str(exc), 500)
+        png = viewer.overlay(int(p["run"]), p["scene_id"], p["task"])
         if not png:
             return error_page("the scene family draws no picture", 404)
         return Response(png, media_type="image/png")
+
+    async def not_found(request: Request, exc: Exception) -> Response:
+        return error_page(str(exc), 404)
 
     return Starlette(
         routes=[
@@ -320,4 +310,5 @@ def viewer_app(viewer: Viewer) -> Starlette:
             Route("/overlay/{run:int}/{scene_id}/{task}", overlay),
         ],
         middleware=[loopback_only()],
+        exception_handlers={QueryError: not_found, PluginBug: plugin_bug_page},
     )
