@@ -29,7 +29,7 @@ from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_sche
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import NotSent, RunState, Tally, sleep_unless
+from bpb_core.runner.state import NotSent, RunState, Tally, wait_unless
 
 
 @dataclass
@@ -112,7 +112,7 @@ class PairCall:
             return True
         if delay is None:
             return True
-        await sleep_unless(self.state.stopping, delay)  # outside the slot; cut short by a stop
+        await wait_unless(self.state.stopping, asyncio.sleep(delay))  # outside the slot
         return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:

@@ -40,7 +40,7 @@ from bpb_core.runner.state import RateLimiter, RunState, TokenBudget
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import ModelAdapter, Task
+    from bpb_core.interfaces import ModelAdapter
     from bpb_core.registry import Registry
     from bpb_core.run_folder import AnswerRecord
 
@@ -116,8 +116,53 @@ async def run_eval_async(
     progress = progress or NoProgress()
     setup = (data, adapter, run_dir, options, registry, adapter_options, spec, flag)
     asked, model, name, plugins, settings = await asyncio.to_thread(_prepare, *setup)
-    with run_lock(run_dir):
-        return await _session(asked, model, name, run_dir, plugins, progress, settings)
+    with run_lock(run_dir):  # one session on the locked folder: guard, recover, send, record
+        options, refs = asked.options, asked.scenes
+        opened = await asyncio.to_thread(_opening, asked, name, run_dir, plugins, settings)
+        history, held, manifest = opened
+        state = RunState(
+            adapter=model,
+            spec=name,
+            tasks=asked.tasks,
+            options=options,
+            run_dir=run_dir,
+            log=AttemptLog(run_dir),
+            progress=progress,
+            limiter=RateLimiter(options.rpm),
+            budget=TokenBudget(options.tpm),
+            slots=asyncio.Semaphore(options.concurrency),
+            rng=random.Random(options.seed),
+            family=asked.family.name,
+            simulator=asked.simulator,
+            config_hash=manifest["config_hash"],
+            history=history,
+            origins={
+                **{task: plugins.origin("task", task) for task in asked.tasks},
+                name: adapter_origin(plugins, name, model),
+            },
+        )
+        ended = False
+        try:
+            done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
+            plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
+            done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
+            plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
+            _announce(state, refs, plan, done)
+            await drive(state, plan)
+            ended = True
+        except WriteRefused as exc:
+            state.stop("write-refused")  # run.json says why, when there is room for it
+            raise WriteRefused(
+                f"{exc}; the run stopped, and {run_dir} keeps every answer written so far: "
+                "make room, then re-run the same command to resume"
+            ) from None
+        finally:
+            state.io.shutdown(wait=True)
+            with _kept_quiet(not ended):  # the disk that refused the run refuses these too
+                state.log.close()
+            with _kept_quiet(not ended):
+                finish_manifest(run_dir, manifest, state)
+        return _result(state, refs, done)
 
 
 def _prepare(
@@ -137,7 +182,8 @@ def _prepare(
     registry = registry or make_registry()
     asked = asking(data, options or RunOptions(), registry)
     check_images(asked.folder, asked.scenes, asked.options.input_mode)
-    model = _adapter(registry, adapter, adapter_options, asked.options, flag)
+    made = adapter_options or AdapterOptions(seed=asked.options.seed)
+    model = registry.adapter(adapter, made, flag=flag) if isinstance(adapter, str) else adapter
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
@@ -150,61 +196,6 @@ def _prepare(
     settings = described_settings(model, origin)
     make_run_folder(run_dir)
     return asked, model, spec, registry, settings
-
-
-async def _session(
-    asked: Asking,
-    model: ModelAdapter,
-    spec: str,
-    run_dir: Path,
-    registry: Registry,
-    progress: Progress,
-    settings: dict[str, Any] | None,
-) -> RunResult:
-    """One session on a locked run folder: guard, recover, send the rest, record the end."""
-    options, refs = asked.options, asked.scenes
-    opened = await asyncio.to_thread(_opening, asked, spec, run_dir, registry, settings)
-    history, held, manifest = opened
-    state = RunState(
-        adapter=model,
-        spec=spec,
-        tasks=asked.tasks,
-        options=options,
-        run_dir=run_dir,
-        log=AttemptLog(run_dir),
-        progress=progress,
-        limiter=RateLimiter(options.rpm),
-        budget=TokenBudget(options.tpm),
-        slots=asyncio.Semaphore(options.concurrency),
-        rng=random.Random(options.seed),
-        family=asked.family.name,
-        simulator=asked.simulator,
-        config_hash=manifest["config_hash"],
-        history=history,
-        origins=_origins(registry, spec, model, asked.tasks),
-    )
-    ended = False
-    try:
-        done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
-        plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
-        done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
-        plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
-        _announce(state, refs, plan, done)
-        await drive(state, plan)
-        ended = True
-    except WriteRefused as exc:
-        state.stop("write-refused")  # run.json says why, when there is room for it
-        raise WriteRefused(
-            f"{exc}; the run stopped, and {run_dir} keeps every answer written so far: "
-            "make room, then re-run the same command to resume"
-        ) from None
-    finally:
-        state.io.shutdown(wait=True)
-        with _kept_quiet(not ended):  # the disk that refused the run refuses these too
-            state.log.close()
-        with _kept_quiet(not ended):
-            finish_manifest(run_dir, manifest, state)
-    return _result(state, refs, done)
 
 
 def _kept_quiet(failing: bool) -> contextlib.AbstractContextManager[None]:
@@ -242,15 +233,6 @@ def _opening(
     return history, held, manifest
 
 
-def _origins(
-    registry: Registry, spec: str, model: ModelAdapter, tasks: dict[str, Task]
-) -> dict[str, str]:
-    """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
-    found = {name: registry.origin("task", name) for name in tasks}
-    found[spec] = adapter_origin(registry, spec, model)
-    return found
-
-
 def adapter_origin(registry: Registry, spec: str, model: object) -> str:
     """Who supplied the adapter run as ``spec``, for one-line plugin errors: the plugin that
     registers its name, else (an adapter object no plugin registers) its module (its name
@@ -262,20 +244,6 @@ def adapter_origin(registry: Registry, spec: str, model: object) -> str:
     if adapter in registry.names("adapter"):
         return registry.origin("adapter", adapter)
     return object_origin(model)
-
-
-def _adapter(
-    registry: Registry,
-    adapter: str | ModelAdapter,
-    options: AdapterOptions | None,
-    run: RunOptions,
-    flag: str,
-) -> ModelAdapter:
-    if not isinstance(adapter, str):
-        return adapter
-    made = options or AdapterOptions(seed=run.seed)
-    built: ModelAdapter = registry.adapter(adapter, made, flag=flag)
-    return built
 
 
 def _announce(
