@@ -51,11 +51,11 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
 
 
 def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
-    from bpb_core.cli.run_file import command_line_plans, model_args, read_run_file
+    from bpb_core.cli.run_file import AdapterPlan, model_args, read_run_file
 
     base = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
     cli_args = model_args(kw["model_args"])
-    plans = command_line_plans(adapters, base, cli_args)
+    plans = [AdapterPlan(spec, replace(base, model_args=dict(cli_args))) for spec in adapters]
     if kw["config"] is not None:
         plans += read_run_file(kw["config"], base, cli_args)
     return plans
