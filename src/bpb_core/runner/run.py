@@ -31,11 +31,11 @@ from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.drive import Pair, call_order, drive, run_sync
+from bpb_core.runner.drive import call_order, drive, run_sync
 from bpb_core.runner.history import History, read_history, recover_answers
 from bpb_core.runner.manifest import finish_manifest, run_lock, start_manifest
 from bpb_core.runner.options import NoProgress, Progress, ProgressEvent, RunOptions, RunResult
-from bpb_core.runner.scenes import Asking, SceneRef, asking, check_images
+from bpb_core.runner.scenes import Asking, asking, check_images
 from bpb_core.runner.state import RateLimiter, RunState, TokenBudget
 from bpb_core.scored_units import object_origin
 
@@ -147,7 +147,12 @@ async def run_eval_async(
             plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
             done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
             plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
-            _announce(state, refs, plan, done)
+            ids = {ref.scene_id for ref in refs}
+            before = Counter(t for s, t, _ in done if s in ids)  # pairs done in earlier sessions
+            for task in options.tasks:
+                todo = sum(1 for _, t, _ in plan if t == task)
+                state.progress.update(ProgressEvent(name, task, "skipped", count=before[task]))
+                state.progress.update(ProgressEvent(name, task, "planned", count=todo))
             await drive(state, plan)
             ended = True
         except WriteRefused as exc:
@@ -162,7 +167,7 @@ async def run_eval_async(
                 state.log.close()
             with _kept_quiet(not ended):
                 finish_manifest(run_dir, manifest, state)
-        return _result(state, refs, done)
+        return _result(state, before)
 
 
 def _prepare(
@@ -246,26 +251,11 @@ def adapter_origin(registry: Registry, spec: str, model: object) -> str:
     return object_origin(model)
 
 
-def _announce(
-    state: RunState,
-    refs: list[SceneRef],
-    plan: list[Pair],
-    done: set[tuple[str, str, int]],
-) -> None:
-    ids = {ref.scene_id for ref in refs}
-    for task in state.options.tasks:
-        before = sum(1 for scene_id, t, _ in done if t == task and scene_id in ids)
-        todo = sum(1 for _, name, _ in plan if name == task)
-        state.progress.update(ProgressEvent(state.spec, task, "skipped", count=before))
-        state.progress.update(ProgressEvent(state.spec, task, "planned", count=todo))
-
-
-def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str, int]]) -> RunResult:
-    ids = {ref.scene_id for ref in refs}
+def _result(state: RunState, before: Counter[str]) -> RunResult:
     statuses: dict[str, Counter[str]] = {}
     for task in state.options.tasks:
         counts = Counter(state.statuses.get(task, {}))
-        counts["done_before"] = sum(1 for s, t, _ in done if t == task and s in ids)
+        counts["done_before"] = before[task]
         statuses[task] = counts
     return RunResult(
         run_dir=state.run_dir,
