@@ -10,7 +10,6 @@ import click
 
 if TYPE_CHECKING:
     from bpb_core.bench.sim_report import SimBench
-    from bpb_core.registry import Registry
 
 
 @click.group("bench")
@@ -81,8 +80,15 @@ def bench_sim(
     from rich.progress import Progress
 
     from bpb_core.bench import sim_report
-    from bpb_core.bench.sim import bench_simulators, with_simulate_timing
+    from bpb_core.bench.sim import (
+        bench_simulators,
+        check_simulate_with,
+        scaling_simulators,
+        with_scaling,
+        with_simulate_timing,
+    )
     from bpb_core.cli.console import load_registry, stderr
+    from bpb_core.errors import BadInput
 
     if plot is not None:  # before the bench: a path that cannot be written would lose it
         from bpb_core.layout import check_writable_file
@@ -91,7 +97,13 @@ def bench_sim(
     if markdown is not None:
         sim_report.check_section_file(markdown)
     registry = load_registry()
-    _check_options(registry, family, scaling, scaling_scenes, simulate_scenes, simulate_with)
+    name = family or registry.default_family()  # refuse bad options of the later steps first
+    if scaling:
+        scaling_simulators(registry, name, scaling, scaling_scenes)
+    if simulate_scenes < 0:
+        raise BadInput(f"--simulate-scenes: must be at least 0 (0 skips), got {simulate_scenes}")
+    if simulate_scenes and simulate_with:
+        check_simulate_with(registry, name, simulate_with)
     with Progress(console=stderr(), transient=True) as bar:
         task = bar.add_task("simulating", total=scenes)
         result = bench_simulators(
@@ -105,8 +117,6 @@ def bench_sim(
             reference_scenes=reference_scenes,
         )
     if scaling:
-        from bpb_core.bench.sim import with_scaling
-
         result = with_scaling(result, scaling, scaling_scenes, registry=registry)
     if simulate_scenes > 0:
         others = [r.name for r in result.rows if not r.reference]
@@ -120,29 +130,6 @@ def bench_sim(
         sim_report.update_section(markdown, sim_report.markdown(result, rel))
     if any(row.failed for row in result.rows) or any(s.failed for s in result.scaling):
         raise click.exceptions.Exit(1)  # figures written; a contestant failed on some scenes
-
-
-def _check_options(
-    registry: Registry,
-    family: str | None,
-    scaling: tuple[str, ...],
-    scaling_scenes: int,
-    simulate_scenes: int,
-    simulate_with: tuple[str, ...],
-) -> None:
-    """Refuse bad options of the steps after the comparison before it runs."""
-    from bpb_core.bench.sim import check_simulate_with
-    from bpb_core.errors import BadInput
-
-    name = family or registry.default_family()
-    if scaling:
-        from bpb_core.bench.sim import scaling_simulators
-
-        scaling_simulators(registry, name, scaling, scaling_scenes)
-    if simulate_scenes < 0:
-        raise BadInput(f"--simulate-scenes: must be at least 0 (0 skips), got {simulate_scenes}")
-    if simulate_scenes and simulate_with:
-        check_simulate_with(registry, name, simulate_with)
 
 
 def _show(result: SimBench) -> None:

@@ -3,9 +3,9 @@ export`` (publish a dataset folder in another tool's format: a Hugging Face data
 
 from __future__ import annotations
 
-from contextlib import AbstractContextManager, nullcontext
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from types import TracebackType
 from typing import TYPE_CHECKING
 
 import click
@@ -38,28 +38,10 @@ def parse_horizons(text: str) -> list[float]:
 
 
 class RichProgress:
-    """Draws :class:`~bpb_core.dataset.jobs.GenerateProgress` events as rich progress bars (in a
-    terminal: see :func:`_progress`)."""
+    """Draws :class:`~bpb_core.dataset.jobs.GenerateProgress` events on rich progress bars."""
 
-    def __init__(self) -> None:
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        self._bar: Progress = Progress(
-            TextColumn("{task.description:<20}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=console.stderr(),
-            disable=not console.stderr().is_terminal,  # rich would print the last state in a pipe
-        )
+    def __init__(self, bar: Progress) -> None:
+        self._bar = bar
         self._task: TaskID | None = None
 
     def phase(self, name: str, total: int) -> None:
@@ -69,22 +51,28 @@ class RichProgress:
         if self._task is not None:
             self._bar.advance(self._task, count)
 
-    def __enter__(self) -> RichProgress:
-        self._bar.start()
-        return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self._bar.stop()
-
-
-def _progress() -> AbstractContextManager[GenerateProgress]:
+@contextmanager
+def _progress() -> Iterator[GenerateProgress]:
     """The bars in a terminal; in a log or a pipe, where rich would draw nothing, no bar at
     all: it costs its import and time per scene even when drawing nothing."""
     from bpb_core.dataset.jobs import NoProgress
 
-    return RichProgress() if console.stderr().is_terminal else nullcontext(NoProgress())
+    if not console.stderr().is_terminal:
+        yield NoProgress()
+        return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    columns = (BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(TextColumn("{task.description:<20}"), *columns, console=console.stderr()) as bar:
+        yield RichProgress(bar)
 
 
 def show_summary(root: Path, manifest: DatasetManifest) -> None:

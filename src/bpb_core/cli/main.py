@@ -118,7 +118,7 @@ def _run(argv: list[str] | None) -> Any:
         return 2
     except click.ClickException as exc:
         exc.show()
-        return 2 if exc.exit_code == 2 or isinstance(exc, click.UsageError) else exc.exit_code
+        return exc.exit_code
     except click.exceptions.Exit as exc:
         return exc.exit_code
     except Exception as exc:  # every failure leaves as one line and an exit code

@@ -16,7 +16,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from bpb_core.cli.console import load_registry, stderr, stdout
-from bpb_core.cli.params import counted
+from bpb_core.cli.params import FiniteFloat, counted
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -52,8 +52,7 @@ USAGE_COLUMNS = {
     "--min-complete",
     default=0.9,
     show_default=True,
-    type=click.FloatRange(0, 1),
-    callback=lambda _ctx, _param, value: _share(value),
+    type=FiniteFloat(0, 1),
     help="Share of a (run, task, horizon) cell that must be answered for it to count.",
 )
 @click.option(
@@ -109,12 +108,6 @@ def report(
     _print_tables(built)
     if out is not None:
         stderr().print(f"wrote {built.files['html']} and {len(built.files) - 1} more files")
-
-
-def _share(value: float) -> float:
-    if math.isnan(value):  # FloatRange lets NaN through: no comparison with it is true
-        raise click.BadParameter("must be a number from 0 to 1, not nan")
-    return value
 
 
 def _print_tables(built: Report) -> None:

@@ -8,6 +8,7 @@ Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``); 1 the ru
 from __future__ import annotations
 
 import json
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -50,11 +51,11 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
 
 
 def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
-    from bpb_core.cli.run_file import command_line_plans, model_args, read_run_file
+    from bpb_core.cli.run_file import AdapterPlan, model_args, read_run_file
 
     base = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
     cli_args = model_args(kw["model_args"])
-    plans = command_line_plans(adapters, base, cli_args)
+    plans = [AdapterPlan(spec, replace(base, model_args=dict(cli_args))) for spec in adapters]
     if kw["config"] is not None:
         plans += read_run_file(kw["config"], base, cli_args)
     return plans
@@ -255,27 +256,15 @@ def run(**kw: Any) -> None:
         ready = prepare(registry, _plans(kw, _offline_adapters(registry, data)), check=check)
     if kw["max_cost"] is not None and not kw["allow_unpriced"] and not kw["dry_run"]:
         refuse_unpriced(ready)
-    options = RunOptions(
+    given = {f.name: kw[f.name] for f in fields(RunOptions) if f.name in kw}  # as click parsed
+    given.update(
         tasks=tuple(tasks),
         horizons=horizons(kw["horizons"]),
-        limit=kw["limit"],
         scenes=tuple(csv_list(kw["scenes"], "--scenes")) if kw["scenes"] is not None else None,
-        sample=kw["sample"],
-        epochs=kw["epochs"],
-        temperature=kw["temperature"],
-        concurrency=kw["concurrency"],
-        rpm=kw["rpm"],
-        tpm=kw["tpm"],
         cot=_cot(tasks, kw["enable_cot"], kw["cot_tasks"]),
-        max_tokens=kw["max_tokens"],
-        timeout=kw["timeout"],
-        force_numeric=kw["force_numeric"],
-        structured_output=kw["structured_output"],
-        input_mode=kw["input_mode"],
-        max_cost=kw["max_cost"],
-        seed=kw["seed"],
         retry=RetryPolicy(max_retries=kw["retries"], max_reasks=kw["reasks"]),
     )
+    options = RunOptions(**given)
     if kw["dry_run"]:
         from bpb_core.cli.run_output import show_dry_run
 
@@ -292,8 +281,6 @@ def run(**kw: Any) -> None:
 def _run_all(
     data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
 ) -> list[RunResult]:
-    import dataclasses
-
     from bpb_core.cli.run_output import RichProgress, make_bar
     from bpb_core.runner import run_eval, slug
 
@@ -306,7 +293,7 @@ def _run_all(
                     data,
                     item.adapter,
                     out / slug(item.name),
-                    dataclasses.replace(options, **item.plan.run),
+                    replace(options, **item.plan.run),
                     registry=registry,
                     progress=display,
                     spec=item.name,

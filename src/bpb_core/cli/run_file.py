@@ -207,14 +207,6 @@ def read_run_file(
     return plans
 
 
-def command_line_plans(
-    specs: Iterable[str], base: AdapterOptions, cli_args: Mapping[str, Any]
-) -> list[AdapterPlan]:
-    """Plans for ``--adapter`` specs, each with the ``--model-arg`` arguments."""
-    options = dataclasses.replace(base, model_args=dict(cli_args))
-    return [AdapterPlan(spec, options) for spec in specs]
-
-
 @dataclass(frozen=True)
 class Prepared:
     """An adapter built and checked before the first call of the run, and who supplied it."""

@@ -73,13 +73,8 @@ def simulate(
     named = _named_paths(paths, from_file)
     if not named:
         raise BadInput("no scene paths given (arguments, --from-file FILE, or - for stdin)")
-    options: dict[str, Any] = {}
-    if dt is not None:
-        options["dt"] = dt
-    if precision is not None:
-        options["precision"] = precision
-    if engine is not None:
-        options["engine"] = engine
+    given = {"dt": dt, "precision": precision, "engine": engine}
+    options: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     lines = simulate_lines(
         named,
         horizon=horizon,

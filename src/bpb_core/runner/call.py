@@ -29,18 +29,13 @@ from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_sche
 from bpb_core.run_folder import AnswerRecord, write_answer
 from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
-from bpb_core.runner.state import NotSent, RunState, Tally, sleep_unless
+from bpb_core.runner.state import NotSent, RunState, Tally, wait_unless
 
 
-@dataclass
-class _Parsed:
-    outcome: str
-    rule: str | None = None
-    error: str | None = None
-    value: dict[str, Any] | None = None
-
-
-def _parse(call: PairCall, response: ModelResponse, prompt: PromptOptions) -> _Parsed:
+def _parse(
+    call: PairCall, response: ModelResponse, prompt: PromptOptions
+) -> tuple[dict[str, Any] | None, str | None, str | None]:
+    """The answer and the rule that read it, or the reason it could not be read."""
     try:
         task = call.state.tasks[call.task]
         parsed = parsed_answer(
@@ -50,8 +45,8 @@ def _parse(call: PairCall, response: ModelResponse, prompt: PromptOptions) -> _P
         reason = str(failure)
         if response.finish_reason == "length":
             reason = f"reply cut off by the token limit (finish_reason length); {reason}"
-        return _Parsed("parse_error", error=reason)
-    return _Parsed("ok", parsed.rule, None, parsed.value)
+        return None, None, reason
+    return parsed.value, parsed.rule, None
 
 
 @dataclass
@@ -112,7 +107,7 @@ class PairCall:
             return True
         if delay is None:
             return True
-        await sleep_unless(self.state.stopping, delay)  # outside the slot; cut short by a stop
+        await wait_unless(self.state.stopping, asyncio.sleep(delay))  # outside the slot
         return False
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
@@ -185,28 +180,28 @@ class PairCall:
         self.finish_reason = response.finish_reason
         self.metadata = dict(response.metadata)
         # Parsing is linear but a reply may be up to a megabyte: keep the event loop serving.
-        parsed = await asyncio.to_thread(_parse, self, response, prompt)
+        value, rule, error = await asyncio.to_thread(_parse, self, response, prompt)
         await self._log(
-            outcome=parsed.outcome,
+            outcome="ok" if error is None else "parse_error",
             text=response.text,
             finish_reason=response.finish_reason,
             usage=vars(response.usage),
             cost=response.cost,
             latency=response.latency,
             model_id=response.model_id,
-            rule=parsed.rule,
-            answer=parsed.value,
-            error=parsed.error,
+            rule=rule,
+            answer=value,
+            error=error,
             sent=response.sent,
             dropped=list(response.dropped),
             reasoning=response.reasoning,
             **({"metadata": response.metadata} if response.metadata else {}),
         )
         self.state.note_dropped(self.task, response.dropped)
-        if parsed.outcome == "ok":
-            await self._settle("ok", parsed.value, parsed.rule)
+        if error is None:
+            await self._settle("ok", value, rule)
             return True
-        self.last_error = parsed.error
+        self.last_error = error
         if self.reasks >= self.state.options.retry.max_reasks:
             await self._settle("parse_error")
             return True

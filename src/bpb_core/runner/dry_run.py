@@ -14,6 +14,7 @@ are described (media type, bytes, SHA-256 as stored in the attempts log), never 
 from __future__ import annotations
 
 import hashlib
+import itertools
 import math
 import struct
 from dataclasses import dataclass, field
@@ -37,7 +38,6 @@ from bpb_core.validated_files import read_model
 
 if TYPE_CHECKING:
     from bpb_core.dataset.reader import DataFolder
-    from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 
 
@@ -78,10 +78,6 @@ def image_tokens(png: bytes) -> int:
     return int(85 + 170 * tiles)
 
 
-def _samples(tasks: dict[str, Task], epochs: int) -> list[tuple[str, Task, int]]:
-    return [(name, task, e) for e in range(1, epochs + 1) for name, task in tasks.items()]
-
-
 def dry_run(
     data: Path | DataFolder,
     run_dir: Path,
@@ -105,7 +101,7 @@ def dry_run(
     for ref in asked.scenes:
         scene = ref.load()
         image = None if options.input_mode == "state" else ref.image()
-        for name, task, epoch in _samples(tasks, options.epochs):
+        for epoch, (name, task) in itertools.product(range(1, options.epochs + 1), tasks.items()):
             if (ref.scene_id, name, epoch) in done:
                 plan.done[name] = plan.done.get(name, 0) + 1
                 continue

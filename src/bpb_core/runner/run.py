@@ -31,16 +31,16 @@ from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.drive import Pair, call_order, drive, run_sync
+from bpb_core.runner.drive import call_order, drive, run_sync
 from bpb_core.runner.history import History, read_history, recover_answers
 from bpb_core.runner.manifest import finish_manifest, run_lock, start_manifest
 from bpb_core.runner.options import NoProgress, Progress, ProgressEvent, RunOptions, RunResult
-from bpb_core.runner.scenes import Asking, SceneRef, asking, check_images
+from bpb_core.runner.scenes import Asking, asking, check_images
 from bpb_core.runner.state import RateLimiter, RunState, TokenBudget
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import ModelAdapter, Task
+    from bpb_core.interfaces import ModelAdapter
     from bpb_core.registry import Registry
     from bpb_core.run_folder import AnswerRecord
 
@@ -116,8 +116,58 @@ async def run_eval_async(
     progress = progress or NoProgress()
     setup = (data, adapter, run_dir, options, registry, adapter_options, spec, flag)
     asked, model, name, plugins, settings = await asyncio.to_thread(_prepare, *setup)
-    with run_lock(run_dir):
-        return await _session(asked, model, name, run_dir, plugins, progress, settings)
+    with run_lock(run_dir):  # one session on the locked folder: guard, recover, send, record
+        options, refs = asked.options, asked.scenes
+        opened = await asyncio.to_thread(_opening, asked, name, run_dir, plugins, settings)
+        history, held, manifest = opened
+        state = RunState(
+            adapter=model,
+            spec=name,
+            tasks=asked.tasks,
+            options=options,
+            run_dir=run_dir,
+            log=AttemptLog(run_dir),
+            progress=progress,
+            limiter=RateLimiter(options.rpm),
+            budget=TokenBudget(options.tpm),
+            slots=asyncio.Semaphore(options.concurrency),
+            rng=random.Random(options.seed),
+            family=asked.family.name,
+            simulator=asked.simulator,
+            config_hash=manifest["config_hash"],
+            history=history,
+            origins={
+                **{task: plugins.origin("task", task) for task in asked.tasks},
+                name: adapter_origin(plugins, name, model),
+            },
+        )
+        ended = False
+        try:
+            done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
+            plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
+            done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
+            plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
+            ids = {ref.scene_id for ref in refs}
+            before = Counter(t for s, t, _ in done if s in ids)  # pairs done in earlier sessions
+            for task in options.tasks:
+                todo = sum(1 for _, t, _ in plan if t == task)
+                state.progress.update(ProgressEvent(name, task, "skipped", count=before[task]))
+                state.progress.update(ProgressEvent(name, task, "planned", count=todo))
+            await drive(state, plan)
+            ended = True
+        except WriteRefused as exc:
+            state.stop("write-refused")  # run.json says why, when there is room for it
+            raise WriteRefused(
+                f"{exc}; the run stopped, and {run_dir} keeps every answer written so far: "
+                "make room, then re-run the same command to resume"
+            ) from None
+        finally:
+            state.io.shutdown(wait=True)
+            with _kept_quiet(not ended):  # the disk that refused the run refuses these too
+                state.log.close()
+            with _kept_quiet(not ended):
+                finish_manifest(run_dir, manifest, state)
+        return _result(state, before)
 
 
 def _prepare(
@@ -137,7 +187,8 @@ def _prepare(
     registry = registry or make_registry()
     asked = asking(data, options or RunOptions(), registry)
     check_images(asked.folder, asked.scenes, asked.options.input_mode)
-    model = _adapter(registry, adapter, adapter_options, asked.options, flag)
+    made = adapter_options or AdapterOptions(seed=asked.options.seed)
+    model = registry.adapter(adapter, made, flag=flag) if isinstance(adapter, str) else adapter
     if spec is None:
         spec = adapter if isinstance(adapter, str) else getattr(model, "name", type(model).__name__)
         spec = run_name(spec, model)
@@ -150,61 +201,6 @@ def _prepare(
     settings = described_settings(model, origin)
     make_run_folder(run_dir)
     return asked, model, spec, registry, settings
-
-
-async def _session(
-    asked: Asking,
-    model: ModelAdapter,
-    spec: str,
-    run_dir: Path,
-    registry: Registry,
-    progress: Progress,
-    settings: dict[str, Any] | None,
-) -> RunResult:
-    """One session on a locked run folder: guard, recover, send the rest, record the end."""
-    options, refs = asked.options, asked.scenes
-    opened = await asyncio.to_thread(_opening, asked, spec, run_dir, registry, settings)
-    history, held, manifest = opened
-    state = RunState(
-        adapter=model,
-        spec=spec,
-        tasks=asked.tasks,
-        options=options,
-        run_dir=run_dir,
-        log=AttemptLog(run_dir),
-        progress=progress,
-        limiter=RateLimiter(options.rpm),
-        budget=TokenBudget(options.tpm),
-        slots=asyncio.Semaphore(options.concurrency),
-        rng=random.Random(options.seed),
-        family=asked.family.name,
-        simulator=asked.simulator,
-        config_hash=manifest["config_hash"],
-        history=history,
-        origins=_origins(registry, spec, model, asked.tasks),
-    )
-    ended = False
-    try:
-        done = {(r.scene_id, r.task, r.epoch) for r in held if r.status in COMPLETE}
-        plan = call_order(refs, options.tasks, done, manifest["order_seed"], options.epochs)
-        done |= await asyncio.to_thread(recover_answers, run_dir, history, plan, state)
-        plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
-        _announce(state, refs, plan, done)
-        await drive(state, plan)
-        ended = True
-    except WriteRefused as exc:
-        state.stop("write-refused")  # run.json says why, when there is room for it
-        raise WriteRefused(
-            f"{exc}; the run stopped, and {run_dir} keeps every answer written so far: "
-            "make room, then re-run the same command to resume"
-        ) from None
-    finally:
-        state.io.shutdown(wait=True)
-        with _kept_quiet(not ended):  # the disk that refused the run refuses these too
-            state.log.close()
-        with _kept_quiet(not ended):
-            finish_manifest(run_dir, manifest, state)
-    return _result(state, refs, done)
 
 
 def _kept_quiet(failing: bool) -> contextlib.AbstractContextManager[None]:
@@ -242,15 +238,6 @@ def _opening(
     return history, held, manifest
 
 
-def _origins(
-    registry: Registry, spec: str, model: ModelAdapter, tasks: dict[str, Task]
-) -> dict[str, str]:
-    """Who supplied each task and the adapter (``spec``), for one-line plugin errors."""
-    found = {name: registry.origin("task", name) for name in tasks}
-    found[spec] = adapter_origin(registry, spec, model)
-    return found
-
-
 def adapter_origin(registry: Registry, spec: str, model: object) -> str:
     """Who supplied the adapter run as ``spec``, for one-line plugin errors: the plugin that
     registers its name, else (an adapter object no plugin registers) its module (its name
@@ -264,40 +251,11 @@ def adapter_origin(registry: Registry, spec: str, model: object) -> str:
     return object_origin(model)
 
 
-def _adapter(
-    registry: Registry,
-    adapter: str | ModelAdapter,
-    options: AdapterOptions | None,
-    run: RunOptions,
-    flag: str,
-) -> ModelAdapter:
-    if not isinstance(adapter, str):
-        return adapter
-    made = options or AdapterOptions(seed=run.seed)
-    built: ModelAdapter = registry.adapter(adapter, made, flag=flag)
-    return built
-
-
-def _announce(
-    state: RunState,
-    refs: list[SceneRef],
-    plan: list[Pair],
-    done: set[tuple[str, str, int]],
-) -> None:
-    ids = {ref.scene_id for ref in refs}
-    for task in state.options.tasks:
-        before = sum(1 for scene_id, t, _ in done if t == task and scene_id in ids)
-        todo = sum(1 for _, name, _ in plan if name == task)
-        state.progress.update(ProgressEvent(state.spec, task, "skipped", count=before))
-        state.progress.update(ProgressEvent(state.spec, task, "planned", count=todo))
-
-
-def _result(state: RunState, refs: list[SceneRef], done: set[tuple[str, str, int]]) -> RunResult:
-    ids = {ref.scene_id for ref in refs}
+def _result(state: RunState, before: Counter[str]) -> RunResult:
     statuses: dict[str, Counter[str]] = {}
     for task in state.options.tasks:
         counts = Counter(state.statuses.get(task, {}))
-        counts["done_before"] = sum(1 for s, t, _ in done if t == task and s in ids)
+        counts["done_before"] = before[task]
         statuses[task] = counts
     return RunResult(
         run_dir=state.run_dir,

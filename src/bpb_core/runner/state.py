@@ -30,15 +30,6 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 
-async def sleep_unless(stop: asyncio.Event | None, seconds: float) -> None:
-    """Sleep ``seconds``, or until ``stop`` is set if that comes first."""
-    if stop is None:
-        await asyncio.sleep(seconds)
-        return
-    with contextlib.suppress(TimeoutError):
-        await asyncio.wait_for(stop.wait(), seconds)
-
-
 async def wait_unless(stop: asyncio.Event | None, waiting: Awaitable[object]) -> None:
     """Await ``waiting``, or until ``stop`` is set if that comes first (``waiting`` is then
     cancelled)."""
@@ -78,7 +69,7 @@ class RateLimiter:
             self._next = start + self._interval
         delay = start - now
         if delay > 0:
-            await sleep_unless(stop, delay)
+            await wait_unless(stop, asyncio.sleep(delay))
 
 
 class TokenBudget:
