@@ -70,13 +70,6 @@ def expected_text(
     return text
 
 
-def built_simulator(registry: Registry, spec: str) -> Simulator:
-    """The simulator the dataset's config names, built with the options it gives it
-    (``pymunk:dt=0.0005``), as generation built it."""
-    named = parse_spec(spec, "dataset.json: config: simulator")
-    return registry.simulator(named.name, named.options)
-
-
 def _registry() -> Registry:
     from bpb_core.registry import PluginWarning, make_registry
 
@@ -135,19 +128,17 @@ class PluginLookup:
     def _simulator(self, request: ModelRequest, family: SceneFamily, origin: str) -> Simulator:
         """The simulator the request names, else the one the family's default config names
         (asked checked, blaming ``origin``: who supplied the family), built with the options
-        its spec gives (:func:`built_simulator`)."""
+        its spec gives (``pymunk:dt=0.0005``), as generation built it."""
         name = request.simulator or simulator_named(
             family, origin, loaded_config(family, origin, None)
         )
-        simulator: Simulator = self._component(f"s:{name}", lambda r: built_simulator(r, name))
-        return simulator
 
-    def _family_origin(self, family: SceneFamily) -> str:
-        """Who supplied ``family``: its registry entry, else its module."""
-        try:
-            return self._plugins().origin("scene_family", family.name)
-        except UnknownName:
-            return object_origin(family)
+        def build(registry: Registry) -> Simulator:
+            named = parse_spec(name, "dataset.json: config: simulator")
+            return registry.simulator(named.name, named.options)
+
+        simulator: Simulator = self._component(f"s:{name}", build)
+        return simulator
 
 
 @dataclass
@@ -171,7 +162,11 @@ class BaselineAdapter(PluginLookup):
         what it offers."""
         offered: tuple[str, ...] = (ORACLE,)
         if isinstance(family, Predicting):
-            offered += offered_predictors(family, self._family_origin(family))
+            try:  # who supplied the family: its registry entry, else its module
+                origin = self._plugins().origin("scene_family", family.name)
+            except UnknownName:
+                origin = object_origin(family)
+            offered += offered_predictors(family, origin)
         offered += (VISION,) if isinstance(family, Perceiving) else ()
         if self.model in offered:
             return None

@@ -12,13 +12,13 @@ from __future__ import annotations
 import asyncio
 import base64
 import dataclasses
+import functools
 import importlib
 import logging
 import os
 import re
 import time
 import uuid
-from collections import OrderedDict
 from typing import Any
 
 from bpb_adapters.litellm_adapter import prices, wire
@@ -27,7 +27,6 @@ from bpb_adapters.litellm_adapter.errors import map_error
 from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
     AdapterOptions,
-    ImagePart,
     Message,
     ModelRequest,
     ModelResponse,
@@ -63,24 +62,10 @@ def _import_litellm() -> Any:
     return litellm
 
 
-class _DataUris:
-    """Base64 data URIs of recent images, so an image shared by a scene's tasks is encoded once."""
-
-    def __init__(self, size: int = 256) -> None:
-        self._size = size
-        self._cache: OrderedDict[int, tuple[bytes, str]] = OrderedDict()
-
-    def get(self, part: ImagePart) -> str:
-        key = id(part.data)
-        hit = self._cache.get(key)
-        if hit is not None and hit[0] is part.data:
-            self._cache.move_to_end(key)
-            return hit[1]
-        uri = f"data:{part.media_type};base64,{base64.b64encode(part.data).decode('ascii')}"
-        self._cache[key] = (part.data, uri)
-        if len(self._cache) > self._size:
-            self._cache.popitem(last=False)
-        return uri
+@functools.lru_cache(maxsize=256)
+def _data_uri(data: bytes, media_type: str) -> str:
+    """The base64 data URI of an image, kept for recent images (a scene's tasks share one)."""
+    return f"data:{media_type};base64,{base64.b64encode(data).decode('ascii')}"
 
 
 class LiteLLMAdapter:
@@ -103,7 +88,6 @@ class LiteLLMAdapter:
         tag = options.label if options.label is not None else wire.label(self.args)
         self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base
-        self._uris = _DataUris()
         self._override = options.prices.get(model) or options.prices.get(self.model)
         if self._override is not None:
             try:
@@ -159,7 +143,12 @@ class LiteLLMAdapter:
             if isinstance(part, TextPart):
                 parts.append({"type": "text", "text": part.text})
             else:
-                parts.append({"type": "image_url", "image_url": {"url": self._uris.get(part)}})
+                parts.append(
+                    {
+                        "type": "image_url",
+                        "image_url": {"url": _data_uri(part.data, part.media_type)},
+                    }
+                )
         return parts
 
     def _kwargs(self, request: ModelRequest) -> dict[str, Any]:
@@ -203,50 +192,44 @@ class LiteLLMAdapter:
         return dataclasses.replace(reply, sent=sent, dropped=dropped)
 
     def _response(self, raw: Any, latency: float) -> ModelResponse:
+        """The reply in ``raw``: its text, token counts (reasoning and cached ones too), cost
+        and reasoning."""
         try:
             choice = raw.choices[0]
             text = choice.message.content or ""
         except (AttributeError, IndexError, TypeError) as exc:
             raise ServerError(f"reply has no message: {type(exc).__name__}") from None
-        usage = usage_of(raw)
+        usage = getattr(raw, "usage", None)
+        completion_details = getattr(usage, "completion_tokens_details", None)
+        prompt_details = getattr(usage, "prompt_tokens_details", None)
+        cost = None
+        if self._priced:
+            try:
+                cost = float(
+                    self._litellm.completion_cost(completion_response=raw, model=self.model)
+                )
+            except Exception:  # litellm raises many types for unmapped models: no price known
+                cost = None
         reasoning = getattr(choice.message, "reasoning_content", None)
         return ModelResponse(
             text=text,
-            usage=usage,
-            cost=self._cost(raw),
+            usage=Usage(  # all None without a usage
+                input_tokens=getattr(usage, "prompt_tokens", None),
+                output_tokens=getattr(usage, "completion_tokens", None),
+                reasoning_tokens=getattr(completion_details, "reasoning_tokens", None),
+                cached_tokens=getattr(prompt_details, "cached_tokens", None),
+            ),
+            cost=cost,
             latency=latency,
             model_id=str(getattr(raw, "model", "") or self.model),
             finish_reason=getattr(choice, "finish_reason", None),
             reasoning=str(reasoning)[:_REASONING_CAP] if reasoning else None,
         )
 
-    def _cost(self, raw: Any) -> float | None:
-        if not self._priced:
-            return None
-        try:
-            return float(self._litellm.completion_cost(completion_response=raw, model=self.model))
-        except Exception:  # litellm raises many types for unmapped models: no price known
-            return None
-
 
 _PLUMBING = frozenset(
     {"model", "messages", "timeout", "max_retries", "drop_params", "api_base", "litellm_call_id"}
 )
-
-
-def usage_of(raw: Any) -> Usage:
-    """Token counts from a litellm response, including reasoning and cached tokens."""
-    usage = getattr(raw, "usage", None)
-    if usage is None:
-        return Usage()
-    completion_details = getattr(usage, "completion_tokens_details", None)
-    prompt_details = getattr(usage, "prompt_tokens_details", None)
-    return Usage(
-        input_tokens=getattr(usage, "prompt_tokens", None),
-        output_tokens=getattr(usage, "completion_tokens", None),
-        reasoning_tokens=getattr(completion_details, "reasoning_tokens", None),
-        cached_tokens=getattr(prompt_details, "cached_tokens", None),
-    )
 
 
 def response_format(request: ModelRequest) -> dict[str, Any]:

@@ -155,39 +155,32 @@ def provider_of(litellm: Any, model: str, api_base: str | None = None) -> str | 
     return str(provider) if provider else None
 
 
-def route_of(litellm: Any, model: str, provider: str) -> str:
-    """``responses`` when litellm sends ``model`` through the OpenAI Responses API."""
-    if provider != "openai":
-        return "chat"
-    try:
-        info = litellm.main.responses_api_bridge_check(model.split("/", 1)[-1], provider)[0]
-    except Exception:  # an unmapped model goes through chat completions
-        return "chat"
-    return "responses" if info.get("mode") == "responses" else "chat"
-
-
-def missing_keys(litellm: Any, model: str, api_base: str | None) -> list[str]:
-    """Environment variables litellm needs for ``model`` and does not find."""
-    try:
-        found = litellm.validate_environment(model=model, api_base=api_base)
-    except Exception:  # litellm could not tell: let the first call say
-        return []
-    return [str(k) for k in found.get("missing_keys") or []]
-
-
 def preflight(
     litellm: Any, model: str, api_base: str | None, model_args: Mapping[str, Any]
 ) -> str | None:
-    """``None`` when calls to ``model`` may be sent, else one line saying what is wrong."""
+    """``None`` when calls to ``model`` may be sent, else one line saying what is wrong: the
+    provider unknown, a key variable litellm needs not set, a module of the route (``responses``
+    when litellm sends ``model`` through the OpenAI Responses API, else ``chat``) missing."""
     provider = provider_of(litellm, model, api_base)
     if provider is None:
         return _unknown(model)
     if "api_key" not in model_args:
-        missing = missing_keys(litellm, model, api_base)
+        try:
+            found = litellm.validate_environment(model=model, api_base=api_base)
+        except Exception:  # litellm could not tell: let the first call say
+            found = {}
+        missing = [str(k) for k in found.get("missing_keys") or []]
         if missing:
             names = " or ".join(missing)
             return f"{model}: environment variable {names} is not set (the {provider} API key)"
-    return _missing_module(model, route_of(litellm, model, provider))
+    route = "chat"
+    if provider == "openai":
+        try:
+            info = litellm.main.responses_api_bridge_check(model.split("/", 1)[-1], provider)[0]
+        except Exception:  # an unmapped model goes through chat completions
+            info = {}
+        route = "responses" if info.get("mode") == "responses" else "chat"
+    return _missing_module(model, route)
 
 
 def catalog() -> list[tuple[str, str]]:

@@ -72,19 +72,12 @@ def register(litellm: Any, model: str, provider: str | None, override: Mapping[s
     litellm.register_model({model: dict(entry), bare: dict(entry)})
 
 
-def _size(png: bytes) -> tuple[int, int] | None:
-    if len(png) < 24 or png[:8] != b"\x89PNG\r\n\x1a\n":
-        return None
-    width, height = struct.unpack(">II", png[16:24])
-    return int(width), int(height)
-
-
 def image_tokens(provider: str | None, png: bytes) -> int:
     """Tokens one PNG costs with ``provider`` (OpenAI's rule for providers without their own)."""
-    size = _size(png)
-    if size is None or provider not in ("anthropic", "gemini"):
+    unreadable = len(png) < 24 or png[:8] != b"\x89PNG\r\n\x1a\n"
+    if unreadable or provider not in ("anthropic", "gemini"):
         return openai_image_tokens(png)
-    width, height = size
+    width, height = (int(v) for v in struct.unpack(">II", png[16:24]))
     if provider == "anthropic":
         scale = min(1.0, 1568 / max(width, height))
         return max(1, math.ceil(width * scale * height * scale / 750))
@@ -93,20 +86,15 @@ def image_tokens(provider: str | None, png: bytes) -> int:
     return 258 * math.ceil(width / 768) * math.ceil(height / 768)
 
 
-def text_tokens(litellm: Any, model: str, text: str) -> int:
-    """Tokens of ``text`` by litellm's counter for ``model`` (characters / 4 if it fails)."""
-    try:
-        return int(litellm.token_counter(model=model, text=text))
-    except Exception:  # an unmapped tokenizer: the rough rule
-        return len(text) // 4
-
-
 def estimate(
     litellm: Any, model: str, provider: str | None, messages: tuple[Message, ...], priced: bool
 ) -> tuple[int, float | None]:
     """Input tokens of ``messages`` and their input cost (``None`` without a price)."""
     text = "\n".join(p.text for m in messages for p in m.parts if isinstance(p, TextPart))
-    tokens = text_tokens(litellm, model, text)
+    try:  # litellm's counter for the model
+        tokens = int(litellm.token_counter(model=model, text=text))
+    except Exception:  # an unmapped tokenizer: the rough rule, characters / 4
+        tokens = len(text) // 4
     tokens += sum(
         image_tokens(provider, p.data)
         for m in messages

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
-
-from pydantic import BaseModel, ConfigDict, field_validator
+from typing import Annotated, Any, ClassVar
 
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import Scene
-from bpb_tasks.billiards.truth.final import FinalState
-from bpb_tasks.questions.answers import TF, Item, Q1Schema, check_ids, load, read_id, upper
+from bpb_tasks.questions.answers import TF, Answers, BallId, Item, Q1Schema, Upper
 from bpb_tasks.questions.browser import colour
 from bpb_tasks.questions.question import LabelQuestion
 
@@ -17,25 +14,8 @@ from bpb_tasks.questions.question import LabelQuestion
 class BallAnswer(Item):
     """Q1 item: did the cue ball touch ball ``id``."""
 
-    id: int
-    answer: TF
-
-    @field_validator("id", mode="before")
-    @classmethod
-    def _id(cls, value: Any) -> int:
-        return read_id(value)
-
-    @field_validator("answer", mode="before")
-    @classmethod
-    def _tf(cls, value: Any) -> Any:
-        return upper(value)
-
-
-class Q1Answer(BaseModel):
-    """``{"answers": [{"id": 1, "answer": "T"}, ...]}``."""
-
-    model_config = ConfigDict(extra="ignore", frozen=True)
-    answers: list[BallAnswer]
+    id: BallId
+    answer: Annotated[TF, Upper]
 
 
 class Q1Task(LabelQuestion):
@@ -45,6 +25,7 @@ class Q1Task(LabelQuestion):
     default_cot: ClassVar[bool] = True
     title: ClassVar[str] = "Ball collisions"
     key: ClassVar[str] = "id"
+    reader = Answers[BallAnswer]
     schema = Q1Schema
 
     def units(self, scene: Scene) -> list[int]:
@@ -60,16 +41,6 @@ class Q1Task(LabelQuestion):
             f"time in [0, {scene.horizon:g}] s? Answer T (yes) or F (no) for every one of them, as "
             f"JSON:\n{self.example(scene)}"
         )
-
-    def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
-        """Validate a Q1 answer: one T/F per object ball, in id order."""
-        answer = load(Q1Answer, "q1", value)
-        check_ids("q1", [a.id for a in answer.answers], self.units(scene))
-        items = sorted(answer.answers, key=lambda a: a.id)
-        return {"answers": [{"id": a.id, "answer": a.answer} for a in items]}
-
-    def expected(self, truth: FinalState) -> dict[str, Any]:
-        return {"answers": [label.model_dump() for label in truth.q1]}
 
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
         """The object balls to tick (``bpb human``)."""

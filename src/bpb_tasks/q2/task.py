@@ -2,35 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
-
-from pydantic import BaseModel, ConfigDict, field_validator
+from typing import Annotated, Any, ClassVar
 
 from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import WALLS, Scene, Wall
-from bpb_tasks.billiards.truth.final import FinalState
-from bpb_tasks.questions.answers import TF, Item, Q2Schema, load, upper
+from bpb_tasks.questions.answers import TF, Answers, Item, Q2Schema, Upper
 from bpb_tasks.questions.question import LabelQuestion
 
 
 class WallAnswer(Item):
     """Q2 item: did the cue ball touch ``wall``."""
 
-    wall: Wall
-    answer: TF
-
-    @field_validator("wall", "answer", mode="before")
-    @classmethod
-    def _upper(cls, value: Any) -> Any:
-        return upper(value)
-
-
-class Q2Answer(BaseModel):
-    """``{"answers": [{"wall": "TOP", "answer": "F"}, ...]}``."""
-
-    model_config = ConfigDict(extra="ignore", frozen=True)
-    answers: list[WallAnswer]
+    wall: Annotated[Wall, Upper]
+    answer: Annotated[TF, Upper]
 
 
 class Q2Task(LabelQuestion):
@@ -40,6 +25,7 @@ class Q2Task(LabelQuestion):
     default_cot: ClassVar[bool] = True
     title: ClassVar[str] = "Wall contacts"
     key: ClassVar[str] = "wall"
+    reader = Answers[WallAnswer]
     schema = Q2Schema
 
     def units(self, scene: Scene) -> list[Wall]:
@@ -53,17 +39,9 @@ class Q2Task(LabelQuestion):
             f"as JSON:\n{self.example(scene)}"
         )
 
-    def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
-        """Validate a Q2 answer: one T/F per wall, in TOP, BOTTOM, LEFT, RIGHT order."""
-        answer = load(Q2Answer, "q2", value)
-        walls = [a.wall for a in answer.answers]
-        if len(walls) != len(set(walls)) or set(walls) != set(WALLS):
-            raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {walls}")
-        by_wall = {a.wall: a.answer for a in answer.answers}
-        return {"answers": [{"wall": w, "answer": by_wall[w]} for w in WALLS]}
-
-    def expected(self, truth: FinalState) -> dict[str, Any]:
-        return {"answers": [label.model_dump() for label in truth.q2]}
+    def check(self, got: list[Any], units: list[Any]) -> None:
+        if len(got) != len(set(got)) or set(got) != set(WALLS):
+            raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {got}")
 
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
         """The walls to tick (``bpb human``)."""

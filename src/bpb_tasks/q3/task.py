@@ -13,7 +13,7 @@ from bpb_core.errors import ParseFailure
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.truth.final import BallPosition, FinalState
-from bpb_tasks.questions.answers import Item, Q3Schema, check_ids, load, read_id, schema_of
+from bpb_tasks.questions.answers import BallId, Item, Q3Schema, check_ids, load, schema_of
 from bpb_tasks.questions.browser import drag_context, read_positions
 from bpb_tasks.questions.question import BilliardsQuestion
 
@@ -21,13 +21,8 @@ from bpb_tasks.questions.question import BilliardsQuestion
 class PositionAnswer(Item):
     """Q3 item: centre of ball ``id`` at the horizon, ``None`` for pocketed."""
 
-    id: int
+    id: BallId
     pos: tuple[float, float] | None
-
-    @field_validator("id", mode="before")
-    @classmethod
-    def _id(cls, value: Any) -> int:
-        return read_id(value)
 
     @field_validator("pos", mode="before")
     @classmethod

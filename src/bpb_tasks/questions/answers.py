@@ -19,15 +19,16 @@ normalised to, which is what the schemas in ``docs/schemas/`` publish and what
 
 from __future__ import annotations
 
-from typing import Any, Literal, TypeVar
+from typing import Annotated, Any, Generic, Literal, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 
 from bpb_core.errors import ParseFailure
 from bpb_tasks.billiards.scene.model import WALLS, Wall
 
 TF = Literal["T", "F"]
 M = TypeVar("M", bound=BaseModel)
+ItemT = TypeVar("ItemT", bound="Item")
 
 
 def ball_id(value: object) -> int | None:
@@ -72,6 +73,19 @@ def read_id(value: Any) -> int:
 def upper(value: Any) -> Any:
     """Strings stripped and upper-cased (``" t "`` -> ``"T"``); anything else unchanged."""
     return value.strip().upper() if isinstance(value, str) else value
+
+
+BallId = Annotated[int, BeforeValidator(read_id)]
+"""An item's ball id, read by :func:`ball_id`."""
+Upper = BeforeValidator(upper)
+"""Reads a string in any case with surrounding spaces (``TF``, ``Wall``)."""
+
+
+class Answers(BaseModel, Generic[ItemT]):
+    """``{"answers": [item, ...]}``: the reply of a label question (q1, q2)."""
+
+    model_config = ConfigDict(extra="ignore", frozen=True)
+    answers: list[ItemT]
 
 
 def load(model: type[M], task: str, value: Any) -> M:

@@ -26,7 +26,7 @@ from bpb_core.model_calls import ImagePart, Message, TextPart
 from bpb_core.reply_json import extract
 from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.truth.final import FinalState
-from bpb_tasks.questions.answers import schema_of
+from bpb_tasks.questions.answers import check_ids, load, schema_of
 
 
 def _num(value: float) -> str:
@@ -229,15 +229,33 @@ class LabelQuestion(BilliardsQuestion):
 
     Attributes:
         key: The key naming the unit in an answer item (``id``, ``wall``).
+        reader: The lenient model a reply is read with
+            (:class:`~bpb_tasks.questions.answers.Answers` of the task's items).
         schema: The strict model of the normalised answer (:mod:`bpb_tasks.questions.answers`).
     """
 
     key: ClassVar[str] = ""
+    reader: ClassVar[type[BaseModel]]
     schema: ClassVar[type[BaseModel]]
 
     @abstractmethod
     def units(self, scene: Scene) -> list[Any]:
         """The units to label, in answer order."""
+
+    def check(self, got: list[Any], units: list[Any]) -> None:
+        """Raise ParseFailure unless ``got`` (the answer's units) has every unit exactly once."""
+        check_ids(self.name, got, units)
+
+    def validate(self, value: Any, scene: Scene) -> dict[str, Any]:
+        """Validate an answer: one T/F per unit, returned in :meth:`units` order."""
+        answer: Any = load(self.reader, self.name, value)
+        units = self.units(scene)
+        self.check([getattr(a, self.key) for a in answer.answers], units)
+        by_unit = {getattr(a, self.key): a.answer for a in answer.answers}
+        return {"answers": [{self.key: u, "answer": by_unit[u]} for u in units]}
+
+    def expected(self, truth: FinalState) -> dict[str, Any]:
+        return {"answers": [label.model_dump() for label in getattr(truth, self.name)]}
 
     def field(self, unit: Any) -> str:
         """The browser form's field of ``unit``."""
