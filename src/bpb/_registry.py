@@ -33,19 +33,15 @@ def _inspect_task(
         limit: int | None = None,
         cot: bool | None = None,
     ) -> Task:
-        mode = _mode(input_mode)
+        if input_mode not in get_args(InputMode):
+            raise BadInput(f"input_mode: {input_mode!r}: use image, image+state or state")
+        mode = cast("InputMode", input_mode)
         return bpb_task(
             tasks, data, suite=suite, input_mode=mode, horizons=horizons, limit=limit, cot=cot
         )
 
     build.__doc__ = summary
     return task(name=name)(build)
-
-
-def _mode(input_mode: str) -> InputMode:
-    if input_mode not in get_args(InputMode):
-        raise BadInput(f"input_mode: {input_mode!r}: use image, image+state or state")
-    return cast("InputMode", input_mode)
 
 
 q1 = _inspect_task(

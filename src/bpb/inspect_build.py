@@ -18,7 +18,7 @@ import dataclasses
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from inspect_ai import Task
 from inspect_ai.dataset import MemoryDataset, Sample
@@ -50,7 +50,7 @@ from bpb_core import ImagePart, build_messages, load_dataset, make_registry, sco
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
-    from bpb_core import Dataset, DatasetScene, Message, Registry
+    from bpb_core import Dataset, DatasetScene, Registry
     from bpb_core.interfaces import InputMode
 
 _ROLES = {"system": ChatMessageSystem, "user": ChatMessageUser, "assistant": ChatMessageAssistant}
@@ -62,7 +62,7 @@ def bpb_task(
     *,
     suite: str | None = None,
     input_mode: InputMode = "image",
-    horizons: Sequence[float] | str | None = None,
+    horizons: Sequence[float] | str | float | None = None,
     limit: int | None = None,
     cot: bool | None = None,
     registry: Registry | None = None,
@@ -74,7 +74,7 @@ def bpb_task(
         data: A dataset folder or a Hugging Face export of one.
         suite: A bpb suite (``total``): its tasks, and its weighted total as a metric.
         input_mode: ``image`` (default), ``image+state`` or ``state``.
-        horizons: Horizons to ask about (a list or ``"1,3"``; default: all).
+        horizons: Horizons to ask about (a list, a number or ``"1,3"``; default: all).
         limit: Scenes per horizon at most.
         cot: Ask for reasoning first (default: each task's own default, as ``bpb run``).
         registry: Where tasks, scorers and suites come from (default: every installed plugin).
@@ -83,11 +83,21 @@ def bpb_task(
         BadInput: No tasks and no suite, an unknown suite, or a bad dataset (names the file).
     """
     registry = registry or make_registry()
-    weights = _weights(suite, registry)
+    weights: dict[str, float] = {}
+    if suite is not None:
+        found = [dict(info.weights) for info in registry.suites() if info.name == suite]
+        if not found:
+            known = ", ".join(info.name for info in registry.suites()) or "none"
+            raise BadInput(f"suite: no suite {suite!r} (installed: {known})")
+        weights = found[0]
     names = list(tasks or weights)
     if not names:
         raise BadInput("bpb_task: give tasks or a suite")
-    chosen = _horizons(horizons)
+    if isinstance(horizons, str):  # Inspect's -T horizons=1,3
+        horizons = [float(h) for h in horizons.split(",") if h.strip()]
+    elif isinstance(horizons, int | float):  # -T horizons=3
+        horizons = [horizons]
+    chosen = None if horizons is None else [float(h) for h in horizons]
     dataset = load_dataset(data, chosen, limit, registry=registry)
     samples = [
         _sample(name, scene, input_mode, cot, registry) for scene in dataset for name in names
@@ -109,36 +119,24 @@ def bpb_task(
     )
 
 
-def _weights(suite: str | None, registry: Registry) -> dict[str, float]:
-    if suite is None:
-        return {}
-    for info in registry.suites():
-        if info.name == suite:
-            return dict(info.weights)
-    known = ", ".join(info.name for info in registry.suites()) or "none"
-    raise BadInput(f"suite: no suite {suite!r} (installed: {known})")
-
-
-def _horizons(horizons: Sequence[float] | str | float | None) -> list[float] | None:
-    """Horizons from a list, a number or Inspect's ``-T horizons=1,3`` text."""
-    if horizons is None:
-        return None
-    if isinstance(horizons, str):
-        return [float(h) for h in horizons.split(",") if h.strip()]
-    if isinstance(horizons, int | float):
-        return [float(horizons)]
-    return [float(h) for h in horizons]
-
-
 def _sample(
     task: str, scene: DatasetScene, mode: InputMode, cot: bool | None, registry: Registry
 ) -> Sample:
-    messages = build_messages(task, scene, mode, cot=cot, registry=registry)
+    chat: list[ChatMessage] = []  # bpb's messages as Inspect's, images as data URIs
+    for message in build_messages(task, scene, mode, cot=cot, registry=registry):
+        content: list[Content] = []
+        for part in message.parts:
+            if isinstance(part, ImagePart):
+                encoded = base64.b64encode(part.data).decode("ascii")
+                content.append(ContentImage(image=f"data:{part.media_type};base64,{encoded}"))
+            else:
+                content.append(ContentText(text=part.text))
+        chat.append(_ROLES[message.role](content=content))
     found = registry.task(task)
     expected = found.expected(scene.truth)
     return Sample(
         id=f"{scene.scene_id}/{task}",
-        input=[to_inspect(message) for message in messages],
+        input=chat,
         target=json.dumps(expected),
         metadata={
             "scene_id": scene.scene_id,
@@ -150,19 +148,6 @@ def _sample(
             "cot": found.default_cot if cot is None else cot,
         },
     )
-
-
-def to_inspect(message: Message) -> ChatMessage:
-    """A bpb :class:`~bpb_core.Message` as an Inspect chat message (images as data URIs)."""
-    content: list[Content] = []
-    for part in message.parts:
-        if isinstance(part, ImagePart):
-            encoded = base64.b64encode(part.data).decode("ascii")
-            content.append(ContentImage(image=f"data:{part.media_type};base64,{encoded}"))
-        else:
-            content.append(ContentText(text=part.text))
-    made: Any = _ROLES[message.role](content=content)
-    return made  # type: ignore[no-any-return]
 
 
 @metric

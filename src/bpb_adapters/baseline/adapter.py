@@ -177,32 +177,30 @@ class BaselineAdapter(PluginLookup):
         """Only the oracle runs the dataset's simulator; the predictions do not."""
         return self.model == ORACLE
 
-    def _predict(self, request: ModelRequest, rng: random.Random) -> Any:
-        name = str(request.family)
-        family = self._family(name)
-        origin = self._plugins().origin("scene_family", name)
-        if self.model == ORACLE:
-            simulator = self._simulator(request, family, origin)
-            return simulated_truth(family, origin, request.scene, simulator)
-        why = self.cannot_answer(family)
-        if why is not None:
-            raise RequestRejected(f"{self.name}: {why}")
-        assert isinstance(family, Predicting)
-        return prediction(family, origin, self.model, request.scene, rng)
-
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the scene in ``request`` (baselines never read the prompt)."""
         started = time.perf_counter()
         if request.scene is None or request.family is None:
             raise RequestRejected(f"{self.name} needs the scene and its family in the request")
-        rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
-        truth = self._predict(request, rng)
+        name = str(request.family)
+        family = self._family(name)
+        origin = self._plugins().origin("scene_family", name)
+        if self.model == ORACLE:
+            simulator = self._simulator(request, family, origin)
+            truth = simulated_truth(family, origin, request.scene, simulator)
+        else:
+            why = self.cannot_answer(family)
+            if why is not None:
+                raise RequestRejected(f"{self.name}: {why}")
+            assert isinstance(family, Predicting)
+            rng = random.Random(f"{self.seed}:{request.scene.scene_id}:{request.task}")
+            truth = prediction(family, origin, self.model, request.scene, rng)
         task = self._task(request.task)
-        oracle = self.model == ORACLE
-        text = expected_text(
-            self._plugins(), request.task, task, truth, request.scene, check=oracle
+        oracle = self.model == ORACLE  # the truth must be a valid answer
+        return self._reply(
+            expected_text(self._plugins(), request.task, task, truth, request.scene, check=oracle),
+            started,
         )
-        return self._reply(text, started)
 
 
 def make_adapter(model: str, options: AdapterOptions) -> BaselineAdapter | VisionAdapter:

@@ -32,16 +32,11 @@ from bpb_core.model_calls import ImagePart, ModelRequest, ModelResponse, TextPar
 from bpb_core.plugin_calls import perception, simulated_truth
 
 if TYPE_CHECKING:
-    from bpb_core.interfaces import SceneFamily, Simulator
+    from bpb_core.interfaces import SceneFamily
     from bpb_core.registry import Registry
 
 T = TypeVar("T")
 CACHE_SIZE = 64  # perceived scenes kept (the tasks of one scene share its image)
-
-
-def _key(image: bytes, prompt: str) -> str:
-    """One scene's image: the image and the prompt's first line (which names the scene)."""
-    return hashlib.sha256(image + prompt.split("\n", 1)[0].encode()).hexdigest()
 
 
 def _cached(cache: OrderedDict[str, T], key: str, build: Callable[[], T]) -> T:
@@ -53,10 +48,6 @@ def _cached(cache: OrderedDict[str, T], key: str, build: Callable[[], T]) -> T:
     return cache[key]
 
 
-def _name(family: object) -> str:
-    return str(getattr(family, "name", type(family).__name__))
-
-
 def _named_values(origin: str, what: str, values: object) -> dict[str, Any]:
     """``values`` as a dict, if it is a mapping of names (the reply's metadata, where anything
     else would fail far from its cause, blamed on the adapter)."""
@@ -65,13 +56,6 @@ def _named_values(origin: str, what: str, values: object) -> dict[str, Any]:
     raise PluginBug(
         f"{origin}: {what} returned {type(values).__name__}; expected a dict of named values"
     )
-
-
-def _inputs(request: ModelRequest) -> tuple[bytes | None, str]:
-    """The first image and all text of the request's messages."""
-    images = [p.data for m in request.messages for p in m.parts if isinstance(p, ImagePart)]
-    text = "\n".join(p.text for m in request.messages for p in m.parts if isinstance(p, TextPart))
-    return (images[0] if images else None), text
 
 
 @dataclass
@@ -94,52 +78,46 @@ class VisionAdapter(PluginLookup):
         """It runs the dataset's simulator on the scene it reads."""
         return True
 
-    def _perceive(
-        self, family: Perceiving, origin: str, image: bytes, prompt: str
-    ) -> tuple[Any, str | None]:
-        key = _key(image, prompt)
-        return _cached(self._seen, key, lambda: perception(family, origin, image, prompt))
-
-    def _measure(
-        self, family: Perceiving, origin: str, image: bytes, prompt: str, seen: Any,
-        request: ModelRequest, simulator: Simulator,
-    ) -> dict[str, Any]:  # fmt: skip
-        """The perception error and the image's ceiling, once per image (the tasks of a scene
-        share them); nothing without the true scene."""
-        scene = request.scene  # the truth: only to measure
-
-        def measure() -> dict[str, Any]:
-            what = f"scene family {_name(family)!r}: perception_error()"
-            with blamed(origin, what):
-                found = _named_values(origin, what, family.perception_error(seen, scene))
-            if isinstance(family, BoundsPerception):
-                what = f"scene family {_name(family)!r}: perception_ceiling()"
-                with blamed(origin, what):
-                    ceiling = family.perception_ceiling(image, prompt, scene, simulator)
-                found |= _named_values(origin, what, ceiling)
-            return found
-
-        if scene is None:
-            return {}
-        measured: dict[str, Any] = _cached(self._measured, _key(image, prompt), measure)
-        return dict(measured)
-
     def _answer(self, request: ModelRequest, family: SceneFamily) -> tuple[str, dict[str, Any]]:
         if not isinstance(family, Perceiving):
             raise RequestRejected(f"{self.name}: {self.cannot_answer(family)}")
-        image, prompt = _inputs(request)
-        if image is None:
+        parts = [p for m in request.messages for p in m.parts]
+        images = [p.data for p in parts if isinstance(p, ImagePart)]
+        if not images:
             missing = "no image in the request (input mode state)"
             return f"unknown: {missing}", {"perception_failed": missing}
+        image, prompt = images[0], "\n".join(p.text for p in parts if isinstance(p, TextPart))
         origin = self._plugins().origin("scene_family", str(request.family))
-        perceived, reason = self._perceive(family, origin, image, prompt)
+        # one scene's image: the image and the prompt's first line (which names the scene)
+        key = hashlib.sha256(image + prompt.split("\n", 1)[0].encode()).hexdigest()
+        perceived, reason = _cached(
+            self._seen, key, lambda: perception(family, origin, image, prompt)
+        )
         if reason is not None:
             return f"unknown: the image could not be read: {reason}", {"perception_failed": reason}
         simulator = self._simulator(request, family, origin)
         truth = simulated_truth(family, origin, perceived, simulator)
         task = self._task(request.task)
-        measured = self._measure(family, origin, image, prompt, perceived, request, simulator)
-        return expected_text(self._plugins(), request.task, task, truth), measured
+        scene = request.scene  # the truth: only to measure
+
+        def measure() -> dict[str, Any]:
+            """The perception error and the image's ceiling, once per image (the tasks of a
+            scene share them)."""
+            name = str(getattr(family, "name", type(family).__name__))
+            what = f"scene family {name!r}: perception_error()"
+            with blamed(origin, what):
+                found = _named_values(origin, what, family.perception_error(perceived, scene))
+            if isinstance(family, BoundsPerception):
+                what = f"scene family {name!r}: perception_ceiling()"
+                with blamed(origin, what):
+                    ceiling = family.perception_ceiling(image, prompt, scene, simulator)
+                found |= _named_values(origin, what, ceiling)
+            return found
+
+        measured: dict[str, Any] = {}
+        if scene is not None:
+            measured = _cached(self._measured, key, measure)
+        return expected_text(self._plugins(), request.task, task, truth), dict(measured)
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Answer from the image and prompt in ``request``."""

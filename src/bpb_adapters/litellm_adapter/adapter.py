@@ -143,15 +143,13 @@ class LiteLLMAdapter:
             if isinstance(part, TextPart):
                 parts.append({"type": "text", "text": part.text})
             else:
-                parts.append(
-                    {
-                        "type": "image_url",
-                        "image_url": {"url": _data_uri(part.data, part.media_type)},
-                    }
-                )
+                url = _data_uri(part.data, part.media_type)
+                parts.append({"type": "image_url", "image_url": {"url": url}})
         return parts
 
-    def _kwargs(self, request: ModelRequest) -> dict[str, Any]:
+    async def complete(self, request: ModelRequest) -> ModelResponse:
+        """Send ``request``; raise a :mod:`bpb_core.errors` model error on failure."""
+        started = time.perf_counter()
         requested: dict[str, Any] = {"temperature": request.temperature}
         if request.max_tokens is not None:
             requested["max_tokens"] = request.max_tokens
@@ -168,12 +166,6 @@ class LiteLLMAdapter:
         }
         if self._api_base:
             kwargs["api_base"] = self._api_base
-        return kwargs
-
-    async def complete(self, request: ModelRequest) -> ModelResponse:
-        """Send ``request``; raise a :mod:`bpb_core.errors` model error on failure."""
-        started = time.perf_counter()
-        kwargs = self._kwargs(request)
         call_id = kwargs["litellm_call_id"] = uuid.uuid4().hex
         try:
             async with asyncio.timeout(request.timeout + _TIMEOUT_GRACE):

@@ -88,16 +88,6 @@ def resolve(model: str, extra: Mapping[str, str] | None = None) -> str:
     return ALIASES.get(model, model)
 
 
-def missing_key(model: str, args: Mapping[str, Any]) -> str | None:
-    """A one-line complaint when ``model``'s provider is in :data:`PROVIDERS` and none of its
-    key variables is set (checked without importing litellm), else ``None``."""
-    provider = PROVIDERS.get(model.split("/", 1)[0]) if "/" in model else None
-    if provider is None or "api_key" in args or any(os.environ.get(v) for v in provider.env):
-        return None
-    names = " or ".join(provider.env)
-    return f"{model}: environment variable {names} is not set (the provider's API key)"
-
-
 # Modules a litellm route imports only when it is first used.
 _ROUTE_MODULES: dict[str, tuple[str, ...]] = {"responses": ("mcp.types",)}
 
@@ -125,13 +115,18 @@ def _unknown(model: str) -> str:
 
 def quick_preflight(model: str, api_base: str | None, args: Mapping[str, Any]) -> str | None:
     """The checks that need no litellm import: a bare name litellm's map does not hold (and no
-    ``api_base`` to route by) has no provider; a known provider's key variable must be set."""
-    names = bundled_map()
-    if "/" not in model and api_base is None and names and model not in names:
+    ``api_base`` to route by) has no provider; a key variable of a provider in
+    :data:`PROVIDERS` must be set."""
+    table = bundled_map()
+    if "/" not in model and api_base is None and table and model not in table:
         return _unknown(model)
-    entry = names.get(model) or names.get(model.split("/", 1)[-1]) or {}
+    provider = PROVIDERS.get(model.split("/", 1)[0]) if "/" in model else None
+    if provider and "api_key" not in args and not any(os.environ.get(v) for v in provider.env):
+        names = " or ".join(provider.env)
+        return f"{model}: environment variable {names} is not set (the provider's API key)"
+    entry = table.get(model) or table.get(model.split("/", 1)[-1]) or {}
     route = "responses" if entry.get("mode") == "responses" else "chat"
-    return missing_key(model, args) or _missing_module(model, route)
+    return _missing_module(model, route)
 
 
 def _missing_module(model: str, route: str) -> str | None:

@@ -61,27 +61,9 @@ def retry_after(exc: BaseException) -> float | None:
     return max(0.0, when.timestamp() - time.time())
 
 
-def _message(exc: BaseException) -> str:
-    text = f"{type(exc).__name__}: {exc}"
-    return redact(" ".join(text.split()))[:_MAX_MESSAGE]
-
-
 def _status(exc: BaseException) -> int | None:
     status = getattr(exc, "status_code", None)
     return status if isinstance(status, int) else None
-
-
-def _cannot_heal(exc: BaseException) -> bool:
-    """An import error inside litellm (a provider route's module is missing), whatever litellm
-    wrapped it in: retrying cannot install the module."""
-    seen: BaseException | None = exc
-    for _ in range(5):
-        if seen is None:
-            break
-        if isinstance(seen, ImportError):
-            return True
-        seen = seen.__cause__ or seen.__context__
-    return "No module named" in str(exc)
 
 
 def map_error(exc: BaseException) -> ModelError:
@@ -94,8 +76,17 @@ def map_error(exc: BaseException) -> ModelError:
         Timeout,
     )
 
-    message = _message(exc)
-    if _cannot_heal(exc):
+    message = redact(" ".join(f"{type(exc).__name__}: {exc}".split()))[:_MAX_MESSAGE]
+    # An import error inside litellm (a provider route's module is missing), whatever litellm
+    # wrapped it in: retrying cannot install the module.
+    seen: BaseException | None = exc
+    for _ in range(5):
+        if seen is None:
+            break
+        if isinstance(seen, ImportError):
+            return RequestRejected(message)
+        seen = seen.__cause__ or seen.__context__
+    if "No module named" in str(exc):
         return RequestRejected(message)
     if isinstance(exc, RateLimitError) or _status(exc) == 429:
         return RateLimited(message, retry_after=retry_after(exc))

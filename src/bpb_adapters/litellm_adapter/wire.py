@@ -58,8 +58,8 @@ def recorded(args: Mapping[str, Any]) -> dict[str, Any]:
 
 
 _KEEP = 2048  # bodies waiting to be taken; a call takes its own right after it returns
-_CONTENT = frozenset(
-    {"messages", "contents", "input", "system", "system_instruction", "systemInstruction"}
+_CONTENT = frozenset(  # the conversation (text and images are never recorded), and tools
+    {"messages", "contents", "input", "system", "system_instruction", "systemInstruction", "tools"}
 )
 # Where an OpenAI-style argument may land on another provider's wire.
 _LANDS_AS: dict[str, tuple[str, ...]] = {
@@ -91,7 +91,7 @@ def install(litellm: Any) -> None:
             call_id = kwargs.get("litellm_call_id")
             body = (kwargs.get("additional_args") or {}).get("complete_input_dict")
             if isinstance(call_id, str) and isinstance(body, Mapping):
-                _bodies[call_id] = params_of(body)
+                _bodies[call_id] = {k: v for k, v in body.items() if k not in _CONTENT}
                 while len(_bodies) > _KEEP:
                     _bodies.popitem(last=False)
 
@@ -102,11 +102,6 @@ def install(litellm: Any) -> None:
 def take(call_id: str) -> dict[str, Any] | None:
     """The parameters sent by the call ``call_id`` (``None`` when litellm logged no body)."""
     return _bodies.pop(call_id, None)
-
-
-def params_of(body: Mapping[str, Any]) -> dict[str, Any]:
-    """The request body without its conversation (text and images are never recorded)."""
-    return {k: v for k, v in body.items() if k not in _CONTENT and k != "tools"}
 
 
 def _keys(value: Any) -> Iterator[tuple[str, Any]]:

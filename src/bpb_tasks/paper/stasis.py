@@ -8,7 +8,7 @@ radius of where they started (Q3). Only answered units count (see
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -37,7 +37,18 @@ def stasis_index(units: pd.DataFrame) -> pd.DataFrame:
         index=RUN_COLUMNS, columns="task", values="missed", aggfunc="mean", observed=True
     ).reindex(columns=["q1", "q2"])
     pooled = labels.groupby(RUN_COLUMNS, observed=True)["missed"].agg(["mean", "size"])
-    moves = _moved_units(units)
+    # answered Q3 units (position or null) of balls that truly moved more than R or were pocketed
+    frame = units[(units["task"] == "q3") & (units["status"] == "ok") & ~units["duplicate"]]
+    frame = frame[frame["pred"].isin(["pos", "null"])]
+    if frame.empty:
+        moves = frame.assign(unmoved=pd.Series(dtype=bool))
+    else:
+        travelled = np.hypot(
+            frame["truth_x"] - frame["start_x"], frame["truth_y"] - frame["start_y"]
+        )
+        frame = frame[(frame["truth"] == "null") | (travelled > frame["radius"])]
+        shift = np.hypot(frame["pred_x"] - frame["start_x"], frame["pred_y"] - frame["start_y"])
+        moves = frame.assign(unmoved=shift <= frame["radius"])  # a null prediction (NaN) moved
     motion = moves.groupby(RUN_COLUMNS, observed=True)["unmoved"].agg(["mean", "size"])
     out = pd.DataFrame(
         {
@@ -51,20 +62,6 @@ def stasis_index(units: pd.DataFrame) -> pd.DataFrame:
     )
     out[["contacts", "moved"]] = out[["contacts", "moved"]].fillna(0).astype("int64")
     return out.reset_index()
-
-
-def _moved_units(units: pd.DataFrame) -> pd.DataFrame:
-    """Answered Q3 units (position or null) of balls that truly moved more than R or were
-    pocketed."""
-    frame = units[(units["task"] == "q3") & (units["status"] == "ok") & ~units["duplicate"]]
-    frame = frame[frame["pred"].isin(["pos", "null"])]
-    if frame.empty:
-        return frame.assign(unmoved=pd.Series(dtype=bool))
-    travelled = np.hypot(frame["truth_x"] - frame["start_x"], frame["truth_y"] - frame["start_y"])
-    moved = (frame["truth"] == "null") | (travelled > frame["radius"])
-    frame = frame[moved]
-    shift = np.hypot(frame["pred_x"] - frame["start_x"], frame["pred_y"] - frame["start_y"])
-    return frame.assign(unmoved=shift <= frame["radius"])  # a null prediction (NaN) moved
 
 
 class StasisIndex:
@@ -95,7 +92,17 @@ class StasisIndex:
             (-height / 2, "motion_stasis", "#0072B2", "moved balls predicted unmoved"),
         ):
             values = 100 * ranked[column].to_numpy(dtype=float)
-            _bars(ax, ys + offset, values, height, colour, text)
+            ax.barh(ys + offset, np.nan_to_num(values, nan=0.0), height, color=colour, label=text)
+            for y, value in zip(ys + offset, values, strict=True):
+                if np.isnan(value):
+                    ax.text(
+                        1, y, "n/a (no answered unit to count)", va="center", fontsize=7,
+                        color="#666666",
+                    )  # fmt: skip
+                    continue
+                if value == 0:
+                    ax.plot([0.6, 0.6], [y - height / 2, y + height / 2], color=colour, lw=3)
+                ax.text(value + 1, y, f"{value:.1f}%", va="center", fontsize=7)
         ax.set_yticks(ys, names_of(ranked), fontsize=8)
         ax.set_xlim(0, 112)
         ax.set_xticks([0, 20, 40, 60, 80, 100])
@@ -105,17 +112,3 @@ class StasisIndex:
         ax.set_axisbelow(True)
         fig.legend(loc="outside lower center", ncols=2, fontsize=8, frameon=False)
         return png(fig)
-
-
-def _bars(ax: Any, ys: Any, values: Any, height: float, colour: str, text: str) -> None:
-    drawn = np.nan_to_num(values, nan=0.0)
-    ax.barh(ys, drawn, height, color=colour, label=text)
-    for y, value in zip(ys, values, strict=True):
-        if np.isnan(value):
-            ax.text(
-                1, y, "n/a (no answered unit to count)", va="center", fontsize=7, color="#666666"
-            )
-            continue
-        if value == 0:
-            ax.plot([0.6, 0.6], [y - height / 2, y + height / 2], color=colour, lw=3)
-        ax.text(value + 1, y, f"{value:.1f}%", va="center", fontsize=7)

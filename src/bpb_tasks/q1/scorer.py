@@ -69,19 +69,18 @@ class Q1Confusion(ConfusionDiagnostic):
     task = "q1"
 
 
-def scene_metrics(units: pd.DataFrame) -> pd.DataFrame:
-    """Per run: ``per_ball`` and ``exact_set``, means over scenes then over horizons."""
-    keys = [*RUN_COLUMNS, "horizon", "index"]
-    grouped = units.groupby(keys, observed=True)["correct"]
+def q1_metrics(units: pd.DataFrame) -> pd.DataFrame:
+    """Every Q1 metric per run of ``units`` (Q1 units of answered calls), run columns first,
+    then :data:`METRIC_NOTES`' columns, then the confusion counts: ``per_ball`` and
+    ``exact_set`` are means over scenes then over horizons, the confusion counts, recall,
+    precision, F1 and balanced accuracy pool the labelled units."""
+    if units.empty:
+        return pd.DataFrame(columns=[*RUN_COLUMNS, *METRIC_NOTES, *COUNTS])
+    grouped = units.groupby([*RUN_COLUMNS, "horizon", "index"], observed=True)["correct"]
     scenes = pd.DataFrame({"per_ball": grouped.mean(), "exact_set": grouped.all()})
     scenes = scenes.astype("float64").reset_index()
     columns = ["per_ball", "exact_set"]
     by_horizon = scenes.groupby([*RUN_COLUMNS, "horizon"], observed=True)[columns].mean()
-    return by_horizon.groupby(level=RUN_COLUMNS, observed=True)[columns].mean()
-
-
-def label_metrics(units: pd.DataFrame) -> pd.DataFrame:
-    """Per run: confusion counts, recall, precision, F1 and balanced accuracy (pooled)."""
     frame = labelled(units, ("q1",))
     counts = pd.concat([frame[RUN_COLUMNS], outcomes(frame)], axis=1)
     out = rates(counts.groupby(RUN_COLUMNS, observed=True)[list(COUNTS)].sum())
@@ -90,15 +89,8 @@ def label_metrics(units: pd.DataFrame) -> pd.DataFrame:
     negatives = (out["tn"] + out["fp"]).where(out["tn"] + out["fp"] > 0)
     specificity = out["tn"] / negatives
     out["balanced_accuracy"] = (out["recall"] + specificity) / 2
-    return out
-
-
-def q1_metrics(units: pd.DataFrame) -> pd.DataFrame:
-    """Every Q1 metric per run of ``units`` (Q1 units of answered calls), run columns first,
-    then :data:`METRIC_NOTES`' columns, then the confusion counts."""
-    if units.empty:
-        return pd.DataFrame(columns=[*RUN_COLUMNS, *METRIC_NOTES, *COUNTS])
-    both = scene_metrics(units).join(label_metrics(units), how="left")
+    both = by_horizon.groupby(level=RUN_COLUMNS, observed=True)[columns].mean()
+    both = both.join(out, how="left")
     both[list(COUNTS)] = both[list(COUNTS)].fillna(0).astype("int64")
     both = both.reset_index()[[*RUN_COLUMNS, *METRIC_NOTES, *COUNTS]]
     return both.astype({name: np.float64 for name in METRIC_NOTES})

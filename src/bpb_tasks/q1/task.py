@@ -7,8 +7,7 @@ from typing import Annotated, Any, ClassVar
 from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.questions.answers import TF, Answers, BallId, Item, Q1Schema, Upper
-from bpb_tasks.questions.browser import colour
-from bpb_tasks.questions.question import LabelQuestion
+from bpb_tasks.questions.question import LabelQuestion, colour
 
 
 class BallAnswer(Item):

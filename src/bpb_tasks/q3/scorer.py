@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
-from PIL import ImageDraw, ImageFont
+from PIL import ImageDraw
 
 from bpb_core.picture import ScenePicture, font, shape
 from bpb_core.results.tables import RUN_COLUMNS, UNANSWERED
@@ -114,7 +114,18 @@ class Q3Scorer:
 
     def explain(self, rows: pd.DataFrame) -> list[str]:
         """``ball 3: off by 0.120 m (4.2 R)`` (or what was said instead) per wrong ball."""
-        return [_wrong_text(r) for r in rows[~rows["correct"].astype(bool)].itertuples()]
+        lines = []
+        r: Any
+        for r in rows[~rows["correct"].astype(bool)].itertuples():
+            if r.truth == "null" or r.pred != "pos":
+                truth = "pocketed" if r.truth == "null" else f"({r.truth_x:.3f}, {r.truth_y:.3f})"
+                pred = {"null": "pocketed", "?": "invalid"}.get(str(r.pred), "no answer")
+                pred = f"({r.pred_x:.3f}, {r.pred_y:.3f})" if r.pred == "pos" else pred
+                lines.append(f"ball {r.unit}: predicted {pred}, truth {truth}")
+            else:
+                off = f"{r.distance:.3f} m ({r.distance / r.radius:.1f} R)"
+                lines.append(f"ball {r.unit}: off by {off}")
+        return lines
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
         """True (yellow square) and predicted (magenta triangle) centres joined by a line:
@@ -124,46 +135,28 @@ class Q3Scorer:
         width = max(2, round(r / 6))
         face = font(max(12, round(r * 0.9)))
         draw = ImageDraw.Draw(picture.image)
+
+        def point(x: float, y: float) -> tuple[float, float] | None:
+            return None if math.isnan(x) or math.isnan(y) else picture.to_px(x, y)
+
+        row: Any
         for row in rows.itertuples():
-            _marks(draw, picture, row, r, width, face)
+            truth = point(float(row.truth_x), float(row.truth_y))
+            pred = point(float(row.pred_x), float(row.pred_y))
+            unit = str(row.unit)
+            if truth and pred:
+                draw.line((*truth, *pred), fill=LINK_COLOUR, width=max(1, width // 2))
+            if truth:
+                tx, ty = truth
+                draw.polygon(shape("square", tx, ty, r * 1.1), outline=TRUTH_COLOUR, width=width)
+                draw.text((tx + r * 1.2, ty - r * 1.2), unit, fill=TRUTH_COLOUR, font=face)
+            if pred:
+                x, y = pred
+                draw.polygon(shape("triangle", x, y, r * 1.1), outline=PRED_COLOUR, width=width)
+                draw.text((x + r * 1.2, y + r * 0.2), unit, fill=PRED_COLOUR, font=face)
         picture.explain("true final position", TRUTH_COLOUR, "square")
         picture.explain("predicted position", PRED_COLOUR, "triangle")
         picture.explain("error", LINK_COLOUR, "line")
-
-
-def _wrong_text(r: Any) -> str:
-    if r.truth == "null" or r.pred != "pos":
-        truth = "pocketed" if r.truth == "null" else f"({r.truth_x:.3f}, {r.truth_y:.3f})"
-        pred = {"null": "pocketed", "?": "invalid"}.get(str(r.pred), "no answer")
-        pred = f"({r.pred_x:.3f}, {r.pred_y:.3f})" if r.pred == "pos" else pred
-        return f"ball {r.unit}: predicted {pred}, truth {truth}"
-    return f"ball {r.unit}: off by {r.distance:.3f} m ({r.distance / r.radius:.1f} R)"
-
-
-def _marks(
-    draw: ImageDraw.ImageDraw,
-    picture: ScenePicture,
-    row: Any,
-    r: float,
-    width: int,
-    face: ImageFont.FreeTypeFont | ImageFont.ImageFont,
-) -> None:
-    def point(x: float, y: float) -> tuple[float, float] | None:
-        return None if math.isnan(x) or math.isnan(y) else picture.to_px(x, y)
-
-    truth = point(float(row.truth_x), float(row.truth_y))
-    pred = point(float(row.pred_x), float(row.pred_y))
-    unit = str(row.unit)
-    if truth and pred:
-        draw.line((*truth, *pred), fill=LINK_COLOUR, width=max(1, width // 2))
-    if truth:
-        tx, ty = truth
-        draw.polygon(shape("square", tx, ty, r * 1.1), outline=TRUTH_COLOUR, width=width)
-        draw.text((tx + r * 1.2, ty - r * 1.2), unit, fill=TRUTH_COLOUR, font=face)
-    if pred:
-        x, y = pred
-        draw.polygon(shape("triangle", x, y, r * 1.1), outline=PRED_COLOUR, width=width)
-        draw.text((x + r * 1.2, y + r * 0.2), unit, fill=PRED_COLOUR, font=face)
 
 
 DEFAULT_TOLERANCES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)

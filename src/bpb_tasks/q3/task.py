@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Mapping, Sequence
@@ -14,8 +15,9 @@ from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.truth.final import BallPosition, FinalState
 from bpb_tasks.questions.answers import BallId, Item, Q3Schema, check_ids, load, schema_of
-from bpb_tasks.questions.browser import drag_context, read_positions
-from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.question import MAX_VALUE, BilliardsQuestion, colour
+
+POCKETED = "pocket"
 
 
 class PositionAnswer(Item):
@@ -51,6 +53,22 @@ def _listed(predictions: Sequence[PositionAnswer | BallPosition]) -> dict[str, A
     return {"predictions": listed}
 
 
+def _position(key: str, value: str, scene: Scene) -> list[float] | None:
+    if value == POCKETED:
+        return None
+    parts = value.split(",")
+    try:
+        x, y = (float(p) for p in parts) if len(parts) == 2 else (math.nan, math.nan)
+    except ValueError:
+        x = y = math.nan
+    if not (math.isfinite(x) and math.isfinite(y)):
+        shown = value[:MAX_VALUE]
+        raise ValueError(f"{key}: expected 'x,y' in metres or {POCKETED!r}, got {shown!r}")
+    if not (0 <= x <= scene.table.width and 0 <= y <= scene.table.height):
+        raise ValueError(f"{key}: ({x:g}, {y:g}) is off the table")
+    return [round(x, 4), round(y, 4)]
+
+
 class Q3Task(BilliardsQuestion):
     """Final positions of all balls (chain of thought off by default, as in the paper)."""
 
@@ -58,19 +76,17 @@ class Q3Task(BilliardsQuestion):
     default_cot: ClassVar[bool] = False
     title: ClassVar[str] = "Final positions"
 
-    def example(self, scene: Scene) -> str:
-        return self._example(scene, pocketed=True)
-
-    def example_for(self, scene: Scene, options: PromptOptions) -> str:
-        """With ``force_numeric`` no ball of the example is null: the prompt forbids it."""
-        return self._example(scene, pocketed=not options.force_numeric)
-
-    def _example(self, scene: Scene, pocketed: bool) -> str:
+    def example(self, scene: Scene, pocketed: bool = True) -> str:
+        """The example, its last ball pocketed unless ``pocketed`` is false."""
         ids = sorted(b.id for b in scene.balls)
         items: list[dict[str, Any]] = [{"id": i, "pos": [1.2345, 0.5]} for i in ids]
         if pocketed and len(items) > 1:
             items[-1]["pos"] = None
         return json.dumps({"predictions": items})
+
+    def example_for(self, scene: Scene, options: PromptOptions) -> str:
+        """With ``force_numeric`` no ball of the example is null: the prompt forbids it."""
+        return self.example(scene, pocketed=not options.force_numeric)
 
     def question(self, scene: Scene, options: PromptOptions) -> str:
         ids = sorted(b.id for b in scene.balls)
@@ -105,12 +121,51 @@ class Q3Task(BilliardsQuestion):
         return _listed(truth.predictions)
 
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
-        """Draggable markers and pocket drop zones on the image (``bpb human``)."""
-        return drag_context(scene, image)
+        """Draggable markers at the balls' starting pixels and pocket drop zones on the image
+        (``bpb human``). The image's frame (origin and scale) is read from its axes, as
+        ``baseline:vision`` reads it, so the markers sit on the balls whatever the dataset's
+        image settings; ``frame`` is ``None`` when the image has no readable axes: the form
+        then asks for numbers."""
+        from bpb_tasks.billiards.vision.frame import (
+            PerceptionFailed,
+            PromptFacts,
+            find_frame,
+            image_keys,
+        )
+
+        frame = None
+        if image is not None:
+            ids = tuple(b.id for b in scene.balls)
+            facts = PromptFacts(
+                scene.scene_id, scene.horizon, scene.table, scene.physics, scene.pockets, ids
+            )
+            with contextlib.suppress(PerceptionFailed):
+                found = find_frame(image_keys(image), facts)
+                frame = {"x0": found.x0, "y0": found.y0, "ppm": found.ppm}
+        balls = [
+            {"id": b.id, "x": b.pos[0], "y": b.pos[1], "colour": colour(b.id)} for b in scene.balls
+        ]
+        return {
+            "balls": sorted(balls, key=lambda b: int(b["id"])),
+            "table": [scene.table.width, scene.table.height],
+            "radius": scene.physics.ball_radius,
+            "pockets": [list(c) for c in scene.pockets.centers],
+            "pocket_radius": scene.pockets.radius,
+            "frame": frame,
+            "horizon": f"{scene.horizon:g}",
+        }
 
     def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
-        """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket``."""
-        return read_positions(fields, scene)
+        """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket`` (one per ball)."""
+        names = {f"pos{b.id}": b.id for b in scene.balls}
+        for key in fields:
+            if key not in names:
+                raise ValueError(f"{key}: not a field of this form")
+        missing = [key for key in names if key not in fields]
+        if missing:
+            raise ValueError(f"{missing[0]}: missing (every ball needs a place)")
+        predictions = [{"id": i, "pos": _position(k, fields[k], scene)} for k, i in names.items()]
+        return {"predictions": sorted(predictions, key=lambda p: int(p["id"]))}
 
     def answer_schema(self) -> dict[str, Any]:
         """The JSON Schema of the normalised answer (``docs/schemas/q3.answer.schema.json``)."""

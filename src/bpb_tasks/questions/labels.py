@@ -72,16 +72,6 @@ def collect(
     return found, dups
 
 
-def score_labels(units: pd.DataFrame) -> pd.DataFrame:
-    """``correct`` where the call is ok, the unit appears once and its label equals the truth."""
-    ok = (units["status"] == "ok").to_numpy(dtype=bool)
-    same = (units["truth"] == units["pred"]).to_numpy(dtype=bool)
-    dup = units["duplicate"].to_numpy(dtype=bool)
-    correct = ok & same & ~dup
-    distance = np.full(len(units), np.nan)
-    return pd.DataFrame({"correct": correct, "distance": distance}, index=units.index)
-
-
 class LabelScorer(ABC):
     """Shared units/score logic; subclasses say which entry key names a unit and the truth.
 
@@ -118,7 +108,14 @@ class LabelScorer(ABC):
         ]
 
     def score(self, units: pd.DataFrame) -> pd.DataFrame:
-        return score_labels(units)
+        """``correct`` where the call is ok, the unit appears once and its label equals the
+        truth."""
+        ok = (units["status"] == "ok").to_numpy(dtype=bool)
+        same = (units["truth"] == units["pred"]).to_numpy(dtype=bool)
+        dup = units["duplicate"].to_numpy(dtype=bool)
+        correct = ok & same & ~dup
+        distance = np.full(len(units), np.nan)
+        return pd.DataFrame({"correct": correct, "distance": distance}, index=units.index)
 
     def explain(self, rows: pd.DataFrame) -> list[str]:
         """``ball 3: said F, truth T`` for each wrong unit."""

@@ -9,6 +9,10 @@ physics, the table coordinates, the ball radius, the pockets and the horizon (SP
 each task adds its question, the JSON format with an example, and the reply instruction
 (reasoning first or JSON only). Nothing in it reads ground truth: the functions take a
 :class:`~bpb_tasks.billiards.scene.model.Scene` and prompt options only.
+
+People answer in the browser (``bpb human``) on the forms ``forms/<task>.html``: Q1 and Q2 are
+ticks (a ticked ball or wall is ``T``, the rest ``F``); Q3 places every ball by dragging its
+marker over the scene image, onto a pocket for a pocketed ball.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from __future__ import annotations
 import json
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
+from importlib import resources
 from typing import Any, ClassVar
 
 from pydantic import BaseModel
@@ -28,119 +33,77 @@ from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import check_ids, load, schema_of
 
+MAX_VALUE = 64  # characters of a posted form value shown in an error
+
+
+def colour(ball_id: int) -> str:
+    """CSS colour of ball ``ball_id`` as the renderer draws it (the browser forms)."""
+    from bpb_tasks.billiards.render import canvas
+
+    r, g, b = canvas.ball_colour(ball_id)
+    return f"#{r:02x}{g:02x}{b:02x}"
+
 
 def _num(value: float) -> str:
     return f"{value:g}"
 
 
-def _point(xy: tuple[float, float]) -> str:
-    return f"({_num(xy[0])}, {_num(xy[1])})"
-
-
-def table_text(scene: Scene) -> str:
-    """Table size, coordinates and walls."""
+def common_prompt(scene: Scene, options: PromptOptions) -> str:
+    """Everything every task states before its question: the table size, coordinates and
+    walls; the balls, their radius, the cue ball and where the initial state is shown; the
+    pockets and the pocketing rule; the friction and collision laws; the horizon; and with
+    ``state`` in the input mode the initial state as compact JSON."""
     w, h = _num(scene.table.width), _num(scene.table.height)
-    return (
-        f"Table: {w} m along x by {h} m along y, seen from above. The origin (0, 0) is the "
-        f"bottom-left corner, x grows to the right and y grows upward. Walls: LEFT is x = 0, "
-        f"RIGHT is x = {w}, BOTTOM is y = 0, TOP is y = {h}."
-    )
-
-
-def balls_text(scene: Scene, options: PromptOptions) -> str:
-    """Ball count, radius, the cue ball, and where the initial state is shown."""
     ids = sorted(b.id for b in scene.balls)
-    radius = _num(scene.physics.ball_radius)
     where = (
         "The image shows every ball with its id and the cue ball's velocity as an arrow "
         "labelled with its speed in m/s."
         if options.input_mode != "state"
         else "The initial state is given as JSON below."
     )
-    return (
-        f"Balls: {len(ids)} balls with ids {ids[0]}..{ids[-1]}, equal mass, radius "
-        f"R = {radius} m. Ball 0 is the cue ball; at t = 0 only the cue ball moves, all others are "
-        f"at rest. {where} A ball touches a wall when its centre is R from the wall, and two "
-        f"balls touch when their centres are 2R apart."
-    )
-
-
-def pockets_text(scene: Scene) -> str:
-    """Pocket positions and the pocketing rule."""
     pockets = scene.pockets
-    if not pockets.centers or pockets.radius <= 0:
-        return "Pockets: none; no ball can leave the table."
-    centres = ", ".join(_point(c) for c in pockets.centers)
-    return (
-        f"Pockets: {len(pockets.centers)} pockets of radius {_num(pockets.radius)} m centred at "
-        f"{centres}. A ball is pocketed the first instant its centre comes within "
-        f"{_num(pockets.radius)} m of a pocket centre, and it leaves the table."
-    )
-
-
-def physics_text(scene: Scene) -> str:
-    """Friction law, stop distance and collision law."""
+    pockets_text = "Pockets: none; no ball can leave the table."
+    if pockets.centers and pockets.radius > 0:
+        centres = ", ".join(f"({_num(x)}, {_num(y)})" for x, y in pockets.centers)
+        pockets_text = (
+            f"Pockets: {len(pockets.centers)} pockets of radius {_num(pockets.radius)} m centred "
+            f"at {centres}. A ball is pocketed the first instant its centre comes within "
+            f"{_num(pockets.radius)} m of a pocket centre, and it leaves the table."
+        )
     p = scene.physics
     restitution = (
         "perfectly elastic (the normal component of velocity is reversed)"
         if p.wall_restitution == 1
         else f"with restitution {_num(p.wall_restitution)} (normal component scaled by it)"
     )
-    return (
+    parts = [
+        f"You are looking at a billiards table (scene {scene.scene_id}). Predict what happens "
+        f"from t = 0 until t = {_num(scene.horizon)} s using the physics below.",
+        f"Table: {w} m along x by {h} m along y, seen from above. The origin (0, 0) is the "
+        f"bottom-left corner, x grows to the right and y grows upward. Walls: LEFT is x = 0, "
+        f"RIGHT is x = {w}, BOTTOM is y = 0, TOP is y = {h}.",
+        f"Balls: {len(ids)} balls with ids {ids[0]}..{ids[-1]}, equal mass, radius "
+        f"R = {_num(p.ball_radius)} m. Ball 0 is the cue ball; at t = 0 only the cue ball moves, "
+        f"all others are at rest. {where} A ball touches a wall when its centre is R from the "
+        f"wall, and two balls touch when their centres are 2R apart.",
+        pockets_text,
         f"Friction: a moving ball decelerates at constant mu*g along its velocity, with "
         f"mu = {_num(p.mu)} and g = {_num(p.g)} m/s^2. After travelling a distance s its speed is "
         f"v(s) = sqrt(v0^2 - 2*mu*g*s); it stops after s_stop = v0^2 / (2*mu*g) and then stays at "
         f"rest until another ball hits it.\n"
         f"Collisions: ball-ball collisions are perfectly elastic and frictionless between equal "
         f"masses (the balls exchange the velocity components along the line of centres); wall "
-        f"collisions are {restitution}. There is no spin."
-    )
-
-
-def state_json(scene: Scene) -> str:
-    """The initial state as compact JSON (positions and velocities of every ball)."""
-    balls = [
-        {"id": b.id, "pos": list(b.pos), "vel": list(b.vel)}
-        for b in sorted(scene.balls, key=lambda b: b.id)
-    ]
-    return json.dumps({"balls": balls})
-
-
-def common_prompt(scene: Scene, options: PromptOptions) -> str:
-    """Everything every task states before its question."""
-    parts = [
-        f"You are looking at a billiards table (scene {scene.scene_id}). Predict what happens "
-        f"from t = 0 until t = {_num(scene.horizon)} s using the physics below.",
-        table_text(scene),
-        balls_text(scene, options),
-        pockets_text(scene),
-        physics_text(scene),
+        f"collisions are {restitution}. There is no spin.",
         f"Horizon: t = {_num(scene.horizon)} s. Anything that happens at or before "
         f"t = {_num(scene.horizon)} s counts.",
     ]
     if options.input_mode in ("image+state", "state"):
-        parts.append(f"Initial state at t = 0 (metres, m/s): {state_json(scene)}")
+        balls = [
+            {"id": b.id, "pos": list(b.pos), "vel": list(b.vel)}
+            for b in sorted(scene.balls, key=lambda b: b.id)
+        ]
+        parts.append(f"Initial state at t = 0 (metres, m/s): {json.dumps({'balls': balls})}")
     return "\n\n".join(parts)
-
-
-def reply_instruction(options: PromptOptions, example: str) -> str:
-    """How to reply: reasoning then JSON, or JSON only; stronger after a malformed answer."""
-    if options.cot:
-        text = (
-            "Think step by step, then end your reply with the final answer as one JSON object "
-            "in exactly the format above."
-        )
-    else:
-        text = "Reply with the JSON object only, in exactly the format above, and no other text."
-    if options.escalation >= 1:
-        text += (
-            "\nIMPORTANT: a previous reply to this question could not be read. The reply must "
-            "contain one complete, valid JSON object (double quotes, no comments, no trailing "
-            "commas) covering every item listed."
-        )
-    if options.escalation >= 2:
-        text += f"\nReturn exactly this shape with your own values:\n{example}"
-    return text
 
 
 class BilliardsQuestion(ABC):
@@ -176,21 +139,37 @@ class BilliardsQuestion(ABC):
 
     @property
     def form_template(self) -> str:
-        """Jinja2 source of the task's browser form (``bpb human``; see
-        :mod:`bpb_tasks.questions.browser`)."""
-        from bpb_tasks.questions.browser import template
-
-        return template(self.name)
+        """Jinja2 source of the task's browser form (``bpb human``)."""
+        return (
+            resources.files("bpb_tasks.questions").joinpath(f"forms/{self.name}.html").read_text()
+        )
 
     def prompt_text(self, scene: Scene, options: PromptOptions) -> str:
-        """The whole text of the prompt."""
-        return "\n\n".join(
-            [
-                common_prompt(scene, options),
-                f"Task {self.name.upper()}: {self.question(scene, options)}",
-                reply_instruction(options, self.example_for(scene, options)),
-            ]
-        )
+        """The whole text of the prompt: the common part, the question and how to reply
+        (reasoning then JSON, or JSON only; stronger after a malformed answer)."""
+        parts = [
+            common_prompt(scene, options),
+            f"Task {self.name.upper()}: {self.question(scene, options)}",
+        ]
+        example = self.example_for(scene, options)
+        if options.cot:
+            reply = (
+                "Think step by step, then end your reply with the final answer as one JSON object "
+                "in exactly the format above."
+            )
+        else:
+            reply = (
+                "Reply with the JSON object only, in exactly the format above, and no other text."
+            )
+        if options.escalation >= 1:
+            reply += (
+                "\nIMPORTANT: a previous reply to this question could not be read. The reply must "
+                "contain one complete, valid JSON object (double quotes, no comments, no trailing "
+                "commas) covering every item listed."
+            )
+        if options.escalation >= 2:
+            reply += f"\nReturn exactly this shape with your own values:\n{example}"
+        return "\n\n".join([*parts, reply])
 
     def messages(
         self, scene: Scene, image: bytes | None, options: PromptOptions
@@ -268,11 +247,14 @@ class LabelQuestion(BilliardsQuestion):
 
     def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
         """Ticked units are ``T``, the others ``F``."""
-        from bpb_tasks.questions.browser import read_ticks
-
         units = self.units(scene)
-        ticked = read_ticks(fields, [self.field(u) for u in units])
-        answers = [{self.key: u, "answer": "T" if self.field(u) in ticked else "F"} for u in units]
+        names = [self.field(u) for u in units]
+        for key, value in fields.items():
+            if key not in names:
+                raise ValueError(f"{key}: not a field of this form")
+            if value != "T":
+                raise ValueError(f"{key}: a ticked box posts T, got {value[:MAX_VALUE]!r}")
+        answers = [{self.key: u, "answer": "T" if self.field(u) in fields else "F"} for u in units]
         return {"answers": answers}
 
     def answer_schema(self) -> dict[str, Any]:

@@ -106,9 +106,11 @@ class PymunkSimulator:
         bound = stable_dt(scene)
         if self.tunnel == "refuse" and self.dt > bound:
             radius = scene.physics.ball_radius
+            scale = 10.0 ** (2 - math.floor(math.log10(bound)))  # 3 digits, rounded down: within
             raise SimulationError.about(
                 "dt",
-                f"{self.dt:g} s is above this scene's stability bound, {_down(bound)} s "
+                f"{self.dt:g} s is above this scene's stability bound, "
+                f"{math.floor(bound * scale) / scale:.3g} s "
                 f"(half the ball radius, {radius / 2:g} m, over the fastest possible speed, "
                 f"{radius / (2 * bound):.4g} m/s): a longer step can carry a ball through a "
                 "cushion",
@@ -123,12 +125,6 @@ def stable_dt(scene: Scene) -> float:
     whole radius lets a ball pushed by others cross a cushion before pymunk pushes it back."""
     speed = math.sqrt(sum(vx * vx + vy * vy for vx, vy in (b.vel for b in scene.balls)))
     return scene.physics.ball_radius / (2 * speed) if speed > 0 else math.inf
-
-
-def _down(value: float) -> str:
-    """``value`` to three significant digits, rounded down (so it is itself within bounds)."""
-    scale = 10.0 ** (2 - math.floor(math.log10(value)))
-    return f"{math.floor(value * scale) / scale:.3g}"
 
 
 class _PymunkRun:
@@ -148,27 +144,18 @@ class _PymunkRun:
         self.active: set[int] = set()  # balls that may be moving
         self.segments: dict[int, list[tuple[float, tuple[float, float], tuple[float, float]]]] = {}
         self.ended: dict[int, float] = {}
-        self._add_balls(pymunk)
-        self._add_walls(pymunk)
-        self.space.on_collision(begin=self._begin)
-        self.box = table_box(scene.table, phys.ball_radius)
-
-    def _add_balls(self, pymunk: Any) -> None:
-        radius = self.scene.physics.ball_radius
-        for ball in sorted(self.scene.balls, key=lambda b: b.id):
+        for ball in sorted(scene.balls, key=lambda b: b.id):
             body = pymunk.Body(1.0, math.inf)
             body.position = ball.pos
             body.velocity = ball.vel
-            shape = pymunk.Circle(body, radius)
+            shape = pymunk.Circle(body, phys.ball_radius)
             shape.elasticity, shape.friction = 1.0, 0.0
             self.space.add(body, shape)
             self.bodies[ball.id] = body
             self.owner[shape] = ("ball", ball.id)
             self.segments[ball.id] = [(0.0, ball.pos, ball.vel)]
             self.active.add(ball.id)  # resting ones leave after the first step
-
-    def _add_walls(self, pymunk: Any) -> None:
-        w, h = self.scene.table.width, self.scene.table.height
+        w, h = scene.table.width, scene.table.height
         corners = {
             "TOP": ((0.0, h), (w, h)),
             "BOTTOM": ((0.0, 0.0), (w, 0.0)),
@@ -176,33 +163,30 @@ class _PymunkRun:
             "RIGHT": ((w, 0.0), (w, h)),
         }
         for name, (a, b) in corners.items():
-            shape = pymunk.Segment(self.space.static_body, a, b, 0.0)
-            shape.elasticity = self.scene.physics.wall_restitution
-            shape.friction = 0.0
-            self.space.add(shape)
-            self.owner[shape] = ("wall", name)
+            wall = pymunk.Segment(self.space.static_body, a, b, 0.0)
+            wall.elasticity = phys.wall_restitution
+            wall.friction = 0.0
+            self.space.add(wall)
+            self.owner[wall] = ("wall", name)
+        self.space.on_collision(begin=self._begin)
+        self.box = table_box(scene.table, phys.ball_radius)
 
     def _begin(self, arbiter: Any, space: Any, data: Any) -> None:
+        """Log a wall contact while the ball moves towards the wall, a ball contact while the
+        pair approaches."""
         first, second = (self.owner[s] for s in arbiter.shapes)
         self.active.update(o[1] for o in (first, second) if o[0] == "ball")
         if first[0] == "wall":
             first, second = second, first
         if second[0] == "wall":
-            self._wall_contact(first[1], second[1])
-        else:
-            self._ball_contact(first[1], second[1])
-
-    def _wall_contact(self, ball: int, wall: str) -> None:
-        body = self.bodies[ball]
-        nx, ny = _WALL_NORMALS[wall]
-        if body.velocity.x * nx + body.velocity.y * ny > 0:
-            self._log("wall", (ball,), wall)
-
-    def _ball_contact(self, a: int, b: int) -> None:
-        a, b = min(a, b), max(a, b)
+            velocity = self.bodies[first[1]].velocity
+            nx, ny = _WALL_NORMALS[second[1]]
+            if velocity.x * nx + velocity.y * ny > 0:
+                self._log("wall", (first[1],), second[1])
+            return
+        a, b = min(first[1], second[1]), max(first[1], second[1])
         pa, pb = self.bodies[a], self.bodies[b]
-        rel = pa.velocity - pb.velocity
-        if rel.dot(pb.position - pa.position) > 0:
+        if (pa.velocity - pb.velocity).dot(pb.position - pa.position) > 0:
             self._log("ball", (a, b), None)
 
     def _log(self, kind: str, ids: tuple[int, ...], wall: str | None) -> None:
@@ -240,7 +224,18 @@ class _PymunkRun:
     def run(self, horizon: float) -> Outcome:
         self._check_budget(horizon)
         self._step_to(horizon)
-        return self._outcome(horizon)
+        positions: dict[int, tuple[float, float] | None] = {}
+        segments: dict[int, tuple[Segment, ...]] = {}
+        for ball, body in self.bodies.items():
+            gone = ball in self.ended
+            positions[ball] = None if gone else self._on_table(ball, body.position)
+            starts = self.segments[ball]
+            ends = [s[0] for s in starts[1:]] + [self.ended.get(ball, horizon)]
+            segments[ball] = tuple(
+                Segment(t0, t1, pos, vel, self.decel)
+                for (t0, pos, vel), t1 in zip(starts, ends, strict=True)
+            )
+        return Outcome(horizon, positions, tuple(self.events), segments)
 
     def events_until_failure(self, end: float) -> tuple[tuple[Event, ...], float | None]:
         """See :meth:`PymunkSimulator.events_until_failure`. A ball through a cushion stops
@@ -267,24 +262,25 @@ class _PymunkRun:
                 break
             self.t += size
             self.space.step(size)
-            self._friction(size)
+            drop = self.decel * size  # friction, exactly between steps
+            for ball in list(self.active):
+                body = self.bodies[ball]
+                vx, vy = body.velocity
+                speed = math.hypot(vx, vy)
+                if speed <= drop:
+                    body.velocity = (0.0, 0.0)
+                    self.active.discard(ball)
+                    if speed > 0:
+                        self._log("stop", (ball,), None)
+                else:
+                    scale = (speed - drop) / speed
+                    body.velocity = (vx * scale, vy * scale)
             self._pockets()
-            self._new_segments()
-
-    def _friction(self, size: float) -> None:
-        drop = self.decel * size
-        for ball in list(self.active):
-            body = self.bodies[ball]
-            vx, vy = body.velocity
-            speed = math.hypot(vx, vy)
-            if speed <= drop:
-                body.velocity = (0.0, 0.0)
-                self.active.discard(ball)
-                if speed > 0:
-                    self._log("stop", (ball,), None)
-            else:
-                scale = (speed - drop) / speed
-                body.velocity = (vx * scale, vy * scale)
+            for ball in self.touched - self.ended.keys():
+                body = self.bodies[ball]
+                pos, vel = body.position, body.velocity
+                self.segments[ball].append((self.t, (pos.x, pos.y), (vel.x, vel.y)))
+            self.touched.clear()
 
     def _pockets(self) -> None:
         pockets, width, height = self.scene.pockets, self.scene.table.width, self.scene.table.height
@@ -308,14 +304,6 @@ class _PymunkRun:
             f"({x:.4g}, {y:.4g}), off the table); use a smaller dt",
         )
 
-    def _new_segments(self) -> None:
-        for ball in self.touched:
-            if ball not in self.ended:
-                body = self.bodies[ball]
-                pos, vel = body.position, body.velocity
-                self.segments[ball].append((self.t, (pos.x, pos.y), (vel.x, vel.y)))
-        self.touched.clear()
-
     def _on_table(self, ball: int, position: Any) -> tuple[float, float]:
         """``position`` put back against any cushion it has sunk into (see the module);
         as it is when tunnelling is allowed."""
@@ -326,17 +314,3 @@ class _PymunkRun:
             self._through(ball, x, y)
         lo_x, hi_x, lo_y, hi_y = self.box
         return (min(max(x, lo_x), hi_x), min(max(y, lo_y), hi_y))
-
-    def _outcome(self, horizon: float) -> Outcome:
-        positions: dict[int, tuple[float, float] | None] = {}
-        segments: dict[int, tuple[Segment, ...]] = {}
-        for ball, body in self.bodies.items():
-            gone = ball in self.ended
-            positions[ball] = None if gone else self._on_table(ball, body.position)
-            starts = self.segments[ball]
-            ends = [s[0] for s in starts[1:]] + [self.ended.get(ball, horizon)]
-            segments[ball] = tuple(
-                Segment(t0, t1, pos, vel, self.decel)
-                for (t0, pos, vel), t1 in zip(starts, ends, strict=True)
-            )
-        return Outcome(horizon, positions, tuple(self.events), segments)

@@ -25,7 +25,6 @@ from bpb_core.run_folder import iter_answers
 from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession, human_app
 from bpb_tasks.q2.task import Q2Task
-from bpb_tasks.questions.browser import template
 
 ORIGIN = "plugin 'formless' (formless_hooks) from bpb-formless 0.2"
 TASK = "task 'badform'"
@@ -39,7 +38,9 @@ class BadFormTask(Q2Task):
 
     @property
     def form_template(self) -> str:  # type: ignore[override]
-        return "{{ no_such_value }}" if self.flaw == "template_undefined" else template("q2")
+        return (
+            "{{ no_such_value }}" if self.flaw == "template_undefined" else Q2Task().form_template
+        )
 
     def form_context(self, scene: Any, image: bytes | None) -> Any:
         if self.flaw == "context_raise":

@@ -11,22 +11,18 @@ outcomes without motion pieces; the stability copies take :func:`run_batch`'s ar
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from operator import attrgetter
 
 import numpy as np
 
-from bpb_core.errors import BpbError
-from bpb_tasks.billiards.scene.model import WALLS, Scene
+from bpb_tasks.billiards.scene.model import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
+from bpb_tasks.simulators.analytic.engine import SimulationError
 from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
 from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
 KINDS = ("ball", "wall", "pocket", "stop")
 SceneArrays = tuple[list[int], np.ndarray, np.ndarray]
-
-
-class KernelBudgetError(BpbError):
-    """The compiled kernel exceeded its event budget."""
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -57,7 +53,7 @@ def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 
 def scene_arrays(scene: Scene) -> SceneArrays:
     """Ball ids (sorted), positions and velocities of ``scene``."""
-    balls = sorted(scene.balls, key=_ball_id)
+    balls = sorted(scene.balls, key=attrgetter("id"))
     pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for b in balls], dtype=float).reshape(-1, 2)
     return [b.id for b in balls], pos, vel
@@ -73,8 +69,6 @@ def kernel_failure(scene: Scene) -> str | None:
 
     if not HAVE_NUMBA:
         return "numba could not be imported"
-    from bpb_tasks.billiards.scene.model import Ball
-
     table = scene.table  # one ball at rest mid-table: one event at most
     still = Ball.model_construct(id=0, pos=(table.width / 2, table.height / 2), vel=(0.0, 0.0))
     one = scene.model_copy(update={"balls": [still]})
@@ -94,20 +88,8 @@ def kernel_outcome(scene: Scene, horizon: float, max_events: int) -> Outcome:
     prm, pockets = table_params(scene)
     events, pieces, final, status = run_arrays(pos, vel, prm, pockets, float(horizon), max_events)
     if status:
-        raise KernelBudgetError(f"more than {max_events} events before t={float(horizon)}")
-    return build_outcome(ids, events, pieces, final, float(horizon), float(prm[0]))
-
-
-def build_outcome(
-    ids: Sequence[int],
-    events: np.ndarray,
-    pieces: np.ndarray,
-    final: np.ndarray,
-    horizon: float,
-    decel: float,
-) -> Outcome:
-    """An :class:`Outcome` from the kernel's arrays."""
-    log = _event_log(ids, events.tolist())
+        raise SimulationError(f"more than {max_events} events before t={float(horizon)}")
+    decel = float(prm[0])
     rows = final.tolist()
     positions = {ids[i]: (r[0], r[1]) if r[2] else None for i, r in enumerate(rows)}
     per_ball: list[list[list[float]]] = [[] for _ in ids]
@@ -122,7 +104,7 @@ def build_outcome(
             )
             for j, p in enumerate(own)
         )
-    return Outcome(horizon, positions, log, segments)
+    return Outcome(float(horizon), positions, _event_log(ids, events.tolist()), segments)
 
 
 def _event_log(ids: Sequence[int], rows: list[list[float]]) -> tuple[Event, ...]:
@@ -147,7 +129,7 @@ def outcomes_many(
 
     Raises:
         ValueError: The scenes do not share one table.
-        KernelBudgetError: A scene exceeded ``max_events``.
+        SimulationError: A scene exceeded ``max_events``.
     """
     if not scenes:
         return []
@@ -174,7 +156,7 @@ def run_batch(
     rows (scene index first).
 
     Raises:
-        KernelBudgetError: A scene exceeded ``max_events`` (when ``check``).
+        SimulationError: A scene exceeded ``max_events`` (when ``check``).
     """
     first = scenes[0]
     shape = (first.table, first.physics, first.pockets)
@@ -185,7 +167,7 @@ def run_batch(
         or s.pockets is not first.pockets
     ):  # fmt: skip
         raise ValueError("outcomes_many: scenes must share table, physics and pockets")
-    ordered = [sorted(s.balls, key=_ball_id) for s in scenes]
+    ordered = [sorted(s.balls, key=attrgetter("id")) for s in scenes]
     pos = np.array([b.pos for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
     vel = np.array([b.vel for balls in ordered for b in balls], dtype=float).reshape(-1, 2)
     starts = np.cumsum([0] + [len(balls) for balls in ordered])
@@ -195,9 +177,5 @@ def run_batch(
         pos, vel, starts, prm, pockets, np.array(ends, dtype=float), max_events
     )
     if check and status.any():
-        raise KernelBudgetError(f"scene {int(np.argmax(status))}: more than {max_events} events")
+        raise SimulationError(f"scene {int(np.argmax(status))}: more than {max_events} events")
     return [[b.id for b in balls] for balls in ordered], starts, final, status, events
-
-
-def _ball_id(ball: Any) -> int:
-    return int(ball.id)

@@ -51,13 +51,14 @@ import copy
 import heapq
 import importlib.util
 import os
+import shutil
 from collections.abc import Sequence
 
 from bpb_core.errors import BadInput, BpbError
 from bpb_tasks.billiards.scene.model import WALLS, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.kernel_cache import (
-    clear_own_cache,
+    cache_folder,
     is_cached,
     note,
     numba_cache_dir,
@@ -126,12 +127,6 @@ class AnalyticSimulator:
         other.max_events = max_events
         return other
 
-    @property
-    def compiled(self) -> bool:
-        """Whether runs may take the compiled kernel (numba installed, float64, not
-        ``engine="python"``, and it has not failed to load)."""
-        return self.available and self.engine != "python" and self.kernel is not False
-
     def kernel_loaded(self) -> bool:
         """Whether single runs take the kernel now: once a batch loaded it, or from the first
         run with ``engine="kernel"``."""
@@ -156,11 +151,15 @@ class AnalyticSimulator:
         from bpb_tasks.simulators.analytic.kernel_roots import CACHE
 
         if CACHE and not self.cached:  # else kernel_roots said it cannot cache it
-            note(COMPILE_NOTE.format(numba_cache_dir(os.environ)))
+            note(
+                "compiling the physics kernel for this machine (about 20 s); cached in "
+                f"{numba_cache_dir(os.environ)} for later commands"
+            )
         failure = kernel_failure(scene)
         if failure is not None:
             note(f"the compiled physics kernel cannot be used ({failure}); using the Python engine")
-            clear_own_cache(numba_cache_dir(os.environ))
+            if numba_cache_dir(os.environ) == cache_folder():  # a folder the user named stays
+                shutil.rmtree(cache_folder(), ignore_errors=True)  # the next command builds it
         self.kernel = failure is None
         return self.kernel
 
@@ -174,12 +173,9 @@ class AnalyticSimulator:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
         end = scene.horizon if horizon is None else horizon
         if self.kernel or (self.engine == "kernel" and self.takes_kernel(scene, 1)):
-            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, kernel_outcome
+            from bpb_tasks.simulators.analytic.compiled import kernel_outcome
 
-            try:
-                return kernel_outcome(scene, end, self.max_events)
-            except KernelBudgetError as exc:
-                raise SimulationError(str(exc)) from None
+            return kernel_outcome(scene, end, self.max_events)
         return _Simulation(scene, self.numeric, self.max_events).run(end)
 
     def capped_events(self, scene: Scene, horizon: float) -> tuple[tuple[Event, ...], bool]:
@@ -200,19 +196,11 @@ class AnalyticSimulator:
         (:func:`~bpb_tasks.simulators.analytic.compiled.outcomes_many`: outcomes without motion
         pieces, ``segments`` empty), else :meth:`run` on each."""
         if scenes and self.takes_kernel(scenes[0], len(scenes)):
-            from bpb_tasks.simulators.analytic.compiled import KernelBudgetError, outcomes_many
+            from bpb_tasks.simulators.analytic.compiled import outcomes_many
 
-            try:
-                ends = None if horizon is None else [horizon] * len(scenes)
-                return outcomes_many(scenes, ends, self.max_events)
-            except KernelBudgetError as exc:
-                raise SimulationError(str(exc)) from None
+            ends = None if horizon is None else [horizon] * len(scenes)
+            return outcomes_many(scenes, ends, self.max_events)
         return [self.run(s, horizon) for s in scenes]
-
-
-COMPILE_NOTE = (
-    "compiling the physics kernel for this machine (about 20 s); cached in {} for later commands"
-)
 
 
 class _Simulation(Predictor):
@@ -255,33 +243,6 @@ class _Simulation(Predictor):
         self.predict_all(q, t, skip=p)
         return True
 
-    def bounce(self, b: Body, t: Number, wall: int) -> None:
-        self.motion.advance(b, t)
-        xmin, xmax, ymin, ymax = self.bounds
-        vx, vy = b.ux * b.speed, b.uy * b.speed
-        if wall in (TOP, BOTTOM):
-            b.y = ymax if wall == TOP else ymin
-            vy = -vy * self.restitution
-        else:
-            b.x = xmax if wall == RIGHT else xmin
-            vx = -vx * self.restitution
-        self.changed(b, t, vx, vy)
-        self.log(t, WALL, (b,), WALLS[wall])
-        self.predict_all(b, t)
-
-    def pocket(self, b: Body, t: Number) -> None:
-        self.motion.advance(b, t)
-        b.alive = False
-        b.version += 1
-        self.ended[b.index] = t
-        self.log(t, POCKET, (b,))
-
-    def stop(self, b: Body, t: Number) -> None:
-        self.motion.advance(b, t)
-        self.changed(b, t, b.speed * 0, b.speed * 0)
-        self.log(t, STOP, (b,))
-        self.predict_pairs(b, t)
-
     def log(self, t: Number, kind: int, bodies: tuple[Body, ...], wall: str | None = None) -> None:
         self.events.append(
             Event(
@@ -321,12 +282,30 @@ class _Simulation(Predictor):
                 other = bodies[k]
                 if other.version != ver_k or not other.alive or not self.collide(b, other, t):
                     continue
-            elif kind == WALL:
-                self.bounce(b, t, k)
+            elif kind == WALL:  # wall ``k``: its normal velocity reversed and scaled
+                self.motion.advance(b, t)
+                xmin, xmax, ymin, ymax = self.bounds
+                vx, vy = b.ux * b.speed, b.uy * b.speed
+                if k in (TOP, BOTTOM):
+                    b.y = ymax if k == TOP else ymin
+                    vy = -vy * self.restitution
+                else:
+                    b.x = xmax if k == RIGHT else xmin
+                    vx = -vx * self.restitution
+                self.changed(b, t, vx, vy)
+                self.log(t, WALL, (b,), WALLS[k])
+                self.predict_all(b, t)
             elif kind == POCKET:
-                self.pocket(b, t)
-            else:
-                self.stop(b, t)
+                self.motion.advance(b, t)
+                b.alive = False
+                b.version += 1
+                self.ended[b.index] = t
+                self.log(t, POCKET, (b,))
+            else:  # the ball stops
+                self.motion.advance(b, t)
+                self.changed(b, t, b.speed * 0, b.speed * 0)
+                self.log(t, STOP, (b,))
+                self.predict_pairs(b, t)
             count += 1
             if count > self.max_events:
                 raise SimulationError(
@@ -334,26 +313,24 @@ class _Simulation(Predictor):
                 )
 
     def outcome(self, horizon_in: float, horizon: Number) -> Outcome:
+        """The final positions, the event log and each ball's pieces of motion as public
+        floats (a ball's last piece ends at the horizon, or where it was pocketed)."""
         positions: dict[int, tuple[float, float] | None] = {}
         segments: dict[int, tuple[Segment, ...]] = {}
         exact = self.numeric.num is not float
+        decel = float(self.motion.decel)
         for b in self.bodies:
             if b.alive:
                 x, y, _ = self.motion.state(b, horizon)
                 positions[b.id] = (float(x), float(y)) if exact else (x, y)
             else:
                 positions[b.id] = None
-            segments[b.id] = self.segments_of(b, self.ended.get(b.index, horizon), exact)
+            end: Number = self.ended.get(b.index, horizon)
+            seg, pieces = b.seg, []
+            for i, (t0, x, y, vx, vy) in enumerate(seg):
+                t1 = seg[i + 1][0] if i + 1 < len(seg) else end
+                if exact:
+                    t0, t1, x, y, vx, vy = (float(v) for v in (t0, t1, x, y, vx, vy))
+                pieces.append(Segment(t0, t1, (x, y), (vx, vy), decel))
+            segments[b.id] = tuple(pieces)
         return Outcome(horizon_in, positions, tuple(self.events), segments)
-
-    def segments_of(self, b: Body, end: Number, exact: bool) -> tuple[Segment, ...]:
-        """``b``'s pieces of motion as public floats (the last one ends at ``end``)."""
-        decel = float(self.motion.decel)
-        seg = b.seg
-        out = []
-        for i, (t0, x, y, vx, vy) in enumerate(seg):
-            t1 = seg[i + 1][0] if i + 1 < len(seg) else end
-            if exact:
-                t0, t1, x, y, vx, vy = (float(v) for v in (t0, t1, x, y, vx, vy))
-            out.append(Segment(t0, t1, (x, y), (vx, vy), decel))
-        return tuple(out)

@@ -93,39 +93,6 @@ def _collide(
 
 
 @jit
-def _bounce(
-    st: Arr, iv: Arr, prm: Arr, events: Any, pieces: Any, b: int, t: float, wall: int
-) -> None:
-    advance(st, prm, b, t)
-    vx, vy = st[b, UX] * st[b, SPEED], st[b, UY] * st[b, SPEED]
-    if wall in (TOP, BOTTOM):
-        st[b, _Y] = prm[YMAX] if wall == TOP else prm[YMIN]
-        vy = -vy * prm[REST]
-    else:
-        st[b, _X] = prm[XMAX] if wall == RIGHT else prm[XMIN]
-        vx = -vx * prm[REST]
-    _changed(st, iv, prm, pieces, b, t, vx, vy)
-    _log(events, st, t, WALL, b, -1, wall)
-
-
-@jit
-def _start(st: Arr, iv: Arr, prm: Arr, pockets: Arr, vel: Arr, queue: Any, pieces: Any) -> None:
-    n = st.shape[0]
-    for i in range(n):
-        set_velocity(st, prm, i, 0.0, vel[i, 0], vel[i, 1])
-        if prm[RECORD]:
-            pieces.append((float(i), 0.0, st[i, _X], st[i, _Y], vel[i, 0], vel[i, 1]))
-    for i in range(n):
-        if st[i, SPEED] > 0:
-            predict_single(st, iv, prm, pockets, queue, i)
-        else:
-            pocket_at_start(st, iv, prm, pockets, queue, i)
-    for i in range(n):
-        if st[i, SPEED] > 0:
-            predict_pairs(st, iv, prm, queue, i, 0.0, -1)
-
-
-@jit
 def _loop(
     st: Arr,
     iv: Arr,
@@ -152,8 +119,17 @@ def _loop(
             predict_pairs(st, iv, prm, queue, i, t, -1)
             predict_single(st, iv, prm, pockets, queue, k)
             predict_pairs(st, iv, prm, queue, k, t, i)
-        elif kind == WALL:
-            _bounce(st, iv, prm, events, pieces, i, t, k)
+        elif kind == WALL:  # wall ``k``
+            advance(st, prm, i, t)
+            vx, vy = st[i, UX] * st[i, SPEED], st[i, UY] * st[i, SPEED]
+            if k in (TOP, BOTTOM):
+                st[i, _Y] = prm[YMAX] if k == TOP else prm[YMIN]
+                vy = -vy * prm[REST]
+            else:
+                st[i, _X] = prm[XMAX] if k == RIGHT else prm[XMIN]
+                vx = -vx * prm[REST]
+            _changed(st, iv, prm, pieces, i, t, vx, vy)
+            _log(events, st, t, WALL, i, -1, k)
             predict_single(st, iv, prm, pockets, queue, i)
             predict_pairs(st, iv, prm, queue, i, t, -1)
         elif kind == POCKET:
@@ -224,7 +200,18 @@ def run_into(
     queue.clear()
     events.clear()
     pieces.clear()
-    _start(st, iv, prm, pockets, vel, queue, pieces)
+    for i in range(n):
+        set_velocity(st, prm, i, 0.0, vel[i, 0], vel[i, 1])
+        if prm[RECORD]:
+            pieces.append((float(i), 0.0, st[i, _X], st[i, _Y], vel[i, 0], vel[i, 1]))
+    for i in range(n):
+        if st[i, SPEED] > 0:
+            predict_single(st, iv, prm, pockets, queue, i)
+        else:
+            pocket_at_start(st, iv, prm, pockets, queue, i)
+    for i in range(n):
+        if st[i, SPEED] > 0:
+            predict_pairs(st, iv, prm, queue, i, 0.0, -1)
     status = _loop(st, iv, prm, pockets, queue, events, pieces, ended, horizon, max_events)
     final[:] = 0.0
     for i in range(n):

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import shutil
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -71,13 +70,6 @@ def is_cached(folder: Path) -> bool:
         return all(any(folder.rglob(f"*.{name}-*.nbi")) for name in ENTRY_POINTS)
     except OSError:
         return False
-
-
-def clear_own_cache(folder: Path) -> None:
-    """Remove ``folder`` when it is bpb's own cache folder (one numba could not load the kernel
-    from), so that the next command builds it anew; a folder the user named stays."""
-    if folder == cache_folder():
-        shutil.rmtree(folder, ignore_errors=True)
 
 
 def python_seconds(runs: int, events: float) -> float:

@@ -15,6 +15,7 @@ import math
 from typing import Any
 
 from bpb_tasks.simulators.analytic.kernel_roots import NO_ROOT, first_contact, jit
+from bpb_tasks.simulators.analytic.motion import point_segment_gap2
 
 X, Y, T0, SPEED, UX, UY, TSTOP, WALL_T = range(8)
 VERSION, ALIVE = 0, 1
@@ -24,6 +25,7 @@ BALL, WALL, POCKET, STOP = 0, 1, 2, 3
 TOP, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3
 INF = math.inf
 Arr = Any  # a numpy array (numba has no static types for mypy)
+gap2 = jit(point_segment_gap2)  # the reference's own code, compiled
 
 
 @jit
@@ -66,14 +68,6 @@ def time_for(prm: Arr, speed: float, s: float) -> float:
 
 
 @jit
-def reach(st: Arr, prm: Arr, i: int) -> float:
-    speed, decel = st[i, SPEED], prm[DECEL]
-    if decel > 0:
-        return float(speed * speed / (2 * decel))
-    return INF if speed > 0 else speed
-
-
-@jit
 def push(prm: Arr, queue: Any, t: float, kind: int, i: int, k: int, ver: int, other: int) -> None:
     if t <= prm[HORIZON]:  # a later event cannot fire in this run
         heapq.heappush(queue, (t, kind, i, k, ver, other))
@@ -84,9 +78,10 @@ def predict_single(st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int)
     st[i, WALL_T] = INF
     if st[i, SPEED] == 0:
         return
+    far = INF
     if prm[DECEL] > 0:
         push(prm, queue, st[i, TSTOP], STOP, i, 0, iv[i, VERSION], 0)
-    far = reach(st, prm, i)
+        far = st[i, SPEED] * st[i, SPEED] / (2 * prm[DECEL])
     x, y, ux, uy = st[i, X], st[i, Y], st[i, UX], st[i, UY]
     if uy != 0:
         if uy > 0:
@@ -216,7 +211,11 @@ def moving_pair(
     h = prm[HALF]
     ax, ay = (st[q, UX] - st[p, UX]) * h, (st[q, UY] - st[p, UY]) * h
     dx, dy = px - qx, py - qy
-    if paths_apart(prm, dx, dy, vx, vy, ax, ay, span):
+    ex = vx * span + ax * span * span  # the reference's cheap rejection
+    ey = vy * span + ay * span * span
+    bulge = math.sqrt(ax * ax + ay * ay) * span * span / 4
+    limit = prm[TWO_R] * (1 + prm[MARGIN]) + bulge
+    if gap2(dx, dy, ex, ey) > limit * limit:
         return NO_ROOT
     coeffs = (
         ax * ax + ay * ay,
@@ -226,24 +225,6 @@ def moving_pair(
         dx * dx + dy * dy - prm[CONTACT2],
     )
     return first_contact(coeffs, span)
-
-
-@jit
-def paths_apart(
-    prm: Arr, x: float, y: float, vx: float, vy: float, ax: float, ay: float, span: float
-) -> bool:
-    """Reference ``Predictor.paths_apart`` with ``point_segment_gap2`` inlined."""
-    ex = vx * span + ax * span * span
-    ey = vy * span + ay * span * span
-    bulge = math.sqrt(ax * ax + ay * ay) * span * span / 4
-    limit = prm[TWO_R] * (1 + prm[MARGIN]) + bulge
-    length2 = ex * ex + ey * ey
-    if length2 > 0:
-        k = -(x * ex + y * ey) / length2
-        if k > 0:
-            k = k if k < 1 else k * 0 + 1
-            x, y = x + k * ex, y + k * ey
-    return bool(x * x + y * y > limit * limit)
 
 
 @jit

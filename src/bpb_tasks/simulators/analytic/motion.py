@@ -6,6 +6,9 @@ A moving ball at ``p`` with speed ``v`` along unit direction ``u`` covers the di
 times all come from a distance ``s`` along that line, turned into a time by the stable form
 ``t = 2 s / (v + sqrt(v^2 - 2 a s))``. Numbers are Python floats or mpmath values
 (:mod:`bpb_tasks.simulators.analytic.numeric`); nothing here depends on which.
+
+:func:`point_segment_gap2` is the compiled kernel's too: ``kernel_predict`` compiles this very
+code with ``@jit``, so this module's source keys the kernel's cache folder as theirs do.
 """
 
 from __future__ import annotations
@@ -88,12 +91,6 @@ class Motion:
         x, y, speed = self.state(b, t)
         b.x, b.y = x, y
         self.set_velocity(b, t, b.ux * speed, b.uy * speed)
-
-    def reach(self, b: Body) -> Number:
-        """Distance ``b`` still covers before stopping (``inf`` without friction)."""
-        if self.decel > 0:
-            return b.speed * b.speed / (2 * self.decel)
-        return self.inf if b.speed > 0 else b.speed
 
     def time_for(self, speed: Number, s: Number) -> Number:
         """Time to cover ``s`` (less than the stopping distance) starting at ``speed``."""

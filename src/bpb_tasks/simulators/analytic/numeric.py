@@ -42,19 +42,10 @@ class Numeric:
 FLOAT64 = Numeric("float64", float, math.sqrt, 1e-15, 200, 1e-15)
 
 
-def mpmath_backend(digits: int = 50) -> Numeric:
-    """A backend with ``digits`` significant decimal digits, on a private mpmath context
-    (the global ``mpmath.mp`` precision is left untouched)."""
-    import mpmath
-
-    ctx = mpmath.MPContext()
-    ctx.dps = digits
-    tol = ctx.mpf(10) ** (-(digits - 8))
-    return Numeric(f"mpmath{digits}", ctx.mpf, ctx.sqrt, tol, 400, tol)
-
-
 def backend(precision: str | int | None) -> Numeric:
-    """The backend named by ``precision``: ``None``/``"float64"``, or a digit count for mpmath."""
+    """The backend named by ``precision``: ``None``/``"float64"``, or a digit count for mpmath
+    (that many significant decimal digits, on a private mpmath context: the global
+    ``mpmath.mp`` precision is left untouched)."""
     if precision is None or precision == "float64":
         return FLOAT64
     try:
@@ -65,4 +56,9 @@ def backend(precision: str | int | None) -> Numeric:
         from bpb_core.errors import BadInput
 
         raise BadInput(f"--precision: expected 'float64' or a digit count >= 20, got {precision!r}")
-    return mpmath_backend(digits)
+    import mpmath
+
+    ctx = mpmath.MPContext()
+    ctx.dps = digits
+    tol = ctx.mpf(10) ** (-(digits - 8))
+    return Numeric(f"mpmath{digits}", ctx.mpf, ctx.sqrt, tol, 400, tol)

@@ -60,9 +60,10 @@ class Predictor:
         b.wall_t = motion.inf
         if b.speed == 0:
             return  # a resting ball enters no pocket (one it came to rest in has taken it)
+        reach = motion.inf  # the distance ``b`` still covers: for ever without friction
         if motion.decel > 0:
             self.push(b.tstop, STOP, b, 0)
-        reach = motion.reach(b)
+            reach = b.speed * b.speed / (2 * motion.decel)
         xmin, xmax, ymin, ymax = self.bounds
         if b.uy != 0:
             wall, gap = (TOP, (ymax - b.y) / b.uy) if b.uy > 0 else (BOTTOM, (b.y - ymin) / -b.uy)
@@ -153,7 +154,14 @@ class Predictor:
         h = self.motion.half
         ax, ay = (q.ux - p.ux) * h, (q.uy - p.uy) * h
         dx, dy = px - qx, py - qy
-        if self.paths_apart((dx, dy), (vx, vy), (ax, ay), span):
+        # Cheap rejection: the relative position d + v t + a t^2 stays within |a| span^2 / 4 of
+        # the chord from d to its value at span; if that chord passes farther than 2R plus this
+        # bulge from the origin, no contact.
+        ex = vx * span + ax * span * span
+        ey = vy * span + ay * span * span
+        bulge = self.sqrt(ax * ax + ay * ay) * span * span / 4
+        limit = self.two_r * (1 + self.margin) + bulge
+        if point_segment_gap2(dx, dy, ex, ey) > limit * limit:
             return None
         coeffs = [
             ax * ax + ay * ay,
@@ -163,22 +171,6 @@ class Predictor:
             dx * dx + dy * dy - self.contact2,
         ]
         return first_contact(coeffs, span, self.numeric)
-
-    def paths_apart(
-        self,
-        d0: tuple[Number, Number],
-        v: tuple[Number, Number],
-        a: tuple[Number, Number],
-        span: Number,
-    ) -> bool:
-        """Cheap rejection of a moving pair: the relative position ``d0 + v t + a t^2`` stays
-        within ``|a| span^2 / 4`` of the chord from ``d0`` to its value at ``span``; if that
-        chord passes farther than ``2R`` plus this bulge from the origin, no contact."""
-        ex = v[0] * span + a[0] * span * span
-        ey = v[1] * span + a[1] * span * span
-        bulge = self.sqrt(a[0] * a[0] + a[1] * a[1]) * span * span / 4
-        limit = self.two_r * (1 + self.margin) + bulge
-        return bool(point_segment_gap2(d0[0], d0[1], ex, ey) > limit * limit)
 
     def predict_all(self, b: Body, t: Number, skip: Body | None = None) -> None:
         """Re-predict everything involving ``b``, which changed at ``t`` (pairs with ``skip`` are
