@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import pluggy
 
@@ -31,15 +31,7 @@ if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
 
 Kind = Literal["task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic"]
-KINDS: tuple[Kind, ...] = (
-    "task",
-    "scene_family",
-    "simulator",
-    "adapter",
-    "scorer",
-    "suite",
-    "diagnostic",
-)
+KINDS: tuple[Kind, ...] = get_args(Kind)
 
 
 def lazy(reference: str) -> Callable[[], Any]:
@@ -564,13 +556,7 @@ def _check_one_scorer_per_task(scorers: dict[str, Registered]) -> None:
 
 
 _RECORDS: dict[Kind, str] = {
-    "task": "TaskInfo",
-    "scene_family": "SceneFamilyInfo",
-    "simulator": "SimulatorInfo",
-    "adapter": "AdapterInfo",
-    "scorer": "ScorerInfo",
-    "suite": "SuiteInfo",
-    "diagnostic": "DiagnosticInfo",
+    record.kind: record.__name__ for record in ComponentInfo.__subclasses__()
 }
 
 

@@ -44,15 +44,22 @@ def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
     Raises:
         BadInput: ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``.
     """
-    if data is None:
-        try:
-            data = path.read_bytes()
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        return model.model_validate_json(data)
+        return model.model_validate_json(read_bytes(path) if data is None else data)
     except ValidationError as exc:
         raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
+
+
+def read_bytes(path: Path) -> bytes:
+    """The bytes of the file ``path``.
+
+    Raises:
+        BadInput: ``"<file>: cannot read: ..."``.
+    """
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
 
 
 def validate_mapping(model: type[M], data: Mapping[str, Any], source: str) -> M:

@@ -160,20 +160,8 @@ class BenchFamily:
 
 
 def bench_family(registry: Registry, name: str) -> BenchFamily:
-    """The scene family ``name`` (:func:`comparing_family`), its hooks to be called checked.
-
-    Raises:
-        BadInput: It is not installed or cannot compare simulators.
-    """
-    return BenchFamily(comparing_family(registry, name), registry.origin("scene_family", name))
-
-
-def _number(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)  # numpy's too
-
-
-def comparing_family(registry: Registry, name: str) -> Comparing:
-    """The scene family ``name``, which must be able to compare simulators.
+    """The scene family ``name``, which must be able to compare simulators, its hooks to be
+    called checked.
 
     Raises:
         BadInput: It is not installed or has no :class:`Comparing` capability.
@@ -181,7 +169,11 @@ def comparing_family(registry: Registry, name: str) -> Comparing:
     family = registry.scene_family(name)
     if not isinstance(family, Comparing):
         raise BadInput(f"--family: the {name} scene family cannot compare simulators")
-    return family
+    return BenchFamily(family, registry.origin("scene_family", name))
+
+
+def _number(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)  # numpy's too
 
 
 def build_simulators(

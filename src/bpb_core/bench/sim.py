@@ -35,11 +35,10 @@ from bpb_core.bench.comparing import (
     BenchFamily,
     bench_family,
     build_simulators,
-    comparing_family,
     timed_run,
 )
 from bpb_core.bench.sim_report import ScaleRow, SimBench, SimRow
-from bpb_core.capabilities import CountsEvents, RunsMany
+from bpb_core.capabilities import RunsMany
 from bpb_core.errors import BadInput
 from bpb_core.simulator_spec import parse_spec
 
@@ -337,7 +336,7 @@ def scaling_simulators(
     """
     if scenes < 1:
         raise BadInput(f"--scaling-scenes: must be at least 1, got {scenes}")
-    if not isinstance(comparing_family(registry, family), CountsEvents):
+    if not bench_family(registry, family).counts_events:
         raise BadInput(f"--scaling: scene family {family!r} does not count events")
     specs = [parse_spec(c, "--scaling") for c in contestants]
     return build_simulators(registry, family, specs, "--scaling")

@@ -14,7 +14,7 @@ import shutil
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -28,7 +28,7 @@ from bpb_core.dataset.jobs import (
     run_scenes,
     worker_setup,
 )
-from bpb_core.dataset.manifest import DatasetManifest, DatasetWriter, HorizonSummary, versions
+from bpb_core.dataset.manifest import DatasetManifest, DatasetWriter, versions
 from bpb_core.errors import (
     BadInput,
     Interrupted,
@@ -131,7 +131,9 @@ def generate_dataset(
                     checked_config(maker, origin, cfg, hs)
                     setup = replace(setup, config=cfg)
                 tallies = new_tallies(maker, origin, cfg, hs)
-                writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+                writer = DatasetWriter(
+                    partial, hs, maker.index_columns, tallies, origin, family_label(maker)
+                )
                 try:
                     run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
                     _write_stats(maker, setup, writer, tallies, progress)
@@ -232,7 +234,7 @@ def _write_stats(
     family: SceneFamily,
     setup: WorkerSetup,
     writer: DatasetWriter,
-    tallies: Mapping[float, CheckedTally],
+    tallies: Mapping[float, HorizonTally],
     progress: GenerateProgress,
 ) -> None:
     if not isinstance(family, DrawingStats):
@@ -240,8 +242,7 @@ def _write_stats(
     progress.phase("stats", 1)
     what = f"scene family {family.name!r}: write_stats()"
     with blamed(setup.origin, what):
-        own = {horizon: checked.tally for horizon, checked in tallies.items()}
-        written = family.write_stats(setup.root, setup.config, own)
+        written = family.write_stats(setup.root, setup.config, tallies)
     if not isinstance(written, list | tuple) or not all(isinstance(r, str) for r in written):
         raise PluginBug(
             f"{setup.origin}: {what} returned {type(written).__name__}; expected a list of "
@@ -317,7 +318,7 @@ def recorded_physics(family: SceneFamily, origin: str, config: Any) -> dict[str,
 
 def new_tallies(
     family: SceneFamily, origin: str, config: Any, horizons: Sequence[float]
-) -> dict[float, CheckedTally]:
+) -> dict[float, HorizonTally]:
     """A ``family.new_tally(config, h)`` per horizon (none when the family does not tally),
     checked: each has ``add()`` and ``summary()``, which the writer calls next, checked too.
 
@@ -336,52 +337,8 @@ def new_tallies(
                 f"{origin}: {what} returned {type(tally).__name__}; expected a tally with "
                 "add(row) and summary()"
             )
-        tallies[horizon] = CheckedTally(tally, origin, f"{what}'s")
+        tallies[horizon] = tally
     return tallies
-
-
-@dataclass(frozen=True)
-class CheckedTally:
-    """A family's tally whose ``add()`` and ``summary()`` are called checked (the family's own
-    ``write_stats()`` takes ``tally`` back as it made it).
-
-    Attributes:
-        tally: What the family's ``new_tally()`` returned.
-        origin: Who supplied the family.
-        what: Whose tally it is (``scene family 'x': new_tally(3)'s``).
-    """
-
-    tally: HorizonTally
-    origin: str
-    what: str
-
-    def add(self, row: Mapping[str, object]) -> None:
-        """``tally.add(row)``.
-
-        Raises:
-            PluginBug: It raised, naming ``origin``.
-        """
-        with blamed(self.origin, f"{self.what} add()"):
-            self.tally.add(row)
-
-    def summary(self) -> dict[str, Any]:
-        """``tally.summary()``, checked: a dict that JSON can hold (the manifest records it)
-        whose fields are not the counts bpb keeps itself (``scenes``).
-
-        Raises:
-            PluginBug: It raised or returned something else, naming ``origin``.
-        """
-        what = f"{self.what} summary()"
-        with blamed(self.origin, what):
-            summary = self.tally.summary()
-        fields = json_values(self.origin, what, summary, "what dataset.json")
-        ours = sorted(set(fields) & set(HorizonSummary.model_fields))
-        if ours:
-            raise PluginBug(
-                f"{self.origin}: {what} returned {ours[0]!r}, which bpb counts itself; "
-                "expected the family's own fields"
-            )
-        return fields
 
 
 def calibrated(

@@ -24,8 +24,9 @@ from typing import IO, TYPE_CHECKING, Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from bpb_core.capabilities import HorizonTally
-from bpb_core.errors import BadInput, writing
+from bpb_core.errors import BadInput, PluginBug, blamed, writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
+from bpb_core.plugin_calls import json_values
 
 if TYPE_CHECKING:
     from bpb_core.dataset.jobs import SceneResult
@@ -175,7 +176,9 @@ class DatasetWriter:
     """Appends index rows and checksums in scene order; writes the manifest.
 
     Attributes:
-        tallies: The family's per-horizon tallies (empty when the family keeps none).
+        tallies: The family's per-horizon tallies (empty when the family keeps none), whose
+            ``add()`` and ``summary()`` are called checked: a failure names ``origin`` (who
+            supplied the family) and ``family`` (how messages name it, ``scene family 'x'``).
     """
 
     def __init__(
@@ -184,10 +187,13 @@ class DatasetWriter:
         horizons: Sequence[float],
         columns: Sequence[str],
         tallies: Mapping[float, HorizonTally] | None = None,
+        origin: str = "",
+        family: str = "",
     ) -> None:
         self.root = root
         self.counts = {h: HorizonCounts() for h in horizons}
         self.tallies = dict(tallies or {})
+        self.origin, self.family = origin, family
         with writing(root):
             self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
             self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
@@ -202,7 +208,8 @@ class DatasetWriter:
         counts.scenes += 1
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
-            self.tallies[row.horizon].add(dict(row.values))
+            with blamed(self.origin, f"{self._tally(row.horizon)} add()"):
+                self.tallies[row.horizon].add(dict(row.values))
         # Checksums first: a Ctrl-C between the two leaves no index row whose files are unlisted
         with writing(self.root / CHECKSUMS):  # the buffer reaching the disk, which may be full
             self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
@@ -232,11 +239,29 @@ class DatasetWriter:
         """Per-horizon counts (with the family's fields) keyed by horizon label (``h3``)."""
         out = {}
         for h, c in self.counts.items():
-            extra: dict[str, Any] = self.tallies[h].summary() if h in self.tallies else {}
+            extra = self._tally_summary(h) if h in self.tallies else {}
             out[horizon_label(h)] = HorizonSummary(
                 scenes=c.scenes, dropped_unstable=c.dropped, unstable=c.unstable, **extra
             )
         return out
+
+    def _tally(self, horizon: float) -> str:
+        return f"{self.family}: new_tally({horizon:g})'s"
+
+    def _tally_summary(self, horizon: float) -> dict[str, Any]:
+        """The tally's ``summary()``, checked: a dict that JSON can hold whose fields are not
+        the counts bpb keeps itself (``scenes``)."""
+        what = f"{self._tally(horizon)} summary()"
+        with blamed(self.origin, what):
+            summary = self.tallies[horizon].summary()
+        fields = json_values(self.origin, what, summary, "what dataset.json")
+        ours = sorted(set(fields) & set(HorizonSummary.model_fields))
+        if ours:
+            raise PluginBug(
+                f"{self.origin}: {what} returned {ours[0]!r}, which bpb counts itself; "
+                "expected the family's own fields"
+            )
+        return fields
 
     def write_manifest(self, manifest: DatasetManifest) -> DatasetManifest:
         """Add the descriptive files' hashes, seal and write ``dataset.json``."""

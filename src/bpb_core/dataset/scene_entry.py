@@ -26,7 +26,7 @@ from pydantic import BaseModel
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INIT, SceneKey
-from bpb_core.validated_files import read_model
+from bpb_core.validated_files import read_bytes, read_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -57,10 +57,7 @@ def read_scene_file(path: Path) -> bytes:
     Raises:
         BadInput: The file cannot be read, or differs from its recorded checksum.
     """
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    data = read_bytes(path)
     check_recorded(path, data)
     return data
 
@@ -68,10 +65,7 @@ def read_scene_file(path: Path) -> bytes:
 def read_scene_model(path: Path, model: type[M]) -> M:
     """A scene's JSON file read with ``model``; a file that does not validate is named with its
     field first, then one that validates but was changed after generation."""
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    data = read_bytes(path)
     value = read_model(path, model, data)
     check_recorded(path, data)
     return value
@@ -200,10 +194,7 @@ class DatasetScene:
             BadInput: No such kind, or the file is missing, truncated, damaged or changed.
         """
         path = self.image_path(kind)
-        try:
-            data = path.read_bytes()
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+        data = read_bytes(path)
         check_image(path, data)
         check_recorded(path, data)
         return data
@@ -271,11 +262,6 @@ def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any)
     folder = key.dir(dataset)
     identity = (_identity(folder / INIT), _identity(folder / FINAL))
     return _read_truth(folder, scene_model, truth_model, identity)
-
-
-def clear_truth_cache() -> None:
-    """Forget every scene :func:`read_truth` has read (to time a cold read)."""
-    _read_truth.cache_clear()
 
 
 def _identity(path: Path) -> tuple[int, int, int] | None:

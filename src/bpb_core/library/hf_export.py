@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import DescribesDataset
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.dataset.reader import DataFolder, Dataset, dataset_keys, load_dataset, manifest_data
+from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset, open_folder
 from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
@@ -335,9 +335,7 @@ def _truth(dataset: Dataset, registry: Registry) -> list[str]:
     """Which simulator made the ground truth, as the config names it, and what it is (its
     registered summary): the family's words hold for every simulator, and only the simulator
     knows whether its truth is exact or stepped."""
-    origin = registry.origin("scene_family", dataset.family.name)
-    folder = DataFolder(dataset.root, manifest_data(dataset.root), None, dataset.family, origin)
-    spec = folder.simulator_spec()
+    spec = open_folder(dataset.root, registry).simulator_spec()
     try:
         summary = registry.get("simulator", spec.name).info.summary
     except UnknownName:
