@@ -47,10 +47,6 @@ def lazy(reference: str) -> Callable[[], Any]:
     return load
 
 
-def _nothing_to_load() -> None:
-    return None
-
-
 @dataclass(frozen=True)
 class ComponentInfo:
     """Common fields of every registration record.
@@ -62,7 +58,7 @@ class ComponentInfo:
     """
 
     name: str
-    load: Callable[[], Any] = field(default=_nothing_to_load, repr=False, compare=False)
+    load: Callable[[], Any] = field(default=lambda: None, repr=False, compare=False)
     summary: str = ""
 
     kind: Kind = field(init=False, default="task")

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Comparing, CountsEvents
 from bpb_core.errors import BadInput, PluginBug, blamed
-from bpb_core.plugin_calls import family_model
+from bpb_core.plugin_calls import family_label, family_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Simulator
@@ -38,10 +38,6 @@ class BenchFamily:
 
     family: Comparing
     origin: str
-
-    @property
-    def name(self) -> str:
-        return str(getattr(self.family, "name", type(self.family).__name__))
 
     @property
     def counts_events(self) -> bool:
@@ -153,7 +149,7 @@ class BenchFamily:
             return getattr(self.family, attribute)
 
     def _label(self) -> str:
-        return f"scene family {self.name!r}"
+        return family_label(self.family)
 
     def _bug(self, said: str) -> PluginBug:
         return PluginBug(f"{self.origin}: {self._label()}: {said}")

@@ -74,6 +74,14 @@ class _Tally:
             if key != ERROR:
                 self.counts[key] = self.counts.get(key, 0.0) + value
 
+    def timed(self, sim: Simulator, scene: Any) -> tuple[Any, float] | None:
+        """:func:`timed_run`; ``None`` when the simulator raised (a failed scene)."""
+        try:
+            return timed_run(sim, scene)
+        except Exception as exc:  # the simulator's own failure on this scene
+            self.fail(f"{type(exc).__name__}: {exc}")
+            return None
+
     def fail(self, why: str) -> None:
         self.failed += 1
         self.first_error = self.first_error or why
@@ -156,11 +164,10 @@ def _run_all(
         for label, sim in sims.items():
             if label == reference and index >= compared:
                 continue
-            try:
-                outcome, seconds = timed_run(sim, scene)
-            except Exception as exc:  # the simulator's own failure on this scene
-                tallies[label].fail(f"{type(exc).__name__}: {exc}")
+            ran = tallies[label].timed(sim, scene)
+            if ran is None:
                 continue
+            outcome, seconds = ran
             truth = outcome if label == reference else truth
             measures = None if truth is None else family.compare(outcome, truth, scene)
             events = family.events(outcome)
@@ -218,7 +225,9 @@ def time_simulate(
     job = parse_spec(simulator, "--simulate-with")
     best: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        paths = _scene_files(family, count, seed, Path(tmp))
+        paths = [Path(tmp) / f"scene_{index:05d}.json" for index in range(count)]
+        for path, scene in zip(paths, family.scenes(count, seed), strict=True):
+            path.write_text(scene.model_dump_json())
 
         def seconds(files: list[Path], n: int) -> tuple[float, float]:
             wall, cpu = time.perf_counter(), time.process_time()
@@ -239,15 +248,6 @@ def time_simulate(
                 for label, value in figures.items():
                     best[label] = min(best.get(label, math.inf), 1000 * value / count)
     return best
-
-
-def _scene_files(family: BenchFamily, count: int, seed: int, folder: Path) -> list[Path]:
-    """Write ``count`` bench scenes as ``scene_NNNNN.json`` files into ``folder``."""
-    paths = []
-    for index, scene in enumerate(family.scenes(count, seed)):
-        paths.append(folder / f"scene_{index:05d}.json")
-        paths[-1].write_text(scene.model_dump_json())
-    return paths
 
 
 def check_simulate_with(registry: Registry, family: str, simulators: Sequence[str]) -> None:
@@ -309,12 +309,9 @@ def with_scaling(
         for factor in factors:
             busy = family.scaled(scene, factor)
             for label, sim in sims.items():
-                try:
-                    outcome, spent = timed_run(sim, busy)
-                except Exception as exc:  # the simulator's own failure on this scene
-                    tallies[factor, label].fail(f"{type(exc).__name__}: {exc}")
-                    continue
-                tallies[factor, label].add(spent, None, family.events(outcome))
+                ran = tallies[factor, label].timed(sim, busy)
+                if ran is not None:
+                    tallies[factor, label].add(ran[1], None, family.events(ran[0]))
     rows = [_scale_row(f, label, t) for (f, label), t in tallies.items()]
     return replace(result, scaling=rows)
 

@@ -44,9 +44,10 @@ from bpb_core.plugin_calls import (
     family_model,
     json_values,
     loaded_config,
+    returned,
     simulator_named,
 )
-from bpb_core.simulator_spec import parse_spec
+from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -109,7 +110,7 @@ def generate_dataset(
         maker = registry.scene_family(name)
         origin = registry.origin("scene_family", name)
         cfg = _config(maker, origin, config)
-        _check_simulator(registry, maker, origin, cfg)
+        spec = _check_simulator(registry, maker, origin, cfg)
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
             raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
@@ -122,7 +123,7 @@ def generate_dataset(
         with partial_folder(target, "bpb generate") as partial:
             try:
                 n_workers = max(1, workers or os.cpu_count() or 1)
-                setup = worker_setup(registry, name, partial, seed, cfg, images)
+                setup = worker_setup(registry, name, partial, seed, cfg, images, spec)
                 setup = replace(setup, scenes=per_horizon * len(hs))
                 calibration = None
                 if isinstance(maker, Calibrating) and calibrate:
@@ -192,10 +193,12 @@ def _naming_file(config: Any) -> Iterator[None]:
         raise
 
 
-def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: Any) -> None:
-    """Refuse, before any worker starts and naming the field, a simulator spec (``name`` or
-    ``name:key=value,...``) that does not parse, an unknown simulator, or options it does
-    not take or whose values it refuses (it is built once here to see)."""
+def _check_simulator(
+    registry: Registry, family: SceneFamily, origin: str, cfg: Any
+) -> SimulatorSpec:
+    """The simulator spec (``name`` or ``name:key=value,...``) ``cfg`` names; refused, before any
+    worker starts and naming the field, when it does not parse, names an unknown simulator, or
+    options it does not take or whose values it refuses (it is built once here to see)."""
     spec = parse_spec(simulator_named(family, origin, cfg), "config: simulator")
     try:
         registry.get("simulator", spec.name)
@@ -206,6 +209,7 @@ def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: 
             registry.simulator(spec.name, spec.options)
         except BadInput as exc:
             raise BadInput(f"config: simulator {spec.spec!r}: {exc}") from None
+    return spec
 
 
 def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
@@ -244,10 +248,8 @@ def _write_stats(
     with blamed(setup.origin, what):
         written = family.write_stats(setup.root, setup.config, tallies)
     if not isinstance(written, list | tuple) or not all(isinstance(r, str) for r in written):
-        raise PluginBug(
-            f"{setup.origin}: {what} returned {type(written).__name__}; expected a list of "
-            "the paths it wrote (str, relative to the dataset folder)"
-        )
+        expected = "a list of the paths it wrote (str, relative to the dataset folder)"
+        raise returned(setup.origin, what, type(written).__name__, expected)
     missing = [rel for rel in written if not (setup.root / rel).is_file()]
     if missing:
         raise PluginBug(
@@ -333,10 +335,8 @@ def new_tallies(
         with blamed(origin, what):
             tally = family.new_tally(config, horizon)
         if not all(callable(getattr(tally, name, None)) for name in ("add", "summary")):
-            raise PluginBug(
-                f"{origin}: {what} returned {type(tally).__name__}; expected a tally with "
-                "add(row) and summary()"
-            )
+            expected = "a tally with add(row) and summary()"
+            raise returned(origin, what, type(tally).__name__, expected)
         tallies[horizon] = tally
     return tallies
 
@@ -362,7 +362,4 @@ def calibrated(
     if isinstance(applied, tuple) and len(applied) == 2:
         got = f"({', '.join(type(part).__name__ for part in applied)})"
     expected = "the config" if model is None else model.__name__
-    raise PluginBug(
-        f"{origin}: {what} returned {got}; expected ({expected}, a dict: the manifest's "
-        "calibration record)"
-    )
+    raise returned(origin, what, got, f"({expected}, a dict: the manifest's calibration record)")

@@ -24,9 +24,9 @@ from typing import IO, TYPE_CHECKING, Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from bpb_core.capabilities import HorizonTally
-from bpb_core.errors import BadInput, PluginBug, blamed, writing
+from bpb_core.errors import BadInput, blamed, writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
-from bpb_core.plugin_calls import json_values
+from bpb_core.plugin_calls import json_values, returned
 
 if TYPE_CHECKING:
     from bpb_core.dataset.jobs import SceneResult
@@ -163,15 +163,6 @@ def sha256_bytes(data: bytes) -> str:
 VERSIONED = ("bpb", "pydantic", "pillow", "zlib-ng", "matplotlib", "numpy")
 
 
-@dataclass
-class HorizonCounts:
-    """Running counts of one horizon that every family has."""
-
-    scenes: int = 0
-    unstable: int = 0
-    dropped: int = 0
-
-
 class DatasetWriter:
     """Appends index rows and checksums in scene order; writes the manifest.
 
@@ -191,7 +182,7 @@ class DatasetWriter:
         family: str = "",
     ) -> None:
         self.root = root
-        self.counts = {h: HorizonCounts() for h in horizons}
+        self.counts = {h: HorizonSummary(scenes=0) for h in horizons}  # running counts
         self.tallies = dict(tallies or {})
         self.origin, self.family = origin, family
         with writing(root):
@@ -218,7 +209,7 @@ class DatasetWriter:
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
-        self.counts[horizon].dropped += 1
+        self.counts[horizon].dropped_unstable += 1
 
     def add_file(self, rel: str) -> None:
         """Checksum an extra file (a stats figure) written under the root."""
@@ -240,9 +231,7 @@ class DatasetWriter:
         out = {}
         for h, c in self.counts.items():
             extra = self._tally_summary(h) if h in self.tallies else {}
-            out[horizon_label(h)] = HorizonSummary(
-                scenes=c.scenes, dropped_unstable=c.dropped, unstable=c.unstable, **extra
-            )
+            out[horizon_label(h)] = HorizonSummary(**c.model_dump(), **extra)
         return out
 
     def _tally(self, horizon: float) -> str:
@@ -257,10 +246,8 @@ class DatasetWriter:
         fields = json_values(self.origin, what, summary, "what dataset.json")
         ours = sorted(set(fields) & set(HorizonSummary.model_fields))
         if ours:
-            raise PluginBug(
-                f"{self.origin}: {what} returned {ours[0]!r}, which bpb counts itself; "
-                "expected the family's own fields"
-            )
+            got = f"{ours[0]!r}, which bpb counts itself"
+            raise returned(self.origin, what, got, "the family's own fields")
         return fields
 
     def write_manifest(self, manifest: DatasetManifest) -> DatasetManifest:

@@ -221,8 +221,6 @@ def load_dataset(
     family = dataset_family(manifest, root, registry)
     export = source if root != source else None
     dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family, export)
-    if horizons is None and limit is None:
-        return dataset
     return dataset.select(horizons, limit)
 
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import hashlib
 import re
-from dataclasses import dataclass, field
-from functools import lru_cache
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -130,7 +130,6 @@ class DatasetScene:
     key: SceneKey
     folder: Path
     family: SceneFamily
-    _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def scene_id(self) -> str:
@@ -142,19 +141,15 @@ class DatasetScene:
         """Seconds the questions are about."""
         return self.key.horizon
 
-    @property
+    @cached_property
     def state(self) -> Any:
         """The initial state: ``init.json`` read with the family's scene model."""
-        if INIT not in self._cache:
-            self._cache[INIT] = read_scene_model(self.folder / INIT, self.family.scene_model)
-        return self._cache[INIT]
+        return read_scene_model(self.folder / INIT, self.family.scene_model)
 
-    @property
+    @cached_property
     def truth(self) -> Any:
         """The ground truth: ``final.json`` read with the family's truth model."""
-        if FINAL not in self._cache:
-            self._cache[FINAL] = read_scene_model(self.folder / FINAL, self.family.truth_model)
-        return self._cache[FINAL]
+        return read_scene_model(self.folder / FINAL, self.family.truth_model)
 
     @property
     def stable(self) -> bool | None:

@@ -124,6 +124,9 @@ def export_hf(
     dataset_keys(dataset.root)  # scene folders unlike index.csv: refused, as bpb run does
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
+    cells = _index_cells(dataset.root / INDEX)
+    # a dataset made with images needs each scene's (a missing one is an error naming it)
+    images = dataset.family.input_image is not None and dataset.manifest.images
     target = Path(out)
     _check_out(target)
     with partial_folder(target, "bpb export") as partial:
@@ -131,9 +134,19 @@ def export_hf(
             with writing(partial):
                 (partial / DATA).mkdir()
                 (partial / SIDE).mkdir()
-            splits, files, card = _write_export(
-                dataset, partial, objects, names, shard_rows, registry
-            )
+            splits: dict[str, tuple[int, int]] = {}  # rows and Arrow bytes per split
+            files: list[str] = []
+            for horizon in dataset.horizons:
+                rows = [
+                    _row(scene, task, cells.get(scene.scene_id, {}), images, registry)
+                    for scene in dataset.select([horizon])
+                    for task in objects
+                ]
+                written, nbytes = _write_split(partial, horizon_label(horizon), rows, shard_rows)
+                splits[horizon_label(horizon)] = (len(rows), nbytes)
+                files += written
+            _write_side_files(dataset, partial)
+            card = card_text(dataset, FEATURES, splits, names, registry)
             with writing(partial / "README.md"):
                 (partial / "README.md").write_text(card, encoding="utf-8")
             _swap_in(partial, target)
@@ -144,38 +157,9 @@ def export_hf(
             ) from None
         finally:
             shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
-    return HfExport(target, splits, tuple(files), names)
-
-
-def _write_export(
-    dataset: Dataset,
-    out: Path,
-    objects: list[Task],
-    names: tuple[str, ...],
-    shard_rows: int,
-    registry: Registry,
-) -> tuple[dict[str, int], list[str], str]:
-    """Write the shards and side files to ``out``; the rows per split, the shards and the card."""
-    cells = _index_cells(dataset.root / INDEX)
-    # a dataset made with images needs each scene's (a missing one is an error naming it)
-    images = dataset.family.input_image is not None and dataset.manifest.images
-    splits: dict[str, int] = {}
-    sizes: dict[str, int] = {}
-    files: list[str] = []
-    for horizon in dataset.horizons:
-        rows = [
-            _row(scene, task, cells.get(scene.scene_id, {}), images, registry)
-            for scene in dataset.select([horizon])
-            for task in objects
-        ]
-        split = horizon_label(horizon)
-        splits[split] = len(rows)
-        written, sizes[split] = _write_split(out, split, rows, shard_rows)
-        files += written
-    _write_side_files(dataset, out)
-    sized = {s: (splits[s], sizes[s]) for s in splits}
-    card = card_text(dataset, FEATURES, sized, names, registry)
-    return splits, files, card
+    return HfExport(
+        target, {split: rows for split, (rows, _) in splits.items()}, tuple(files), names
+    )
 
 
 def _check_out(out: Path) -> None:
