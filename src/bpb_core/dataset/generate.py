@@ -105,11 +105,20 @@ def generate_dataset(
             scenes listed so far, whole, in the partial folder; an existing ``out`` as it was).
     """
     with _naming_file(config):
-        registry = registry if registry is not None else _registry()
+        if registry is None:
+            from bpb_core.registry import PluginWarning, make_registry
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
+                registry = make_registry()
         name = family or registry.default_family()
         maker = registry.scene_family(name)
         origin = registry.origin("scene_family", name)
-        cfg = _config(maker, origin, config)
+        cfg = loaded_config(maker, origin, config)
+        if getattr(cfg, "family", maker.name) != maker.name:
+            raise BadInput(
+                f"config: family: {cfg.family!r}, but the scene family is {maker.name!r}"
+            )
         spec = _check_simulator(registry, maker, origin, cfg)
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
@@ -119,7 +128,12 @@ def generate_dataset(
         checked_config(maker, origin, cfg, () if calibrate else hs)
         progress = progress or NoProgress()
         target = Path(out)
-        _check_target(target, overwrite)
+        if target.exists() and (not target.is_dir() or any(target.iterdir())):
+            is_dataset = (target / MANIFEST).is_file()
+            if not (overwrite and is_dataset):
+                hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
+                raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
+        check_writable_folder(target)
         with partial_folder(target, "bpb generate") as partial:
             try:
                 n_workers = max(1, workers or os.cpu_count() or 1)
@@ -165,22 +179,6 @@ def _left(target: Path, partial: Path) -> str:
     )
 
 
-def _registry() -> Registry:
-    from bpb_core.registry import PluginWarning, make_registry
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
-        return make_registry()
-
-
-def _config(family: SceneFamily, origin: str, config: Any) -> Any:
-    cfg = loaded_config(family, origin, config)
-    named = getattr(cfg, "family", family.name)
-    if named != family.name:
-        raise BadInput(f"config: family: {named!r}, but the scene family is {family.name!r}")
-    return cfg
-
-
 @contextmanager
 def _naming_file(config: Any) -> Iterator[None]:
     """A config error ("config: balls: ...") names the config's file when it came from one."""
@@ -223,15 +221,6 @@ def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
     if len(set(hs)) != len(hs):
         raise BadInput("horizons: a horizon is listed twice")
     return hs
-
-
-def _check_target(target: Path, overwrite: bool) -> None:
-    if target.exists() and (not target.is_dir() or any(target.iterdir())):
-        is_dataset = (target / MANIFEST).is_file()
-        if not (overwrite and is_dataset):
-            hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
-            raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
-    check_writable_folder(target)
 
 
 def _write_stats(

@@ -14,14 +14,14 @@ import shutil
 import signal
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from multiprocessing.pool import Pool
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from bpb_core.capabilities import Calibrating, ExpectsWork
-from bpb_core.dataset.manifest import DatasetWriter, IndexRow, plugin_label, sha256_bytes
+from bpb_core.dataset.manifest import DatasetWriter, IndexRow, sha256_bytes
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
@@ -106,9 +106,9 @@ def worker_setup(
     a picklable setup."""
     family_entry = registry.get("scene_family", family)
     simulator_entry = registry.get("simulator", spec.name)
-    plugins = (
-        ("scene_family", plugin_label(family_entry)),
-        ("simulator", plugin_label(simulator_entry)),
+    plugins = tuple(  # name (distribution version) of each
+        (e.info.kind, f"{e.info.name} ({e.distribution} {e.version})")
+        for e in (family_entry, simulator_entry)
     )
     return WorkerSetup(
         root=root,
@@ -130,16 +130,8 @@ class InProcess:
     def __init__(self, setup: WorkerSetup) -> None:
         init_worker(setup)
 
-    def imap(
-        self, func: Callable[[Any], Any], items: Iterable[Any], chunksize: int = 1
-    ) -> Iterator[Any]:
+    def imap(self, func: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[Any]:
         return map(func, items)
-
-    def __enter__(self) -> InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
 
 
 def pooled(n_workers: int) -> bool:
@@ -151,10 +143,10 @@ def pooled(n_workers: int) -> bool:
     return n_workers > 1
 
 
-def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
+def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | nullcontext[InProcess]:
     """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1)."""
     if n_workers == 1:
-        return InProcess(setup)
+        return nullcontext(InProcess(setup))
     return started_pool(lambda: Pool(n_workers, init_pool_worker, (setup,)))
 
 

@@ -134,10 +134,6 @@ class IndexRow:
         """Column names, in order, for a family with ``columns``."""
         return ["scene_id", "horizon", "index", *columns, "stable"]
 
-    def get(self, column: str) -> object:
-        """The family's cell ``column``."""
-        return dict(self.values)[column]
-
     def cells(self) -> list[str]:
         """The row as CSV cells (booleans as ``true``/``false``, empty when unknown)."""
         values = [self.scene_id, self.horizon, self.index, *(v for _, v in self.values)]
@@ -268,8 +264,3 @@ def versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             continue
     return found
-
-
-def plugin_label(registered: Any) -> str:
-    """``name (distribution version)`` of a registered component."""
-    return f"{registered.info.name} ({registered.distribution} {registered.version})"

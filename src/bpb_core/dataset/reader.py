@@ -113,7 +113,16 @@ class Dataset:
             BadInput: ``checksums.sha256`` cannot be read, or the export has none (an export
                 made by an earlier bpb).
         """
-        carried = self._exported_names()
+        carried: set[str] | None = None  # the names of the scene files an export carries
+        if self.export is not None:
+            if not (self.root / CHECKSUMS).is_file():
+                raise BadInput(
+                    f"{self.export}: this Hugging Face export has no {SIDE}/{CHECKSUMS} (made by "
+                    "an earlier bpb), so its scene files cannot be checked: export the dataset "
+                    "again, or verify the dataset folder it came from"
+                )
+            image = self.family.input_image if self.manifest.images else None
+            carried = {INIT, FINAL} | ({image} if image else set())
         problems = []
         # the file's own fields, as the bpb that wrote it hashed them (not the model's defaults)
         if content_hash(manifest_file(self.root)[0] or {}) != self.manifest.dataset_hash:
@@ -150,19 +159,6 @@ class Dataset:
             elif hashlib.sha256(target.read_bytes()).hexdigest() != digest:
                 problems.append(f"{rel}: content differs from its checksum")
         return problems
-
-    def _exported_names(self) -> set[str] | None:
-        """The names of the scene files an export carries (``None``: a dataset folder)."""
-        if self.export is None:
-            return None
-        if not (self.root / CHECKSUMS).is_file():
-            raise BadInput(
-                f"{self.export}: this Hugging Face export has no {SIDE}/{CHECKSUMS} (made by an "
-                "earlier bpb), so its scene files cannot be checked: export the dataset again, "
-                "or verify the dataset folder it came from"
-            )
-        image = self.family.input_image if self.manifest.images else None
-        return {INIT, FINAL} | ({image} if image else set())
 
 
 def dataset_keys(root: Path) -> list[SceneKey]:

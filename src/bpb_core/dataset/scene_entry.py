@@ -95,16 +95,12 @@ def check_recorded(path: Path, data: bytes) -> None:
 def _recorded(root: Path) -> dict[str, str]:
     """The hashes ``root/checksums.sha256`` records by path (empty without the file); read
     again when the file changes."""
-    path = root / CHECKSUMS
-    try:
-        stat = path.stat()
-    except OSError:
-        return {}
-    return _parse_file(path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
+    identity = _identity(root / CHECKSUMS)
+    return {} if identity is None else _parse_file(root / CHECKSUMS, identity)
 
 
 @lru_cache(maxsize=16)
-def _parse_file(path: Path, mtime_ns: int, size: int, inode: int) -> dict[str, str]:
+def _parse_file(path: Path, identity: tuple[int, int, int]) -> dict[str, str]:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, ValueError):

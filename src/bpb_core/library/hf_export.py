@@ -146,7 +146,10 @@ def export_hf(
                 splits[horizon_label(horizon)] = (len(rows), nbytes)
                 files += written
             _write_side_files(dataset, partial)
-            card = card_text(dataset, FEATURES, splits, names, registry)
+            family = dataset.family
+            words = family.dataset_card() if isinstance(family, DescribesDataset) else {}
+            body = _body(dataset, words, splits, names, _truth(dataset, registry))
+            card = "\n".join(["---", *_front_matter(dataset, words, splits), "---", "", *body])
             with writing(partial / "README.md"):
                 (partial / "README.md").write_text(card, encoding="utf-8")
             _swap_in(partial, target)
@@ -295,26 +298,6 @@ def _write_side_files(dataset: Dataset, out: Path) -> None:
             ) from None
 
 
-def card_text(
-    dataset: Dataset,
-    features: Mapping[str, Mapping[str, str]],
-    splits: Mapping[str, tuple[int, int]],
-    tasks: Sequence[str],
-    registry: Registry,
-) -> str:
-    """The whole README.md of the export."""
-    words = dataset.family.dataset_card() if isinstance(dataset.family, DescribesDataset) else {}
-    return "\n".join(
-        [
-            "---",
-            *_front_matter(dataset, words, features, splits),
-            "---",
-            "",
-            *_body(dataset, words, splits, tasks, _truth(dataset, registry)),
-        ]
-    )
-
-
 def _truth(dataset: Dataset, registry: Registry) -> list[str]:
     """Which simulator made the ground truth, as the config names it, and what it is (its
     registered summary): the family's words hold for every simulator, and only the simulator
@@ -331,7 +314,6 @@ def _truth(dataset: Dataset, registry: Registry) -> list[str]:
 def _front_matter(
     dataset: Dataset,
     words: Mapping[str, Any],
-    features: Mapping[str, Mapping[str, str]],
     splits: Mapping[str, tuple[int, int]],
 ) -> list[str]:
     q = json.dumps
@@ -344,7 +326,7 @@ def _front_matter(
     for split in splits:
         lines += [f"  - split: {q(split)}", f"    path: {q(f'data/{split}-*')}"]
     lines += ["dataset_info:", "  features:"]
-    for name, feature in features.items():
+    for name, feature in FEATURES.items():
         dtype = _FEATURE_NAMES.get(feature["_type"], feature.get("dtype", "string"))
         lines += [f"  - name: {q(name)}", f"    dtype: {q(dtype)}"]
     lines.append("  splits:")
