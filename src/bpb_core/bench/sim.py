@@ -205,19 +205,13 @@ def _time_batches(
 
 
 def time_simulate(
-    family: BenchFamily,
-    simulator: str,
-    count: int = 1000,
-    seed: int = 1,
-    *,
-    registry: Registry | None = None,
-    workers: Sequence[int] = (1, 2),
+    family: BenchFamily, simulator: str, count: int, registry: Registry
 ) -> dict[str, float]:
     """Milliseconds per scene of ``bpb simulate``'s library path (read, validate, simulate,
     build and serialise the ground truth) with ``simulator`` (``name:key=value,...``) over
-    ``count`` scene files of ``family``, start-up excluded.
+    ``count`` scene files of ``family`` (seed 1), start-up excluded.
 
-    Wall time for each worker count, plus the CPU time of the single-process run (less
+    Wall time with 1 and 2 workers, plus the CPU time of the single-process run (less
     sensitive to other load on a shared machine); three interleaved rounds, the best counts.
     """
     from bpb_core.simulate import simulate_lines
@@ -226,7 +220,7 @@ def time_simulate(
     best: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
         paths = [Path(tmp) / f"scene_{index:05d}.json" for index in range(count)]
-        for path, scene in zip(paths, family.scenes(count, seed), strict=True):
+        for path, scene in zip(paths, family.scenes(count, 1), strict=True):
             path.write_text(scene.model_dump_json())
 
         def seconds(files: list[Path], n: int) -> tuple[float, float]:
@@ -241,7 +235,7 @@ def time_simulate(
         # hundreds of scenes at once, so a smaller warm-up left its build or load to round one.
         seconds(paths, 1)
         for _ in range(3):
-            for n in workers:
+            for n in (1, 2):
                 wall, cpu = seconds(paths, n)
                 figures = {f"{n} worker{'s' if n > 1 else ''}, wall": wall}
                 figures |= {"1 worker, CPU": cpu} if n == 1 else {}
@@ -276,7 +270,7 @@ def with_simulate_timing(
     check_simulate_with(reg, result.family, names)
     figures: dict[str, float] = {}
     for name in names:
-        found = time_simulate(family, name, count, registry=reg)
+        found = time_simulate(family, name, count, reg)
         prefix = f"{name}, " if len(names) > 1 else ""
         figures |= {f"{prefix}{label}": ms for label, ms in found.items()}
     with_ = ", ".join(names)
