@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
-from typing import TYPE_CHECKING, Any, Literal, get_args
+from typing import TYPE_CHECKING, Any, Literal, cast, get_args
 
 import pluggy
 
@@ -274,8 +274,7 @@ class Registry:
     # The typed facade: every component comes out as its interface.
     def task(self, name: str) -> Task:
         """A fresh instance of the task ``name``."""
-        task: Task = self.build("task", name)
-        return task
+        return cast("Task", self.build("task", name))
 
     def task_info(self, name: str) -> TaskInfo:
         """The record of task ``name`` (which family it asks about, whether it is a default)."""
@@ -338,8 +337,7 @@ class Registry:
 
     def scene_family(self, name: str) -> SceneFamily:
         """A fresh instance of the scene family ``name``."""
-        family: SceneFamily = self.build("scene_family", name)
-        return family
+        return cast("SceneFamily", self.build("scene_family", name))
 
     def default_family(self) -> str:
         """The family marked default by its plugin (or the only one installed).

@@ -124,7 +124,9 @@ def export_hf(
     dataset_keys(dataset.root)  # scene folders unlike index.csv: refused, as bpb run does
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
-    cells = _index_cells(dataset.root / INDEX)
+    index = csv.DictReader((dataset.root / INDEX).read_text(encoding="utf-8-sig").splitlines())
+    drop = {"scene_id", "horizon", "index", "stable"}  # index.csv: only the family's cells kept
+    cells = {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in index}
     # a dataset made with images needs each scene's (a missing one is an error naming it)
     images = dataset.family.input_image is not None and dataset.manifest.images
     target = Path(out)
@@ -200,13 +202,6 @@ def _swap_in(partial: Path, out: Path) -> None:
         for there, back in reversed(moved):  # put the earlier export back as it was
             there.rename(back)
         raise BadInput(f"{out}: --out: cannot replace the export: {exc.strerror or exc}") from None
-
-
-def _index_cells(path: Path) -> dict[str, dict[str, str]]:
-    """The family's cells of ``index.csv`` per scene id (without id, horizon, index, stable)."""
-    reader = csv.DictReader(path.read_text(encoding="utf-8-sig").splitlines())
-    drop = {"scene_id", "horizon", "index", "stable"}
-    return {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in reader}
 
 
 def _row(
