@@ -154,19 +154,6 @@ def check_writable_file(path: Path, option: str) -> None:
     check_writable_folder(path.parent, option)
 
 
-def make_folder(path: Path, option: str = "--out") -> None:
-    """Create the folder ``path`` (and its parents) after :func:`check_writable_folder`.
-
-    Raises:
-        BadInput: It cannot be created or written (one line naming the path and ``option``).
-    """
-    check_writable_folder(path, option)
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise BadInput(f"{path}: {option}: cannot create the folder: {exc.strerror}") from None
-
-
 def partial_path(target: Path) -> Path:
     """The hidden folder ``target`` is built in: ``.NAME.partial`` beside it."""
     where = Path(os.path.abspath(target))

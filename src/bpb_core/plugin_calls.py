@@ -10,14 +10,13 @@ object no plugin registers).
 from __future__ import annotations
 
 import json
-import math
 import random
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
-from bpb_core.model_calls import Message
+from bpb_core.model_calls import Message, known_cost
 
 if TYPE_CHECKING:
     from bpb_core.capabilities import (
@@ -156,7 +155,7 @@ def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
         name = family.simulator_name(config)
     if isinstance(name, str) and name:
         return name
-    raise PluginBug(f"{origin}: {what} returned {name!r:.80}; expected a simulator's name (str)")
+    raise returned(origin, what, f"{name!r:.80}", "a simulator's name (str)")
 
 
 def prompt_messages(
@@ -178,7 +177,7 @@ def prompt_messages(
     got = type(messages).__name__
     if isinstance(messages, tuple | list):
         got = f"a {got} of {', '.join(sorted({type(m).__name__ for m in messages}))}"
-    raise PluginBug(f"{origin}: {what} returned {got}; expected a tuple of bpb_core.Message")
+    raise returned(origin, what, got, "a tuple of bpb_core.Message")
 
 
 def parsed_answer(
@@ -200,9 +199,7 @@ def parsed_answer(
     got = type(parsed).__name__
     if isinstance(parsed, ParsedAnswer):
         got = f"a ParsedAnswer whose value is {type(parsed.value).__name__}"
-    raise PluginBug(
-        f"{origin}: {what} returned {got}; expected a bpb_core.ParsedAnswer with a dict value"
-    )
+    raise returned(origin, what, got, "a bpb_core.ParsedAnswer with a dict value")
 
 
 def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
@@ -218,9 +215,13 @@ def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
         schema = task.answer_schema()
     if isinstance(schema, dict):
         return schema
-    raise PluginBug(
-        f"{origin}: {what} returned {type(schema).__name__}; expected a dict (a JSON Schema)"
-    )
+    raise returned(origin, what, type(schema).__name__, "a dict (a JSON Schema)")
+
+
+def returned(origin: str, what: str, got: str, expected: str) -> PluginBug:
+    """The one-line error for plugin code (``what``, supplied by ``origin``) that returned the
+    wrong thing: ``<origin>: <what> returned <got>; expected <expected>``."""
+    return PluginBug(f"{origin}: {what} returned {got}; expected {expected}")
 
 
 def named(kind: str, component: object) -> str:
@@ -248,10 +249,8 @@ def _checked_model(family: object, origin: str, what: str, value: Any, attribute
     model = family_model(family, attribute)
     if model is None or isinstance(value, model):
         return value
-    raise PluginBug(
-        f"{origin}: {what} returned {type(value).__name__}; expected {model.__name__} "
-        f"(the family's {attribute})"
-    )
+    expected = f"{model.__name__} (the family's {attribute})"
+    raise returned(origin, what, type(value).__name__, expected)
 
 
 def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
@@ -365,26 +364,18 @@ def estimated_input(
         estimate = adapter.estimate(messages)
     if isinstance(estimate, tuple | list) and len(estimate) == 2:
         tokens, cost = estimate
-        if _count(tokens) and (cost is None or _amount(cost)):
+        if _count(tokens) and (cost is None or known_cost(cost) is not None):
             return tokens, None if cost is None else float(cost)
-    raise PluginBug(
-        f"{origin}: {what} returned {estimate!r:.80}; expected (input tokens, cost): an int "
-        "at least 0 and a finite float at least 0 or None"
-    )
+    expected = "(input tokens, cost): an int at least 0 and a finite float at least 0 or None"
+    raise returned(origin, what, f"{estimate!r:.80}", expected)
 
 
 def _checked_line(origin: str, what: str, line: object) -> str | None:
     """``line`` if it is ``None`` or a str (one line shown to the user)."""
     if line is None or isinstance(line, str):
         return line
-    raise PluginBug(f"{origin}: {what} returned {type(line).__name__}; expected None or a str")
+    raise returned(origin, what, type(line).__name__, "None or a str")
 
 
 def _count(value: object) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
-
-
-def _amount(value: object) -> bool:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return False
-    return math.isfinite(value) and value >= 0

@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, cast, get_args
 
 import pluggy
 
@@ -31,15 +31,7 @@ if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
 
 Kind = Literal["task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic"]
-KINDS: tuple[Kind, ...] = (
-    "task",
-    "scene_family",
-    "simulator",
-    "adapter",
-    "scorer",
-    "suite",
-    "diagnostic",
-)
+KINDS: tuple[Kind, ...] = get_args(Kind)
 
 
 def lazy(reference: str) -> Callable[[], Any]:
@@ -55,10 +47,6 @@ def lazy(reference: str) -> Callable[[], Any]:
     return load
 
 
-def _nothing_to_load() -> None:
-    return None
-
-
 @dataclass(frozen=True)
 class ComponentInfo:
     """Common fields of every registration record.
@@ -70,7 +58,7 @@ class ComponentInfo:
     """
 
     name: str
-    load: Callable[[], Any] = field(default=_nothing_to_load, repr=False, compare=False)
+    load: Callable[[], Any] = field(default=lambda: None, repr=False, compare=False)
     summary: str = ""
 
     kind: Kind = field(init=False, default="task")
@@ -286,8 +274,7 @@ class Registry:
     # The typed facade: every component comes out as its interface.
     def task(self, name: str) -> Task:
         """A fresh instance of the task ``name``."""
-        task: Task = self.build("task", name)
-        return task
+        return cast("Task", self.build("task", name))
 
     def task_info(self, name: str) -> TaskInfo:
         """The record of task ``name`` (which family it asks about, whether it is a default)."""
@@ -350,8 +337,7 @@ class Registry:
 
     def scene_family(self, name: str) -> SceneFamily:
         """A fresh instance of the scene family ``name``."""
-        family: SceneFamily = self.build("scene_family", name)
-        return family
+        return cast("SceneFamily", self.build("scene_family", name))
 
     def default_family(self) -> str:
         """The family marked default by its plugin (or the only one installed).
@@ -564,13 +550,7 @@ def _check_one_scorer_per_task(scorers: dict[str, Registered]) -> None:
 
 
 _RECORDS: dict[Kind, str] = {
-    "task": "TaskInfo",
-    "scene_family": "SceneFamilyInfo",
-    "simulator": "SimulatorInfo",
-    "adapter": "AdapterInfo",
-    "scorer": "ScorerInfo",
-    "suite": "SuiteInfo",
-    "diagnostic": "DiagnosticInfo",
+    record.kind: record.__name__ for record in ComponentInfo.__subclasses__()
 }
 
 

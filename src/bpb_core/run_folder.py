@@ -26,10 +26,10 @@ from bpb_core.layout import (
     RUN_LOCK,
     RUN_MANIFEST,
     SceneKey,
+    check_writable_folder,
     iter_scene_keys,
-    make_folder,
 )
-from bpb_core.validated_files import describe_validation_error
+from bpb_core.validated_files import describe_validation_error, validate_mapping
 
 Status = Literal["ok", "parse_error", "api_error"]
 COMPLETE: frozenset[str] = frozenset({"ok", "parse_error"})
@@ -71,14 +71,10 @@ class AnswerRecord(BaseModel):
     metadata: dict[str, bool | float | str] = Field(default_factory=dict)
 
 
-def answer_name(task: str, epoch: int = 1) -> str:
-    """The answer file's stem: ``q1`` for the first epoch, ``q1.e2`` for the second."""
-    return task if epoch == 1 else f"{task}.e{epoch}"
-
-
 def answer_path(run_dir: Path, key: SceneKey, task: str, epoch: int = 1) -> Path:
-    """Where the answer of ``task`` (its ``epoch``-th sample) for scene ``key`` lives."""
-    return key.dir(run_dir) / f"{answer_name(task, epoch)}.json"
+    """Where the answer of ``task`` (its ``epoch``-th sample) for scene ``key`` lives:
+    ``q1.json`` for the first epoch, ``q1.e2.json`` for the second."""
+    return key.dir(run_dir) / (f"{task}.json" if epoch == 1 else f"{task}.e{epoch}.json")
 
 
 def make_run_folder(run_dir: Path) -> None:
@@ -88,7 +84,11 @@ def make_run_folder(run_dir: Path) -> None:
         BadInput: The path, or one of its parents, is a file, or it cannot be written (one line
             naming the path).
     """
-    make_folder(run_dir, "--out")
+    check_writable_folder(run_dir)
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BadInput(f"{run_dir}: --out: cannot create the folder: {exc.strerror}") from None
 
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
@@ -264,10 +264,7 @@ def read_manifest(run_dir: Path) -> dict[str, Any] | None:
         raise BadInput(f"{path}: cannot read run manifest: {exc}") from None
     if not isinstance(data, dict):
         raise BadInput(f"{path}: expected a JSON object")
-    try:
-        _ManifestFields.model_validate(data)
-    except ValidationError as exc:
-        raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
+    validate_mapping(_ManifestFields, data, str(path))
     return data
 
 

@@ -6,7 +6,7 @@ mistake reads the same way: ``<file>: <field.path[index]>: what is wrong``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -22,19 +22,13 @@ def describe_validation_error(exc: ValidationError) -> str:
     errors = exc.errors()
     first: dict[str, Any] = dict(errors[0])
     message = str(first.get("msg", "invalid")).removeprefix("Value error, ")
-    where = field_path(first.get("loc", ()))
+    where = ""
+    for part in first.get("loc", ()):  # ("items", 2, "pos") -> items[2].pos
+        where += f"[{part}]" if isinstance(part, int) else (f".{part}" if where else str(part))
     more = len(errors) - 1
     suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
     text = f"{where}: {message}" if where else message
     return " ".join(text.split()) + suffix
-
-
-def field_path(loc: Sequence[str | int]) -> str:
-    """``("items", 2, "pos")`` -> ``items[2].pos``."""
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out
 
 
 def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
@@ -44,15 +38,22 @@ def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
     Raises:
         BadInput: ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``.
     """
-    if data is None:
-        try:
-            data = path.read_bytes()
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        return model.model_validate_json(data)
+        return model.model_validate_json(read_bytes(path) if data is None else data)
     except ValidationError as exc:
         raise BadInput(f"{path}: {describe_validation_error(exc)}") from None
+
+
+def read_bytes(path: Path) -> bytes:
+    """The bytes of the file ``path``.
+
+    Raises:
+        BadInput: ``"<file>: cannot read: ..."``.
+    """
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
 
 
 def validate_mapping(model: type[M], data: Mapping[str, Any], source: str) -> M:

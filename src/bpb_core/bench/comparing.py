@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Comparing, CountsEvents
 from bpb_core.errors import BadInput, PluginBug, blamed
-from bpb_core.plugin_calls import family_model
+from bpb_core.plugin_calls import family_label, family_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import Simulator
@@ -38,10 +38,6 @@ class BenchFamily:
 
     family: Comparing
     origin: str
-
-    @property
-    def name(self) -> str:
-        return str(getattr(self.family, "name", type(self.family).__name__))
 
     @property
     def counts_events(self) -> bool:
@@ -153,27 +149,15 @@ class BenchFamily:
             return getattr(self.family, attribute)
 
     def _label(self) -> str:
-        return f"scene family {self.name!r}"
+        return family_label(self.family)
 
     def _bug(self, said: str) -> PluginBug:
         return PluginBug(f"{self.origin}: {self._label()}: {said}")
 
 
 def bench_family(registry: Registry, name: str) -> BenchFamily:
-    """The scene family ``name`` (:func:`comparing_family`), its hooks to be called checked.
-
-    Raises:
-        BadInput: It is not installed or cannot compare simulators.
-    """
-    return BenchFamily(comparing_family(registry, name), registry.origin("scene_family", name))
-
-
-def _number(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)  # numpy's too
-
-
-def comparing_family(registry: Registry, name: str) -> Comparing:
-    """The scene family ``name``, which must be able to compare simulators.
+    """The scene family ``name``, which must be able to compare simulators, its hooks to be
+    called checked.
 
     Raises:
         BadInput: It is not installed or has no :class:`Comparing` capability.
@@ -181,7 +165,11 @@ def comparing_family(registry: Registry, name: str) -> Comparing:
     family = registry.scene_family(name)
     if not isinstance(family, Comparing):
         raise BadInput(f"--family: the {name} scene family cannot compare simulators")
-    return family
+    return BenchFamily(family, registry.origin("scene_family", name))
+
+
+def _number(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)  # numpy's too
 
 
 def build_simulators(

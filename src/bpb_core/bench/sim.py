@@ -35,11 +35,10 @@ from bpb_core.bench.comparing import (
     BenchFamily,
     bench_family,
     build_simulators,
-    comparing_family,
     timed_run,
 )
 from bpb_core.bench.sim_report import ScaleRow, SimBench, SimRow
-from bpb_core.capabilities import CountsEvents, RunsMany
+from bpb_core.capabilities import RunsMany
 from bpb_core.errors import BadInput
 from bpb_core.simulator_spec import parse_spec
 
@@ -74,6 +73,14 @@ class _Tally:
         for key, value in measures.items():
             if key != ERROR:
                 self.counts[key] = self.counts.get(key, 0.0) + value
+
+    def timed(self, sim: Simulator, scene: Any) -> tuple[Any, float] | None:
+        """:func:`timed_run`; ``None`` when the simulator raised (a failed scene)."""
+        try:
+            return timed_run(sim, scene)
+        except Exception as exc:  # the simulator's own failure on this scene
+            self.fail(f"{type(exc).__name__}: {exc}")
+            return None
 
     def fail(self, why: str) -> None:
         self.failed += 1
@@ -157,11 +164,10 @@ def _run_all(
         for label, sim in sims.items():
             if label == reference and index >= compared:
                 continue
-            try:
-                outcome, seconds = timed_run(sim, scene)
-            except Exception as exc:  # the simulator's own failure on this scene
-                tallies[label].fail(f"{type(exc).__name__}: {exc}")
+            ran = tallies[label].timed(sim, scene)
+            if ran is None:
                 continue
+            outcome, seconds = ran
             truth = outcome if label == reference else truth
             measures = None if truth is None else family.compare(outcome, truth, scene)
             events = family.events(outcome)
@@ -199,19 +205,13 @@ def _time_batches(
 
 
 def time_simulate(
-    family: BenchFamily,
-    simulator: str,
-    count: int = 1000,
-    seed: int = 1,
-    *,
-    registry: Registry | None = None,
-    workers: Sequence[int] = (1, 2),
+    family: BenchFamily, simulator: str, count: int, registry: Registry
 ) -> dict[str, float]:
     """Milliseconds per scene of ``bpb simulate``'s library path (read, validate, simulate,
     build and serialise the ground truth) with ``simulator`` (``name:key=value,...``) over
-    ``count`` scene files of ``family``, start-up excluded.
+    ``count`` scene files of ``family`` (seed 1), start-up excluded.
 
-    Wall time for each worker count, plus the CPU time of the single-process run (less
+    Wall time with 1 and 2 workers, plus the CPU time of the single-process run (less
     sensitive to other load on a shared machine); three interleaved rounds, the best counts.
     """
     from bpb_core.simulate import simulate_lines
@@ -219,7 +219,9 @@ def time_simulate(
     job = parse_spec(simulator, "--simulate-with")
     best: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        paths = _scene_files(family, count, seed, Path(tmp))
+        paths = [Path(tmp) / f"scene_{index:05d}.json" for index in range(count)]
+        for path, scene in zip(paths, family.scenes(count, 1), strict=True):
+            path.write_text(scene.model_dump_json())
 
         def seconds(files: list[Path], n: int) -> tuple[float, float]:
             wall, cpu = time.perf_counter(), time.process_time()
@@ -233,22 +235,13 @@ def time_simulate(
         # hundreds of scenes at once, so a smaller warm-up left its build or load to round one.
         seconds(paths, 1)
         for _ in range(3):
-            for n in workers:
+            for n in (1, 2):
                 wall, cpu = seconds(paths, n)
                 figures = {f"{n} worker{'s' if n > 1 else ''}, wall": wall}
                 figures |= {"1 worker, CPU": cpu} if n == 1 else {}
                 for label, value in figures.items():
                     best[label] = min(best.get(label, math.inf), 1000 * value / count)
     return best
-
-
-def _scene_files(family: BenchFamily, count: int, seed: int, folder: Path) -> list[Path]:
-    """Write ``count`` bench scenes as ``scene_NNNNN.json`` files into ``folder``."""
-    paths = []
-    for index, scene in enumerate(family.scenes(count, seed)):
-        paths.append(folder / f"scene_{index:05d}.json")
-        paths[-1].write_text(scene.model_dump_json())
-    return paths
 
 
 def check_simulate_with(registry: Registry, family: str, simulators: Sequence[str]) -> None:
@@ -277,7 +270,7 @@ def with_simulate_timing(
     check_simulate_with(reg, result.family, names)
     figures: dict[str, float] = {}
     for name in names:
-        found = time_simulate(family, name, count, registry=reg)
+        found = time_simulate(family, name, count, reg)
         prefix = f"{name}, " if len(names) > 1 else ""
         figures |= {f"{prefix}{label}": ms for label, ms in found.items()}
     with_ = ", ".join(names)
@@ -310,12 +303,9 @@ def with_scaling(
         for factor in factors:
             busy = family.scaled(scene, factor)
             for label, sim in sims.items():
-                try:
-                    outcome, spent = timed_run(sim, busy)
-                except Exception as exc:  # the simulator's own failure on this scene
-                    tallies[factor, label].fail(f"{type(exc).__name__}: {exc}")
-                    continue
-                tallies[factor, label].add(spent, None, family.events(outcome))
+                ran = tallies[factor, label].timed(sim, busy)
+                if ran is not None:
+                    tallies[factor, label].add(ran[1], None, family.events(ran[0]))
     rows = [_scale_row(f, label, t) for (f, label), t in tallies.items()]
     return replace(result, scaling=rows)
 
@@ -337,7 +327,7 @@ def scaling_simulators(
     """
     if scenes < 1:
         raise BadInput(f"--scaling-scenes: must be at least 1, got {scenes}")
-    if not isinstance(comparing_family(registry, family), CountsEvents):
+    if not bench_family(registry, family).counts_events:
         raise BadInput(f"--scaling: scene family {family!r} does not count events")
     specs = [parse_spec(c, "--scaling") for c in contestants]
     return build_simulators(registry, family, specs, "--scaling")

@@ -36,11 +36,6 @@ def machine_description() -> str:
     return f"{os.cpu_count()} cores, {model}, {python}"
 
 
-def today() -> str:
-    """Today's date in ISO form (``2026-11-21``), the date a figure was measured."""
-    return date.today().isoformat()
-
-
 @dataclass(frozen=True)
 class SimRow:
     """One contestant's figures over the benchmark scenes (``counts`` in column order; errors
@@ -80,7 +75,7 @@ class SimBench:
     compared: int = 0
     scaling: list[ScaleRow] = field(default_factory=list)
     machine: str = field(default_factory=machine_description)
-    day: str = field(default_factory=today)
+    day: str = field(default_factory=lambda: date.today().isoformat())  # 2026-11-21
 
 
 @dataclass(frozen=True)
@@ -151,7 +146,13 @@ def markdown(result: SimBench, plot: str | None = "img/bench_sim.png") -> str:
     if reading:
         lines += ["", _wrap(reading)]
     if result.simulate_ms is not None:
-        lines += ["", _wrap(_simulate_text(result))]
+        figures = ", ".join(f"{k}: **{ms:.3f} ms/scene**" for k, ms in result.simulate_ms.items())
+        simulate = (
+            f"`bpb simulate` with `{result.simulate_with}` over {result.simulate_scenes} scene "
+            "files (read, validate, simulate, build and serialise the ground truth; start-up "
+            f"excluded; best of 3 interleaved rounds): {figures}."
+        )
+        lines += ["", _wrap(simulate)]
     if plot:
         lines += ["", f"![speed against error]({plot})"]
     lines += ["", END]
@@ -220,7 +221,8 @@ def _reading(result: SimBench) -> str:
     """Plain-language reading of the table, computed from it."""
     reference = next((r for r in result.rows if r.reference), None)
     others = sorted(
-        (r for r in result.rows if not r.reference and _whole(r)),
+        # every scene ran and was compared: rows the reading may rank
+        (r for r in result.rows if not (r.reference or r.failed or r.max_error is None)),
         key=lambda r: (_num(r.max_error), _num(r.ms_per_scene)),
     )
     if reference is None or reference.ms_per_scene is None or not others:
@@ -243,11 +245,6 @@ def _reading(result: SimBench) -> str:
     return text
 
 
-def _whole(row: SimRow) -> bool:
-    """Every scene ran and was compared: a row the reading may rank."""
-    return not row.failed and None not in (row.ms_per_scene, row.max_error, row.median_error)
-
-
 def _num(value: float | None) -> float:
     return math.inf if value is None else value
 
@@ -259,18 +256,6 @@ def _speed(ms: float, other_ms: float) -> str:
     ratio = max(ms, other_ms) / min(ms, other_ms)
     times = f"{ratio:,.0f}x" if ratio >= 100 else f"{ratio:.3g}x"
     return f"{times} faster than" if ms <= other_ms else f"{times} slower than"
-
-
-def _simulate_text(result: SimBench) -> str:
-    assert result.simulate_ms is not None
-    figures = ", ".join(
-        f"{label}: **{ms:.3f} ms/scene**" for label, ms in result.simulate_ms.items()
-    )
-    return (
-        f"`bpb simulate` with `{result.simulate_with}` over {result.simulate_scenes} scene "
-        "files (read, validate, simulate, build and serialise the ground truth; start-up "
-        f"excluded; best of 3 interleaved rounds): {figures}."
-    )
 
 
 def check_section_file(path: Path) -> None:

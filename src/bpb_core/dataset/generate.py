@@ -14,7 +14,7 @@ import shutil
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -28,7 +28,7 @@ from bpb_core.dataset.jobs import (
     run_scenes,
     worker_setup,
 )
-from bpb_core.dataset.manifest import DatasetManifest, DatasetWriter, HorizonSummary, versions
+from bpb_core.dataset.manifest import DatasetManifest, DatasetWriter, versions
 from bpb_core.errors import (
     BadInput,
     Interrupted,
@@ -44,9 +44,10 @@ from bpb_core.plugin_calls import (
     family_model,
     json_values,
     loaded_config,
+    returned,
     simulator_named,
 )
-from bpb_core.simulator_spec import parse_spec
+from bpb_core.simulator_spec import SimulatorSpec, parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -104,12 +105,21 @@ def generate_dataset(
             scenes listed so far, whole, in the partial folder; an existing ``out`` as it was).
     """
     with _naming_file(config):
-        registry = registry if registry is not None else _registry()
+        if registry is None:
+            from bpb_core.registry import PluginWarning, make_registry
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
+                registry = make_registry()
         name = family or registry.default_family()
         maker = registry.scene_family(name)
         origin = registry.origin("scene_family", name)
-        cfg = _config(maker, origin, config)
-        _check_simulator(registry, maker, origin, cfg)
+        cfg = loaded_config(maker, origin, config)
+        if getattr(cfg, "family", maker.name) != maker.name:
+            raise BadInput(
+                f"config: family: {cfg.family!r}, but the scene family is {maker.name!r}"
+            )
+        spec = _check_simulator(registry, maker, origin, cfg)
         hs = _check_args(per_horizon, horizons)
         if calibrate and not isinstance(maker, Calibrating):
             raise BadInput(f"--calibrate: the {name} scene family has nothing to calibrate")
@@ -118,11 +128,16 @@ def generate_dataset(
         checked_config(maker, origin, cfg, () if calibrate else hs)
         progress = progress or NoProgress()
         target = Path(out)
-        _check_target(target, overwrite)
+        if target.exists() and (not target.is_dir() or any(target.iterdir())):
+            is_dataset = (target / MANIFEST).is_file()
+            if not (overwrite and is_dataset):
+                hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
+                raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
+        check_writable_folder(target)
         with partial_folder(target, "bpb generate") as partial:
             try:
                 n_workers = max(1, workers or os.cpu_count() or 1)
-                setup = worker_setup(registry, name, partial, seed, cfg, images)
+                setup = worker_setup(registry, name, partial, seed, cfg, images, spec)
                 setup = replace(setup, scenes=per_horizon * len(hs))
                 calibration = None
                 if isinstance(maker, Calibrating) and calibrate:
@@ -131,7 +146,9 @@ def generate_dataset(
                     checked_config(maker, origin, cfg, hs)
                     setup = replace(setup, config=cfg)
                 tallies = new_tallies(maker, origin, cfg, hs)
-                writer = DatasetWriter(partial, hs, maker.index_columns, tallies)
+                writer = DatasetWriter(
+                    partial, hs, maker.index_columns, tallies, origin, family_label(maker)
+                )
                 try:
                     run_scenes(n_workers, setup, writer, hs, per_horizon, stable_only, progress)
                     _write_stats(maker, setup, writer, tallies, progress)
@@ -162,22 +179,6 @@ def _left(target: Path, partial: Path) -> str:
     )
 
 
-def _registry() -> Registry:
-    from bpb_core.registry import PluginWarning, make_registry
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
-        return make_registry()
-
-
-def _config(family: SceneFamily, origin: str, config: Any) -> Any:
-    cfg = loaded_config(family, origin, config)
-    named = getattr(cfg, "family", family.name)
-    if named != family.name:
-        raise BadInput(f"config: family: {named!r}, but the scene family is {family.name!r}")
-    return cfg
-
-
 @contextmanager
 def _naming_file(config: Any) -> Iterator[None]:
     """A config error ("config: balls: ...") names the config's file when it came from one."""
@@ -190,10 +191,12 @@ def _naming_file(config: Any) -> Iterator[None]:
         raise
 
 
-def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: Any) -> None:
-    """Refuse, before any worker starts and naming the field, a simulator spec (``name`` or
-    ``name:key=value,...``) that does not parse, an unknown simulator, or options it does
-    not take or whose values it refuses (it is built once here to see)."""
+def _check_simulator(
+    registry: Registry, family: SceneFamily, origin: str, cfg: Any
+) -> SimulatorSpec:
+    """The simulator spec (``name`` or ``name:key=value,...``) ``cfg`` names; refused, before any
+    worker starts and naming the field, when it does not parse, names an unknown simulator, or
+    options it does not take or whose values it refuses (it is built once here to see)."""
     spec = parse_spec(simulator_named(family, origin, cfg), "config: simulator")
     try:
         registry.get("simulator", spec.name)
@@ -204,6 +207,7 @@ def _check_simulator(registry: Registry, family: SceneFamily, origin: str, cfg: 
             registry.simulator(spec.name, spec.options)
         except BadInput as exc:
             raise BadInput(f"config: simulator {spec.spec!r}: {exc}") from None
+    return spec
 
 
 def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
@@ -219,20 +223,11 @@ def _check_args(per_horizon: int, horizons: Sequence[float]) -> list[float]:
     return hs
 
 
-def _check_target(target: Path, overwrite: bool) -> None:
-    if target.exists() and (not target.is_dir() or any(target.iterdir())):
-        is_dataset = (target / MANIFEST).is_file()
-        if not (overwrite and is_dataset):
-            hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
-            raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
-    check_writable_folder(target)
-
-
 def _write_stats(
     family: SceneFamily,
     setup: WorkerSetup,
     writer: DatasetWriter,
-    tallies: Mapping[float, CheckedTally],
+    tallies: Mapping[float, HorizonTally],
     progress: GenerateProgress,
 ) -> None:
     if not isinstance(family, DrawingStats):
@@ -240,13 +235,10 @@ def _write_stats(
     progress.phase("stats", 1)
     what = f"scene family {family.name!r}: write_stats()"
     with blamed(setup.origin, what):
-        own = {horizon: checked.tally for horizon, checked in tallies.items()}
-        written = family.write_stats(setup.root, setup.config, own)
+        written = family.write_stats(setup.root, setup.config, tallies)
     if not isinstance(written, list | tuple) or not all(isinstance(r, str) for r in written):
-        raise PluginBug(
-            f"{setup.origin}: {what} returned {type(written).__name__}; expected a list of "
-            "the paths it wrote (str, relative to the dataset folder)"
-        )
+        expected = "a list of the paths it wrote (str, relative to the dataset folder)"
+        raise returned(setup.origin, what, type(written).__name__, expected)
     missing = [rel for rel in written if not (setup.root / rel).is_file()]
     if missing:
         raise PluginBug(
@@ -317,7 +309,7 @@ def recorded_physics(family: SceneFamily, origin: str, config: Any) -> dict[str,
 
 def new_tallies(
     family: SceneFamily, origin: str, config: Any, horizons: Sequence[float]
-) -> dict[float, CheckedTally]:
+) -> dict[float, HorizonTally]:
     """A ``family.new_tally(config, h)`` per horizon (none when the family does not tally),
     checked: each has ``add()`` and ``summary()``, which the writer calls next, checked too.
 
@@ -332,56 +324,10 @@ def new_tallies(
         with blamed(origin, what):
             tally = family.new_tally(config, horizon)
         if not all(callable(getattr(tally, name, None)) for name in ("add", "summary")):
-            raise PluginBug(
-                f"{origin}: {what} returned {type(tally).__name__}; expected a tally with "
-                "add(row) and summary()"
-            )
-        tallies[horizon] = CheckedTally(tally, origin, f"{what}'s")
+            expected = "a tally with add(row) and summary()"
+            raise returned(origin, what, type(tally).__name__, expected)
+        tallies[horizon] = tally
     return tallies
-
-
-@dataclass(frozen=True)
-class CheckedTally:
-    """A family's tally whose ``add()`` and ``summary()`` are called checked (the family's own
-    ``write_stats()`` takes ``tally`` back as it made it).
-
-    Attributes:
-        tally: What the family's ``new_tally()`` returned.
-        origin: Who supplied the family.
-        what: Whose tally it is (``scene family 'x': new_tally(3)'s``).
-    """
-
-    tally: HorizonTally
-    origin: str
-    what: str
-
-    def add(self, row: Mapping[str, object]) -> None:
-        """``tally.add(row)``.
-
-        Raises:
-            PluginBug: It raised, naming ``origin``.
-        """
-        with blamed(self.origin, f"{self.what} add()"):
-            self.tally.add(row)
-
-    def summary(self) -> dict[str, Any]:
-        """``tally.summary()``, checked: a dict that JSON can hold (the manifest records it)
-        whose fields are not the counts bpb keeps itself (``scenes``).
-
-        Raises:
-            PluginBug: It raised or returned something else, naming ``origin``.
-        """
-        what = f"{self.what} summary()"
-        with blamed(self.origin, what):
-            summary = self.tally.summary()
-        fields = json_values(self.origin, what, summary, "what dataset.json")
-        ours = sorted(set(fields) & set(HorizonSummary.model_fields))
-        if ours:
-            raise PluginBug(
-                f"{self.origin}: {what} returned {ours[0]!r}, which bpb counts itself; "
-                "expected the family's own fields"
-            )
-        return fields
 
 
 def calibrated(
@@ -405,7 +351,4 @@ def calibrated(
     if isinstance(applied, tuple) and len(applied) == 2:
         got = f"({', '.join(type(part).__name__ for part in applied)})"
     expected = "the config" if model is None else model.__name__
-    raise PluginBug(
-        f"{origin}: {what} returned {got}; expected ({expected}, a dict: the manifest's "
-        "calibration record)"
-    )
+    raise returned(origin, what, got, f"({expected}, a dict: the manifest's calibration record)")

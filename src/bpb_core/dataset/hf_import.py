@@ -18,6 +18,7 @@ from pathlib import Path
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
+from bpb_core.validated_files import read_bytes
 
 DATA = "data"
 SIDE = "bpb"
@@ -66,15 +67,8 @@ def _digest(path: Path, shards: list[Path]) -> str:
     sums = [path / SIDE / CHECKSUMS] if (path / SIDE / CHECKSUMS).is_file() else []
     for file in [path / SIDE / MANIFEST, path / SIDE / INDEX, *sums, *shards]:
         digest.update(file.name.encode() + b"\0")
-        digest.update(_read(file))
+        digest.update(read_bytes(file))
     return digest.hexdigest()[:24]
-
-
-def _read(file: Path) -> bytes:
-    try:
-        return file.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{file}: cannot read: {exc.strerror or exc}") from None
 
 
 def _unpack(path: Path, shards: list[Path], target: Path) -> None:

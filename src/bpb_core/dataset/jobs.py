@@ -14,22 +14,22 @@ import shutil
 import signal
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from multiprocessing.pool import Pool
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from bpb_core.capabilities import Calibrating, ExpectsWork
-from bpb_core.dataset.manifest import DatasetWriter, IndexRow, plugin_label, sha256_bytes
+from bpb_core.dataset.manifest import DatasetWriter, IndexRow, sha256_bytes
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
-from bpb_core.plugin_calls import simulator_named
-from bpb_core.simulator_spec import parse_spec
+from bpb_core.plugin_calls import returned
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
+    from bpb_core.simulator_spec import SimulatorSpec
 
 RUN = 8  # scenes per pool task: a message each way per run of scenes, not per scene
 MAX_DRAWS_FACTOR = 50  # --stable-only gives up after this many draws per wanted scene
@@ -39,15 +39,15 @@ WORKERS_PER_CORE = 4  # beyond, processes only queue for the cores, each with it
 MAX_PER_HORIZON = 100_000
 
 
-def check_per_horizon(count: int, option: str = "--per-horizon", least: int = 1) -> None:
-    """Refuse a count of scenes per horizon below ``least`` or above :data:`MAX_PER_HORIZON`.
+def check_per_horizon(count: int, option: str = "--per-horizon") -> None:
+    """Refuse a count of scenes per horizon below 1 or above :data:`MAX_PER_HORIZON`.
 
     Raises:
         BadInput: ``"--per-horizon: must be at least 1, got 0"`` or
             ``"--per-horizon: at most 100,000 scenes per horizon, got 2,000,000,000"``.
     """
-    if count < least:
-        raise BadInput(f"{option}: must be at least {least}, got {count}")
+    if count < 1:
+        raise BadInput(f"{option}: must be at least 1, got {count}")
     if count > MAX_PER_HORIZON:
         raise BadInput(f"{option}: at most {MAX_PER_HORIZON:,} scenes per horizon, got {count:,}")
 
@@ -94,32 +94,33 @@ class NoProgress:
 
 
 def worker_setup(
-    registry: Registry, family: str, root: Path, seed: int, config: Any, images: bool
+    registry: Registry,
+    family: str,
+    root: Path,
+    seed: int,
+    config: Any,
+    images: bool,
+    spec: SimulatorSpec,
 ) -> WorkerSetup:
-    """Resolve the family and the simulator its config names (with its options) into a
-    picklable setup."""
+    """Resolve the family and the simulator its config names (``spec``, with its options) into
+    a picklable setup."""
     family_entry = registry.get("scene_family", family)
-    named = simulator_named(registry.scene_family(family), family_entry.origin, config)
-    spec = parse_spec(named, "config: simulator")
-    simulator = spec.name
-    simulator_entry = registry.get("simulator", simulator)
-    plugins = (
-        ("scene_family", plugin_label(family_entry)),
-        ("simulator", plugin_label(simulator_entry)),
+    simulator_entry = registry.get("simulator", spec.name)
+    plugins = tuple(  # name (distribution version) of each
+        (e.info.kind, f"{e.info.name} ({e.distribution} {e.version})")
+        for e in (family_entry, simulator_entry)
     )
     return WorkerSetup(
         root=root,
         seed=seed,
         config=config,
         family_cls=registry.load("scene_family", family),
-        simulator_cls=registry.load("simulator", simulator),
+        simulator_cls=registry.load("simulator", spec.name),
         images=images,
         origin=family_entry.origin,
-        plugins=plugins,
-        options=tuple(spec.options.items()),
-        simulator=simulator,
+        spec=spec,
         simulator_origin=simulator_entry.origin,
-        simulator_spec=spec.spec,
+        plugins=plugins,
     )
 
 
@@ -129,16 +130,8 @@ class InProcess:
     def __init__(self, setup: WorkerSetup) -> None:
         init_worker(setup)
 
-    def imap(
-        self, func: Callable[[Any], Any], items: Iterable[Any], chunksize: int = 1
-    ) -> Iterator[Any]:
+    def imap(self, func: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[Any]:
         return map(func, items)
-
-    def __enter__(self) -> InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
 
 
 def pooled(n_workers: int) -> bool:
@@ -150,10 +143,10 @@ def pooled(n_workers: int) -> bool:
     return n_workers > 1
 
 
-def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | InProcess:
+def make_pool(n_workers: int, setup: WorkerSetup) -> Pool | nullcontext[InProcess]:
     """A pool of ``n_workers`` initialised with ``setup`` (in-process when 1)."""
     if n_workers == 1:
-        return InProcess(setup)
+        return nullcontext(InProcess(setup))
     return started_pool(lambda: Pool(n_workers, init_pool_worker, (setup,)))
 
 
@@ -257,9 +250,9 @@ def _run_stable(
         ahead, first = [] if first is None else [first], None
         made = _results(pool, batch[len(ahead) :])
         for result in itertools.chain(ahead, made):
-            if kept >= per_horizon:
-                if result.written:
-                    remove_scene(setup.root, h, result.row.index)
+            if kept >= per_horizon:  # surplus of the batch: written, but not kept
+                if result.files:
+                    shutil.rmtree(scene_dir(setup.root, h, result.row.index), ignore_errors=True)
             elif result.row.stable is False:
                 writer.drop(h)
             else:
@@ -284,10 +277,6 @@ class SceneResult:
     row: IndexRow
     files: tuple[tuple[str, str], ...]
 
-    @property
-    def written(self) -> bool:
-        return bool(self.files)
-
 
 @dataclass(frozen=True)
 class WorkerSetup:
@@ -295,10 +284,9 @@ class WorkerSetup:
 
     Attributes:
         origin: Who supplied the family (a registry entry's origin), for one-line plugin errors.
-        options: Keyword options the simulator is built with.
-        simulator: The simulator's registered name; ``simulator_origin`` who supplied it
-            (default: ``origin``); ``simulator_spec`` how the config names it with its options
-            (``pymunk:dt=0.0005``), where a refused option's value is set.
+        spec: The simulator as the config names it (``pymunk:dt=0.0005``, where a refused
+            option's value is set): its registered name and the options it is built with;
+            ``simulator_origin`` who supplied it.
     """
 
     root: Path
@@ -308,11 +296,9 @@ class WorkerSetup:
     simulator_cls: type
     images: bool
     origin: str
+    spec: SimulatorSpec
+    simulator_origin: str
     plugins: tuple[tuple[str, str], ...] = ()
-    options: tuple[tuple[str, Any], ...] = ()
-    simulator: str = ""
-    simulator_origin: str = ""
-    simulator_spec: str = ""
     scenes: int = 0
 
 
@@ -330,14 +316,12 @@ def init_worker(setup: WorkerSetup) -> None:
     _SETUP = setup
     _STATE.clear()
     family = getattr(setup.family_cls, "name", setup.family_cls.__name__)
-    simulator = setup.simulator or setup.simulator_cls.__name__
+    simulator = setup.spec.name
     try:
         with blamed(setup.origin, f"creating the scene family {family!r}"):
             _STATE["family"] = setup.family_cls()
-        with blamed(
-            setup.simulator_origin or setup.origin, f"creating the simulator {simulator!r}"
-        ):
-            made = setup.simulator_cls(**dict(setup.options))
+        with blamed(setup.simulator_origin, f"creating the simulator {simulator!r}"):
+            made = setup.simulator_cls(**setup.spec.options)
             if isinstance(made, ExpectsWork) and setup.scenes:
                 made.expect_scenes(setup.scenes)
             _STATE["simulator"] = made
@@ -489,7 +473,7 @@ def _finishing(setup: WorkerSetup, what: str, where: str) -> Iterator[None]:
     except BpbError as exc:
         said = f"{where}: {exc}; the simulator cannot finish it"
         if exc.option is not None:
-            spec, name, option = setup.simulator_spec, setup.simulator, exc.option
+            spec, name, option = setup.spec.spec, setup.spec.name, exc.option
             said += (
                 f": set {option} in the config's simulator {spec or name!r} ({name}:{option}=...)"
             )
@@ -506,10 +490,8 @@ def _cells(
         made_id, stable = getattr(truth, "scene_id", None), getattr(truth, "stable", None)
     shaped = isinstance(made_id, str) and stable in (True, False, None)
     if not (shaped and isinstance(row, Mapping) and callable(getattr(made, "files", None))):
-        raise PluginBug(
-            f"{origin}: {what} returned {type(made).__name__}; expected a "
-            "bpb_core.GeneratedScene (truth with scene_id and stable, row, files())"
-        )
+        expected = "a bpb_core.GeneratedScene (truth with scene_id and stable, row, files())"
+        raise returned(origin, what, type(made).__name__, expected)
     if made_id != name:
         raise PluginBug(
             f"{origin}: {what} made scene {made_id!r}; make_scene must name scene i at "
@@ -532,12 +514,5 @@ def _files(setup: WorkerSetup, what: str, made: GeneratedScene) -> dict[str, byt
         isinstance(k, str) and isinstance(v, bytes) for k, v in files.items()
     ):
         return files
-    raise PluginBug(
-        f"{setup.origin}: {what}'s files() returned {type(files).__name__}; expected a dict "
-        "of file names (str) and their contents (bytes)"
-    )
-
-
-def remove_scene(root: Path, horizon: float, index: int) -> None:
-    """Delete a scene folder written by a worker but not kept (``--stable-only`` surplus)."""
-    shutil.rmtree(scene_dir(root, horizon, index), ignore_errors=True)
+    expected = "a dict of file names (str) and their contents (bytes)"
+    raise returned(setup.origin, f"{what}'s files()", type(files).__name__, expected)

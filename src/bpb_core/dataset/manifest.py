@@ -24,8 +24,9 @@ from typing import IO, TYPE_CHECKING, Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from bpb_core.capabilities import HorizonTally
-from bpb_core.errors import BadInput, writing
+from bpb_core.errors import BadInput, blamed, writing
 from bpb_core.layout import INDEX, MANIFEST, horizon_label
+from bpb_core.plugin_calls import json_values, returned
 
 if TYPE_CHECKING:
     from bpb_core.dataset.jobs import SceneResult
@@ -133,10 +134,6 @@ class IndexRow:
         """Column names, in order, for a family with ``columns``."""
         return ["scene_id", "horizon", "index", *columns, "stable"]
 
-    def get(self, column: str) -> object:
-        """The family's cell ``column``."""
-        return dict(self.values)[column]
-
     def cells(self) -> list[str]:
         """The row as CSV cells (booleans as ``true``/``false``, empty when unknown)."""
         values = [self.scene_id, self.horizon, self.index, *(v for _, v in self.values)]
@@ -162,20 +159,13 @@ def sha256_bytes(data: bytes) -> str:
 VERSIONED = ("bpb", "pydantic", "pillow", "zlib-ng", "matplotlib", "numpy")
 
 
-@dataclass
-class HorizonCounts:
-    """Running counts of one horizon that every family has."""
-
-    scenes: int = 0
-    unstable: int = 0
-    dropped: int = 0
-
-
 class DatasetWriter:
     """Appends index rows and checksums in scene order; writes the manifest.
 
     Attributes:
-        tallies: The family's per-horizon tallies (empty when the family keeps none).
+        tallies: The family's per-horizon tallies (empty when the family keeps none), whose
+            ``add()`` and ``summary()`` are called checked: a failure names ``origin`` (who
+            supplied the family) and ``family`` (how messages name it, ``scene family 'x'``).
     """
 
     def __init__(
@@ -184,10 +174,13 @@ class DatasetWriter:
         horizons: Sequence[float],
         columns: Sequence[str],
         tallies: Mapping[float, HorizonTally] | None = None,
+        origin: str = "",
+        family: str = "",
     ) -> None:
         self.root = root
-        self.counts = {h: HorizonCounts() for h in horizons}
+        self.counts = {h: HorizonSummary(scenes=0) for h in horizons}  # running counts
         self.tallies = dict(tallies or {})
+        self.origin, self.family = origin, family
         with writing(root):
             self._index: IO[str] = (root / INDEX).open("w", encoding="utf-8", newline="")
             self._sums: IO[str] = (root / CHECKSUMS).open("w", encoding="utf-8", newline="")
@@ -202,7 +195,8 @@ class DatasetWriter:
         counts.scenes += 1
         counts.unstable += row.stable is False
         if row.horizon in self.tallies:
-            self.tallies[row.horizon].add(dict(row.values))
+            with blamed(self.origin, f"{self._tally(row.horizon)} add()"):
+                self.tallies[row.horizon].add(dict(row.values))
         # Checksums first: a Ctrl-C between the two leaves no index row whose files are unlisted
         with writing(self.root / CHECKSUMS):  # the buffer reaching the disk, which may be full
             self._sums.write("".join(f"{digest}  {rel}\n" for rel, digest in result.files))
@@ -211,7 +205,7 @@ class DatasetWriter:
 
     def drop(self, horizon: float) -> None:
         """Count a scene dropped as unstable."""
-        self.counts[horizon].dropped += 1
+        self.counts[horizon].dropped_unstable += 1
 
     def add_file(self, rel: str) -> None:
         """Checksum an extra file (a stats figure) written under the root."""
@@ -232,11 +226,25 @@ class DatasetWriter:
         """Per-horizon counts (with the family's fields) keyed by horizon label (``h3``)."""
         out = {}
         for h, c in self.counts.items():
-            extra: dict[str, Any] = self.tallies[h].summary() if h in self.tallies else {}
-            out[horizon_label(h)] = HorizonSummary(
-                scenes=c.scenes, dropped_unstable=c.dropped, unstable=c.unstable, **extra
-            )
+            extra = self._tally_summary(h) if h in self.tallies else {}
+            out[horizon_label(h)] = HorizonSummary(**c.model_dump(), **extra)
         return out
+
+    def _tally(self, horizon: float) -> str:
+        return f"{self.family}: new_tally({horizon:g})'s"
+
+    def _tally_summary(self, horizon: float) -> dict[str, Any]:
+        """The tally's ``summary()``, checked: a dict that JSON can hold whose fields are not
+        the counts bpb keeps itself (``scenes``)."""
+        what = f"{self._tally(horizon)} summary()"
+        with blamed(self.origin, what):
+            summary = self.tallies[horizon].summary()
+        fields = json_values(self.origin, what, summary, "what dataset.json")
+        ours = sorted(set(fields) & set(HorizonSummary.model_fields))
+        if ours:
+            got = f"{ours[0]!r}, which bpb counts itself"
+            raise returned(self.origin, what, got, "the family's own fields")
+        return fields
 
     def write_manifest(self, manifest: DatasetManifest) -> DatasetManifest:
         """Add the descriptive files' hashes, seal and write ``dataset.json``."""
@@ -256,8 +264,3 @@ def versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             continue
     return found
-
-
-def plugin_label(registered: Any) -> str:
-    """``name (distribution version)`` of a registered component."""
-    return f"{registered.info.name} ({registered.distribution} {registered.version})"

@@ -113,10 +113,19 @@ class Dataset:
             BadInput: ``checksums.sha256`` cannot be read, or the export has none (an export
                 made by an earlier bpb).
         """
-        carried = self._exported_names()
+        carried: set[str] | None = None  # the names of the scene files an export carries
+        if self.export is not None:
+            if not (self.root / CHECKSUMS).is_file():
+                raise BadInput(
+                    f"{self.export}: this Hugging Face export has no {SIDE}/{CHECKSUMS} (made by "
+                    "an earlier bpb), so its scene files cannot be checked: export the dataset "
+                    "again, or verify the dataset folder it came from"
+                )
+            image = self.family.input_image if self.manifest.images else None
+            carried = {INIT, FINAL} | ({image} if image else set())
         problems = []
         # the file's own fields, as the bpb that wrote it hashed them (not the model's defaults)
-        if content_hash(manifest_data(self.root) or {}) != self.manifest.dataset_hash:
+        if content_hash(manifest_file(self.root)[0] or {}) != self.manifest.dataset_hash:
             problems.append(f"{MANIFEST}: dataset_hash does not match the manifest's content")
         for name, digest in sorted(self.manifest.files.items()):
             target = self.root / name
@@ -151,19 +160,6 @@ class Dataset:
                 problems.append(f"{rel}: content differs from its checksum")
         return problems
 
-    def _exported_names(self) -> set[str] | None:
-        """The names of the scene files an export carries (``None``: a dataset folder)."""
-        if self.export is None:
-            return None
-        if not (self.root / CHECKSUMS).is_file():
-            raise BadInput(
-                f"{self.export}: this Hugging Face export has no {SIDE}/{CHECKSUMS} (made by an "
-                "earlier bpb), so its scene files cannot be checked: export the dataset again, "
-                "or verify the dataset folder it came from"
-            )
-        image = self.family.input_image if self.manifest.images else None
-        return {INIT, FINAL} | ({image} if image else set())
-
 
 def dataset_keys(root: Path) -> list[SceneKey]:
     """The scenes of the folder ``root``: those its ``index.csv`` lists (a generated dataset),
@@ -194,15 +190,11 @@ def _folder_problems(root: Path, listed: Sequence[SceneKey]) -> list[str]:
     except OSError as exc:
         raise BadInput(f"{root}: cannot list scene folders: {exc.strerror or exc}") from None
     wanted = set(listed)
-    missing = [f"{_rel(root, k)}: listed in {INDEX} but missing" for k in sorted(wanted - present)]
+    missing = [f"{k.dir(Path())}: listed in {INDEX} but missing" for k in sorted(wanted - present)]
     extra = [
-        f"{_rel(root, k)}: a scene folder {INDEX} does not list" for k in sorted(present - wanted)
+        f"{k.dir(Path())}: a scene folder {INDEX} does not list" for k in sorted(present - wanted)
     ]
     return missing + extra
-
-
-def _rel(root: Path, key: SceneKey) -> str:
-    return key.dir(root).relative_to(root).as_posix()
 
 
 def load_dataset(
@@ -225,8 +217,6 @@ def load_dataset(
     family = dataset_family(manifest, root, registry)
     export = source if root != source else None
     dataset = Dataset(root, manifest, tuple(_read_index(root / INDEX)), family, export)
-    if horizons is None and limit is None:
-        return dataset
     return dataset.select(horizons, limit)
 
 
@@ -241,22 +231,18 @@ def read_manifest(root: Path) -> DatasetManifest:
     return read_model(root / MANIFEST, DatasetManifest)
 
 
-def manifest_data(root: Path) -> dict[str, Any] | None:
-    """The JSON object of ``root/dataset.json`` (``None`` when there is none), checked where
-    the lenient readers look (a hand-made folder's manifest may hold only a few keys): no
-    NaN or infinity anywhere; ``dataset_hash``, when there, a string; ``config``, when there,
-    an object whose ``family``, when there, is a non-empty string. A manifest that names its
-    ``format`` (one ``bpb generate`` wrote) is checked whole, as :func:`read_manifest` does.
+def manifest_file(root: Path) -> tuple[dict[str, Any] | None, str | None]:
+    """The JSON object of ``root/dataset.json`` and the SHA-256 of its bytes, from one read
+    (``None`` for both when there is none), checked where the lenient readers look (a hand-made
+    folder's manifest may hold only a few keys): no NaN or infinity anywhere; ``dataset_hash``,
+    when there, a string; ``config``, when there, an object whose ``family``, when there, is a
+    non-empty string. A manifest that names its ``format`` (one ``bpb generate`` wrote) is
+    checked whole, as :func:`read_manifest` does.
 
     Raises:
         BadInput: The file cannot be read, is not a JSON object, or one of those fields is
             wrong (names the file and the field).
     """
-    return _manifest_file(root)[0]
-
-
-def _manifest_file(root: Path) -> tuple[dict[str, Any] | None, str | None]:
-    """:func:`manifest_data` and the SHA-256 of the file's bytes, from one read."""
     path = root / MANIFEST
     try:
         raw = path.read_bytes()
@@ -313,7 +299,7 @@ class DataFolder:
     of a run instead of each reading the file again.
 
     Attributes:
-        recorded: The manifest's fields as written, checked (:func:`manifest_data`; ``None``:
+        recorded: The manifest's fields as written, checked (:func:`manifest_file`; ``None``:
             a hand-made folder of scenes without one).
         digest: The SHA-256 of the manifest's bytes (``None`` without one).
         family: The scene family it names (the default family when it names none).
@@ -374,7 +360,7 @@ def open_folder(data: Path | DataFolder, registry: Registry | None = None) -> Da
     """The folder of scenes ``data`` read once (a :class:`DataFolder` is returned as it is).
 
     Raises:
-        BadInput: ``dataset.json`` is not a valid manifest (:func:`manifest_data`), or the
+        BadInput: ``dataset.json`` is not a valid manifest (:func:`manifest_file`), or the
             family it names is not installed.
     """
     if isinstance(data, DataFolder):
@@ -382,7 +368,7 @@ def open_folder(data: Path | DataFolder, registry: Registry | None = None) -> Da
     from bpb_core.registry import make_registry
 
     registry = registry if registry is not None else make_registry()
-    recorded, digest = _manifest_file(data)
+    recorded, digest = manifest_file(data)
     family = _installed_family(_named_family(recorded), data, registry)
     entry = registry.entries("scene_family").get(family.name)
     origin = entry.origin if entry is not None else object_origin(family)
@@ -401,7 +387,7 @@ def dataset_family(
     from bpb_core.registry import make_registry
 
     registry = registry if registry is not None else make_registry()
-    name = manifest.family if manifest is not None else _named_family(manifest_data(root))
+    name = manifest.family if manifest is not None else _named_family(manifest_file(root)[0])
     return _installed_family(name, root, registry)
 
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import hashlib
 import re
-from dataclasses import dataclass, field
-from functools import lru_cache
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -26,7 +26,7 @@ from pydantic import BaseModel
 from bpb_core.dataset.manifest import CHECKSUMS
 from bpb_core.errors import BadInput
 from bpb_core.layout import FINAL, INIT, SceneKey
-from bpb_core.validated_files import read_model
+from bpb_core.validated_files import read_bytes, read_model
 
 if TYPE_CHECKING:
     from bpb_core.interfaces import SceneFamily
@@ -57,10 +57,7 @@ def read_scene_file(path: Path) -> bytes:
     Raises:
         BadInput: The file cannot be read, or differs from its recorded checksum.
     """
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    data = read_bytes(path)
     check_recorded(path, data)
     return data
 
@@ -68,10 +65,7 @@ def read_scene_file(path: Path) -> bytes:
 def read_scene_model(path: Path, model: type[M]) -> M:
     """A scene's JSON file read with ``model``; a file that does not validate is named with its
     field first, then one that validates but was changed after generation."""
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+    data = read_bytes(path)
     value = read_model(path, model, data)
     check_recorded(path, data)
     return value
@@ -101,16 +95,12 @@ def check_recorded(path: Path, data: bytes) -> None:
 def _recorded(root: Path) -> dict[str, str]:
     """The hashes ``root/checksums.sha256`` records by path (empty without the file); read
     again when the file changes."""
-    path = root / CHECKSUMS
-    try:
-        stat = path.stat()
-    except OSError:
-        return {}
-    return _parse_file(path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
+    identity = _identity(root / CHECKSUMS)
+    return {} if identity is None else _parse_file(root / CHECKSUMS, identity)
 
 
 @lru_cache(maxsize=16)
-def _parse_file(path: Path, mtime_ns: int, size: int, inode: int) -> dict[str, str]:
+def _parse_file(path: Path, identity: tuple[int, int, int]) -> dict[str, str]:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, ValueError):
@@ -136,7 +126,6 @@ class DatasetScene:
     key: SceneKey
     folder: Path
     family: SceneFamily
-    _cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def scene_id(self) -> str:
@@ -148,19 +137,15 @@ class DatasetScene:
         """Seconds the questions are about."""
         return self.key.horizon
 
-    @property
+    @cached_property
     def state(self) -> Any:
         """The initial state: ``init.json`` read with the family's scene model."""
-        if INIT not in self._cache:
-            self._cache[INIT] = read_scene_model(self.folder / INIT, self.family.scene_model)
-        return self._cache[INIT]
+        return read_scene_model(self.folder / INIT, self.family.scene_model)
 
-    @property
+    @cached_property
     def truth(self) -> Any:
         """The ground truth: ``final.json`` read with the family's truth model."""
-        if FINAL not in self._cache:
-            self._cache[FINAL] = read_scene_model(self.folder / FINAL, self.family.truth_model)
-        return self._cache[FINAL]
+        return read_scene_model(self.folder / FINAL, self.family.truth_model)
 
     @property
     def stable(self) -> bool | None:
@@ -200,10 +185,7 @@ class DatasetScene:
             BadInput: No such kind, or the file is missing, truncated, damaged or changed.
         """
         path = self.image_path(kind)
-        try:
-            data = path.read_bytes()
-        except OSError as exc:
-            raise BadInput(f"{path}: cannot read: {exc.strerror or exc}") from None
+        data = read_bytes(path)
         check_image(path, data)
         check_recorded(path, data)
         return data
@@ -271,11 +253,6 @@ def read_truth(dataset: Path, key: SceneKey, scene_model: Any, truth_model: Any)
     folder = key.dir(dataset)
     identity = (_identity(folder / INIT), _identity(folder / FINAL))
     return _read_truth(folder, scene_model, truth_model, identity)
-
-
-def clear_truth_cache() -> None:
-    """Forget every scene :func:`read_truth` has read (to time a cold read)."""
-    _read_truth.cache_clear()
 
 
 def _identity(path: Path) -> tuple[int, int, int] | None:

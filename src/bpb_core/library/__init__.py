@@ -136,18 +136,13 @@ class AnswerScore:
         return all(unit.correct for unit in self.units)
 
 
-def _task(task: str | Task, registry: Registry | None) -> Task:
+def _task(task: str | Task, registry: Registry | None) -> tuple[Task, str]:
+    """The task (a name looked up in ``registry``, default: every installed plugin) and who
+    supplied it: its plugin when named, else the object's module."""
     if not isinstance(task, str):
-        return task
-    found: Task = (registry or make_registry()).task(task)
-    return found
-
-
-def _origin(task: str | Task, found: Task, registry: Registry | None) -> str:
-    """Who supplied the task: its plugin when named, else the object's module."""
-    if isinstance(task, str) and registry is not None:
-        return registry.origin("task", task)
-    return object_origin(found)
+        return task, object_origin(task)
+    registry = registry or make_registry()
+    return registry.task(task), registry.origin("task", task)
 
 
 def prompt_options(task: Task, input_mode: InputMode, cot: bool | None) -> PromptOptions:
@@ -177,13 +172,11 @@ def build_messages(
         BadInput: The scene's files are missing or invalid (names the file), or the input
             mode is none of the three.
     """
-    if isinstance(task, str):
-        registry = registry or make_registry()
-    found = _task(task, registry)
+    found, origin = _task(task, registry)
     check_input_mode(input_mode)
     image = None if input_mode == "state" else scene.image_bytes()
     options = prompt_options(found, input_mode, cot)
-    return prompt_messages(found, _origin(task, found, registry), scene.state, image, options)
+    return prompt_messages(found, origin, scene.state, image, options)
 
 
 def score_answer(
@@ -207,12 +200,10 @@ def score_answer(
         registry: Where the task and its scorer come from; default: every installed plugin.
     """
     registry = registry or make_registry()
-    found = _task(task, registry)
+    found, origin = _task(task, registry)
     options = prompt_options(found, "image", cot)
     try:
-        parsed = parsed_answer(
-            found, _origin(task, found, registry), reply_text, scene.state, options
-        )
+        parsed = parsed_answer(found, origin, reply_text, scene.state, options)
         status, answer, rule, error = "ok", parsed.value, parsed.rule, None
     except ParseFailure as exc:
         status, answer, rule, error = "parse_error", None, None, str(exc)
@@ -251,6 +242,19 @@ def mark(
     )
 
 
+def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict[str, Any]:
+    """The JSON Schema of a task's answer (published in ``docs/schemas/`` for the built-ins).
+
+    Raises:
+        BadInput: The task publishes no schema.
+        PluginBug: Its ``answer_schema()`` raised or returned no dict, naming the task's plugin.
+    """
+    found, origin = _task(task, registry)
+    if not isinstance(found, PublishesSchema):
+        raise BadInput(f"task {found.name!r}: publishes no answer schema")
+    return published_schema(found, origin)
+
+
 def scene_score(rule: str, units: tuple[UnitScore, ...]) -> float:
     """A scene's score from its units: the share correct (``mean``) or all-or-nothing
     (``all``); 0.0 without units."""
@@ -259,19 +263,6 @@ def scene_score(rule: str, units: tuple[UnitScore, ...]) -> float:
     if rule == "all":
         return float(all(u.correct for u in units))
     return sum(u.correct for u in units) / len(units)
-
-
-def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict[str, Any]:
-    """The JSON Schema of a task's answer (published in ``docs/schemas/`` for the built-ins).
-
-    Raises:
-        BadInput: The task publishes no schema.
-        PluginBug: Its ``answer_schema()`` raised or returned no dict, naming the task's plugin.
-    """
-    found = _task(task, registry)
-    if not isinstance(found, PublishesSchema):
-        raise BadInput(f"task {found.name!r}: publishes no answer schema")
-    return published_schema(found, _origin(task, found, registry))
 
 
 @dataclass

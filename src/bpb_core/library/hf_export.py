@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 from bpb_core.capabilities import DescribesDataset
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.dataset.reader import DataFolder, Dataset, dataset_keys, load_dataset, manifest_data
+from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset, open_folder
 from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
@@ -124,6 +124,11 @@ def export_hf(
     dataset_keys(dataset.root)  # scene folders unlike index.csv: refused, as bpb run does
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
+    index = csv.DictReader((dataset.root / INDEX).read_text(encoding="utf-8-sig").splitlines())
+    drop = {"scene_id", "horizon", "index", "stable"}  # index.csv: only the family's cells kept
+    cells = {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in index}
+    # a dataset made with images needs each scene's (a missing one is an error naming it)
+    images = dataset.family.input_image is not None and dataset.manifest.images
     target = Path(out)
     _check_out(target)
     with partial_folder(target, "bpb export") as partial:
@@ -131,9 +136,22 @@ def export_hf(
             with writing(partial):
                 (partial / DATA).mkdir()
                 (partial / SIDE).mkdir()
-            splits, files, card = _write_export(
-                dataset, partial, objects, names, shard_rows, registry
-            )
+            splits: dict[str, tuple[int, int]] = {}  # rows and Arrow bytes per split
+            files: list[str] = []
+            for horizon in dataset.horizons:
+                rows = [
+                    _row(scene, task, cells.get(scene.scene_id, {}), images, registry)
+                    for scene in dataset.select([horizon])
+                    for task in objects
+                ]
+                written, nbytes = _write_split(partial, horizon_label(horizon), rows, shard_rows)
+                splits[horizon_label(horizon)] = (len(rows), nbytes)
+                files += written
+            _write_side_files(dataset, partial)
+            family = dataset.family
+            words = family.dataset_card() if isinstance(family, DescribesDataset) else {}
+            body = _body(dataset, words, splits, names, _truth(dataset, registry))
+            card = "\n".join(["---", *_front_matter(dataset, words, splits), "---", "", *body])
             with writing(partial / "README.md"):
                 (partial / "README.md").write_text(card, encoding="utf-8")
             _swap_in(partial, target)
@@ -144,38 +162,9 @@ def export_hf(
             ) from None
         finally:
             shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
-    return HfExport(target, splits, tuple(files), names)
-
-
-def _write_export(
-    dataset: Dataset,
-    out: Path,
-    objects: list[Task],
-    names: tuple[str, ...],
-    shard_rows: int,
-    registry: Registry,
-) -> tuple[dict[str, int], list[str], str]:
-    """Write the shards and side files to ``out``; the rows per split, the shards and the card."""
-    cells = _index_cells(dataset.root / INDEX)
-    # a dataset made with images needs each scene's (a missing one is an error naming it)
-    images = dataset.family.input_image is not None and dataset.manifest.images
-    splits: dict[str, int] = {}
-    sizes: dict[str, int] = {}
-    files: list[str] = []
-    for horizon in dataset.horizons:
-        rows = [
-            _row(scene, task, cells.get(scene.scene_id, {}), images, registry)
-            for scene in dataset.select([horizon])
-            for task in objects
-        ]
-        split = horizon_label(horizon)
-        splits[split] = len(rows)
-        written, sizes[split] = _write_split(out, split, rows, shard_rows)
-        files += written
-    _write_side_files(dataset, out)
-    sized = {s: (splits[s], sizes[s]) for s in splits}
-    card = card_text(dataset, FEATURES, sized, names, registry)
-    return splits, files, card
+    return HfExport(
+        target, {split: rows for split, (rows, _) in splits.items()}, tuple(files), names
+    )
 
 
 def _check_out(out: Path) -> None:
@@ -213,13 +202,6 @@ def _swap_in(partial: Path, out: Path) -> None:
         for there, back in reversed(moved):  # put the earlier export back as it was
             there.rename(back)
         raise BadInput(f"{out}: --out: cannot replace the export: {exc.strerror or exc}") from None
-
-
-def _index_cells(path: Path) -> dict[str, dict[str, str]]:
-    """The family's cells of ``index.csv`` per scene id (without id, horizon, index, stable)."""
-    reader = csv.DictReader(path.read_text(encoding="utf-8-sig").splitlines())
-    drop = {"scene_id", "horizon", "index", "stable"}
-    return {row["scene_id"]: {k: v for k, v in row.items() if k not in drop} for row in reader}
 
 
 def _row(
@@ -311,33 +293,11 @@ def _write_side_files(dataset: Dataset, out: Path) -> None:
             ) from None
 
 
-def card_text(
-    dataset: Dataset,
-    features: Mapping[str, Mapping[str, str]],
-    splits: Mapping[str, tuple[int, int]],
-    tasks: Sequence[str],
-    registry: Registry,
-) -> str:
-    """The whole README.md of the export."""
-    words = dataset.family.dataset_card() if isinstance(dataset.family, DescribesDataset) else {}
-    return "\n".join(
-        [
-            "---",
-            *_front_matter(dataset, words, features, splits),
-            "---",
-            "",
-            *_body(dataset, words, splits, tasks, _truth(dataset, registry)),
-        ]
-    )
-
-
 def _truth(dataset: Dataset, registry: Registry) -> list[str]:
     """Which simulator made the ground truth, as the config names it, and what it is (its
     registered summary): the family's words hold for every simulator, and only the simulator
     knows whether its truth is exact or stepped."""
-    origin = registry.origin("scene_family", dataset.family.name)
-    folder = DataFolder(dataset.root, manifest_data(dataset.root), None, dataset.family, origin)
-    spec = folder.simulator_spec()
+    spec = open_folder(dataset.root, registry).simulator_spec()
     try:
         summary = registry.get("simulator", spec.name).info.summary
     except UnknownName:
@@ -349,7 +309,6 @@ def _truth(dataset: Dataset, registry: Registry) -> list[str]:
 def _front_matter(
     dataset: Dataset,
     words: Mapping[str, Any],
-    features: Mapping[str, Mapping[str, str]],
     splits: Mapping[str, tuple[int, int]],
 ) -> list[str]:
     q = json.dumps
@@ -362,7 +321,7 @@ def _front_matter(
     for split in splits:
         lines += [f"  - split: {q(split)}", f"    path: {q(f'data/{split}-*')}"]
     lines += ["dataset_info:", "  features:"]
-    for name, feature in features.items():
+    for name, feature in FEATURES.items():
         dtype = _FEATURE_NAMES.get(feature["_type"], feature.get("dtype", "string"))
         lines += [f"  - name: {q(name)}", f"    dtype: {q(dtype)}"]
     lines.append("  splits:")

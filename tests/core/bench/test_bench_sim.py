@@ -16,7 +16,7 @@ import pytest
 from PIL import Image
 
 from bpb_core.bench import sim_report
-from bpb_core.bench.comparing import build_simulators, comparing_family
+from bpb_core.bench.comparing import bench_family, build_simulators
 from bpb_core.bench.sim import bench_simulators, with_scaling
 from bpb_core.bench.sim_report import SimBench, SimRow
 from bpb_core.errors import BadInput, UnknownName
@@ -65,7 +65,7 @@ def test_billiards_reference_is_exact_and_analytic_close(registry: Registry) -> 
 def test_billiards_default_contestants_measure_pymunk_on_fast_scenes(registry: Registry) -> None:
     # after pymunk learned to refuse coarse steps, the default pymunk:dt=0.01 refused every
     # scene with a cue over 1.43 m/s (most --scaling scenes): it is measured, not refused
-    family = comparing_family(registry, "billiards")
+    family = bench_family(registry, "billiards").family
     reference = build_simulators(
         registry, "billiards", [parse_spec(family.bench_reference, "--reference")]
     )
