@@ -62,9 +62,8 @@ def _import_litellm() -> Any:
     return litellm
 
 
-@functools.lru_cache(maxsize=256)
 def _data_uri(data: bytes, media_type: str) -> str:
-    """The base64 data URI of an image, kept for recent images (a scene's tasks share one)."""
+    """The base64 data URI of an image."""
     return f"data:{media_type};base64,{base64.b64encode(data).decode('ascii')}"
 
 
@@ -88,6 +87,8 @@ class LiteLLMAdapter:
         tag = options.label if options.label is not None else wire.label(self.args)
         self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base
+        # each adapter keeps the URIs of its recent images (a scene's tasks share one image)
+        self._uri = functools.lru_cache(maxsize=256)(_data_uri)
         self._override = options.prices.get(model) or options.prices.get(self.model)
         if self._override is not None:
             try:
@@ -143,7 +144,7 @@ class LiteLLMAdapter:
             if isinstance(part, TextPart):
                 parts.append({"type": "text", "text": part.text})
             else:
-                url = _data_uri(part.data, part.media_type)
+                url = self._uri(part.data, part.media_type)
                 parts.append({"type": "image_url", "image_url": {"url": url}})
         return parts
 
