@@ -25,7 +25,8 @@ from bpb_core.dataset.manifest import DatasetWriter, IndexRow, sha256_bytes
 from bpb_core.errors import BadInput, BpbError, PluginBug, blamed, writing
 from bpb_core.interfaces import GeneratedScene, SceneFamily, Simulator
 from bpb_core.layout import scene_dir, scene_id
-from bpb_core.plugin_calls import returned
+from bpb_core.plugin_calls import returned, simulator_named
+from bpb_core.simulator_spec import parse_spec
 
 if TYPE_CHECKING:
     from bpb_core.registry import Registry
@@ -100,11 +101,14 @@ def worker_setup(
     seed: int,
     config: Any,
     images: bool,
-    spec: SimulatorSpec,
+    spec: SimulatorSpec | None = None,
 ) -> WorkerSetup:
-    """Resolve the family and the simulator its config names (``spec``, with its options) into
-    a picklable setup."""
+    """Resolve the family and the simulator its config names (``spec``, with its options, when
+    the caller parsed it already) into a picklable setup."""
     family_entry = registry.get("scene_family", family)
+    if spec is None:
+        named = simulator_named(registry.scene_family(family), family_entry.origin, config)
+        spec = parse_spec(named, "config: simulator")
     simulator_entry = registry.get("simulator", spec.name)
     plugins = tuple(  # name (distribution version) of each
         (e.info.kind, f"{e.info.name} ({e.distribution} {e.version})")

@@ -14,7 +14,6 @@ from bpb_core.dataset.jobs import Job, produce, worker_setup
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry
-from bpb_core.simulator_spec import parse_spec
 from bpb_tasks.billiards.scene.config import DatasetConfig
 from support.dataset_small import SMALL
 from support.paths import tree
@@ -72,9 +71,7 @@ def test_a_scene_regenerated_alone_equals_the_one_in_the_dataset(
     small_dataset: Path, tmp_path: Path, registry: Registry
 ) -> None:
     seed = int(SMALL["seed"])  # type: ignore[call-overload]
-    config = DatasetConfig()
-    spec = parse_spec(config.simulator, "config: simulator")
-    setup = worker_setup(registry, "billiards", tmp_path, seed, config, True, spec)
+    setup = worker_setup(registry, "billiards", tmp_path, seed, DatasetConfig(), images=True)
     result = produce(setup, setup.family_cls(), setup.simulator_cls(), Job(3.0, 2))
     for rel, digest in result.files:
         assert hashlib.sha256((small_dataset / rel).read_bytes()).hexdigest() == digest
