@@ -26,13 +26,12 @@ import os
 import subprocess
 import sys
 import tempfile
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from bpb_core.registry import PluginWarning, Registry, make_registry
+from bpb_core.registry import Registry, make_registry
 from support.dataset_small import SMALL
 from support.plugin_dist import InstallFn, install_fake_dist
 from support.reports_fixture import write_runs
@@ -75,9 +74,7 @@ def compiled_code() -> None:
 @pytest.fixture
 def registry() -> Registry:
     """A fresh registry of the installed plugins."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)
-        return make_registry()
+    return make_registry(warn=False)
 
 
 @pytest.fixture

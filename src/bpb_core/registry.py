@@ -559,6 +559,7 @@ def make_registry(
     *,
     entry_points: bool = True,
     group: str = ENTRY_POINT_GROUP,
+    warn: bool = True,
 ) -> Registry:
     """Discover plugins and build a :class:`Registry`.
 
@@ -567,6 +568,8 @@ def make_registry(
             optionally paired with a :class:`PluginSource`; used by tests and embedders.
         entry_points: Also load every plugin of the ``bpb`` entry-point group.
         group: Entry-point group to scan (tests point this at a private group).
+        warn: Issue each problem (:attr:`Registry.warnings`) as a :class:`PluginWarning`; a
+            caller that shows or has shown them itself passes ``False``.
 
     Raises:
         PluginError: Two plugins register the same name, two scorers score one task, or a hook
@@ -593,6 +596,6 @@ def make_registry(
     _check_hook_names(pm, sources)
     components = _collect(pm, sources, problems)
     _check_one_scorer_per_task(components["scorer"])
-    for line in problems:
+    for line in problems if warn else ():
         warnings.warn(line, PluginWarning, stacklevel=2)
     return Registry(components, problems)

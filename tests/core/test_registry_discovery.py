@@ -126,6 +126,10 @@ def test_a_hook_that_raises_is_a_warning(recwarn: pytest.WarningsRecorder) -> No
     assert registry.names("task") == []
     assert any("boom" in line for line in registry.warnings)
     assert any(issubclass(w.category, PluginWarning) for w in recwarn.list)
+    recwarn.clear()
+    quiet = make_registry([Exploding()], entry_points=False, warn=False)  # the caller shows them
+    assert quiet.warnings == registry.warnings
+    assert not any(issubclass(w.category, PluginWarning) for w in recwarn.list)
 
 
 def test_name_clash_is_an_error_naming_both_distributions(install: Any, run_bpb: Any) -> None:

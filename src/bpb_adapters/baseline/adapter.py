@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import random
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -71,11 +70,9 @@ def expected_text(
 
 
 def _registry() -> Registry:
-    from bpb_core.registry import PluginWarning, make_registry
+    from bpb_core.registry import make_registry
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)  # the CLI has shown them already
-        return make_registry()
+    return make_registry(warn=False)  # the CLI has shown its warnings already
 
 
 class PluginLookup:

@@ -40,13 +40,9 @@ def stderr() -> Console:
 
 def load_registry() -> Registry:
     """Build the registry and show each plugin warning on stderr as one line."""
-    import warnings
+    from bpb_core.registry import make_registry
 
-    from bpb_core.registry import PluginWarning, make_registry
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PluginWarning)
-        registry = make_registry()
+    registry = make_registry(warn=False)
     for line in registry.warnings:
         stderr().print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
     return registry

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
@@ -106,11 +105,9 @@ def generate_dataset(
     """
     with _naming_file(config):
         if registry is None:
-            from bpb_core.registry import PluginWarning, make_registry
+            from bpb_core.registry import make_registry
 
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", PluginWarning)  # the CLI reports these itself
-                registry = make_registry()
+            registry = make_registry(warn=False)  # the CLI reports its warnings itself
         name = family or registry.default_family()
         maker = registry.scene_family(name)
         origin = registry.origin("scene_family", name)
