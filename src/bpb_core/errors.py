@@ -133,6 +133,12 @@ class Notice(UserWarning):
     as a ``note:`` line on stderr, a library caller sees or filters an ordinary warning."""
 
 
+def named(kind: str, component: object) -> str:
+    """``task 'q1'``: how one-line plugin errors name a component of ``kind`` (by its ``name``,
+    else its class)."""
+    return f"{kind} {getattr(component, 'name', type(component).__name__)!r}"
+
+
 @contextmanager
 def blamed(origin: str, what: str, passing: tuple[type[Exception], ...] = ()) -> Iterator[None]:
     """Run plugin code; an unexpected exception leaves as a one-line :class:`PluginBug`

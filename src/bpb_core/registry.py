@@ -354,23 +354,17 @@ class Registry:
         known = ", ".join(i.name for i in infos) or "none installed"
         raise BadInput(f"--family: no single default scene family; choose one of: {known}")
 
-    def scorer(self, name: str) -> Scorer:
-        """A fresh instance of the scorer ``name``.
-
-        Raises:
-            PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
-        """
-        scorer: Scorer = self.build("scorer", name)
-        check_scorer(scorer, self.origin("scorer", name))
-        return scorer
-
     def scorer_for(self, task: str) -> Scorer:
         """A fresh instance of the scorer of ``task``.
 
         Raises:
             BadInput: No installed scorer scores ``task``.
+            PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
         """
-        return self.scorer(self.scorer_entry(task).info.name)
+        entry = self.scorer_entry(task)
+        scorer: Scorer = self.build("scorer", entry.info.name)
+        check_scorer(scorer, entry.origin)
+        return scorer
 
     def scorer_entry(self, task: str) -> Registered:
         """The record of the scorer of ``task`` (its name and who supplied it).
