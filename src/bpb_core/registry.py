@@ -531,8 +531,7 @@ def _check_one_scorer_per_task(scorers: dict[str, Registered]) -> None:
     """Refuse two scorers for one task (which one scored it would be an accident of sorting),
     naming both and who supplied them."""
     seen: dict[str, Registered] = {}
-    for name in sorted(scorers):
-        entry = scorers[name]
+    for name, entry in sorted(scorers.items()):
         if not isinstance(entry.info, ScorerInfo):
             continue
         first = seen.setdefault(entry.info.task, entry)

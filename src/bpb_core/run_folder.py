@@ -78,12 +78,7 @@ def answer_path(run_dir: Path, key: SceneKey, task: str, epoch: int = 1) -> Path
 
 
 def make_run_folder(run_dir: Path) -> None:
-    """Create the run folder (and its parents) and check that it can be written.
-
-    Raises:
-        BadInput: The path, or one of its parents, is a file, or it cannot be written (one line
-            naming the path).
-    """
+    """Create the run folder (and its parents), checked as :func:`check_writable_folder` does."""
     check_writable_folder(run_dir)
     try:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -93,12 +88,8 @@ def make_run_folder(run_dir: Path) -> None:
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename, so a reader (or a run
-    killed half-way) sees the old file or the new one, never a torn one.
-
-    Raises:
-        WriteRefused: The system refused the write (a full disk): names ``path``, which is left
-            as it was (the temporary file is removed).
-    """
+    killed half-way) sees the old file or the new one, never a torn one. A write the system
+    refuses (a full disk) is a :class:`WriteRefused` naming ``path``, left as it was."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         try:
@@ -178,15 +169,12 @@ class AttemptLog:
         with writing(self.path):
             run_dir.mkdir(parents=True, exist_ok=True)
             self._file = self.path.open("a+b")
-            self._close_torn_line()
-
-    def _close_torn_line(self) -> None:
-        size = self._file.seek(0, os.SEEK_END)
-        if size:
-            self._file.seek(size - 1)
-            if self._file.read(1) != b"\n":
-                self._file.write(b"\n")
-                self._file.flush()
+            size = self._file.seek(0, os.SEEK_END)
+            if size:  # close off a line torn by a killed process
+                self._file.seek(size - 1)
+                if self._file.read(1) != b"\n":
+                    self._file.write(b"\n")
+                    self._file.flush()
 
     def append(self, entry: dict[str, Any]) -> None:
         """Write one attempt and flush it to the operating system.
