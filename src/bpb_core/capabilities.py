@@ -105,11 +105,8 @@ class Perceiving(Protocol):
     separates seeing from reasoning)."""
 
     def perceive(self, image: bytes, prompt: str) -> Any:
-        """The scene (of the family's scene model) read from ``image`` and ``prompt``.
-
-        Raises:
-            ValueError: Something could not be read; the message says what (one line).
-        """
+        """The scene (of the family's scene model) read from ``image`` and ``prompt``; raises
+        ``ValueError`` saying in one line what could not be read."""
 
     def perception_error(self, perceived: Any, scene: Any) -> dict[str, float]:
         """How far ``perceived`` is from the true ``scene``: named numbers, stored with each
@@ -127,11 +124,8 @@ class BoundsPerception(Protocol):
         self, image: bytes, prompt: str, scene: Any, simulator: Simulator
     ) -> dict[str, bool]:
         """Named yes/no measures (which answers survive the image's resolution), stored with
-        each answer and shown as shares per horizon by the report.
-
-        Raises:
-            ValueError: The image cannot be read (as in ``perceive``).
-        """
+        each answer and shown as shares per horizon by the report; raises ``ValueError`` as
+        ``perceive`` does."""
 
 
 @runtime_checkable

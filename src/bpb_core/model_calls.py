@@ -203,11 +203,7 @@ def non_finite(value: Any, path: str = "") -> tuple[str, float] | None:
         items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
     else:
         return None
-    for where, inner in items:
-        found = non_finite(inner, where)
-        if found is not None:
-            return found
-    return None
+    return next(filter(None, (non_finite(inner, where) for where, inner in items)), None)
 
 
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")

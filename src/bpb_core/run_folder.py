@@ -121,11 +121,8 @@ def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
 
 
 def read_answer(path: Path) -> AnswerRecord | None:
-    """The record in ``path``, or ``None`` when there is no such file.
-
-    Raises:
-        BadInput: The file cannot be read or is not an answer record (names the file).
-    """
+    """The record in ``path``, or ``None`` when there is no such file; a :class:`BadInput`
+    naming the file when it cannot be read or is not an answer record."""
     try:
         data = path.read_bytes()
     except FileNotFoundError:
@@ -238,11 +235,8 @@ def write_manifest(run_dir: Path, manifest: dict[str, Any]) -> None:
 
 
 def read_manifest(run_dir: Path) -> dict[str, Any] | None:
-    """``run.json`` of a run folder, or ``None`` if there is none yet.
-
-    Raises:
-        BadInput: It exists but cannot be read or is not a JSON object (names the file).
-    """
+    """``run.json`` of a run folder, or ``None`` if there is none yet; a :class:`BadInput`
+    naming the file when it cannot be read or is not a JSON object."""
     path = run_dir / RUN_MANIFEST
     try:
         data = json.loads(path.read_text(encoding="utf-8"))

@@ -75,12 +75,9 @@ SCENE_RULES = ("mean", "all")
 
 
 def check_scorer(scorer: Any, origin: str) -> None:
-    """Raise unless the scorer's ``scene_rule`` is one of :data:`SCENE_RULES` and its
-    ``columns`` map column names to dtypes: any other rule would be scored as ``mean``
-    without a word, wrong columns fail deep in pandas.
-
-    Raises:
-        PluginBug: Naming ``origin`` (who supplied the scorer) and the attribute.
+    """Raise a :class:`PluginBug` naming ``origin`` and the attribute unless the scorer's
+    ``scene_rule`` is one of :data:`SCENE_RULES` and its ``columns`` map column names to dtypes:
+    any other rule would be scored as ``mean`` without a word, wrong columns fail deep in pandas.
     """
     what, rule = named("scorer", scorer), getattr(scorer, "scene_rule", None)
     if rule not in SCENE_RULES:
