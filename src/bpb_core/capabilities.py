@@ -1,31 +1,16 @@
-"""Optional capabilities of plugins: what a scene family, an adapter or a scorer may offer
-beyond its interface (:mod:`bpb_core.interfaces`). Core checks each with ``isinstance`` and does
-without when it is missing.
+"""Optional capabilities of plugins: what a plugin may offer beyond its interface
+(:mod:`bpb_core.interfaces`). Core checks each with ``isinstance`` and does without when it is
+missing; each protocol's docstring says what uses it.
 
-- A scene family: :class:`Calibrating` (``bpb generate --calibrate``), :class:`Tallying`
-  (per-horizon fields in the manifest), :class:`DrawingStats` (figures in ``stats/``),
-  :class:`Predicting` (the ``baseline`` adapter's predictions), :class:`Perceiving` (reading a
-  scene back from the image and prompt a model gets: ``baseline:vision``), :class:`BoundsPerception`
-  (what the image's resolution allows even a perfect reader), :class:`Picturing`
-  (the failure gallery's picture), :class:`Comparing` (``bpb bench sim``), :class:`CountsEvents`
-  (its cost per event and against scaled scenes).
-- An offline adapter: :class:`KnowsFamilies` (which families it can answer), :class:`UsesRegistry`
-  (it looks up tasks and families itself, in the registry that built it), :class:`NeedsSimulator`
-  (it runs the dataset's simulator).
-- An adapter that talks to a model: :class:`Preflighting` (a check before the first call),
-  :class:`Describing` (the settings that shape its answers, recorded and guarded in run.json),
-  :class:`Pricing` (whether it can price replies; ``--max-cost`` needs it) and
-  :class:`Estimating` (input tokens and cost of a request by the provider's rules, for
-  ``--dry-run``).
-- A task: :class:`AnswersInBrowser` (people answer it in ``bpb human``), :class:`PublishesSchema`
-  (its answer's JSON Schema, for ``--structured-output``).
-- A scorer: :class:`ExplainsErrors` and :class:`DrawsOverlay` (the failure gallery),
-  :class:`ReportsMetrics` (metrics beside its task's accuracy in reports).
-- A simulator: :class:`RunsMany` (a batch call, timed by ``bpb bench sim``).
-- A scene family: :class:`TruthOfMany` (the ground truth of many scenes at once, for
-  ``bpb simulate``).
-- A ground truth: :class:`ExplainsInstability` (why a scene is left out of the stable subset).
-- A scene family: :class:`DescribesDataset` (the dataset card of ``bpb export --format hf``).
+- A scene family: :class:`Calibrating`, :class:`Tallying`, :class:`DrawingStats`,
+  :class:`Predicting`, :class:`Perceiving`, :class:`BoundsPerception`, :class:`Picturing`,
+  :class:`Comparing`, :class:`CountsEvents`, :class:`TruthOfMany`, :class:`DescribesDataset`.
+- A simulator: :class:`ExpectsWork`, :class:`RunsMany`.
+- An adapter: :class:`KnowsFamilies`, :class:`UsesRegistry`, :class:`NeedsSimulator` (offline
+  ones), :class:`Preflighting`, :class:`Describing`, :class:`Pricing`, :class:`Estimating`.
+- A task: :class:`AnswersInBrowser`, :class:`PublishesSchema`.
+- A scorer: :class:`ExplainsErrors`, :class:`DrawsOverlay`, :class:`ReportsMetrics`.
+- A ground truth: :class:`ExplainsInstability`.
 """
 
 from __future__ import annotations
@@ -63,13 +48,11 @@ class Calibrating(Protocol):
 
     def calibrate_horizon(self, config: Any, simulator: Simulator, horizon: float) -> Any:
         """Calibrate one horizon (runs in a worker process; return a picklable value)."""
-        ...
 
     def apply_calibration(
         self, config: Any, results: Mapping[float, Any]
     ) -> tuple[Any, dict[str, Any]]:
         """The config updated with the per-horizon results, and the manifest's record."""
-        ...
 
 
 class HorizonTally(Protocol):
@@ -77,11 +60,9 @@ class HorizonTally(Protocol):
 
     def add(self, row: Mapping[str, object]) -> None:
         """Count one kept scene (its ``index.csv`` cells)."""
-        ...
 
     def summary(self) -> dict[str, Any]:
         """Fields added to the horizon's entry of the manifest's ``summary``."""
-        ...
 
 
 @runtime_checkable
@@ -90,7 +71,6 @@ class Tallying(Protocol):
 
     def new_tally(self, config: Any, horizon: float) -> HorizonTally:
         """An empty tally for ``horizon``."""
-        ...
 
 
 @runtime_checkable
@@ -101,7 +81,6 @@ class DrawingStats(Protocol):
         self, root: Path, config: Any, tallies: Mapping[float, HorizonTally]
     ) -> list[str]:
         """Write the figures under ``root`` and return their paths relative to it."""
-        ...
 
 
 @runtime_checkable
@@ -117,7 +96,6 @@ class Predicting(Protocol):
 
     def predict(self, name: str, scene: Any, rng: random.Random) -> GroundTruth:
         """What predictor ``name`` expects to happen in ``scene``; raises ``KeyError``."""
-        ...
 
 
 @runtime_checkable
@@ -127,17 +105,12 @@ class Perceiving(Protocol):
     separates seeing from reasoning)."""
 
     def perceive(self, image: bytes, prompt: str) -> Any:
-        """The scene (of the family's scene model) read from ``image`` and ``prompt``.
-
-        Raises:
-            ValueError: Something could not be read; the message says what (one line).
-        """
-        ...
+        """The scene (of the family's scene model) read from ``image`` and ``prompt``; raises
+        ``ValueError`` saying in one line what could not be read."""
 
     def perception_error(self, perceived: Any, scene: Any) -> dict[str, float]:
         """How far ``perceived`` is from the true ``scene``: named numbers, stored with each
         answer (``metadata``) and summarised per horizon by the report."""
-        ...
 
 
 @runtime_checkable
@@ -151,12 +124,8 @@ class BoundsPerception(Protocol):
         self, image: bytes, prompt: str, scene: Any, simulator: Simulator
     ) -> dict[str, bool]:
         """Named yes/no measures (which answers survive the image's resolution), stored with
-        each answer and shown as shares per horizon by the report.
-
-        Raises:
-            ValueError: The image cannot be read (as in ``perceive``).
-        """
-        ...
+        each answer and shown as shares per horizon by the report; raises ``ValueError`` as
+        ``perceive`` does."""
 
 
 @runtime_checkable
@@ -165,7 +134,6 @@ class Picturing(Protocol):
 
     def picture(self, dataset: Path, folder: Path, scene: Any) -> ScenePicture:
         """The scene drawn as an RGB image with its coordinate mapping."""
-        ...
 
 
 @runtime_checkable
@@ -190,14 +158,12 @@ class Comparing(Protocol):
 
     def bench_scenes(self, count: int, seed: int) -> list[Any]:
         """``count`` scenes of the family's scene model, the same for the same ``seed``."""
-        ...
 
     def compare(self, outcome: Any, reference: Any, scene: Any) -> dict[str, float]:
         """How far ``outcome`` is from ``reference`` (both from :meth:`Simulator.run` on
         ``scene``): the key ``error`` holds a distance (max and median over scenes are
         reported); every other key counts disagreements (summed over scenes), named and
         ordered as the table's columns."""
-        ...
 
 
 @runtime_checkable
@@ -209,7 +175,6 @@ class KnowsFamilies(Protocol):
     def cannot_answer(self, family: SceneFamily) -> str | None:
         """``None`` when it can answer questions about ``family``'s scenes, else why not (one
         line, e.g. what it could answer instead)."""
-        ...
 
 
 @runtime_checkable
@@ -220,7 +185,6 @@ class NeedsSimulator(Protocol):
 
     def needs_simulator(self) -> bool:
         """Whether its answers come from running the dataset's simulator."""
-        ...
 
 
 @runtime_checkable
@@ -232,7 +196,6 @@ class UsesRegistry(Protocol):
 
     def use_registry(self, registry: Registry) -> None:
         """Look plugins up in ``registry`` from now on."""
-        ...
 
 
 @runtime_checkable
@@ -242,7 +205,6 @@ class Preflighting(Protocol):
 
     def preflight(self) -> str | None:
         """``None`` when calls may be sent, else one line saying what to fix."""
-        ...
 
 
 @runtime_checkable
@@ -252,7 +214,6 @@ class Describing(Protocol):
 
     def settings(self) -> dict[str, Any]:
         """JSON-ready settings that shape the answers (never a secret)."""
-        ...
 
 
 @runtime_checkable
@@ -262,7 +223,6 @@ class Pricing(Protocol):
     @property
     def priced(self) -> bool:
         """True when a price is known (bundled or overridden) for the model."""
-        ...
 
 
 @runtime_checkable
@@ -272,7 +232,6 @@ class Estimating(Protocol):
     def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
         """Input tokens of ``messages`` by the provider's own counting (its image rule
         included) and their input cost in USD (``None`` when no price is known)."""
-        ...
 
 
 @runtime_checkable
@@ -293,12 +252,10 @@ class AnswersInBrowser(Protocol):
 
     def form_context(self, scene: Any, image: bytes | None) -> dict[str, Any]:
         """The values the form template needs for ``scene`` (JSON-ready)."""
-        ...
 
     def read_form(self, fields: Mapping[str, str], scene: Any) -> dict[str, Any]:
         """The answer (the task's answer format) from the posted ``fields`` (names without the
         prefix); raises ``ValueError`` naming the field for anything unexpected."""
-        ...
 
 
 @runtime_checkable
@@ -307,7 +264,6 @@ class ExplainsErrors(Protocol):
 
     def explain(self, rows: pd.DataFrame) -> list[str]:
         """One line per wrong unit of one (run, scene) in ``rows`` (its units of this task)."""
-        ...
 
 
 @runtime_checkable
@@ -316,7 +272,6 @@ class DrawsOverlay(Protocol):
 
     def overlay(self, picture: ScenePicture, rows: pd.DataFrame) -> None:
         """Draw on ``picture.image`` and add legend entries to ``picture.legend``."""
-        ...
 
 
 @runtime_checkable
@@ -337,7 +292,6 @@ class PublishesSchema(Protocol):
 
     def answer_schema(self) -> dict[str, Any]:
         """The JSON Schema (draft 2020-12) every valid answer, once normalised, satisfies."""
-        ...
 
 
 @runtime_checkable
@@ -347,11 +301,9 @@ class CountsEvents(Protocol):
 
     def events(self, outcome: Any) -> int:
         """The number of events in ``outcome`` (from :meth:`Simulator.run`)."""
-        ...
 
     def scaled_scene(self, scene: Any, factor: float) -> Any:
         """``scene`` with more events in the same simulated time (such as faster motion)."""
-        ...
 
 
 @runtime_checkable
@@ -375,7 +327,6 @@ class TruthOfMany(Protocol):
     ) -> list[GroundTruth]:
         """The truth of each scene, in order, equal to what ``ground_truth(scene, simulator,
         horizon, stability=False)`` gives."""
-        ...
 
 
 @runtime_checkable
@@ -408,4 +359,3 @@ class DescribesDataset(Protocol):
         """The card's words: ``pretty_name``, ``description`` (Markdown), ``citation``
         (BibTeX), ``license`` (a Hugging Face license id), ``task_categories`` and ``tags``
         (lists of strings); any may be missing."""
-        ...

@@ -133,16 +133,20 @@ class Notice(UserWarning):
     as a ``note:`` line on stderr, a library caller sees or filters an ordinary warning."""
 
 
+def named(kind: str, component: object) -> str:
+    """``task 'q1'``: how one-line plugin errors name a component of ``kind`` (by its ``name``,
+    else its class)."""
+    return f"{kind} {getattr(component, 'name', type(component).__name__)!r}"
+
+
 @contextmanager
 def blamed(origin: str, what: str, passing: tuple[type[Exception], ...] = ()) -> Iterator[None]:
     """Run plugin code; an unexpected exception leaves as a one-line :class:`PluginBug`
     naming the plugin (``origin``, e.g. ``Registered.origin``) and what it was doing.
 
-    bpb's own errors (:class:`BpbError`: a ``BadInput``, a ``ParseFailure``, a model error)
-    pass through unchanged: raising them is part of a plugin's contract, as raising the
-    ``passing`` types is for some hooks (a ``ValueError`` naming a field). A write the system
-    refused for want of room (a full disk, a quota, a file size limit) is no bug of the plugin:
-    it leaves as :class:`WriteRefused`, naming the file when the error does.
+    A :class:`BpbError` (a ``BadInput``, a ``ParseFailure``, a model error) and the ``passing``
+    types (a ``ValueError`` naming a field, for some hooks) are the plugin's contract and pass
+    through; a write refused for want of room (:data:`NO_ROOM`) leaves as :class:`WriteRefused`.
     """
     try:
         yield

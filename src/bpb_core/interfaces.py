@@ -61,12 +61,10 @@ class Scene(Protocol):
     @property
     def scene_id(self) -> str:
         """Unique within its dataset (``h3_0007``)."""
-        ...
 
     @property
     def horizon(self) -> float:
         """Seconds to simulate; questions are about ``[0, horizon]``."""
-        ...
 
 
 class GroundTruth(Protocol):
@@ -75,16 +73,13 @@ class GroundTruth(Protocol):
     @property
     def scene_id(self) -> str:
         """The scene's id."""
-        ...
 
     @property
     def stable(self) -> bool | None:
         """Whether no label flips under small perturbations (``None``: not annotated)."""
-        ...
 
     def model_dump_json(self, *, indent: int | None = None) -> str:
         """The ``final.json`` text."""
-        ...
 
 
 class GeneratedScene(Protocol):
@@ -93,17 +88,14 @@ class GeneratedScene(Protocol):
     @property
     def truth(self) -> GroundTruth:
         """Its ground truth (``truth.stable`` decides ``--stable-only``)."""
-        ...
 
     @property
     def row(self) -> Mapping[str, object]:
         """Its cells of ``index.csv``, keyed by :attr:`SceneFamily.index_columns`."""
-        ...
 
     def files(self, images: bool) -> dict[str, bytes]:
         """The scene folder's files by name, ``init.json`` and ``final.json`` first; images
         only when ``images`` (rendering is skipped for scenes that are not kept)."""
-        ...
 
 
 @runtime_checkable
@@ -115,7 +107,6 @@ class Simulator(Protocol):
     def run(self, scene: Any, horizon: float | None = None) -> Any:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own); return an outcome the
         family understands."""
-        ...
 
 
 @runtime_checkable
@@ -149,20 +140,17 @@ class SceneFamily(Protocol):
     def load_config(self, source: Any) -> Any:
         """A config from ``None`` (defaults), a JSON/TOML file path, a mapping of fields or a
         config object; raises :class:`~bpb_core.errors.BadInput` naming the file and field."""
-        ...
 
     def check_config(self, config: Any, horizons: Sequence[float]) -> None:
         """Raise :class:`~bpb_core.errors.BadInput` before anything is written when
         ``config`` cannot make scenes at ``horizons``. With ``--calibrate`` it is called first
         with no horizons (check what calibration does not set), then with the horizons on the
         calibrated config."""
-        ...
 
     def simulator_name(self, config: Any) -> str:
         """The simulator plugin the config asks for: its name, or ``name:key=value,...``
         with the options it is built with (:mod:`bpb_core.simulator_spec`), which the
         manifest's config should record."""
-        ...
 
     def make_scene(
         self, config: Any, simulator: Simulator, seed: int, horizon: float, index: int
@@ -171,18 +159,15 @@ class SceneFamily(Protocol):
         index) alone, simulated and annotated. Its ``scene_id`` must be
         :func:`bpb_core.layout.scene_id` ``(horizon, index)`` (``h2_0003``): the name of the
         folder it lands in."""
-        ...
 
     def physics(self, config: Any) -> dict[str, Any]:
         """The world the config describes, recorded under ``physics`` in the manifest."""
-        ...
 
     def ground_truth(
         self, scene: Any, simulator: Simulator, horizon: float | None = None, *, stability: bool
     ) -> GroundTruth:
         """What ``simulator`` says happens in ``scene`` by ``horizon`` (default: its own), with
         the stability annotation when ``stability``."""
-        ...
 
 
 @runtime_checkable
@@ -201,15 +186,12 @@ class Task(Protocol):
         self, scene: Any, image: bytes | None, options: PromptOptions
     ) -> tuple[Message, ...]:
         """Build the prompt from the scene alone (never from ground truth)."""
-        ...
 
     def parse(self, text: str, scene: Any, options: PromptOptions) -> ParsedAnswer:
         """Extract and validate the answer; raise :class:`~bpb_core.errors.ParseFailure`."""
-        ...
 
     def expected(self, truth: Any) -> dict[str, Any]:
         """The correct answer, in the task's answer format, from the family's ground truth."""
-        ...
 
 
 @runtime_checkable
@@ -220,7 +202,6 @@ class ModelAdapter(Protocol):
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Send one request and return the reply."""
-        ...
 
 
 @runtime_checkable
@@ -255,11 +236,9 @@ class Scorer(Protocol):
 
     def units(self, answer: Mapping[str, Any] | None, truth: Any, scene: Any) -> list[UnitRow]:
         """The scored units of one answer (``None`` = no answer), in a fixed order."""
-        ...
 
     def score(self, units: pd.DataFrame) -> pd.DataFrame:
         """Columns ``correct`` and ``distance`` for every row of ``units``."""
-        ...
 
 
 class ScoredResults(Protocol):
@@ -268,17 +247,14 @@ class ScoredResults(Protocol):
     @property
     def units(self) -> pd.DataFrame:
         """One row per scored unit of every expected (run, scene, task)."""
-        ...
 
     @property
     def calls(self) -> pd.DataFrame:
         """One row per (run, scene, task) with status, tokens, cost and latency."""
-        ...
 
     @property
     def suites(self) -> tuple[SuiteInfo, ...]:
         """The installed suites all of whose tasks appear in ``units``."""
-        ...
 
 
 @runtime_checkable
@@ -300,8 +276,6 @@ class Diagnostic(Protocol):
     def table(self, results: ScoredResults) -> pd.DataFrame:
         """The table: one row per run (or per run and something else), with the run columns
         ``run, adapter, model, baseline`` first."""
-        ...
 
     def chart(self, table: pd.DataFrame) -> bytes | None:
         """A PNG of the table, or ``None``."""
-        ...

@@ -1,17 +1,14 @@
 """Where things live on disk: dataset and run folders mirror each other.
 
-Dataset: ``DIR/dataset.json``, ``DIR/index.csv``, ``DIR/stats/``,
-``DIR/h{t}/scene_{i:04d}/{init.json, final.json, init.png, final.png, trajectory.png}``.
-Run: ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl``,
-``RUN_DIR/h{t}/scene_{i:04d}/{task}.json``.
+Dataset: ``DIR/dataset.json``, ``DIR/index.csv``, ``DIR/stats/``, ``DIR/h{t}/scene_{i:04d}/``
+(``init.json``, ``final.json``, the family's images). Run: ``RUN_DIR/run.json``,
+``RUN_DIR/attempts.jsonl``, ``RUN_DIR/h{t}/scene_{i:04d}/{task}.json``.
 
 A command that writes a folder (a dataset, an export) builds it in a hidden ``.NAME.partial``
 folder beside its target and moves it in at the end, so a failure never leaves a half-made
-folder where a finished one is expected. Two such commands on one target at once would share the
-partial folder, each clearing what the other wrote; so the partial folder is held with an
-exclusive ``flock`` while it is built, and a second command is refused as bad input. The system
-drops the lock when its process dies, so a folder left by an interrupted command is simply
-emptied and reused.
+folder. The partial folder is held with an exclusive ``flock`` while it is built, so a second
+command on the same target is refused as bad input; one left by an interrupted command (the
+system dropped its lock) is emptied and reused.
 """
 
 from __future__ import annotations
@@ -20,6 +17,7 @@ import fcntl
 import os
 import re
 import shutil
+from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -110,25 +108,20 @@ def select_keys(
     """``keys`` (sorted) at ``horizons`` (all when ``None``), the first ``limit`` per horizon:
     the one selection rule of runs, dry runs and the scoring of runs."""
     wanted = None if horizons is None else {float(h) for h in horizons}
-    taken: dict[float, int] = {}
+    taken: Counter[float] = Counter()
     chosen: list[SceneKey] = []
     for key in keys:
         if wanted is not None and key.horizon not in wanted:
             continue
-        if limit is not None and taken.get(key.horizon, 0) >= limit:
-            continue
-        taken[key.horizon] = taken.get(key.horizon, 0) + 1
-        chosen.append(key)
+        if limit is None or taken[key.horizon] < limit:
+            taken[key.horizon] += 1
+            chosen.append(key)
     return chosen
 
 
 def check_writable_folder(path: Path, option: str = "--out") -> None:
-    """Check that ``path`` is, or can be created as, a folder this process can write.
-
-    Raises:
-        BadInput: ``path`` or an ancestor is a file, or the nearest existing ancestor is not
-            writable (one line naming that path and ``option``).
-    """
+    """Check that ``path`` is, or can be created as, a folder this process can write; else a
+    :class:`BadInput` naming ``option`` and the ancestor at fault (a file, or not writable)."""
     for parent in (path, *path.parents):
         if not parent.exists():
             continue
@@ -141,12 +134,7 @@ def check_writable_folder(path: Path, option: str = "--out") -> None:
 
 def check_writable_file(path: Path, option: str) -> None:
     """Check that ``path`` is, or can be created as, a file this process can write (before any
-    work whose result would then be lost).
-
-    Raises:
-        BadInput: ``path`` is a folder or a file that cannot be written, or its folder cannot be
-            (one line naming the path and ``option``).
-    """
+    work whose result would then be lost); else a :class:`BadInput` naming it and ``option``."""
     if path.is_dir():
         raise BadInput(f"{path}: {option}: a folder, expected a file path")
     if path.exists() and not os.access(path, os.W_OK):
@@ -162,12 +150,8 @@ def partial_path(target: Path) -> Path:
 
 @contextmanager
 def partial_folder(target: Path, command: str) -> Iterator[Path]:
-    """Hold an empty partial folder for ``target`` for the block (the caller moves it in).
-
-    Raises:
-        BadInput: The folder cannot be made (names ``--out``), or another ``command`` is
-            building ``target`` now.
-    """
+    """Hold an empty partial folder for ``target`` for the block (the caller moves it in); a
+    :class:`BadInput` when it cannot be made (names ``--out``) or another ``command`` holds it."""
     partial = partial_path(target)
     handle = _open(partial, target)
     try:

@@ -151,16 +151,8 @@ class AdapterOptions:
 
 
 def split_spec(spec: str, flag: str = "--adapter") -> tuple[str, str]:
-    """Split an adapter spec ``name:model`` at the first colon.
-
-    Args:
-        spec: The spec.
-        flag: What the caller called it, for the message: ``--adapter`` on the command line,
-            the parameter's name (``adapter``, ``adapters``) in the library.
-
-    Raises:
-        BadInput: The spec has no name or no model part.
-    """
+    """Split an adapter spec ``name:model`` at the first colon; a spec with no name or no model
+    part is a :class:`BadInput` naming ``flag`` (``--adapter``, or a library parameter)."""
     name, sep, model = spec.partition(":")
     if not sep or not name or not model:
         raise BadInput(f"{flag} {spec!r}: expected NAME:MODEL, e.g. baseline:stasis")
@@ -211,11 +203,7 @@ def non_finite(value: Any, path: str = "") -> tuple[str, float] | None:
         items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
     else:
         return None
-    for where, inner in items:
-        found = non_finite(inner, where)
-        if found is not None:
-            return found
-    return None
+    return next(filter(None, (non_finite(inner, where) for where, inner in items)), None)
 
 
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")

@@ -4,7 +4,9 @@ naming the plugin (:class:`~bpb_core.errors.PluginBug`, exit 3) instead of a tra
 error blamed on whatever took the value next (a task's ``expected``, an adapter, run.json).
 
 ``origin`` is always who supplied the object (a registry entry's origin, or the module of an
-object no plugin registers).
+object no plugin registers). Every function raises :class:`~bpb_core.errors.PluginBug`, naming
+``origin`` and the component, when the plugin code raises or returns something other than what
+its docstring says it checks for.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import random
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
-from bpb_core.errors import PluginBug, blamed
+from bpb_core.errors import PluginBug, blamed, named as named
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 from bpb_core.model_calls import Message, known_cost
 
@@ -31,13 +33,8 @@ if TYPE_CHECKING:
 
 def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: random.Random) -> Any:
     """``family.predict(name, scene, rng)``, checked: an instance of the family's
-    ``truth_model``, since what takes it next (a task's ``expected``) would fail on anything
-    else and be blamed for it.
-
-    Raises:
-        PluginBug: The family raised or returned something else, naming ``origin`` (who
-            supplied it) and the family.
-    """
+    ``truth_model`` (what takes it next, a task's ``expected``, would be blamed for anything
+    else)."""
     what = f"{family_label(family)}: predict({name!r})"
     with blamed(origin, what):
         truth = family.predict(name, scene, rng)
@@ -46,12 +43,7 @@ def prediction(family: Predicting, origin: str, name: str, scene: Any, rng: rand
 
 def offered_predictors(family: Predicting, origin: str) -> tuple[str, ...]:
     """``family.predictors``, checked: a tuple (or list) of names (a str would be taken letter
-    by letter, offering ``baseline:s``).
-
-    Raises:
-        PluginBug: Reading it raised, or it is something else, naming ``origin`` (who supplied
-            the family).
-    """
+    by letter, offering ``baseline:s``)."""
     what = f"{family_label(family)}: predictors"
     with blamed(origin, what):
         names = family.predictors
@@ -71,12 +63,7 @@ def simulated_truth(
 ) -> Any:
     """``family.ground_truth(scene, simulator, horizon, stability=...)``, checked as
     :func:`prediction` is (``bpb simulate``, ``baseline:oracle`` and ``baseline:vision`` answer
-    from it).
-
-    Raises:
-        PluginBug: The family raised or returned something other than its ``truth_model``,
-            naming ``origin`` and the family.
-    """
+    from it)."""
     what = f"{family_label(family)}: ground_truth()"
     with blamed(origin, what):
         truth = family.ground_truth(scene, simulator, horizon, stability=stability)
@@ -87,12 +74,7 @@ def simulated_truths(
     family: TruthOfMany, origin: str, scenes: list[Any], simulator: Simulator, horizon: float | None
 ) -> list[Any]:
     """``family.ground_truths(scenes, simulator, horizon)``, checked: a list of one instance of
-    the family's ``truth_model`` per scene (each is paired with its scene file by position).
-
-    Raises:
-        PluginBug: The family raised or returned something else, naming ``origin`` and the
-            family.
-    """
+    the family's ``truth_model`` per scene (each is paired with its scene file by position)."""
     what = f"{family_label(family)}: ground_truths()"
     with blamed(origin, what):
         truths = family.ground_truths(scenes, simulator, horizon)
@@ -111,12 +93,7 @@ def perception(
     """``family.perceive(image, prompt)``, checked: an instance of the family's ``scene_model``
     (its ``ground_truth()`` runs on it next and would be blamed for anything else) and
     ``None``; or, when it raises ``ValueError`` (how it says the image cannot be read), ``None``
-    and why.
-
-    Raises:
-        PluginBug: The family raised anything else or returned something else, naming
-            ``origin`` (who supplied it) and the family.
-    """
+    and why."""
     what = f"{family_label(family)}: perceive()"
     with blamed(origin, what):
         try:
@@ -129,12 +106,7 @@ def perception(
 def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
     """``family.load_config(source)``, checked: an instance of the family's ``config_model``
     (the manifest records it and the family's other hooks take it). A
-    :class:`~bpb_core.errors.BadInput` naming the file or field passes through.
-
-    Raises:
-        PluginBug: The family raised anything else or returned something else, naming
-            ``origin`` (who supplied it) and the family.
-    """
+    :class:`~bpb_core.errors.BadInput` naming the file or field passes through."""
     what = f"{family_label(family)}: load_config()"
     with blamed(origin, what):
         config = family.load_config(source)
@@ -144,12 +116,7 @@ def loaded_config(family: SceneFamily, origin: str, source: Any) -> Any:
 def simulator_named(family: SceneFamily, origin: str, config: Any) -> str:
     """``family.simulator_name(config)``, checked: a simulator's spec (a non-empty str: its name,
     optionally with options, ``pymunk:dt=0.0005``), which is parsed and looked up in the
-    registry next and recorded in the manifest.
-
-    Raises:
-        PluginBug: The family raised or returned something else, naming ``origin`` (who
-            supplied it) and the family.
-    """
+    registry next and recorded in the manifest."""
     what = f"{family_label(family)}: simulator_name()"
     with blamed(origin, what):
         name = family.simulator_name(config)
@@ -163,12 +130,7 @@ def prompt_messages(
 ) -> tuple[Message, ...]:
     """``task.messages(scene, image, options)``, checked: a sequence of
     :class:`~bpb_core.model_calls.Message` (an adapter that choked on anything else would be
-    blamed for it).
-
-    Raises:
-        PluginBug: The task raised or returned something else, naming ``origin`` (who
-            supplied it) and the task.
-    """
+    blamed for it)."""
     what = f"{named('task', task)}: messages()"
     with blamed(origin, what):
         messages = task.messages(scene, image, options)
@@ -185,12 +147,7 @@ def parsed_answer(
 ) -> ParsedAnswer:
     """``task.parse(text, scene, options)``, checked: a :class:`ParsedAnswer` holding a dict
     (the answer file and the scorer take its ``value``). A :class:`ParseFailure` passes
-    through: it is how a task says the reply holds no answer.
-
-    Raises:
-        PluginBug: The task raised anything else or returned something else, naming
-            ``origin`` (who supplied it) and the task.
-    """
+    through: it is how a task says the reply holds no answer."""
     what = f"{named('task', task)}: parse()"
     with blamed(origin, what):
         parsed = task.parse(text, scene, options)
@@ -204,12 +161,7 @@ def parsed_answer(
 
 def published_schema(task: PublishesSchema, origin: str) -> dict[str, Any]:
     """``task.answer_schema()``, checked: a dict (an adapter that choked on anything else, with
-    ``--structured-output``, would be blamed for it).
-
-    Raises:
-        PluginBug: The task raised or returned something else, naming ``origin`` (who
-            supplied it) and the task.
-    """
+    ``--structured-output``, would be blamed for it)."""
     what = f"{named('task', task)}: answer_schema()"
     with blamed(origin, what):
         schema = task.answer_schema()
@@ -222,12 +174,6 @@ def returned(origin: str, what: str, got: str, expected: str) -> PluginBug:
     """The one-line error for plugin code (``what``, supplied by ``origin``) that returned the
     wrong thing: ``<origin>: <what> returned <got>; expected <expected>``."""
     return PluginBug(f"{origin}: {what} returned {got}; expected {expected}")
-
-
-def named(kind: str, component: object) -> str:
-    """``task 'q1'``: how one-line plugin errors name a component of ``kind`` (by its ``name``,
-    else its class)."""
-    return f"{kind} {getattr(component, 'name', type(component).__name__)!r}"
 
 
 def family_label(family: object) -> str:
@@ -255,12 +201,7 @@ def _checked_model(family: object, origin: str, what: str, value: Any, attribute
 
 def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
     """The adapter's :meth:`Describing.settings` as run.json stores them (``None`` without
-    them), checked: a dict that JSON can hold (a tuple comes back a list, as a resume reads it).
-
-    Raises:
-        PluginBug: ``settings()`` raised or returned something else, naming ``origin`` (who
-            supplied the adapter).
-    """
+    them), checked: a dict that JSON can hold (a tuple comes back a list, as a resume reads it)."""
     if not isinstance(adapter, Describing):
         return None
     what = f"{named('adapter', adapter)}: settings()"
@@ -270,19 +211,10 @@ def described_settings(adapter: object, origin: str) -> dict[str, Any] | None:
 
 
 def json_values(origin: str, what: str, value: object, held_as: str) -> dict[str, Any]:
-    """``value`` as a JSON file holds it, if it is a dict that JSON can hold (a tuple comes back
-    a list, a key 1 the key "1", as a reader of the file finds them).
-
-    Args:
-        origin: Who supplied the plugin code that returned ``value``.
-        what: What returned it (``scene family 'x': physics()``).
-        value: What it returned.
-        held_as: What the message calls ``value`` and the file it is stored in
-            (``what dataset.json``).
-
-    Raises:
-        PluginBug: ``value`` is no dict, or JSON cannot hold it, naming ``origin`` and why.
-    """
+    """``value``, returned by ``what`` (``scene family 'x': physics()``), as a JSON file holds
+    it, if it is a dict that JSON can hold (a tuple comes back a list, a key 1 the key "1", as a
+    reader of the file finds them); ``held_as`` is what the message calls it and the file it is
+    stored in (``what dataset.json``). Else the :class:`PluginBug` says why."""
     try:
         if not isinstance(value, dict):
             raise TypeError(f"a {type(value).__name__}, not a dict")
@@ -301,12 +233,7 @@ def json_values(origin: str, what: str, value: object, held_as: str) -> dict[str
 def preflight_problem(adapter: object, origin: str) -> str | None:
     """The adapter's :meth:`Preflighting.preflight` (``None`` without it), checked: ``None`` or
     a str (anything else would be shown to the user as what to fix, or break the run before
-    its first call naming no plugin).
-
-    Raises:
-        PluginBug: ``preflight()`` raised or returned something else, naming ``origin`` (who
-            supplied the adapter).
-    """
+    its first call naming no plugin)."""
     if not isinstance(adapter, Preflighting):
         return None
     what = f"{named('adapter', adapter)}: preflight()"
@@ -317,12 +244,7 @@ def preflight_problem(adapter: object, origin: str) -> str | None:
 
 def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | None:
     """The adapter's :meth:`KnowsFamilies.cannot_answer` for ``family`` (``None`` without it),
-    checked as :func:`preflight_problem` is.
-
-    Raises:
-        PluginBug: ``cannot_answer()`` raised or returned something other than ``None`` or a
-            str, naming ``origin`` (who supplied the adapter).
-    """
+    checked as :func:`preflight_problem` is."""
     if not isinstance(adapter, KnowsFamilies):
         return None
     what = f"{named('adapter', adapter)}: cannot_answer({getattr(family, 'name', '?')!r})"
@@ -333,12 +255,7 @@ def answer_refusal(adapter: object, origin: str, family: SceneFamily) -> str | N
 
 def price_known(adapter: object, origin: str) -> bool | None:
     """The adapter's :attr:`Pricing.priced` (``None`` without it), checked: a bool (``--max-cost``
-    refuses the adapter when it is false, and would take any other value's truth for it).
-
-    Raises:
-        PluginBug: Reading ``priced`` raised or gave something else, naming ``origin`` (who
-            supplied the adapter).
-    """
+    refuses the adapter when it is false, and would take any other value's truth for it)."""
     what = f"{named('adapter', adapter)}: priced"
     with blamed(origin, what):  # before Python 3.12, isinstance reads the property too
         if not isinstance(adapter, Pricing):
@@ -353,12 +270,7 @@ def estimated_input(
     adapter: Estimating, origin: str, messages: tuple[Message, ...]
 ) -> tuple[int, float | None]:
     """``adapter.estimate(messages)``, checked: input tokens (an int, at least 0) and their cost
-    in USD (a finite number, at least 0, or ``None``), which ``bpb run --dry-run`` adds up.
-
-    Raises:
-        PluginBug: ``estimate()`` raised or returned something else, naming ``origin`` (who
-            supplied the adapter).
-    """
+    in USD (a finite number, at least 0, or ``None``), which ``bpb run --dry-run`` adds up."""
     what = f"{named('adapter', adapter)}: estimate()"
     with blamed(origin, what):
         estimate = adapter.estimate(messages)

@@ -247,22 +247,15 @@ class Registry:
         return self.get(kind, name).origin
 
     def load(self, kind: Kind, name: str) -> Any:
-        """Import and return the component class or factory registered as ``name``.
-
-        Raises:
-            PluginBug: The plugin's loader failed (a wrong ``lazy`` reference, an import
-                error), naming the plugin.
-        """
+        """Import and return the component class or factory registered as ``name``; a loader that
+        fails (a wrong ``lazy`` reference, an import error) is a :class:`PluginBug`."""
         entry = self.get(kind, name)
         with blamed(entry.origin, f"loading the {kind.replace('_', ' ')} {name!r}"):
             return entry.info.load()
 
     def build(self, kind: Kind, name: str) -> Any:
-        """A fresh instance of the component class registered as ``name``.
-
-        Raises:
-            PluginBug: Loading or creating it failed, naming the plugin.
-        """
+        """A fresh instance of the component class registered as ``name`` (a
+        :class:`PluginBug` naming the plugin when loading or creating it fails)."""
         made = self.load(kind, name)
         with blamed(self.origin(kind, name), f"creating the {kind.replace('_', ' ')} {name!r}"):
             return made()
@@ -340,11 +333,8 @@ class Registry:
         return cast("SceneFamily", self.build("scene_family", name))
 
     def default_family(self) -> str:
-        """The family marked default by its plugin (or the only one installed).
-
-        Raises:
-            BadInput: None or several are marked and more than one is installed.
-        """
+        """The family marked default by its plugin (or the only one installed); a
+        :class:`BadInput` when none or several are marked and more than one is installed."""
         infos = [r.info for r in self.entries("scene_family").values()]
         marked = [i.name for i in infos if isinstance(i, SceneFamilyInfo) and i.default]
         if len(marked) == 1:
@@ -354,30 +344,21 @@ class Registry:
         known = ", ".join(i.name for i in infos) or "none installed"
         raise BadInput(f"--family: no single default scene family; choose one of: {known}")
 
-    def scorer(self, name: str) -> Scorer:
-        """A fresh instance of the scorer ``name``.
-
-        Raises:
-            PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
-        """
-        scorer: Scorer = self.build("scorer", name)
-        check_scorer(scorer, self.origin("scorer", name))
-        return scorer
-
     def scorer_for(self, task: str) -> Scorer:
         """A fresh instance of the scorer of ``task``.
 
         Raises:
             BadInput: No installed scorer scores ``task``.
+            PluginBug: Its ``scene_rule`` or ``columns`` is unusable, naming the plugin.
         """
-        return self.scorer(self.scorer_entry(task).info.name)
+        entry = self.scorer_entry(task)
+        scorer: Scorer = self.build("scorer", entry.info.name)
+        check_scorer(scorer, entry.origin)
+        return scorer
 
     def scorer_entry(self, task: str) -> Registered:
-        """The record of the scorer of ``task`` (its name and who supplied it).
-
-        Raises:
-            BadInput: No installed scorer scores ``task``.
-        """
+        """The record of the scorer of ``task`` (its name and who supplied it); a
+        :class:`BadInput` when no installed scorer scores it."""
         for entry in self.entries("scorer").values():
             if isinstance(entry.info, ScorerInfo) and entry.info.task == task:
                 return entry
@@ -537,8 +518,7 @@ def _check_one_scorer_per_task(scorers: dict[str, Registered]) -> None:
     """Refuse two scorers for one task (which one scored it would be an accident of sorting),
     naming both and who supplied them."""
     seen: dict[str, Registered] = {}
-    for name in sorted(scorers):
-        entry = scorers[name]
+    for name, entry in sorted(scorers.items()):
         if not isinstance(entry.info, ScorerInfo):
             continue
         first = seen.setdefault(entry.info.task, entry)

@@ -81,14 +81,9 @@ class _Scan:
 
 
 def _spans(text: str) -> list[tuple[int, int]]:
-    """``(start, end)`` of the top-level balanced objects, in one pass over ``text``.
-
-    Braces are matched with a stack (of runs, so ``{`` x 30,000 is one step); inside an object a
-    JSON string is skipped whole, so its braces do not count. A closed object is top-level when
-    no closed object holds it. Braces left open at the end never close; the objects inside them
-    are top-level, as if the scan had resumed after each unclosed brace. Work is linear in
-    ``len(text)`` and bounded by :data:`MAX_BRACES`.
-    """
+    """``(start, end)`` of the top-level balanced objects, in one pass over ``text`` (bounded
+    by :data:`MAX_BRACES`). Braces left open at the end never close; the objects inside them are
+    top-level, as if the scan had resumed after each unclosed brace."""
     scan = _Scan()
     position = 0
     for _ in range(MAX_BRACES):
@@ -115,12 +110,9 @@ def _spans(text: str) -> list[tuple[int, int]]:
 
 
 def balanced_objects(text: str) -> Iterator[str]:
-    """Yield the top-level balanced ``{...}`` substrings of ``text`` from left to right.
-
-    Braces inside JSON strings do not count. An opening brace that never closes is skipped,
-    so an unterminated fragment in the reasoning does not hide a later complete answer. At
-    most :data:`MAX_OBJECTS` are yielded; the search is linear in the length of ``text``.
-    """
+    """Yield the top-level balanced ``{...}`` substrings of ``text`` from left to right (at most
+    :data:`MAX_OBJECTS`); an opening brace that never closes is skipped, so an unterminated
+    fragment in the reasoning does not hide a later complete answer."""
     for start, end in _spans(text):
         yield text[start:end]
 

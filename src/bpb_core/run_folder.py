@@ -78,12 +78,7 @@ def answer_path(run_dir: Path, key: SceneKey, task: str, epoch: int = 1) -> Path
 
 
 def make_run_folder(run_dir: Path) -> None:
-    """Create the run folder (and its parents) and check that it can be written.
-
-    Raises:
-        BadInput: The path, or one of its parents, is a file, or it cannot be written (one line
-            naming the path).
-    """
+    """Create the run folder (and its parents), checked as :func:`check_writable_folder` does."""
     check_writable_folder(run_dir)
     try:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -93,12 +88,8 @@ def make_run_folder(run_dir: Path) -> None:
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename, so a reader (or a run
-    killed half-way) sees the old file or the new one, never a torn one.
-
-    Raises:
-        WriteRefused: The system refused the write (a full disk): names ``path``, which is left
-            as it was (the temporary file is removed).
-    """
+    killed half-way) sees the old file or the new one, never a torn one. A write the system
+    refuses (a full disk) is a :class:`WriteRefused` naming ``path``, left as it was."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         try:
@@ -130,11 +121,8 @@ def write_answer(run_dir: Path, key: SceneKey, record: AnswerRecord) -> Path:
 
 
 def read_answer(path: Path) -> AnswerRecord | None:
-    """The record in ``path``, or ``None`` when there is no such file.
-
-    Raises:
-        BadInput: The file cannot be read or is not an answer record (names the file).
-    """
+    """The record in ``path``, or ``None`` when there is no such file; a :class:`BadInput`
+    naming the file when it cannot be read or is not an answer record."""
     try:
         data = path.read_bytes()
     except FileNotFoundError:
@@ -178,15 +166,12 @@ class AttemptLog:
         with writing(self.path):
             run_dir.mkdir(parents=True, exist_ok=True)
             self._file = self.path.open("a+b")
-            self._close_torn_line()
-
-    def _close_torn_line(self) -> None:
-        size = self._file.seek(0, os.SEEK_END)
-        if size:
-            self._file.seek(size - 1)
-            if self._file.read(1) != b"\n":
-                self._file.write(b"\n")
-                self._file.flush()
+            size = self._file.seek(0, os.SEEK_END)
+            if size:  # close off a line torn by a killed process
+                self._file.seek(size - 1)
+                if self._file.read(1) != b"\n":
+                    self._file.write(b"\n")
+                    self._file.flush()
 
     def append(self, entry: dict[str, Any]) -> None:
         """Write one attempt and flush it to the operating system.
@@ -250,11 +235,8 @@ def write_manifest(run_dir: Path, manifest: dict[str, Any]) -> None:
 
 
 def read_manifest(run_dir: Path) -> dict[str, Any] | None:
-    """``run.json`` of a run folder, or ``None`` if there is none yet.
-
-    Raises:
-        BadInput: It exists but cannot be read or is not a JSON object (names the file).
-    """
+    """``run.json`` of a run folder, or ``None`` if there is none yet; a :class:`BadInput`
+    naming the file when it cannot be read or is not a JSON object."""
     path = run_dir / RUN_MANIFEST
     try:
         data = json.loads(path.read_text(encoding="utf-8"))

@@ -29,11 +29,10 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NamedTuple
 
-from bpb_core.errors import PluginBug, blamed
+from bpb_core.errors import PluginBug, blamed, named
 
 NAN = math.nan
 INVALID = "?"
-STATUSES = ("ok", "parse_error", "api_error", "missing")
 
 SCORER_INPUT: dict[str, str] = {
     "status": "category",
@@ -76,40 +75,29 @@ SCENE_RULES = ("mean", "all")
 
 
 def check_scorer(scorer: Any, origin: str) -> None:
-    """Raise unless the scorer's ``scene_rule`` is one of :data:`SCENE_RULES` and its
-    ``columns`` map column names to dtypes: any other rule would be scored as ``mean``
-    without a word, wrong columns fail deep in pandas.
-
-    Raises:
-        PluginBug: Naming ``origin`` (who supplied the scorer) and the attribute.
+    """Raise a :class:`PluginBug` naming ``origin`` and the attribute unless the scorer's
+    ``scene_rule`` is one of :data:`SCENE_RULES` and its ``columns`` map column names to dtypes:
+    any other rule would be scored as ``mean`` without a word, wrong columns fail deep in pandas.
     """
-    name = getattr(scorer, "name", type(scorer).__name__)
-    rule = getattr(scorer, "scene_rule", None)
+    what, rule = named("scorer", scorer), getattr(scorer, "scene_rule", None)
     if rule not in SCENE_RULES:
-        raise PluginBug(
-            f"{origin}: scorer {name!r}: scene_rule is {rule!r}; expected 'mean' or 'all'"
-        )
+        raise PluginBug(f"{origin}: {what}: scene_rule is {rule!r}; expected 'mean' or 'all'")
     columns = getattr(scorer, "columns", None)
     if not isinstance(columns, Mapping) or not all(
         isinstance(column, str) and isinstance(dtype, str) for column, dtype in columns.items()
     ):
         shown = repr(columns) if len(repr(columns)) <= 60 else type(columns).__name__
         raise PluginBug(
-            f"{origin}: scorer {name!r}: columns is {shown}; expected a dict of column name "
+            f"{origin}: {what}: columns is {shown}; expected a dict of column name "
             "(str) -> pandas dtype (str)"
         )
 
 
 def unit_rows(scorer: Any, origin: str, answer: Any, truth: Any, scene: Any) -> list[UnitRow]:
     """``scorer.units(answer, truth, scene)``, checked: a list of :class:`UnitRow` with one
-    value per declared column.
-
-    Raises:
-        PluginBug: The scorer raised or returned something else, naming ``origin`` (who
-            supplied it) and the scorer.
-    """
-    name = getattr(scorer, "name", type(scorer).__name__)
-    with blamed(origin, f"scorer {name!r}: units()"):
+    value per declared column (else a :class:`PluginBug` naming ``origin``, as for a raise)."""
+    what = f"{named('scorer', scorer)}: units()"
+    with blamed(origin, what):
         rows = scorer.units(answer, truth, scene)
     width = len(scorer.columns)
     if isinstance(rows, list | tuple) and all(
@@ -119,31 +107,27 @@ def unit_rows(scorer: Any, origin: str, answer: Any, truth: Any, scene: Any) -> 
     shown = repr(rows)
     shown = shown if len(shown) <= 80 else shown[:77] + "..."
     raise PluginBug(
-        f"{origin}: scorer {name!r}: units() returned {shown}; expected a list of "
+        f"{origin}: {what} returned {shown}; expected a list of "
         f"bpb_core.UnitRow, each with {width} values (one per declared column)"
     )
 
 
 def scored_units(scorer: Any, origin: str, frame: Any) -> Any:
     """``scorer.score(frame)``, checked: a frame with ``correct`` and ``distance`` and one row
-    per row of ``frame``, on its index.
-
-    Raises:
-        PluginBug: The scorer raised or returned something else, naming ``origin``.
-    """
+    per row of ``frame``, on its index (else a :class:`PluginBug` naming ``origin``)."""
     import pandas as pd
 
-    name = getattr(scorer, "name", type(scorer).__name__)
-    with blamed(origin, f"scorer {name!r}: score()"):
+    what = f"{named('scorer', scorer)}: score()"
+    with blamed(origin, what):
         scored = scorer.score(frame)
     fits = isinstance(scored, pd.DataFrame) and set(SCORER_OUTPUT) <= set(scored.columns)
     if fits and len(scored) == len(frame) and scored.index.equals(frame.index):
         return scored
-    what = type(scored).__name__
+    got = type(scored).__name__
     if isinstance(scored, pd.DataFrame):
-        what = f"a DataFrame with columns {list(scored.columns)} and {len(scored)} rows"
+        got = f"a DataFrame with columns {list(scored.columns)} and {len(scored)} rows"
     raise PluginBug(
-        f"{origin}: scorer {name!r}: score() returned {what}; expected a DataFrame with the "
+        f"{origin}: {what} returned {got}; expected a DataFrame with the "
         f"columns correct and distance, on the index of its input ({len(frame)} rows)"
     )
 

@@ -26,12 +26,9 @@ class SimulatorSpec:
 
 def parse_spec(spec: str, flag: str) -> SimulatorSpec:
     """Parse ``name`` or ``name:key=value,...``; values become int, float or str. ``flag``
-    names where the spec was given (``--contestant``, ``config: simulator``...).
-
-    Raises:
-        BadInput: ``"{flag} 'x:dt': expected name or name:key=value,..."``: no name, an option
-            that is not ``key=value``, or one given twice.
-    """
+    names where the spec was given (``--contestant``, ``config: simulator``...). No name, an
+    option that is not ``key=value``, or one given twice raises :class:`BadInput`:
+    ``"{flag} 'x:dt': expected name or name:key=value,..."``."""
     name, _, rest = spec.strip().partition(":")
     options: dict[str, Any] = {}
     for item in filter(None, (part.strip() for part in rest.split(","))):

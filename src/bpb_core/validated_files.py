@@ -33,11 +33,8 @@ def describe_validation_error(exc: ValidationError) -> str:
 
 def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
     """Read and validate a JSON file; ``data``: its bytes, already read (a pipe such as
-    ``<(...)`` or ``/dev/stdin`` can be read only once).
-
-    Raises:
-        BadInput: ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``.
-    """
+    ``<(...)`` or ``/dev/stdin`` can be read only once). Raises :class:`BadInput`:
+    ``"<file>: cannot read: ..."`` or ``"<file>: <field>: problem"``."""
     try:
         return model.model_validate_json(read_bytes(path) if data is None else data)
     except ValidationError as exc:
@@ -45,11 +42,7 @@ def read_model(path: Path, model: type[M], data: bytes | None = None) -> M:
 
 
 def read_bytes(path: Path) -> bytes:
-    """The bytes of the file ``path``.
-
-    Raises:
-        BadInput: ``"<file>: cannot read: ..."``.
-    """
+    """The bytes of the file ``path``; raises :class:`BadInput`: ``"<file>: cannot read: ..."``."""
     try:
         return path.read_bytes()
     except OSError as exc:
@@ -57,11 +50,8 @@ def read_bytes(path: Path) -> bytes:
 
 
 def validate_mapping(model: type[M], data: Mapping[str, Any], source: str) -> M:
-    """Validate already-parsed ``data`` (a TOML or JSON config) read from ``source``.
-
-    Raises:
-        BadInput: ``"<source>: <field>: problem"``.
-    """
+    """Validate already-parsed ``data`` (a TOML or JSON config) read from ``source``; raises
+    :class:`BadInput`: ``"<source>: <field>: problem"``."""
     try:
         return model.model_validate(dict(data))
     except ValidationError as exc:
