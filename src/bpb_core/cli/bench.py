@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 
 import click
 
+from bpb_core.cli.params import PATH
+
 if TYPE_CHECKING:
     from bpb_core.bench.sim_report import SimBench
 
@@ -53,13 +55,8 @@ def bench() -> None:
     "(repeatable; the family must count events).",
 )
 @click.option("--scaling-scenes", default=200, show_default=True, help="Scenes for --scaling.")
-@click.option("--plot", type=click.Path(path_type=Path), default=None, help="Write the PNG here.")
-@click.option(
-    "--markdown",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Update the simulator section of this benchmarks.md.",
-)
+@click.option("--plot", type=PATH, help="Write the PNG here.")
+@click.option("--markdown", type=PATH, help="Update the simulator section of this benchmarks.md.")
 def bench_sim(
     scenes: int,
     seed: int,

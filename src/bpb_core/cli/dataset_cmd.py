@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import click
 
 from bpb_core.cli import console
+from bpb_core.cli.params import PATH
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:
@@ -107,10 +108,9 @@ def _figure(name: str, value: object) -> str:
 
 
 @click.command("generate")
-@click.option("--out", "out", required=True, type=click.Path(path_type=Path), help="Folder.")
+@click.option("--out", required=True, type=PATH, help="Folder.")
 @click.option(
     "--family",
-    default=None,
     help="Scene family plugin [default: the default one; see bpb list scene-families].",
 )
 @click.option(
@@ -118,7 +118,7 @@ def _figure(name: str, value: object) -> str:
 )
 @click.option("--horizons", default="1,2,3,4,5", show_default=True, help="Seconds, comma list.")
 @click.option("--seed", default=0, show_default=True, help="Dataset seed.")
-@click.option("--config", "config_path", type=click.Path(path_type=Path), help="JSON/TOML config.")
+@click.option("--config", "config_path", type=PATH, help="JSON/TOML config.")
 @click.option("--stable-only", is_flag=True, help="Draw until N stable scenes per horizon.")
 @click.option(
     "--workers", type=int, default=None, help="Processes, at most 4 per core [default: all cores]."
@@ -170,7 +170,7 @@ def generate(
 
 
 @click.command("export")
-@click.argument("data", type=click.Path(path_type=Path))
+@click.argument("data", type=PATH)
 @click.option(
     "--format",
     "fmt",
@@ -179,8 +179,8 @@ def generate(
     show_default=True,
     help="hf: Parquet shards with an Image feature, split by horizon, and a dataset card.",
 )
-@click.option("--out", required=True, type=click.Path(path_type=Path), help="Export folder.")
-@click.option("--tasks", default=None, help="Comma-separated tasks [default: the family's].")
+@click.option("--out", required=True, type=PATH, help="Export folder.")
+@click.option("--tasks", help="Comma-separated tasks [default: the family's].")
 @click.option(
     "--shard-rows", default=1000, show_default=True, help="Rows per Parquet file at most."
 )

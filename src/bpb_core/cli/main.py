@@ -19,23 +19,20 @@ import click
 
 from bpb_core.version import __version__
 
-# name -> (module, attribute, one-line help); the help is here so listing needs no import.
+# name -> (module in bpb_core.cli, attribute, one-line help); the help is here so listing needs
+# no import.
 COMMANDS: dict[str, tuple[str, str, str]] = {
-    "plugins": ("bpb_core.cli.plugins_cmd", "plugins", "List installed plugins and versions."),
-    "list": ("bpb_core.cli.plugins_cmd", "list_components", "List tasks, adapters, ..."),
-    "bench": ("bpb_core.cli.bench", "bench", "Benchmarks (speed against error)."),
-    "run": ("bpb_core.cli.run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
-    "generate": ("bpb_core.cli.dataset_cmd", "generate", "Generate a dataset (scenes, images)."),
-    "export": ("bpb_core.cli.dataset_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
-    "report": ("bpb_core.cli.report_cmd", "report", "Score and compare runs; charts and HTML."),
-    "prompt": ("bpb_core.cli.prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
-    "human": ("bpb_core.cli.web_cmd", "human", "Answer the questions in the browser (a run)."),
-    "view": ("bpb_core.cli.web_cmd", "view", "Browse runs in the browser, pair by pair."),
-    "simulate": (
-        "bpb_core.cli.simulate_cmd",
-        "simulate",
-        "Simulate scenes; print final.json lines.",
-    ),
+    "plugins": ("plugins_cmd", "plugins", "List installed plugins and versions."),
+    "list": ("plugins_cmd", "list_components", "List tasks, adapters, ..."),
+    "bench": ("bench", "bench", "Benchmarks (speed against error)."),
+    "run": ("run_cmd", "run", "Ask models the benchmark's questions (resumable)."),
+    "generate": ("dataset_cmd", "generate", "Generate a dataset (scenes, images)."),
+    "export": ("dataset_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
+    "report": ("report_cmd", "report", "Score and compare runs; charts and HTML."),
+    "prompt": ("prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
+    "human": ("web_cmd", "human", "Answer the questions in the browser (a run)."),
+    "view": ("web_cmd", "view", "Browse runs in the browser, pair by pair."),
+    "simulate": ("simulate_cmd", "simulate", "Simulate scenes; print final.json lines."),
 }
 
 
@@ -50,7 +47,7 @@ class LazyGroup(click.Group):
         if entry is None:
             return None
         module, attribute, _ = entry
-        command = getattr(importlib.import_module(module), attribute)
+        command = getattr(importlib.import_module(f"bpb_core.cli.{module}"), attribute)
         assert isinstance(command, click.Command)
         return command
 
@@ -110,7 +107,11 @@ def _run(argv: list[str] | None) -> Any:
     try:
         return cli.main(args=argv, prog_name="bpb", standalone_mode=False)
     except click.exceptions.Abort as exc:
-        click.echo(_aborted(exc.__cause__), err=True)
+        from bpb_core.errors import Interrupted
+
+        cause = exc.__cause__  # what the interrupted command left where, when it says
+        told = isinstance(cause, Interrupted) and str(cause)
+        click.echo(f"aborted; {cause}" if told else "aborted", err=True)
         return 130
     except click.UsageError as exc:  # one line, like every other bad input
         where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
@@ -123,13 +124,6 @@ def _run(argv: list[str] | None) -> Any:
         return exc.exit_code
     except Exception as exc:  # every failure leaves as one line and an exit code
         return _report_error(exc)
-
-
-def _aborted(cause: BaseException | None) -> str:
-    """``aborted``, followed by what the interrupted command left where, when it says."""
-    from bpb_core.errors import Interrupted
-
-    return f"aborted; {cause}" if isinstance(cause, Interrupted) and str(cause) else "aborted"
 
 
 def _report_error(exc: BaseException) -> int:
@@ -149,3 +143,7 @@ def _report_error(exc: BaseException) -> int:
         f"internal error: {type(exc).__name__}: {exc} (set BPB_DEBUG=1 for a traceback)", err=True
     )
     return 3
+
+
+if __name__ == "__main__":
+    main()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
 import click
@@ -28,6 +29,10 @@ class FiniteFloat(click.FloatRange):
         if not math.isfinite(number):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return number
+
+
+PATH = click.Path(path_type=Path)
+"""The type of a path option or argument (click hands a :class:`~pathlib.Path`)."""
 
 
 def positive() -> FiniteFloat:

@@ -6,15 +6,13 @@ from pathlib import Path
 
 import click
 
-from bpb_core.cli.params import counted, force_numeric_option, input_mode_option
+from bpb_core.cli.params import PATH, counted, force_numeric_option, input_mode_option
 
 
 @click.command("prompt")
-@click.argument("scene", type=click.Path(path_type=Path))
+@click.argument("scene", type=PATH)
 @click.option("--task", default="q1", show_default=True, help="The task whose prompt to print.")
-@click.option(
-    "--data", type=click.Path(path_type=Path), help="Dataset folder, to give SCENE as an id."
-)
+@click.option("--data", type=PATH, help="Dataset folder, to give SCENE as an id.")
 @input_mode_option
 @click.option("--cot/--no-cot", "cot", default=None, help="Chain of thought (default: the task's).")
 @force_numeric_option

@@ -16,7 +16,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from bpb_core.cli.console import load_registry, stderr, stdout
-from bpb_core.cli.params import FiniteFloat, counted
+from bpb_core.cli.params import PATH, FiniteFloat, counted
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -41,10 +41,8 @@ USAGE_COLUMNS = {
 
 
 @click.command("report")
-@click.argument("run_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option(
-    "--out", type=click.Path(path_type=Path), help="Write charts, CSV/Parquet and report.html here."
-)
+@click.argument("run_dirs", nargs=-1, required=True, type=PATH)
+@click.option("--out", type=PATH, help="Write charts, CSV/Parquet and report.html here.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON (for scripts).")
 @counted("--bootstrap", "n_boot", default=2000, low=10, help="Bootstrap resamples.")
 @click.option("--seed", default=0, show_default=True, help="Bootstrap seed.")

@@ -17,6 +17,7 @@ from rich.markup import escape
 
 from bpb_core.cli.console import load_registry, stderr
 from bpb_core.cli.params import (
+    PATH,
     FiniteFloat,
     counted,
     csv_list,
@@ -136,13 +137,10 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 
 @click.command("run")
 @click.option(
-    "--data",
-    type=click.Path(path_type=Path),
-    help="Dataset folder (default: a small generated one in OUT/data).",
+    "--data", type=PATH, help="Dataset folder (default: a small generated one in OUT/data)."
 )
 @click.option(
     "--tasks",
-    default=None,
     help="Comma-separated tasks [default: the default tasks of the dataset's scene family].",
 )
 @click.option(
@@ -174,7 +172,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 @click.option("--tpm", type=positive(), help="Tokens per minute cap (in + out).")
 @click.option(
     "--out",
-    type=click.Path(path_type=Path),
+    type=PATH,
     default=Path(DEFAULT_OUT),
     show_default=True,
     help="Writes OUT/<adapter slug>/ per adapter.",

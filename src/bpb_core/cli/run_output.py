@@ -5,8 +5,9 @@ the end (from :mod:`bpb_core.results`)."""
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,27 +34,19 @@ if TYPE_CHECKING:
 @dataclass
 class _Row:
     task_id: TaskID
-    total: int = 0
-    done_before: int = 0
-    ok: int = 0
-    parse_error: int = 0
-    api_error: int = 0
-    not_sent: int = 0
-    retries: int = 0
-    tokens: int = 0
+    counts: Counter[str] = field(default_factory=Counter)  # by event kind and final status
     cost: float | None = 0.0
 
     def fields(self) -> dict[str, Any]:
-        cost = "$?" if self.cost is None else f"${self.cost:.4f}"
-        failed = self.parse_error + self.api_error
+        n, cost = self.counts, "$?" if self.cost is None else f"${self.cost:.4f}"
         text = (
-            f"ok {self.ok} failed {failed} (parse {self.parse_error}, api {self.api_error}) "
-            f"retrying {self.retries} tok {self.tokens:,} {cost}"
+            f"ok {n['ok']} failed {n['parse_error'] + n['api_error']} (parse {n['parse_error']}, "
+            f"api {n['api_error']}) retrying {n['retry']} tok {n['tokens']:,} {cost}"
         )
-        if self.done_before:
-            text += f" | {self.done_before} done before"
-        if self.not_sent:
-            text += f" | {self.not_sent} not sent"
+        if n["skipped"]:
+            text += f" | {n['skipped']} done before"
+        if n["not_sent"]:
+            text += f" | {n['not_sent']} not sent"
         return {"stats": text}
 
 
@@ -64,35 +57,27 @@ class RichProgress:
         self._bar = bar
         self._rows: dict[tuple[str, str], _Row] = {}
 
-    def _row(self, event: ProgressEvent) -> _Row:
-        key = (event.adapter, event.task)
-        if key not in self._rows:
-            name = escape(f"{event.adapter} {event.task}")
-            task_id = self._bar.add_task(name, total=0, stats="")
-            self._rows[key] = _Row(task_id)
-        return self._rows[key]
-
     def update(self, event: ProgressEvent) -> None:
         """Apply one event to its row (a warning is printed above the bars)."""
         if event.kind == "warning":
             text = escape(f"{event.adapter}: {event.reason}")
             self._bar.console.print(f"[yellow]warning:[/] {text}")
             return
-        row = self._row(event)
-        if event.kind == "planned":
-            row.total += event.count
-        elif event.kind == "skipped":
-            row.done_before += event.count
-        elif event.kind == "retry":
-            row.retries += 1
-        elif event.kind == "done":
-            status = event.status or "ok"
-            setattr(row, status, getattr(row, status, 0) + 1)
-            row.tokens += event.tokens
+        key = (event.adapter, event.task)
+        if key not in self._rows:
+            name = escape(f"{event.adapter} {event.task}")
+            self._rows[key] = _Row(self._bar.add_task(name, total=0, stats=""))
+        row = self._rows[key]
+        n = row.counts
+        if event.kind == "done":
+            n[event.status or "ok"] += 1
+            n["tokens"] += event.tokens
             if row.cost is not None:
                 row.cost = None if event.cost is None else row.cost + event.cost
-        finished = row.ok + row.parse_error + row.api_error + row.not_sent
-        self._bar.update(row.task_id, total=row.total, completed=finished, **row.fields())
+        else:  # planned, skipped (done before), retry
+            n[event.kind] += event.count
+        finished = n["ok"] + n["parse_error"] + n["api_error"] + n["not_sent"]
+        self._bar.update(row.task_id, total=n["planned"], completed=finished, **row.fields())
 
 
 def make_bar() -> RichBar:

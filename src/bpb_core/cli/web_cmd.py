@@ -15,8 +15,8 @@ PORTS = click.IntRange(0, 65535)
 
 
 @click.command("human")
-@click.option("--data", required=True, type=click.Path(path_type=Path), help="Dataset folder.")
-@click.option("--out", required=True, type=click.Path(path_type=Path), help="Run folder.")
+@click.option("--data", required=True, type=params.PATH, help="Dataset folder.")
+@click.option("--out", required=True, type=params.PATH, help="Run folder.")
 @click.option("--name", default="anonymous", show_default=True, help="Who answers (human:NAME).")
 @click.option("--tasks", help="Comma-separated tasks (default: the family's default tasks).")
 @params.horizons_option
@@ -49,7 +49,7 @@ def human(
 
 
 @click.command("view")
-@click.argument("run_dirs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("run_dirs", nargs=-1, required=True, type=params.PATH)
 @click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
 def view(run_dirs: tuple[Path, ...], port: int) -> None:
     """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""

@@ -26,7 +26,7 @@ from bpb_core.errors import (
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
 from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
-from bpb_core.run_folder import AnswerRecord, write_answer
+from bpb_core.run_folder import write_answer
 from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import NotSent, RunState, Tally, wait_unless
@@ -249,20 +249,14 @@ class PairCall:
         self, status: str, value: dict[str, Any] | None = None, rule: str | None = None
     ) -> None:
         """Write the pair's answer file (atomically, on the IO thread) and report it."""
-        record = AnswerRecord(
-            scene_id=self.ref.scene_id,
-            horizon=self.ref.key.horizon,
-            index=self.ref.key.index,
-            task=self.task,
-            adapter=self.state.spec,
+        record = self.tally.record(
+            self.ref,
+            self.task,
+            self.state.spec,
             status=status,
             answer=value,
             rule=rule,
             finish_reason=self.finish_reason,
-            attempts=self.tally.attempts,
-            usage=self.tally.usage,
-            cost=self.tally.cost if self.tally.responses else None,
-            latency=self.tally.latency,
             error=None if status == "ok" else self.last_error,
             input_mode=self.state.options.input_mode,
             cot=self.state.cot(self.task),

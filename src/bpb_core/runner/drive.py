@@ -16,10 +16,6 @@ only when the run owns its event loop in the main thread (``bpb run``, a synchro
 when it ends. A run awaited in the caller's own loop (``run_eval_async`` in an async app or a
 notebook) and a run in a worker thread leave the signals to the caller, whose way to stop it is
 cancelling its task.
-
-Synchronous entry points (:func:`run_sync`) work wherever they are called: a script, a worker
-thread, or code already running inside an event loop (a Jupyter cell, an async web handler),
-where ``asyncio.run`` refuses to start.
 """
 
 from __future__ import annotations

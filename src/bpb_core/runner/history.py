@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.model_calls import known_cost
-from bpb_core.run_folder import AnswerRecord, read_attempts, write_answer
+from bpb_core.run_folder import read_attempts, write_answer
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState, Tally
 
@@ -117,21 +117,14 @@ def recover_answers(
         found = history.pairs.get((ref.scene_id, task, epoch))
         if found is None or found.ok is None:
             continue
-        tally, entry = found.tally, found.ok
-        record = AnswerRecord(
-            scene_id=ref.scene_id,
-            horizon=ref.key.horizon,
-            index=ref.key.index,
-            task=task,
-            adapter=state.spec,
+        record = found.tally.record(
+            ref,
+            task,
+            state.spec,
             status="ok",
-            answer=entry["answer"],
-            rule=entry.get("rule"),
-            finish_reason=entry.get("finish_reason"),
-            attempts=tally.attempts,
-            usage=tally.usage.model_copy(),
-            cost=tally.cost if tally.responses else None,
-            latency=tally.latency,
+            answer=found.ok["answer"],
+            rule=found.ok.get("rule"),
+            finish_reason=found.ok.get("finish_reason"),
             input_mode=state.options.input_mode,
             cot=state.cot(task),
             epoch=epoch,

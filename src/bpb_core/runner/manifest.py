@@ -79,18 +79,6 @@ def versions() -> dict[str, Any]:
     }
 
 
-def _plugins(registry: Registry) -> list[dict[str, str]]:
-    return [
-        {
-            "kind": e.info.kind,
-            "name": e.info.name,
-            "distribution": e.distribution,
-            "version": e.version,
-        }
-        for e in registry
-    ]
-
-
 def _options(options: RunOptions, registry: Registry) -> dict[str, Any]:
     data = dataclasses.asdict(options)
     data["cot"] = {t: options.cot.get(t, registry.task(t).default_cot) for t in options.tasks}
@@ -112,16 +100,6 @@ def config_hash(manifest: dict[str, Any]) -> str:
     shaping = {key: _guarded(manifest, key) for key in _GUARDED}
     text = json.dumps(shaping, sort_keys=True, default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
-
-
-def _check_log(run_dir: Path, logged: set[str], new: str) -> None:
-    other = sorted(logged - {new})
-    if other:
-        raise BadInput(
-            f"{run_dir / ATTEMPTS}: holds attempts of another configuration (hash {other[0]}, "
-            f"this run {new}) and {RUN_MANIFEST} is missing; use another --out to keep answers "
-            "comparable"
-        )
 
 
 def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> None:
@@ -208,7 +186,10 @@ def start_manifest(
         "dataset_hash": dataset_hash(folder),
         "scenes": scenes,
         "versions": versions(),
-        "plugins": _plugins(registry),
+        "plugins": [
+            dict(kind=e.info.kind, name=e.info.name, distribution=e.distribution, version=e.version)
+            for e in registry
+        ],
         "started": now(),
         "finished": None,
         "order_seed": options.seed,
@@ -218,7 +199,14 @@ def start_manifest(
     manifest["config_hash"] = config_hash(manifest)
     old = read_manifest(run_dir)
     if old is None:
-        _check_log(run_dir, logged or set(), manifest["config_hash"])
+        other = sorted((logged or set()) - {manifest["config_hash"]})
+        if other:
+            raise BadInput(
+                f"{run_dir / ATTEMPTS}: holds attempts of another configuration (hash "
+                f"{other[0]}, this run {manifest['config_hash']}) and {RUN_MANIFEST} is missing; "
+                "use another --out to keep answers comparable"
+            )
+        manifest["sessions"] = [manifest["started"]]
     else:
         _check_resume(run_dir, old, manifest)
         if scene_ids is not None:
@@ -230,8 +218,6 @@ def start_manifest(
         manifest["model_id"] = old.get("model_id")
         manifest["dropped_params"] = old.get("dropped_params", [])
         manifest["sessions"] = [*old.get("sessions", []), now()]
-    if old is None:
-        manifest["sessions"] = [manifest["started"]]
     write_manifest(run_dir, manifest)
     return manifest
 
@@ -251,12 +237,6 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
     write_manifest(run_dir, manifest)
 
 
-def _holder(handle: int) -> str:
-    os.lseek(handle, 0, os.SEEK_SET)
-    text = os.read(handle, 64).decode("ascii", "replace").strip()
-    return text or "unknown"
-
-
 @contextmanager
 def run_lock(run_dir: Path) -> Iterator[None]:
     """Hold the run folder's lock for the block.
@@ -274,8 +254,9 @@ def run_lock(run_dir: Path) -> Iterator[None]:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            holder = os.pread(handle, 64, 0).decode("ascii", "replace").strip() or "unknown"
             raise BadInput(
-                f"{run_dir}: in use by another bpb run (pid {_holder(handle)}); wait for it to "
+                f"{run_dir}: in use by another bpb run (pid {holder}); wait for it to "
                 "finish or stop it, then re-run to resume"
             ) from None
         os.ftruncate(handle, 0)

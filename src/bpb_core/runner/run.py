@@ -2,14 +2,8 @@
 
 :func:`run_eval` runs one adapter into one run folder; :func:`evaluate` runs several, each into
 ``OUT/<slug>/``. Re-running the same call resumes: (scene, task) pairs whose answer file says
-``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. The (scene,
-task) pairs are sent in a seeded random order (:func:`~bpb_core.runner.drive.call_order`), so a
-run stopped early holds a uniform sample; they stream through a bounded window, so memory does
-not grow with the dataset.
-
-The synchronous entry points work wherever they are called: a script, a worker thread, or code
-already running inside an event loop (a Jupyter cell, an async web handler), where
-``asyncio.run`` refuses to start (:func:`~bpb_core.runner.drive.run_sync`).
+``ok`` or ``parse_error`` are never sent again; ``api_error`` ones are retried. How the pairs are
+sent (a seeded order, a bounded window, signals, synchronous callers): :mod:`.drive`.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ A run's tasks default to the default tasks of the dataset's family; a task that 
 another family's scenes is bad input, named with both families. The runner asks about
 ``init.json`` (and the family's input image, for image input) and never hands ground truth to an
 adapter; it only reads each selected scene's ground truth once before the first call
-(:func:`check_truth`), so a run that could not be scored sends nothing.
+(in :func:`asking`), so a run that could not be scored sends nothing.
 """
 
 from __future__ import annotations
@@ -77,35 +77,6 @@ class SceneRef:
         check_image(path, data)
         check_recorded(path, data)
         return data
-
-
-def select_scenes(
-    folder: DataFolder, horizons: Sequence[float] | None = None, limit: int | None = None
-) -> list[SceneRef]:
-    """Scenes of ``folder`` at ``horizons`` (all when ``None``), the first ``limit`` per horizon.
-
-    Raises:
-        BadInput: ``folder`` is not a dataset folder, its scene folders do not match its
-            ``index.csv``, or no scene matches.
-    """
-    data = folder.root
-    if not data.is_dir():
-        raise BadInput(f"{data}: --data: not a dataset folder")
-    keys = select_keys(dataset_keys(data), horizons, limit)
-    if not keys:
-        raise BadInput(f"{data}: --data: no scenes (h*/scene_*/init.json) match the selection")
-    return [SceneRef(key, key.dir(data), folder.family) for key in keys]
-
-
-def check_truth(refs: Sequence[SceneRef]) -> None:
-    """Read the scene and ground truth of every scene in ``refs`` as scoring (``bpb report``)
-    will, so a damaged ``final.json`` stops the run up front instead of after every call.
-
-    Raises:
-        BadInput: A scene's ``init.json`` or ``final.json`` is missing or invalid (names it).
-    """
-    for ref in refs:
-        read_scene_files(ref.folder, ref.family.scene_model, ref.family.truth_model)
 
 
 def check_images(folder: DataFolder, refs: Sequence[SceneRef], input_mode: str) -> None:
@@ -211,8 +182,16 @@ def asking(data: Path | DataFolder, options: RunOptions, registry: Registry) -> 
             )
     resolved = dataclasses.replace(options, tasks=tuple(names))
     tasks = {name: registry.task(name) for name in names}
-    scenes = _chosen(select_scenes(folder, options.horizons, options.limit), options)
-    check_truth(scenes)
+    if not folder.root.is_dir():
+        raise BadInput(f"{folder.root}: --data: not a dataset folder")
+    keys = select_keys(dataset_keys(folder.root), options.horizons, options.limit)
+    if not keys:
+        raise BadInput(
+            f"{folder.root}: --data: no scenes (h*/scene_*/init.json) match the selection"
+        )
+    scenes = _chosen([SceneRef(key, key.dir(folder.root), family) for key in keys], options)
+    for ref in scenes:  # read as scoring will: a damaged final.json stops the run up front
+        read_scene_files(ref.folder, family.scene_model, family.truth_model)
     simulator = folder.simulator()
     check_manifest(folder)  # after the checks that name a field, which say more
     return Asking(family, resolved, tasks, scenes, simulator, folder)

@@ -21,11 +21,12 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from bpb_core.errors import AuthenticationFailed
 from bpb_core.interfaces import ModelAdapter, Task
 from bpb_core.model_calls import ModelResponse
-from bpb_core.run_folder import AttemptLog, UsageRecord
+from bpb_core.run_folder import AnswerRecord, AttemptLog, UsageRecord
 from bpb_core.runner.options import Progress, ProgressEvent, RunOptions
 
 if TYPE_CHECKING:
     from bpb_core.runner.history import History
+    from bpb_core.runner.scenes import SceneRef
 
 T = TypeVar("T")
 
@@ -251,3 +252,18 @@ class Tally:
         if self.cost is not None:
             self.cost = None if response.cost is None else self.cost + response.cost
         self.latency += response.latency
+
+    def record(self, ref: SceneRef, task: str, adapter: str, **fields: Any) -> AnswerRecord:
+        """The answer record of ``task`` about ``ref`` with these totals (``fields``: the rest)."""
+        return AnswerRecord(
+            scene_id=ref.scene_id,
+            horizon=ref.key.horizon,
+            index=ref.key.index,
+            task=task,
+            adapter=adapter,
+            attempts=self.attempts,
+            usage=self.usage.model_copy(),
+            cost=self.cost if self.responses else None,
+            latency=self.latency,
+            **fields,
+        )

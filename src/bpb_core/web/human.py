@@ -40,10 +40,11 @@ from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import prompt_text, valid_unicode
 from bpb_core.plugin_calls import named, parsed_answer, prompt_messages
-from bpb_core.run_folder import AnswerRecord, AttemptLog, completed, write_answer
+from bpb_core.run_folder import AttemptLog, completed, write_answer
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef, asking
+from bpb_core.runner.state import Tally
 from bpb_core.web import environment, error_page, loopback_only, plugin_bug_page, render
 
 if TYPE_CHECKING:
@@ -236,19 +237,14 @@ class HumanSession:
                 "latency": latency, "rule": rule, "error": None,
             }
         )  # fmt: skip
-        record = AnswerRecord(
-            scene_id=ref.scene_id,
-            horizon=ref.key.horizon,
-            index=ref.key.index,
-            task=task,
-            adapter=self.spec,
+        record = Tally(1, 1, cost=0.0, latency=round(latency, 3)).record(
+            ref,
+            task,
+            self.spec,
             status="ok",
             answer=value,
             rule=rule,
             finish_reason="stop",
-            attempts=1,
-            cost=0.0,
-            latency=round(latency, 3),
             input_mode=self.options.input_mode,
             cot=self._prompt_options(task).cot,
         )
