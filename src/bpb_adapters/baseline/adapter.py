@@ -14,7 +14,7 @@ import json
 import random
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from bpb_core.capabilities import Perceiving, Predicting
 from bpb_core.errors import BadInput, ParseFailure, PluginBug, RequestRejected, UnknownName, blamed
@@ -101,12 +101,10 @@ class PluginLookup:
         return self._components[key]
 
     def _family(self, name: str) -> SceneFamily:
-        family: SceneFamily = self._component(f"f:{name}", lambda r: r.scene_family(name))
-        return family
+        return cast("SceneFamily", self._component(f"f:{name}", lambda r: r.scene_family(name)))
 
     def _task(self, name: str) -> Task:
-        task: Task = self._component(f"t:{name}", lambda r: r.task(name))
-        return task
+        return cast("Task", self._component(f"t:{name}", lambda r: r.task(name)))
 
     def _reply(
         self, text: str, started: float, metadata: dict[str, Any] | None = None
@@ -134,8 +132,7 @@ class PluginLookup:
             named = parse_spec(name, "dataset.json: config: simulator")
             return registry.simulator(named.name, named.options)
 
-        simulator: Simulator = self._component(f"s:{name}", build)
-        return simulator
+        return cast("Simulator", self._component(f"s:{name}", build))
 
 
 @dataclass

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import Annotated, Any, ClassVar
 
-from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.questions.answers import TF, Answers, BallId, Item, Q1Schema, Upper
 from bpb_tasks.questions.question import LabelQuestion, colour
@@ -21,7 +20,6 @@ class Q1Task(LabelQuestion):
     """Cue-ball collisions with each object ball (chain of thought on by default)."""
 
     name: ClassVar[str] = "q1"
-    default_cot: ClassVar[bool] = True
     title: ClassVar[str] = "Ball collisions"
     key: ClassVar[str] = "id"
     reader = Answers[BallAnswer]
@@ -34,12 +32,8 @@ class Q1Task(LabelQuestion):
     def field(self, unit: Any) -> str:
         return f"ball{unit}"
 
-    def question(self, scene: Scene, options: PromptOptions) -> str:
-        return (
-            f"For each object ball {self.units(scene)}, does the cue ball (ball 0) touch it at any "
-            f"time in [0, {scene.horizon:g}] s? Answer T (yes) or F (no) for every one of them, as "
-            f"JSON:\n{self.example(scene)}"
-        )
+    def asked(self, scene: Scene) -> tuple[str, str]:
+        return f"object ball {self.units(scene)}", "every one of them"
 
     def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
         """The object balls to tick (``bpb human``)."""

@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Annotated, Any, ClassVar
 
 from bpb_core.errors import ParseFailure
-from bpb_core.interfaces import PromptOptions
 from bpb_tasks.billiards.scene.model import WALLS, Scene, Wall
 from bpb_tasks.questions.answers import TF, Answers, Item, Q2Schema, Upper
 from bpb_tasks.questions.question import LabelQuestion
@@ -22,7 +21,6 @@ class Q2Task(LabelQuestion):
     """Cue-ball contacts with each wall (chain of thought on by default)."""
 
     name: ClassVar[str] = "q2"
-    default_cot: ClassVar[bool] = True
     title: ClassVar[str] = "Wall contacts"
     key: ClassVar[str] = "wall"
     reader = Answers[WallAnswer]
@@ -32,12 +30,8 @@ class Q2Task(LabelQuestion):
         """The walls: TOP, BOTTOM, LEFT, RIGHT."""
         return list(WALLS)
 
-    def question(self, scene: Scene, options: PromptOptions) -> str:
-        return (
-            f"For each wall TOP, BOTTOM, LEFT and RIGHT, does the cue ball (ball 0) touch it at "
-            f"any time in [0, {scene.horizon:g}] s? Answer T (yes) or F (no) for all four walls, "
-            f"as JSON:\n{self.example(scene)}"
-        )
+    def asked(self, scene: Scene) -> tuple[str, str]:
+        return "wall TOP, BOTTOM, LEFT and RIGHT", "all four walls"
 
     def check(self, got: list[Any], units: list[Any]) -> None:
         if len(got) != len(set(got)) or set(got) != set(WALLS):

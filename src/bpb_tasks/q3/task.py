@@ -73,7 +73,6 @@ class Q3Task(BilliardsQuestion):
     """Final positions of all balls (chain of thought off by default, as in the paper)."""
 
     name: ClassVar[str] = "q3"
-    default_cot: ClassVar[bool] = False
     title: ClassVar[str] = "Final positions"
 
     def example(self, scene: Scene, pocketed: bool = True) -> str:

@@ -213,6 +213,7 @@ class LabelQuestion(BilliardsQuestion):
         schema: The strict model of the normalised answer (:mod:`bpb_tasks.questions.answers`).
     """
 
+    default_cot: ClassVar[bool] = True
     key: ClassVar[str] = ""
     reader: ClassVar[type[BaseModel]]
     schema: ClassVar[type[BaseModel]]
@@ -220,6 +221,18 @@ class LabelQuestion(BilliardsQuestion):
     @abstractmethod
     def units(self, scene: Scene) -> list[Any]:
         """The units to label, in answer order."""
+
+    @abstractmethod
+    def asked(self, scene: Scene) -> tuple[str, str]:
+        """What the question names: each unit (``wall TOP, ...``), and all of them."""
+
+    def question(self, scene: Scene, options: PromptOptions) -> str:
+        each, every = self.asked(scene)
+        return (
+            f"For each {each}, does the cue ball (ball 0) touch it at any time in "
+            f"[0, {scene.horizon:g}] s? Answer T (yes) or F (no) for {every}, as JSON:\n"
+            f"{self.example(scene)}"
+        )
 
     def check(self, got: list[Any], units: list[Any]) -> None:
         """Raise ParseFailure unless ``got`` (the answer's units) has every unit exactly once."""

@@ -13,30 +13,19 @@ Same scene format and conventions as ``analytic`` where a fixed-step engine can 
   counts only while the pair approaches and a wall contact only while the ball moves towards the
   wall. Event times are the end of the step in which pymunk saw them, so they carry an error of
   up to ``dt``; the last step is shortened to land exactly on the horizon.
-* A step may carry no ball further than half its radius: ``dt`` above the scene's stability
-  bound :func:`stable_dt` (half the ball radius over the fastest speed any ball can reach) is
-  refused with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError`, a message
-  starting ``dt:`` (its ``option``) and giving the bound; the caller names where ``dt`` was set
-  (``bpb simulate`` the scene file and ``--dt``, ``bpb generate`` the config, the scene and the
-  config's ``simulator``, e.g. ``pymunk:dt=0.0005``; a stability copy a hair faster than its
-  scene counts as unfinished). No ``dt`` is chosen from the bound instead: the step is part of
-  the truth (its events carry an error of up to ``dt``), so it is one number that the user
-  chose and the manifest records, the same for every scene and every stability copy.
+* A step may carry no ball further than half its radius: a ``dt`` above the scene's
+  :func:`stable_dt` is refused (:meth:`PymunkSimulator.run`). No ``dt`` is chosen from the bound
+  instead: the step is part of the truth, one number the user chose and the manifest records.
   Beyond the bound pymunk tunnels: at three times it 26 of 60 random scenes (cue at 0.5-6 m/s)
   ended a ball off the table, and at twice it a ball squeezed between a cushion and a fast
   stack of balls now and then went through.
 * Final positions lie on the table as a scene file's balls do, ``R`` from every cushion
-  (:func:`bpb_tasks.billiards.scene.model.table_box`): a ball the horizon catches mid-bounce, sunk
-  into a cushion by part of a step's travel that pymunk would push out over the next steps, is
-  put back against it. A ball whose centre crosses a cushion has left the table: the run fails
-  with :class:`~bpb_tasks.simulators.analytic.engine.SimulationError` (about ``dt``, named by
-  the caller as the bound refusal is) rather than give that position as the truth. The
-  stability annotation's run 1 s past the horizon stops there instead, as at the step budget
-  (:meth:`PymunkSimulator.events_until_failure`): the scene ran to its horizon.
+  (:func:`bpb_tasks.billiards.scene.model.table_box`): a ball the horizon catches sunk into a
+  cushion is put back against it; a ball whose centre crossed a cushion fails the run rather
+  than give that position as the truth.
 * ``tunnel="allow"`` (``pymunk:dt=0.01,tunnel=allow`` as a ``bpb bench sim`` contestant) turns
-  the last two points off: any ``dt`` is taken and the final positions are pymunk's own, a ball
-  that went through a cushion included. That is what ``bpb bench sim`` measures (speed against
-  error at coarse steps on purpose); ground truth keeps the default ``tunnel="refuse"``.
+  the last two points off: any ``dt`` is taken and the final positions are pymunk's own. That is
+  what ``bpb bench sim`` measures; ground truth keeps the default ``tunnel="refuse"``.
 """
 
 from __future__ import annotations
@@ -81,7 +70,8 @@ class PymunkSimulator:
             SimulationError: ``dt`` is above the scene's :func:`stable_dt`, a ball left the
                 table all the same, or the run would take more than :data:`MAX_STEPS` steps;
                 each message starts ``dt:`` (its ``option``), for the caller to name where
-                ``dt`` is set.
+                ``dt`` is set (``bpb simulate`` the scene file and ``--dt``, ``bpb generate``
+                the config's ``simulator``).
         """
         end = scene.horizon if horizon is None else horizon
         return self._started(scene).run(end)
@@ -283,7 +273,7 @@ class _PymunkRun:
             self.touched.clear()
 
     def _pockets(self) -> None:
-        pockets, width, height = self.scene.pockets, self.scene.table.width, self.scene.table.height
+        pockets = self.scene.pockets
         for ball in list(self.active):
             body = self.bodies[ball]
             x, y = body.position
@@ -293,11 +283,13 @@ class _PymunkRun:
                 self.ended[ball] = self.t
                 self.active.discard(ball)
                 self.space.remove(body, *body.shapes)
-            elif self.on_table and not (0.0 <= x <= width and 0.0 <= y <= height):
+            elif self.on_table:
                 self._through(ball, x, y)
 
     def _through(self, ball: int, x: float, y: float) -> None:
-        """Fail the run: ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
+        """Fail the run if ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
+        if 0.0 <= x <= self.scene.table.width and 0.0 <= y <= self.scene.table.height:
+            return
         raise SimulationError.about(
             "dt",
             f"{self.dt:g} s let ball {ball} go through a cushion by t={self.t:.6g} (centre at "
@@ -310,7 +302,6 @@ class _PymunkRun:
         x, y = position
         if not self.on_table:
             return (x, y)
-        if not (0.0 <= x <= self.scene.table.width and 0.0 <= y <= self.scene.table.height):
-            self._through(ball, x, y)
+        self._through(ball, x, y)
         lo_x, hi_x, lo_y, hi_y = self.box
         return (min(max(x, lo_x), hi_x), min(max(y, lo_y), hi_y))

@@ -60,11 +60,6 @@ class Physics(StrictModel):
             )
         return self
 
-    @property
-    def deceleration(self) -> float:
-        """Friction deceleration mu*g in m/s^2."""
-        return self.mu * self.g
-
 
 class Pockets(StrictModel):
     """Pocket circles; a ball is pocketed when its centre first comes within ``radius``."""
@@ -98,11 +93,6 @@ class Scene(StrictModel):
     pockets: Pockets = Field(default_factory=Pockets)
     balls: list[Ball] = Field(min_length=1)
 
-    @model_validator(mode="after")
-    def _geometry(self) -> Scene:
-        check_geometry(self)
-        return self
-
     def ball(self, ball_id: int) -> Ball:
         """The ball with id ``ball_id``."""
         for ball in self.balls:
@@ -110,37 +100,38 @@ class Scene(StrictModel):
                 return ball
         raise KeyError(ball_id)
 
-
-def check_geometry(scene: Scene) -> None:
-    """Raise ValueError naming the ball when there is no cue ball (id 0), ids repeat, a centre
-    is off the table or within a pocket circle (tangency included: such a ball would be pocketed
-    at t = 0), or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
-    radius, balls = scene.physics.ball_radius, scene.balls
-    if all(ball.id != 0 for ball in balls):
-        raise ValueError("balls: no cue ball (a ball with id 0)")
-    x_lo, x_hi, y_lo, y_hi = table_box(scene.table, radius)
-    lo_x, hi_x = x_lo - TOUCH_TOLERANCE, x_hi + TOUCH_TOLERANCE
-    lo_y, hi_y = y_lo - TOUCH_TOLERANCE, y_hi + TOUCH_TOLERANCE
-    centers, pocket_radius = scene.pockets.centers, scene.pockets.radius
-    seen: set[int] = set()
-    for i, ball in enumerate(balls):
-        if ball.id in seen:
-            raise ValueError(f"balls[{i}].id: duplicate ball id {ball.id}")
-        seen.add(ball.id)
-        x, y = pos = ball.pos
-        if not (lo_x <= x <= hi_x and lo_y <= y <= hi_y):
-            raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(pos)} is off the table")
-        for k, centre in enumerate(centers):
-            if math.dist(pos, centre) <= pocket_radius:
-                raise ValueError(
-                    f"balls[{i}].pos: ball {ball.id} at {list(pos)} starts inside pocket {k}"
-                )
-    min_gap = 2 * radius - TOUCH_TOLERANCE
-    places = [ball.pos for ball in balls]
-    for i, a in enumerate(places):
-        for j in range(i + 1, len(places)):
-            if math.dist(a, places[j]) < min_gap:
-                raise ValueError(f"balls: ball {balls[i].id} and ball {balls[j].id} overlap")
+    @model_validator(mode="after")
+    def _geometry(self) -> Scene:
+        """Raise ValueError naming the ball when there is no cue ball (id 0), ids repeat, a
+        centre is off the table or within a pocket circle (tangency included: such a ball would
+        be pocketed at t = 0), or balls overlap by more than :data:`TOUCH_TOLERANCE`."""
+        radius, balls = self.physics.ball_radius, self.balls
+        if all(ball.id != 0 for ball in balls):
+            raise ValueError("balls: no cue ball (a ball with id 0)")
+        x_lo, x_hi, y_lo, y_hi = table_box(self.table, radius)
+        lo_x, hi_x = x_lo - TOUCH_TOLERANCE, x_hi + TOUCH_TOLERANCE
+        lo_y, hi_y = y_lo - TOUCH_TOLERANCE, y_hi + TOUCH_TOLERANCE
+        centers, pocket_radius = self.pockets.centers, self.pockets.radius
+        seen: set[int] = set()
+        for i, ball in enumerate(balls):
+            if ball.id in seen:
+                raise ValueError(f"balls[{i}].id: duplicate ball id {ball.id}")
+            seen.add(ball.id)
+            x, y = pos = ball.pos
+            if not (lo_x <= x <= hi_x and lo_y <= y <= hi_y):
+                raise ValueError(f"balls[{i}].pos: ball {ball.id} at {list(pos)} is off the table")
+            for k, centre in enumerate(centers):
+                if math.dist(pos, centre) <= pocket_radius:
+                    raise ValueError(
+                        f"balls[{i}].pos: ball {ball.id} at {list(pos)} starts inside pocket {k}"
+                    )
+        min_gap = 2 * radius - TOUCH_TOLERANCE
+        places = [ball.pos for ball in balls]
+        for i, a in enumerate(places):
+            for j in range(i + 1, len(places)):
+                if math.dist(a, places[j]) < min_gap:
+                    raise ValueError(f"balls: ball {balls[i].id} and ball {balls[j].id} overlap")
+        return self
 
 
 def table_box(table: Table, radius: float) -> tuple[float, float, float, float]:

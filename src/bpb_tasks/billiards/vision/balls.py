@@ -51,7 +51,7 @@ def template(spec: CanvasSpec, ball_id: int) -> tuple[NDArray[np.intp], NDArray[
     """Rows and columns (from the sprite's top-left) of the sprite's flat-colour pixels, and the
     sprite's half side (the paste offset of its centre)."""
     sprite, mask = stamp(spec, ball_id)
-    keys = image_keys_of(sprite.convert("RGB").tobytes(), sprite.size)
+    keys = image_keys_of(sprite)
     flat = (keys == fill_colour(spec, ball_id)) & (np.asarray(mask) > 0)
     rows, cols = np.nonzero(flat)
     return rows, cols, sprite.width // 2
@@ -62,7 +62,7 @@ def fill_colour(spec: CanvasSpec, ball_id: int) -> int:
     """The colour key the renderer fills ball ``ball_id`` with on this canvas: the commonest
     sprite colour near the flat one (the palette may move it by a few levels)."""
     sprite, mask = stamp(spec, ball_id)
-    keys = image_keys_of(sprite.convert("RGB").tobytes(), sprite.size)[np.asarray(mask) > 0]
+    keys = image_keys_of(sprite)[np.asarray(mask) > 0]
     colours, counts = np.unique(keys, return_counts=True)
     channels = np.stack([(colours >> s) & 255 for s in (16, 8, 0)], axis=1)
     close = np.abs(channels - np.array(st.ball_colour(ball_id))).sum(axis=1) <= 24
@@ -148,9 +148,7 @@ MAX_MISMATCH = 0.02  # share of the note's pixels that may differ from the best 
 
 @functools.lru_cache(maxsize=64)
 def _note_keys(spec: CanvasSpec, text: str) -> Keys:
-    patch = text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE)
-    rgb = patch.convert("RGB")
-    return image_keys_of(rgb.tobytes(), rgb.size)
+    return image_keys_of(text_patch(spec, text, st.font(round(16 * spec.scale)), st.MUTED, st.PAGE))
 
 
 def _reading(int_digits: int, digits: list[str]) -> str:

@@ -123,12 +123,13 @@ def image_keys(png: bytes) -> Keys:
             rgb = img.convert("RGB")
     except (OSError, ValueError) as exc:
         raise PerceptionFailed(f"the image cannot be read: {exc}") from None
-    return image_keys_of(rgb.tobytes(), rgb.size)
+    return image_keys_of(rgb)
 
 
-def image_keys_of(raw: bytes, size: tuple[int, int]) -> Keys:
-    """Colour keys of raw RGB bytes of ``size``."""
-    rgb = np.frombuffer(raw, dtype=np.uint8).reshape(size[1], size[0], 3).astype(np.int32)
+def image_keys_of(image: Image.Image) -> Keys:
+    """Colour keys of a Pillow image, read as RGB."""
+    raw, (width, height) = image.convert("RGB").tobytes(), image.size
+    rgb = np.frombuffer(raw, dtype=np.uint8).reshape(height, width, 3).astype(np.int32)
     return (rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]
 
 

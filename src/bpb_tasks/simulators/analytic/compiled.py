@@ -17,12 +17,9 @@ import numpy as np
 
 from bpb_tasks.billiards.scene.model import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
-from bpb_tasks.simulators.analytic.engine import SimulationError
+from bpb_tasks.simulators.analytic.engine import KIND_NAMES, SimulationError
 from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
 from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
-
-KINDS = ("ball", "wall", "pocket", "stop")
-SceneArrays = tuple[list[int], np.ndarray, np.ndarray]
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -51,7 +48,7 @@ def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return prm, np.array(pockets.centers, dtype=float).reshape(-1, 2)
 
 
-def scene_arrays(scene: Scene) -> SceneArrays:
+def scene_arrays(scene: Scene) -> tuple[list[int], np.ndarray, np.ndarray]:
     """Ball ids (sorted), positions and velocities of ``scene``."""
     balls = sorted(scene.balls, key=attrgetter("id"))
     pos = np.array([b.pos for b in balls], dtype=float).reshape(-1, 2)
@@ -116,7 +113,7 @@ def _event_log(ids: Sequence[int], rows: list[list[float]]) -> tuple[Event, ...]
             log.append(Event(t, "ball", (ids[int(a)], ids[int(b)]), None, ((xa, ya), (xb, yb))))
         else:
             name = WALLS[int(wall)] if wall >= 0 else None
-            log.append(Event(t, KINDS[int(kind)], (ids[int(a)],), name, ((xa, ya),)))
+            log.append(Event(t, KIND_NAMES[int(kind)], (ids[int(a)],), name, ((xa, ya),)))
     return tuple(log)
 
 

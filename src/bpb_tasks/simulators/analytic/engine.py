@@ -36,13 +36,9 @@ Physics conventions (the data contract; the dataset card quotes them):
 The same code runs on float64 or on 50-digit mpmath numbers (``precision=50``), the reference.
 With numba installed (the ``fast`` extra) float64 runs can go through the compiled event kernel
 (:mod:`bpb_tasks.simulators.analytic.kernel`), which performs the same operations in the same
-order, so either gives the same numbers. ``engine="python"`` forces this module's pure-Python
-loop (the reference and fallback), ``engine="kernel"`` the kernel. With ``engine="auto"`` a
-batch (:meth:`AnalyticSimulator.run_many`, the stability copies) takes the kernel when numba has
-it cached, or once the Python engine's estimated time in this simulator would reach the time to
-build it (:func:`~bpb_tasks.simulators.analytic.kernel_cache.use_kernel`); single runs take it
-once a batch has loaded it. A kernel numba cannot load or build is said in a ``note:`` and the
-Python engine runs instead.
+order, so either gives the same numbers. :class:`AnalyticSimulator`'s ``engine`` chooses
+between them (:meth:`AnalyticSimulator.takes_kernel`); this module's pure-Python loop is the
+reference and the fallback.
 """
 
 from __future__ import annotations
