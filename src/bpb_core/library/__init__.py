@@ -209,7 +209,10 @@ def score_answer(
         status, answer, rule, error = "parse_error", None, None, str(exc)
     scorer = registry.scorer_for(found.name)
     units = mark(scorer, answer, status, scene, origin=registry.scorer_entry(found.name).origin)
-    score = scene_score(scorer.scene_rule, units)
+    right = [unit.correct for unit in units]  # the share right; 0.0 without units
+    score = sum(right) / len(right) if right else 0.0
+    if scorer.scene_rule == "all":  # all-or-nothing
+        score = float(bool(right) and all(right))
     return AnswerScore(found.name, scene.scene_id, status, answer, rule, error, units, score)
 
 
@@ -253,16 +256,6 @@ def answer_schema(task: str | Task, *, registry: Registry | None = None) -> dict
     if not isinstance(found, PublishesSchema):
         raise BadInput(f"task {found.name!r}: publishes no answer schema")
     return published_schema(found, origin)
-
-
-def scene_score(rule: str, units: tuple[UnitScore, ...]) -> float:
-    """A scene's score from its units: the share correct (``mean``) or all-or-nothing
-    (``all``); 0.0 without units."""
-    if not units:
-        return 0.0
-    if rule == "all":
-        return float(all(u.correct for u in units))
-    return sum(u.correct for u in units) / len(units)
 
 
 @dataclass

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from bpb_core.errors import BadInput, PluginBug, WriteRefused, blamed, writing
+from bpb_core.errors import BadInput, WriteRefused, blamed, writing
+from bpb_core.plugin_calls import returned
 from bpb_core.report import charts as ch, gallery, html
 from bpb_core.report.exports import part_json, write_exports
 from bpb_core.report.parts import Completeness, ReportPart, report_parts, report_tables
@@ -271,15 +272,12 @@ def chart_pngs(part: ReportPart, names: dict[str, str], rule: Completeness) -> d
 
 
 def _chart(part: ReportPart, diagnostic: Diagnostic, table: pd.DataFrame) -> bytes | None:
-    origin = part.origin(diagnostic.name)
-    with blamed(origin, f"diagnostic {diagnostic.name!r}: chart()"):
+    origin, what = part.origin(diagnostic.name), f"diagnostic {diagnostic.name!r}: chart()"
+    with blamed(origin, what):
         png = diagnostic.chart(table)
-    if png is not None and not isinstance(png, bytes):
-        raise PluginBug(
-            f"{origin}: diagnostic {diagnostic.name!r}: chart() returned "
-            f"{type(png).__name__}; expected PNG bytes or None"
-        )
-    return png
+    if png is None or isinstance(png, bytes):
+        return png
+    raise returned(origin, what, type(png).__name__, "PNG bytes or None")
 
 
 def chart_notes(part: ReportPart, rule: Completeness) -> dict[str, str]:

@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from bpb_core.capabilities import DrawsOverlay, ExplainsErrors, Picturing
-from bpb_core.errors import PluginBug, blamed
+from bpb_core.errors import blamed
 from bpb_core.layout import SceneKey
 from bpb_core.picture import ScenePicture
+from bpb_core.plugin_calls import returned
 from bpb_core.registry import SuiteInfo
 from bpb_core.results.tables import scene_scores
 from bpb_core.scored_units import object_origin
@@ -157,9 +158,7 @@ def _picture(family: Picturing, run: RunFolder, key: SceneKey, scene: Any) -> Sc
         picture = family.picture(run.dataset, key.dir(run.dataset), scene)
     if isinstance(picture, ScenePicture):
         return picture
-    raise PluginBug(
-        f"{origin}: {what} returned {type(picture).__name__}; expected bpb_core.ScenePicture"
-    )
+    raise returned(origin, what, type(picture).__name__, "bpb_core.ScenePicture")
 
 
 def _origin(origins: Mapping[str, str] | None, task: str) -> str:
@@ -172,13 +171,10 @@ def _name(scorer: object) -> str:
 
 def _explain(scorer: ExplainsErrors, origin: str, rows: pd.DataFrame) -> list[str]:
     """``scorer.explain(rows)``, checked: a list of strings."""
-    name = _name(scorer)
-    with blamed(origin, f"scorer {name!r}: explain()"):
+    what = f"scorer {_name(scorer)!r}: explain()"
+    with blamed(origin, what):
         lines = scorer.explain(rows)
     if isinstance(lines, list | tuple) and all(isinstance(line, str) for line in lines):
         return list(lines)
     shown = repr(lines)
-    shown = shown if len(shown) <= 80 else shown[:77] + "..."
-    raise PluginBug(
-        f"{origin}: scorer {name!r}: explain() returned {shown}; expected a list of str"
-    )
+    raise returned(origin, what, shown if len(shown) <= 80 else shown[:77] + "...", "a list of str")

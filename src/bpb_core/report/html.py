@@ -80,11 +80,8 @@ def table(
     marked; ``headers`` renames columns for display."""
     columns = [c for c in frame.columns if c not in drop and c != "baseline"]
     rows = [
-        (
-            bool(record.get("baseline", False)),
-            [plain(record[c], c in percent) for c in columns],
-        )
-        for record in frame.to_dict(orient="records")
+        (bool(row.get("baseline", False)), [plain(row[c], c in percent) for c in columns])
+        for row in frame.to_dict(orient="records")
     ]
     names = headers or {}
     return cells([names.get(str(c), str(c)) for c in columns], rows, empty)

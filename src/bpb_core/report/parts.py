@@ -16,6 +16,7 @@ import pandas as pd
 
 from bpb_core.capabilities import ReportsMetrics
 from bpb_core.errors import PluginBug, blamed
+from bpb_core.plugin_calls import returned
 from bpb_core.registry import DiagnosticInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.frames import Results
@@ -147,14 +148,12 @@ def _only(frame: pd.DataFrame, dataset: str) -> pd.DataFrame:
 
 
 def _table(diagnostic: Diagnostic, origin: str, results: Results) -> pd.DataFrame:
-    with blamed(origin, f"diagnostic {diagnostic.name!r}: table()"):
+    what = f"diagnostic {diagnostic.name!r}: table()"
+    with blamed(origin, what):
         table = diagnostic.table(results)
-    if not isinstance(table, pd.DataFrame):
-        raise PluginBug(
-            f"{origin}: diagnostic {diagnostic.name!r}: table() returned "
-            f"{type(table).__name__}; expected a pandas DataFrame"
-        )
-    return table
+    if isinstance(table, pd.DataFrame):
+        return table
+    raise returned(origin, what, type(table).__name__, "a pandas DataFrame")
 
 
 def _tasks_of(entry: object) -> tuple[str, ...]:
@@ -270,10 +269,7 @@ def _metrics(scorer: ReportsMetrics, origin: str, answered: pd.DataFrame) -> pd.
     got = type(table).__name__
     if isinstance(table, pd.DataFrame):
         got = f"a DataFrame with columns {list(table.columns)}"
-    raise PluginBug(
-        f"{origin}: {what} returned {got}; expected a DataFrame with the columns "
-        f"{', '.join(wanted)}"
-    )
+    raise returned(origin, what, got, f"a DataFrame with the columns {', '.join(wanted)}")
 
 
 def _with_completeness(table: pd.DataFrame, done: pd.DataFrame) -> pd.DataFrame:

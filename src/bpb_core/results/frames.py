@@ -229,7 +229,6 @@ class _Columns:
     def __init__(self, dtypes: dict[str, str]) -> None:
         self.dtypes = dtypes
         self.data: dict[str, list[Any]] = {name: [] for name in dtypes}
-        self.rows = 0
 
     def repeat(self, values: dict[str, Any], count: int) -> None:
         for name, value in values.items():
@@ -240,9 +239,9 @@ class _Columns:
 
     def pad(self) -> None:
         """Fill columns that this block of rows did not set (another scorer's) with NaN."""
-        self.rows = max(len(values) for values in self.data.values())
+        rows = max(len(values) for values in self.data.values())
         for values in self.data.values():
-            values.extend([float("nan")] * (self.rows - len(values)))
+            values.extend([float("nan")] * (rows - len(values)))
 
     def frame(self) -> pd.DataFrame:
         import pandas as pd

@@ -130,8 +130,20 @@ def _write_run(root: Path, key: tuple[str, str, str], logs: list[Any]) -> Path:
             record = _record(sample, adapter)
             if record is not None:
                 write_answer(run_dir, SceneKey(record.horizon, record.index), record)
-    last = logs[-1].eval.metadata
-    write_manifest(run_dir, _manifest(adapter, model, data, list(tasks), last, logs))
+    meta = logs[-1].eval.metadata
+    manifest = {
+        "adapter": adapter,
+        "model_id": model,
+        "data": data,
+        "dataset_hash": meta.get("bpb_dataset_hash"),
+        "tasks": list(tasks),
+        "horizons": meta.get("bpb_horizons"),
+        "limit": meta.get("bpb_limit"),
+        "options": {"input_mode": meta.get("bpb_input_mode")},
+        "source": "inspect_ai",
+        "inspect_logs": [str(log.location) for log in logs],
+    }
+    write_manifest(run_dir, manifest)
     return run_dir
 
 
@@ -169,33 +181,13 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
     )
 
 
-def _manifest(
-    adapter: str, model: str, data: str, tasks: list[str], meta: dict[str, Any], logs: list[Any]
-) -> dict[str, Any]:
-    return {
-        "adapter": adapter,
-        "model_id": model,
-        "data": data,
-        "dataset_hash": meta.get("bpb_dataset_hash"),
-        "tasks": tasks,
-        "horizons": meta.get("bpb_horizons"),
-        "limit": meta.get("bpb_limit"),
-        "options": {"input_mode": meta.get("bpb_input_mode")},
-        "source": "inspect_ai",
-        "inspect_logs": [str(log.location) for log in logs],
-    }
-
-
 def cache_folder(where: str, state: str, build: Callable[[Path], None]) -> Path:
-    """The folder ``<where>-<state>`` under ``$BPB_CACHE_DIR/inspect``, made by ``build`` (given
-    an empty folder) unless made already, and held by this process. ``where`` names the logs'
-    folders, ``state`` the logs as they are (paths, sizes, modification times). It is built in a
-    hidden temporary folder and renamed into place whole, so a reader never sees half of one, and
-    a reader finding it made uses it. Every process using a folder holds a shared ``flock`` on it
-    until it exits or reads a newer state of the same logs (``bpb view`` reads answer files long
-    after loading them). Once a reader has its folder, the other states of its logs that no
-    process holds are removed; the system drops a dead process's locks, so what a killed reader
-    held goes at the next reading.
+    """The folder ``<where>-<state>`` under ``$BPB_CACHE_DIR/inspect`` (``where`` names the logs'
+    folders, ``state`` the logs as they are), made by ``build`` in a hidden folder renamed into
+    place whole (a reader never sees half of one) unless made already. The process holds a
+    shared ``flock`` on it until it exits or reads a newer state of the same logs (``bpb view``
+    reads answer files long after loading them); the other states no process holds are then
+    removed (the system drops a dead process's locks).
 
     Raises:
         OSError: The folder keeps being removed while taken (other processes reading other

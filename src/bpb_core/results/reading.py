@@ -237,10 +237,8 @@ def _dataset_path(manifest: dict[str, Any], run_path: Path) -> Path:
     if not isinstance(value, str) or not value:
         raise BadInput(f"{run_path / RUN_MANIFEST}: data: no dataset path recorded")
     raw = Path(value)
-    candidates = [raw] if raw.is_absolute() else [run_path / raw, run_path.parent / raw, raw]
-    if not raw.is_absolute():
-        candidates.append(run_path.parent.parent / raw)
-    for candidate in candidates:
+    near = [run_path / raw, run_path.parent / raw, raw, run_path.parent.parent / raw]
+    for candidate in [raw] if raw.is_absolute() else near:
         if candidate.is_dir():
             return candidate.resolve()
     raise BadInput(f"{run_path / RUN_MANIFEST}: data: dataset folder {value!r} not found")

@@ -257,21 +257,13 @@ METADATA_COLUMNS: dict[str, str] = {
 
 
 def metadata_table(calls: pd.DataFrame) -> pd.DataFrame:
-    """One row per (run, horizon, measure) found in ``calls["metadata"]``; empty (with the
-    columns of :data:`METADATA_COLUMNS`) when no answer carries any.
+    """The adapters' own measurements (``calls["metadata"]``): one row per (run, horizon,
+    measure); empty (with the columns of :data:`METADATA_COLUMNS`) when no answer carries any.
 
-    The adapters' own measurements (``metadata`` of each answer), summarised per run and horizon.
-
-    An adapter may return named numbers, yes/no values or strings with a reply (an offline
-    adapter's error in reading its input, say). Core does not know what they mean: each numeric
-    measure gets its count of scenes, median, mean and maximum per (run, horizon); each yes/no
-    measure (JSON ``true``/``false``) its count of scenes and the share that is true (``mean``; no
-    median); each text measure (a reason, a label) its count of scenes.
-
-    Everything is per scene, however many answers it has (one per task, again per ``--epochs``):
-    ``scenes`` counts the scenes whose answers carry the measure, each once, and a scene's value is
-    the mean over its answers (the share of them that hold, for a yes/no measure); median, mean and
-    maximum are taken over those per-scene values.
+    Core does not know what a measure means: a numeric one gets its count of scenes, median,
+    mean and maximum; a yes/no one (JSON ``true``/``false``) its count and the share true
+    (``mean``); a text one (a reason, a label) its count. Each scene counts once, however many
+    answers it has (tasks, ``--epochs``), its value the mean over them.
     """
     values: dict[tuple[str, float, str], dict[str, list[Value]]] = defaultdict(
         lambda: defaultdict(list)
