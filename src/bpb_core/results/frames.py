@@ -153,8 +153,7 @@ def load_results(
         _read_one(run, scorers, origins, tasks, units, calls)
         warn_stray_answers(run)
     unit_frame = _score(units.frame(), scorers, origins)
-    present = set(scorers)
-    suites = tuple(s for s in registry.suites() if set(s.weights) <= present)
+    suites = tuple(s for s in registry.suites() if set(s.weights) <= set(scorers))
     return Results(unit_frame, calls.frame(), tuple(runs), suites)
 
 
@@ -174,10 +173,8 @@ def write_scores(
     if not run_dirs:
         return None
     results = load_results(list(run_dirs), registry=registry, folders=folders)
-    frame = results.units
-    written = frame
-    if (frame["epoch"] == 1).all():  # without --epochs the file keeps its columns
-        written = frame.drop(columns="epoch")
+    frame = results.units  # without --epochs the file keeps its columns
+    written = frame.drop(columns="epoch") if (frame["epoch"] == 1).all() else frame
     for run in results.runs:
         text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))

@@ -58,9 +58,7 @@ def with_inspect_runs(items: Iterable[Path | str]) -> list[Path]:
                 kept.append(item)
         else:
             kept.append(item)
-    if not named and not found:
-        return kept
-    return kept + runs_from_logs(named, found)
+    return kept + runs_from_logs(named, found) if named or found else kept
 
 
 def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:
