@@ -34,7 +34,7 @@ from bpb_core.registry import PluginSource, Registry, make_registry
 from bpb_core.report.build import build_report
 from bpb_core.results import load_results
 from bpb_core.runner import RunOptions, run_eval
-from bpb_core.simulate import simulate_lines, simulate_paths
+from bpb_core.simulate import CHUNK, simulate_lines, simulate_paths
 from bpb_core.web.viewer import Viewer
 from support.inprocess import Done, bpb
 
@@ -224,11 +224,12 @@ def test_bpb_simulate_is_one_line_naming_the_family_plugin_and_exit_3(
     source = Path(support.flawed_family.__file__).read_text()
     install("bpb-flawed", "1.2", {"flawed_family": source}, {"flawed": "flawed_family"})
     monkeypatch.setenv("BPB_TEST_FLAW", "ground_truths_short")
-    many = [str(flawed_data)] * 128  # 256 scenes: in batches
+    many = [str(flawed_data)] * 128  # 256 scenes: in batches of CHUNK
     done = run_bpb("simulate", *many, "--simulator", "flawed-analytic", "--workers", "1")
     assert done.returncode == 3
     assert done.stdout == ""  # no line paired with the wrong scene file
-    said = "ground_truths() returned a list of 255 for 256 scenes; expected a list with one"
+    said = f"ground_truths() returned a list of {CHUNK - 1} for {CHUNK} scenes; expected a list"
+    said += " with one"
     debug = "(set BPB_DEBUG=1 for a traceback)"
     assert done.stderr.strip().splitlines() == [
         f"error: {ORIGIN}: {FAMILY}: {said} ground truth per scene {debug}"
