@@ -136,7 +136,8 @@ def bench_simulators(
     compared = min(len(sample), reference_scenes or len(sample))
     tallies = _run_all(maker, sims, sample, progress, compared)
     _time_batches(sims, sample, tallies)
-    rows = [t.row(label, label == ref.spec, maker.counts_events) for label, t in tallies.items()]
+    counting = maker.counts_events
+    rows = [t.row(label, label == ref.spec, counting) for label, t in tallies.items()]
     columns = tuple(next((r.counts for r in rows if r.counts), {}))
     description, measures = maker.text("bench_description"), maker.text("bench_measures")
     return SimBench(
@@ -305,7 +306,8 @@ def with_scaling(
                 ran = tallies[factor, label].timed(sim, busy)
                 if ran is not None:
                     tallies[factor, label].add(ran[1], None, family.events(ran[0]))
-    return replace(result, scaling=[_scale_row(f, label, t) for (f, label), t in tallies.items()])
+    rows = [_scale_row(f, label, t) for (f, label), t in tallies.items()]
+    return replace(result, scaling=rows)
 
 
 def _scale_row(factor: float, label: str, tally: _Tally) -> ScaleRow:

@@ -162,8 +162,9 @@ def export_hf(
             ) from None
         finally:
             shutil.rmtree(partial, ignore_errors=True)  # a failed export leaves nothing half-made
-    counts = {split: rows for split, (rows, _) in splits.items()}
-    return HfExport(target, counts, tuple(files), names)
+    return HfExport(
+        target, {split: rows for split, (rows, _) in splits.items()}, tuple(files), names
+    )
 
 
 def _check_out(out: Path) -> None:
@@ -274,8 +275,9 @@ def _write_split(
 def _arrow_type(pa: Any, feature: dict[str, str]) -> Any:
     if feature["_type"] == "Image":
         return pa.struct([("bytes", pa.binary()), ("path", pa.string())])
-    types = {"string": pa.string(), "float64": pa.float64(), "int64": pa.int64()}
-    return types.get(feature["dtype"], pa.bool_())
+    return {"string": pa.string(), "float64": pa.float64(), "int64": pa.int64()}.get(
+        feature["dtype"], pa.bool_()
+    )
 
 
 def _write_side_files(dataset: Dataset, out: Path) -> None:

@@ -287,7 +287,8 @@ def _bar(
     done = float(cell["completeness"]) if not np.isnan(cell["completeness"]) else 0.0
     grade = level(done, min_complete)
     text_args: dict[str, Any] = {"ha": "center", "va": "bottom", "fontsize": 5.5 if many else 7}
-    text_args |= {"rotation": 90} if many else {}
+    if many:
+        text_args["rotation"] = 90
     if grade == "short" or np.isnan(value):
         ax.bar(x, 100, width, facecolor=SHORT_FACE, edgecolor=style["color"], ls=":", lw=0.6)
         text = f"left out ({100 * done:.0f}% ans.)"

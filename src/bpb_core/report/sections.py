@@ -146,7 +146,8 @@ def different_scenes_note(part: ReportPart) -> str | None:
     scores are means over different scenes), or ``None``; shown in the terminal, JSON and HTML
     alike. The counts are of distinct scene-tasks (not calls: epochs ask the same scenes again);
     a task one run was not asked is its own '–'."""
-    asked = part.results.units[["run", "task", "scene_id"]].drop_duplicates().astype(str)
+    asked = part.results.units[["run", "task", "scene_id"]].drop_duplicates()
+    asked = asked.astype(str)
     scenes = asked.groupby(["task", "run"])["scene_id"].agg(frozenset)
     if all(group.nunique() < 2 for _, group in scenes.groupby(level="task")):
         return None

@@ -153,7 +153,8 @@ def load_results(
         _read_one(run, scorers, origins, tasks, units, calls)
         warn_stray_answers(run)
     unit_frame = _score(units.frame(), scorers, origins)
-    suites = tuple(s for s in registry.suites() if set(s.weights) <= set(scorers))
+    present = set(scorers)
+    suites = tuple(s for s in registry.suites() if set(s.weights) <= present)
     return Results(unit_frame, calls.frame(), tuple(runs), suites)
 
 
@@ -173,8 +174,10 @@ def write_scores(
     if not run_dirs:
         return None
     results = load_results(list(run_dirs), registry=registry, folders=folders)
-    frame = results.units  # without --epochs the file keeps its columns
-    written = frame.drop(columns="epoch") if (frame["epoch"] == 1).all() else frame
+    frame = results.units
+    written = frame
+    if (frame["epoch"] == 1).all():  # without --epochs the file keeps its columns
+        written = frame.drop(columns="epoch")
     for run in results.runs:
         text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))

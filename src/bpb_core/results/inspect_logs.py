@@ -58,7 +58,9 @@ def with_inspect_runs(items: Iterable[Path | str]) -> list[Path]:
                 kept.append(item)
         else:
             kept.append(item)
-    return kept + runs_from_logs(named, found) if named or found else kept
+    if not named and not found:
+        return kept
+    return kept + runs_from_logs(named, found)
 
 
 def runs_from_logs(named: list[Path], found: list[Path]) -> list[Path]:

@@ -116,9 +116,12 @@ def find_runs(
             raise BadInput(f"{path}: not a run folder (no {RUN_MANIFEST}) and holds none")
         found.extend(inner)
     found = _once(found)
+    labels = _labels(found)
     known = {folder.root.resolve(): folder for folder in folders}  # each dataset read once
-    labelled = zip(found, _labels(found), strict=True)
-    return _not_copies([read_run(path, label, registry, known) for path, label in labelled])
+    runs = [
+        read_run(path, label, registry, known) for path, label in zip(found, labels, strict=True)
+    ]
+    return _not_copies(runs)
 
 
 def _not_copies(runs: list[RunFolder]) -> list[RunFolder]:

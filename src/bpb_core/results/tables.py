@@ -188,7 +188,8 @@ def leaderboard(
     out["completeness"] = out["answered"] / out["answers"]
     out["worst_cell"] = out["run"].map(acc.groupby("run", observed=True)["completeness"].min())
     out["short"] = [", ".join(short.get(str(run), [])) for run in out["run"]]
-    columns = [*metrics(units, suites), "completeness", "worst_cell", "short", "expected", "epochs"]
+    columns = [*metrics(units, suites), "completeness", "worst_cell", "short", "expected"]
+    columns.append("epochs")
     out = out[[*RUN_COLUMNS, *columns]]
     key = sort_by or (suites[0].name if suites else None)
     order = out[key] if key is not None else out[tasks].mean(axis=1)

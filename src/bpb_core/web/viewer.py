@@ -220,8 +220,12 @@ def _pairs(units: pd.DataFrame) -> pd.DataFrame:
     """One row per (run, scene, task) with its verdict."""
     keys = ["run", "adapter", "model", "task", "horizon", "index", "scene_id"]
     grouped = units.groupby(keys, observed=True, sort=True)
-    first = {"stable": ("stable", "first"), "status": ("status", "first")}
-    frame = grouped.agg(**first, units=("correct", "size"), right=("correct", "sum")).reset_index()
+    frame = grouped.agg(
+        stable=("stable", "first"),
+        status=("status", "first"),
+        units=("correct", "size"),
+        right=("correct", "sum"),
+    ).reset_index()
     answered = frame["status"].isin(["ok", "parse_error"])
     frame["verdict"] = "wrong"
     frame.loc[answered & (frame["right"] == frame["units"]), "verdict"] = "correct"
