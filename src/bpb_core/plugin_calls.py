@@ -16,7 +16,7 @@ import random
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
-from bpb_core.errors import PluginBug, blamed, named as named
+from bpb_core.errors import PluginBug, blamed, named
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 from bpb_core.model_calls import Message, known_cost
 

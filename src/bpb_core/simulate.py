@@ -345,7 +345,7 @@ CHUNK = 16
 """Scenes read, simulated and written together (and handed to a worker at once). Small, so a
 chunk's objects are freed before Python's collector moves them to its oldest generation: each
 collection of that generation walks every object the process holds (numba's, pydantic's), and
-chunks of 256 scenes set one off every few hundred scenes, 40% of the time per scene."""
+larger chunks set one off every few hundred scenes (``docs/benchmarks.md``)."""
 
 
 def simulate_lines(

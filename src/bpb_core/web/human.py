@@ -36,10 +36,10 @@ from starlette.responses import HTMLResponse, RedirectResponse, Response
 from starlette.routing import Route
 
 from bpb_core.capabilities import AnswersInBrowser
-from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
+from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed, named
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import prompt_text, valid_unicode
-from bpb_core.plugin_calls import named, parsed_answer, prompt_messages
+from bpb_core.plugin_calls import parsed_answer, prompt_messages
 from bpb_core.run_folder import AttemptLog, completed, write_answer
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
@@ -237,7 +237,7 @@ class HumanSession:
                 "latency": latency, "rule": rule, "error": None,
             }
         )  # fmt: skip
-        record = Tally(1, 1, cost=0.0, latency=round(latency, 3)).record(
+        record = Tally(attempts=1, responses=1, latency=round(latency, 3)).record(
             ref,
             task,
             self.spec,

@@ -273,7 +273,7 @@ class _PymunkRun:
             self.touched.clear()
 
     def _pockets(self) -> None:
-        pockets = self.scene.pockets
+        pockets, width, height = self.scene.pockets, self.scene.table.width, self.scene.table.height
         for ball in list(self.active):
             body = self.bodies[ball]
             x, y = body.position
@@ -283,13 +283,11 @@ class _PymunkRun:
                 self.ended[ball] = self.t
                 self.active.discard(ball)
                 self.space.remove(body, *body.shapes)
-            elif self.on_table:
+            elif self.on_table and not (0.0 <= x <= width and 0.0 <= y <= height):
                 self._through(ball, x, y)
 
     def _through(self, ball: int, x: float, y: float) -> None:
-        """Fail the run if ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
-        if 0.0 <= x <= self.scene.table.width and 0.0 <= y <= self.scene.table.height:
-            return
+        """Fail the run: ``ball``'s centre at ``(x, y)`` has crossed a cushion."""
         raise SimulationError.about(
             "dt",
             f"{self.dt:g} s let ball {ball} go through a cushion by t={self.t:.6g} (centre at "
@@ -302,6 +300,7 @@ class _PymunkRun:
         x, y = position
         if not self.on_table:
             return (x, y)
-        self._through(ball, x, y)
+        if not (0.0 <= x <= self.scene.table.width and 0.0 <= y <= self.scene.table.height):
+            self._through(ball, x, y)
         lo_x, hi_x, lo_y, hi_y = self.box
         return (min(max(x, lo_x), hi_x), min(max(y, lo_y), hi_y))
