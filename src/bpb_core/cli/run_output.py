@@ -16,6 +16,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress as RichBar, Te
 from rich.table import Table
 
 from bpb_core.cli.console import stderr, stdout
+from bpb_core.cli.fit import Name, print_fitted
 from bpb_core.errors import BpbError
 from bpb_core.runner import slug
 from bpb_core.runner.dry_run import dry_run
@@ -140,7 +141,7 @@ def show_summary(
         return
     if frame is None or frame.empty:
         return
-    stdout().print(_table(frame))
+    _print_table(frame)
     for run, line in frame.attrs.get("incomplete", {}).items():
         stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     parents = sorted({str(d.parent) for d in run_dirs})
@@ -152,17 +153,15 @@ def show_summary(
     )
 
 
-def _table(frame: pd.DataFrame) -> Table:
+def _print_table(frame: pd.DataFrame) -> None:
     """Answered-only scores and completeness first, the strict score beside each."""
     names = [
         c for c in frame.columns
         if c not in _NOT_SCORES and c != "short" and not c.endswith("_answered")
     ]  # fmt: skip
-    table = Table(title="bpb run: scores (answered only; strict in brackets)")
-    for column in ("adapter", "complete", *names, "left out"):
-        table.add_column(column, justify="left" if column == "adapter" else "right")
+    rows = []
     for _, row in frame.iterrows():
-        cells = [escape(str(row["adapter"])), _pct(row["completeness"])]
+        cells = [_pct(row["completeness"])]
         for name in names:
             answered, strict = row[f"{name}_answered"], row[name]
             if not math.isnan(float(answered)):
@@ -170,8 +169,9 @@ def _table(frame: pd.DataFrame) -> Table:
             else:  # too incomplete, or not asked (a suite with a task the run lacks)
                 cells.append("left out" if row["short"] else "–")
         cells.append(escape(str(row["short"])) or "–")
-        table.add_row(*cells)
-    return table
+        rows.append((Name(str(row["adapter"])), cells))
+    title = "bpb run: scores (answered only; strict in brackets)"
+    print_fitted(stdout(), title, ["adapter", "complete", *names, "left out"], rows)
 
 
 def _pct(value: float) -> str:
