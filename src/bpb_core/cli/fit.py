@@ -59,14 +59,14 @@ def fitted(
     alone do not fit)."""
     cells = [[Text.from_markup(c) for c in row] for _, row in rows]
     names = [name for name, _ in rows]
-    whole = [_width(head[j + 1], [row[j] for row in cells], True) for j in range(len(head) - 1)]
+    widest = [max((row[j].cell_len for row in cells), default=0) for j in range(len(head) - 1)]
+    whole = [max(w, len(header)) for w, header in zip(widest, head[1:], strict=True)]
     first = max([len(head[0]), *(len(n.text) + len(n.suffix) for n in names)])
-    fits = sum(whole) + 3 * len(head) + 1 + first <= width  # then every header stays whole
-    widths = (
-        whole
-        if fits
-        else [_width(head[j + 1], [row[j] for row in cells]) for j in range(len(head) - 1)]
-    )
+    if sum(whole) + 3 * len(head) + 1 + first <= width:  # every header stays whole
+        widths = whole
+    else:  # headers wrap at spaces
+        words = (max(map(len, header.split()), default=0) for header in head[1:])
+        widths = [max(w, word) for w, word in zip(widest, words, strict=True)]
     fixed = sum(widths[:keys]) + 3 * (keys + 1) + 1  # rich: 3 a column (padding, rule), 1 edge
     values = list(range(keys, len(widths)))
     size, parts = _layout(names, head[0], [widths[j] for j in values], width - fixed)
@@ -82,13 +82,6 @@ def fitted(
             table.add_row(Text(label, style=name.style), *(row[j] for j in [*range(keys), *part]))
         tables.append(table)
     return tables
-
-
-def _width(header: str, column: Sequence[Text], whole: bool = False) -> int:
-    """A column's width: its widest cell, or its header's longest word (headers wrap), or
-    with ``whole`` its whole header."""
-    word = len(header) if whole else max((len(w) for w in header.split()), default=0)
-    return max([word, *(cell.cell_len for cell in column)])
 
 
 def _layout(
