@@ -146,8 +146,10 @@ class CallCeiling:
 
     @property
     def output_cost(self) -> float | None:
-        """The cost of ``output_tokens`` (``None`` without a bound)."""
-        return None if self.output_tokens is None else self.output_tokens * self.output_price
+        """The cost of ``output_tokens`` (``None`` without a bound, unless output is free)."""
+        if self.output_tokens is None:
+            return 0.0 if self.output_price == 0 else None
+        return self.output_tokens * self.output_price
 
 
 @dataclass(frozen=True)

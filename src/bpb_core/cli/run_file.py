@@ -263,7 +263,7 @@ def refuse_unbounded(ready: list[Prepared], max_tokens: int | None) -> None:
 
     for item in ready:
         ceiling = call_ceiling(item.adapter, item.origin, (), max_tokens)
-        if ceiling is not None and ceiling.output_tokens is None:
+        if ceiling is not None and ceiling.output_cost is None:
             raise BadInput(unbounded(item.name))
 
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress as RichBar, TextColumn
-from rich.table import Table
+from rich.table import Column, Table
 
 from bpb_core.cli.console import stderr, stdout
 from bpb_core.errors import BpbError
@@ -107,7 +107,8 @@ def show_dry_run(
     pilot's real usage."""
     title = "bpb run --pilot: projection from the pilot's real usage (not sent)"
     table = Table(
-        "adapter", "task", "calls", "already done", "est. input tokens", "est. input USD",
+        Column("adapter", no_wrap=True, min_width=max(len(item.name) for item in ready)),
+        "task", "calls", "done before", "input tokens", "input USD",
         "output USD typical", "output USD at cap", "projected USD",
         title=title if pilot else "bpb run --dry-run (nothing sent)",
     )  # fmt: skip
