@@ -72,6 +72,10 @@ def test_one_model_never_sends_more_than_the_cap(
     kept = budget["kept_by_cap"]
     assert isinstance(kept, list) and len(kept) == 18 - round(sent / PER_CALL)
     assert "the cap kept" in done.stderr and "higher --max-cost" in done.stderr
+    report = run_bpb("report", str(tmp_path / "out"), "--out", str(tmp_path / "report"))
+    assert report.returncode == 0, report.stderr
+    page = (tmp_path / "report" / "report.html").read_text()
+    assert "Spending and the cost cap" in page and str(kept[0]) in page
 
 
 def test_two_models_share_one_cap(
