@@ -113,6 +113,9 @@ def _run(argv: list[str] | None) -> Any:
         told = isinstance(cause, Interrupted) and str(cause)
         click.echo(f"aborted; {cause}" if told else "aborted", err=True)
         return 130
+    except click.exceptions.NoArgsIsHelpError as exc:  # bare ``bpb``: the help, not an error
+        click.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message())
+        return 0
     except click.UsageError as exc:  # one line, like every other bad input
         where = f" (see {exc.ctx.command_path} --help)" if exc.ctx is not None else ""
         click.echo(f"error: {exc.format_message()}{where}", err=True)

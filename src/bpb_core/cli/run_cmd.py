@@ -168,7 +168,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     show_default=True,
     help="Sampling temperature (the paper: 0).",
 )
-@counted("--concurrency", default=8)
+@counted("--concurrency", default=8, help="Calls in flight at once, per adapter.")
 @click.option("--rpm", type=positive(), help="Requests per minute cap.")
 @click.option("--tpm", type=positive(), help="Tokens per minute cap (in + out).")
 @click.option(
@@ -220,7 +220,13 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     help="Most USD the command may spend, over all its adapters and sessions (each call's "
     "worst case is reserved before it is sent).",
 )
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option(
+    "--seed",
+    type=int,
+    default=0,
+    show_default=True,
+    help="Seed of the call order, of --sample and of adapters with randomness.",
+)
 @counted("--retries", default=6, low=0, help="Retries after 429/5xx/timeouts/connection errors.")
 @counted("--reasks", default=2, low=0, help="Escalating re-asks after a malformed answer.")
 @click.option(

@@ -102,11 +102,14 @@ def build_report(
     that ran); with ``out``, also write charts, exports and ``report.html`` there.
 
     Raises:
-        BadInput: No run folder found, or a run, answer or ground-truth file cannot be read.
+        BadInput: No run folder found, or a run, answer or ground-truth file cannot be read;
+            ``out`` given without the ``report`` extra installed.
         WriteRefused: The system refused to write a file of the report (names it).
     """
     from bpb_core.registry import make_registry
 
+    if out is not None:
+        need_report_extra()
     registry = registry if registry is not None else make_registry()
     rule = completeness or Completeness()
     results = load_results(run_dirs, registry=registry)
@@ -122,6 +125,22 @@ def build_report(
             "make room, then run it again"
         ) from None
     return Report(parts, files, rule)
+
+
+def need_report_extra() -> None:
+    """Refuse, before any scoring, a written report the installed packages cannot draw.
+
+    Raises:
+        BadInput: matplotlib (charts) or pyarrow (Parquet) is missing; names the extra.
+    """
+    import importlib.util
+
+    missing = [m for m in ("matplotlib", "pyarrow") if importlib.util.find_spec(m) is None]
+    if missing:
+        raise BadInput(
+            f"a written report (--out) needs {' and '.join(missing)}: "
+            "pip install 'bpb[report]' (the terminal report and --json work without them)"
+        )
 
 
 def titles(results: Results, registry: Registry) -> dict[str, str]:
