@@ -18,7 +18,7 @@ _LAZY: dict[str, str] = {
     "bpb_core.hookspecs": "hookimpl hookspec",
     "bpb_core.registry": (
         "make_registry Registry PluginWarning lazy TaskInfo SceneFamilyInfo SimulatorInfo "
-        "AdapterInfo ScorerInfo SuiteInfo DiagnosticInfo"
+        "AdapterInfo ScorerInfo SuiteInfo DiagnosticInfo ReferenceInfo Figure"
     ),
     "bpb_core.interfaces": (
         "Task Scene GroundTruth GeneratedScene SceneFamily Simulator ModelAdapter Scorer "
@@ -114,7 +114,9 @@ if TYPE_CHECKING:
     from bpb_core.registry import (
         AdapterInfo as AdapterInfo,
         DiagnosticInfo as DiagnosticInfo,
+        Figure as Figure,
         PluginWarning as PluginWarning,
+        ReferenceInfo as ReferenceInfo,
         Registry as Registry,
         SceneFamilyInfo as SceneFamilyInfo,
         ScorerInfo as ScorerInfo,

@@ -31,6 +31,7 @@ if TYPE_CHECKING:  # the registry imports this module
         AdapterInfo,
         DiagnosticInfo,
         Kind,
+        ReferenceInfo,
         SceneFamilyInfo,
         ScorerInfo,
         SimulatorInfo,
@@ -113,6 +114,18 @@ def bpb_suites() -> Iterable[SuiteInfo]:  # type: ignore[empty-body]
 
 
 @hookspec
+def bpb_references() -> Iterable[ReferenceInfo]:  # type: ignore[empty-body]
+    """Register published figures (a paper's stated scores per model and task).
+
+    ``bpb report`` shows each figure beside a run of the same model, with the run's score,
+    its interval and the difference.
+
+    Returns:
+        :class:`~bpb_core.registry.ReferenceInfo` records.
+    """
+
+
+@hookspec
 def bpb_diagnostics() -> Iterable[DiagnosticInfo]:  # type: ignore[empty-body]
     """Register diagnostics: tables (and charts) derived from scored results.
 
@@ -131,4 +144,5 @@ HOOK_KINDS: dict[str, Kind] = {
     "bpb_scorers": "scorer",
     "bpb_suites": "suite",
     "bpb_diagnostics": "diagnostic",
+    "bpb_references": "reference",
 }

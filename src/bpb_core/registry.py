@@ -30,7 +30,9 @@ from bpb_core.scored_units import check_scorer
 if TYPE_CHECKING:
     from bpb_core.interfaces import Diagnostic, ModelAdapter, SceneFamily, Scorer, Simulator, Task
 
-Kind = Literal["task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic"]
+Kind = Literal[
+    "task", "scene_family", "simulator", "adapter", "scorer", "suite", "diagnostic", "reference"
+]
 KINDS: tuple[Kind, ...] = get_args(Kind)
 
 
@@ -157,6 +159,52 @@ class SuiteInfo(ComponentInfo):
             raise ValueError(f"suite {self.name!r}: give at least one task weight")
         if abs(sum(self.weights.values()) - 1.0) > 1e-9:
             raise ValueError(f"suite {self.name!r}: weights must sum to 1")
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One score a publication states for a model.
+
+    Attributes:
+        model: The model as the publication names it. A run matches it when the model part of
+            its adapter spec, or the model id the provider reported, is the same name after
+            :func:`model_key` (``litellm:gpt-5.5`` and ``openai/gpt-5.5`` match ``GPT-5.5``).
+        metric: A task or suite name (``q1``, ``total``).
+        value: The stated score, in [0, 1].
+        horizon: The horizon the score is for; ``None``: the mean over the reference's
+            ``horizons``.
+        where: Where the publication states it (a section).
+    """
+
+    model: str
+    metric: str
+    value: float
+    horizon: float | None = None
+    where: str = ""
+
+
+def model_key(name: str) -> str:
+    """``name`` without an adapter (``x:``) or provider (``x/``) prefix, in lower case, with
+    dots and underscores as hyphens: how runs and published figures are matched."""
+    bare = name.rpartition(":")[2].rpartition("/")[2]
+    return bare.lower().replace(".", "-").replace("_", "-")
+
+
+@dataclass(frozen=True)
+class ReferenceInfo(ComponentInfo):
+    """Scores a publication states (a paper's results), shown beside runs of the same models.
+    Nothing is loaded: the figures are the reference.
+
+    Attributes:
+        source: The publication, as a citation line.
+        figures: The scores it states (only those: nothing read off a chart).
+        horizons: The horizons its means are over; a run compared to a mean must have them all.
+    """
+
+    source: str = ""
+    figures: tuple[Figure, ...] = ()
+    horizons: tuple[float, ...] = ()
+    kind: Kind = field(init=False, default="reference")
 
 
 @dataclass(frozen=True)
@@ -399,6 +447,11 @@ class Registry:
             if isinstance(r.info, AdapterInfo) and r.info.offline
             for model in r.info.models
         ]
+
+    def references(self) -> list[ReferenceInfo]:
+        """Every installed reference (published figures), sorted by name."""
+        found = self.entries("reference").values()
+        return [r.info for r in found if isinstance(r.info, ReferenceInfo)]
 
     def suites(self) -> list[SuiteInfo]:
         """Every installed suite, sorted by name."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 
 from bpb_core import hookspecs
-from bpb_core.registry import Registry, SuiteInfo
+from bpb_core.registry import ReferenceInfo, Registry, SuiteInfo
 from support.paths import DOCS as DOCS_DIR
 
 DOCS = DOCS_DIR / "plugins.md"
@@ -36,6 +36,11 @@ def test_every_registered_builtin_loads(registry: Registry) -> None:
         assert entry.info.summary, f"{entry.info.name} has no summary"
         if isinstance(entry.info, SuiteInfo):  # a suite is its weights; nothing to load
             assert set(entry.info.weights) <= set(registry.names("task"))
+            continue
+        if isinstance(entry.info, ReferenceInfo):  # its figures; each of a task or a suite
+            known = {*registry.names("task"), *registry.names("suite")}
+            assert entry.info.figures and {f.metric for f in entry.info.figures} <= known
+            assert all(0 <= f.value <= 1 for f in entry.info.figures)
             continue
         assert entry.info.load() is not None, entry.info.name
     assert kinds == set(hookspecs.HOOK_KINDS.values())  # every hook is used by a built-in

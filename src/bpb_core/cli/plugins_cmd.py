@@ -18,6 +18,7 @@ LIST_KINDS: dict[str, Kind] = {
     "scene-families": "scene_family",
     "suites": "suite",
     "diagnostics": "diagnostic",
+    "references": "reference",
 }
 
 

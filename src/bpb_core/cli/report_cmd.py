@@ -125,17 +125,24 @@ def _print_tables(built: Report) -> None:
 
 def _print_part(part: ReportPart, built: Report) -> None:
     from bpb_core.report.sections import (
+        REFERENCE_NOTE,
         different_conditions_note,
         different_scenes_note,
         epoch_columns,
         headline_cells,
         horizon_cells,
+        reference_cells,
+        reference_sources,
     )
     from bpb_core.results.completeness import incomplete_lines, unparsed_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
     _cell_table(title, *headline_cells(part, rule))
+    if not tables["references"].empty:
+        _cell_table("Published figures beside your runs", *reference_cells(part))
+        for line in [REFERENCE_NOTE, *reference_sources(part)]:
+            console.print(escape(line), highlight=False, style="dim")
     warned = [*incomplete_lines(part.results).items(), *unparsed_lines(part.results).items()]
     for run, line in warned:
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)

@@ -142,6 +142,7 @@ def part_json(part: ReportPart) -> dict[str, Any]:
         "different_conditions": different_conditions_note(part),
         "usage": records(tables["usage"]),
         "pairs": records(tables["pairs"]),
+        "references": records(tables["references"]),
         "metrics": {t: records(tables[f"{t}_metrics"]) for t in part.metric_notes},
         "metric_notes": {t: dict(notes) for t, notes in part.metric_notes.items()},
         "diagnostics": {d.name: records(tables[d.name]) for d in part.diagnostics},

@@ -17,9 +17,10 @@ import pandas as pd
 from bpb_core.capabilities import ReportsMetrics
 from bpb_core.errors import PluginBug, blamed
 from bpb_core.plugin_calls import returned
-from bpb_core.registry import DiagnosticInfo
+from bpb_core.registry import DiagnosticInfo, ReferenceInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.frames import Results
+from bpb_core.results.references import reference_table
 from bpb_core.results.tables import (
     RUN_COLUMNS,
     UNANSWERED,
@@ -109,6 +110,7 @@ def report_parts(
         tables = report_tables(
             part, diagnostics, n_boot=n_boot, seed=seed, completeness=completeness,
             scorers=scorers, origins=origins, scorer_origins=scored_by,
+            references=registry.references(),
         )  # fmt: skip
         dataset = part.runs[0].dataset_id if part.runs else ""
         notes: dict[str, Mapping[str, str]] = {
@@ -171,6 +173,7 @@ def report_tables(
     scorers: Mapping[str, Scorer] | None = None,
     origins: Mapping[str, str] | None = None,
     scorer_origins: Mapping[str, str] | None = None,
+    references: Sequence[ReferenceInfo] = (),
 ) -> dict[str, pd.DataFrame]:
     """Every table of a report, derived from ``results`` (nothing is written or printed).
 
@@ -181,6 +184,8 @@ def report_tables(
     adds the table ``<task>_metrics``. ``origins`` names who supplied each diagnostic, for
     the :class:`~bpb_core.errors.PluginBug` raised when one fails or returns no DataFrame;
     ``scorer_origins`` names who supplied each task's scorer, for its ``task_metrics``.
+    ``references`` (published figures) give the table ``references``: each figure beside the
+    runs of its model (:func:`~bpb_core.results.references.reference_table`).
     """
     rule = completeness or Completeness()
     units, calls, suites = results.units, results.calls, results.suites
@@ -196,6 +201,7 @@ def report_tables(
         "stable_exclusions": stable_exclusions(units),
         "usage": usage(calls),
         "metadata": metadata_table(calls),
+        "references": reference_table(units, suites, references, n_boot=n_boot, seed=seed),
     }
     for suffix, view in (("", "strict"), ("_answered", "answered")):
         acc = accuracy(units, view=view)  # type: ignore[arg-type]

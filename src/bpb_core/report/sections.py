@@ -63,6 +63,13 @@ def headline(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     head, rows = headline_cells(part, rule)
     body = _headline_note(part, rule) + html.cells(head, rows, "no runs")
     out = [("Leaderboard (answered only; strict beside)", body + incomplete_notes(part))]
+    if not part.tables["references"].empty:
+        sources = Markup("").join(
+            Markup("<p class='muted'>{}</p>").format(line) for line in reference_sources(part)
+        )
+        note = Markup("<p class='muted'>{}</p>").format(REFERENCE_NOTE)
+        body = note + html.cells(*reference_cells(part), "no figures") + sources
+        out.append(("Published figures beside your runs", body))
     for task in part.metric_notes:
         out.append((f"{task} metrics beside accuracy (answered only)", metrics_body(part, task)))
     return out
@@ -115,6 +122,39 @@ def _interval(ci: pd.DataFrame, run: str, metric: str) -> Cell:
     if rows.empty or rows["lo"].isna().all():
         return Cell("–")
     return Cell(f"{pct(float(rows['lo'].iloc[0]))}–{pct(float(rows['hi'].iloc[0]))}")
+
+
+def reference_cells(part: ReportPart) -> tuple[list[str], Rows]:
+    """Published figures beside the runs of their models: header and rows (the run's strict
+    score with its 95% interval, the stated score, the difference in points)."""
+    head = ["run", "figure", "yours (strict)", "95% CI", "stated", "diff", "where", "note"]
+    rows: Rows = []
+    for row in part.tables["references"].to_dict(orient="records"):
+        horizon = float(row["horizon"])
+        span = "mean" if math.isnan(horizon) else f"{horizon:g} s"
+        shown = not math.isnan(float(row["estimate"]))
+        yours = Cell(pct(float(row["estimate"]))) if shown else Cell("–")
+        interval = f"{pct(float(row['lo']))}–{pct(float(row['hi']))}" if shown else "–"
+        diff = f"{100 * float(row['diff']):+.1f} pt" if shown else "–"
+        cells = [Cell(str(row["run"])), Cell(f"{row['metric']} {span}"), yours, Cell(interval)]
+        stated = Cell(f"{100 * float(row['stated']):.2f}%")  # as the publication writes it
+        cells += [stated, Cell(diff), Cell(str(row["where"]))]
+        rows.append((False, [*cells, Cell(str(row["note"]) or "–", css="" if shown else "short")]))
+    return head, rows
+
+
+def reference_sources(part: ReportPart) -> list[str]:
+    """The citation line of each reference the part's table shows figures of."""
+    table = part.tables["references"].drop_duplicates("reference")
+    pairs = zip(table["reference"], table["source"], strict=True)
+    return [f"{name}: {source}" for name, source in pairs]
+
+
+REFERENCE_NOTE = (
+    "Scores a publication states for the models of these runs (only the figures it states in "
+    "its text), beside each run's strict score on the same horizons: a stated score inside the "
+    "run's interval is no disagreement."
+)
 
 
 def _headline_note(part: ReportPart, rule: Completeness) -> Markup:

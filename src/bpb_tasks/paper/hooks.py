@@ -6,7 +6,14 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from bpb_core.hookspecs import hookimpl
-from bpb_core.registry import DiagnosticInfo, ScorerInfo, SuiteInfo, TaskInfo, lazy
+from bpb_core.registry import (
+    DiagnosticInfo,
+    ReferenceInfo,
+    ScorerInfo,
+    SuiteInfo,
+    TaskInfo,
+    lazy,
+)
 
 PAPER_WEIGHTS = {"q1": 0.3, "q2": 0.3, "q3": 0.4}
 
@@ -93,3 +100,10 @@ def bpb_suites() -> Iterator[SuiteInfo]:
         weights=PAPER_WEIGHTS,
         title="Total (0.3 Q1 + 0.3 Q2 + 0.4 Q3)",
     )
+
+
+@hookimpl
+def bpb_references() -> Iterator[ReferenceInfo]:
+    from bpb_tasks.paper.figures import paper_reference
+
+    yield paper_reference()
