@@ -112,14 +112,21 @@ def _print_tables(built: Report) -> None:
     console = stdout()
     several = len(built.parts) > 1
     if several:
+        datasets = len({part.dataset for part in built.parts})
+        what = f"{datasets} datasets" if datasets > 1 else "one dataset"
+        if any(part.scenes for part in built.parts):
+            what += f" in {len(built.parts)} different sets of scenes"
         stderr().print(
-            f"[yellow]note:[/] the runs answered {len(built.parts)} datasets; each is reported "
-            "on its own, never ranked together",
+            f"[yellow]note:[/] the runs answered {what}; each is reported on its own, never "
+            "ranked together",
             highlight=False,
         )
+        for part in built.parts:
+            runs = ", ".join(run.label for run in part.results.runs)
+            stderr().print(f"  {escape(part.title)}: {escape(runs)}", highlight=False)
     for part in built.parts:
         if several:
-            console.rule(f"dataset {part.short_id} ({part.path})")
+            console.rule(f"dataset {escape(part.title)}")
         _print_part(part, built)
 
 

@@ -183,7 +183,7 @@ def write_report(
         answered += len(gallery.scene_totals(part.results.units, part.results.suites))
         pages.append(
             {
-                "name": f"{part.short_id} ({part.path})",
+                "name": part.title,
                 "runs": run_items(part),
                 "headline": headline(part, report.completeness),
                 "charts": pngs,

@@ -127,6 +127,7 @@ def part_json(part: ReportPart) -> dict[str, Any]:
     return {
         "dataset": part.dataset,
         "dataset_path": part.path,
+        "scenes": part.scenes or None,
         "leaderboard": records(tables["summary"]),
         "leaderboard_answered": records(tables["leaderboard_answered"]),
         "suites": {s.name: dict(s.weights) for s in results.suites},

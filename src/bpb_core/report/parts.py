@@ -7,6 +7,7 @@ tables on its own. :func:`report_tables` is pure (frames in, frames out).
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
@@ -20,6 +21,7 @@ from bpb_core.plugin_calls import returned
 from bpb_core.registry import DiagnosticInfo, ReferenceInfo
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, cell_levels
 from bpb_core.results.frames import Results
+from bpb_core.results.reading import RunFolder
 from bpb_core.results.references import reference_table
 from bpb_core.results.tables import (
     RUN_COLUMNS,
@@ -64,6 +66,11 @@ class ReportPart:
     """Per diagnostic, the tasks it looks at."""
     origins: dict[str, str] = field(default_factory=dict)
     """Per diagnostic, who supplied it (``Registered.origin``), for one-line plugin errors."""
+    scenes: str = ""
+    """The part's scenes in a few words when its dataset's runs were asked different scenes
+    (each scene set is a part of its own), else empty."""
+    section: int = 0
+    """The part's number among its dataset's scene sets (0: the dataset is one part)."""
 
     def origin(self, diagnostic: str) -> str:
         """Who supplied ``diagnostic`` (its name when not known)."""
@@ -88,7 +95,13 @@ class ReportPart:
     @property
     def short_id(self) -> str:
         """The first 12 characters of the dataset hash (a path's last part when no hash)."""
-        return self.dataset[:12] if "/" not in self.dataset else self.dataset.rsplit("/", 1)[1]
+        base = self.dataset[:12] if "/" not in self.dataset else self.dataset.rsplit("/", 1)[1]
+        return f"{base}-{self.section}" if self.section else base
+
+    @property
+    def title(self) -> str:
+        """The part's heading: its dataset and, when split, its scenes."""
+        return f"{self.short_id} ({self.path})" + (f": {self.scenes}" if self.scenes else "")
 
 
 def report_parts(
@@ -101,7 +114,8 @@ def report_parts(
 ) -> tuple[ReportPart, ...]:
     """One :class:`ReportPart` per dataset, with the diagnostics of the tasks that ran on it."""
     parts = []
-    for part in by_dataset(results):
+    sections: Counter[str] = Counter()
+    for part, scenes in by_dataset(results):
         diagnostics = tuple(registry.diagnostics_for(part.tasks))
         scorers = {task: registry.scorer_for(task) for task in part.tasks}
         infos = registry.entries("diagnostic")
@@ -119,30 +133,53 @@ def report_parts(
             if isinstance(scorer, ReportsMetrics)
         }
         looks = {d.name: _tasks_of(infos.get(d.name)) for d in diagnostics}
-        parts.append(ReportPart(dataset, part, tables, diagnostics, notes, looks, origins))
+        sections[dataset] += 1
+        section = sections[dataset] if scenes else 0
+        parts.append(
+            ReportPart(dataset, part, tables, diagnostics, notes, looks, origins, scenes, section)
+        )
     return tuple(parts)
 
 
-def by_dataset(results: Results) -> list[Results]:
-    """``results`` split by dataset (the hash each run records): runs on different datasets
-    answered different questions, so they are never ranked together. Datasets in the order
-    their first run was read."""
-    datasets = list(dict.fromkeys(run.dataset_id for run in results.runs))
-    if len(datasets) <= 1:
-        return [results]
+def by_dataset(results: Results) -> list[tuple[Results, str]]:
+    """``results`` split by dataset (the hash each run records), then by the scenes each run
+    was asked: runs on different datasets answered different questions, and runs asked
+    different scenes of one dataset (``--horizons 1`` beside a full run, ``--sample``) have
+    means over different scenes, so neither is ever ranked together. Datasets in the order
+    their first run was read; each part with the label of its scenes (horizons and count) when
+    its dataset's runs were split, else ``""``."""
+    pairs = results.units[["run", "scene_id"]].drop_duplicates().astype(str)
+    asked: dict[str, frozenset[str]] = {
+        str(run): frozenset(group["scene_id"]) for run, group in pairs.groupby("run")
+    }
+    groups: dict[tuple[str, frozenset[str]], list[RunFolder]] = {}
+    for run in results.runs:
+        key = (run.dataset_id, asked.get(run.label, frozenset()))
+        groups.setdefault(key, []).append(run)
+    if len(groups) <= 1:
+        return [(results, "")]
+    split = Counter(dataset for dataset, _ in groups)
     parts = []
-    for dataset in datasets:
-        runs = tuple(run for run in results.runs if run.dataset_id == dataset)
-        units = _only(results.units, dataset)
-        calls = _only(results.calls, dataset)
+    for (dataset, _), runs in groups.items():
+        labels = {run.label for run in runs}
+        units, calls = _only(results.units, labels), _only(results.calls, labels)
         tasks = {str(t) for t in units["task"].unique()}
         suites = tuple(s for s in results.suites if set(s.weights) <= tasks)
-        parts.append(Results(units, calls, runs, suites))
+        label = scene_label(units) if split[dataset] > 1 else ""
+        parts.append((Results(units, calls, tuple(runs), suites), label))
     return parts
 
 
-def _only(frame: pd.DataFrame, dataset: str) -> pd.DataFrame:
-    part = frame[frame["dataset"] == dataset].reset_index(drop=True)
+def scene_label(units: pd.DataFrame) -> str:
+    """The scenes of ``units`` in a few words: their horizons and how many."""
+    horizons = sorted(float(h) for h in units["horizon"].unique().tolist())
+    count = units["scene_id"].nunique()
+    noun = "scene" if count == 1 else "scenes"
+    return f"horizons {', '.join(f'{h:g}' for h in horizons)} s, {count} {noun}"
+
+
+def _only(frame: pd.DataFrame, runs: set[str]) -> pd.DataFrame:
+    part = frame[frame["run"].astype(str).isin(runs)].reset_index(drop=True)
     for name in part.columns:
         if isinstance(part[name].dtype, pd.CategoricalDtype):
             part[name] = part[name].cat.remove_unused_categories()

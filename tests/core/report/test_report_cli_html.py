@@ -207,11 +207,11 @@ def test_a_hand_edited_run_json_is_refused_naming_the_field_not_read_as_no_scene
     assert f"{run / 'run.json'}: {field}" in done.stderr
 
 
-def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
+def test_a_horizon_1_run_and_a_full_run_are_ranked_apart_and_named(
     bpb: Callable[..., Done], tmp_path: Path, dataset: Path
 ) -> None:
-    # The counts are of scene-tasks: stasis, asked each of its 18 twice (36 calls), counts 18;
-    # the warning said "scene-task calls" of these figures.
+    # They were ranked together as both "complete 100%" (straight on horizon 1 only above the
+    # same baseline on every horizon), with one warning naming neither runs nor horizons.
     runs = tmp_path / "runs"
     runs_of = (("baseline:stasis", ["--epochs", "2"]), ("baseline:straight", ["--horizons", "1"]))
     for adapter, extra in runs_of:
@@ -219,11 +219,21 @@ def test_runs_asked_different_scenes_are_warned_about_in_terminal_json_and_html(
         assert ran.returncode == 0, ran.stderr
     shown = bpb("report", str(runs), "--out", str(tmp_path / "rep"))
     assert shown.returncode == 0, shown.stderr
-    warning = "The runs were asked different numbers of scenes (9, 18 scene-tasks):"
-    assert warning in " ".join(shown.stdout.split())
+    said = " ".join(shown.stderr.split())
+    assert "the runs answered one dataset in 2 different sets of scenes;" in said
+    assert "horizons 1, 3 s, 6 scenes: baseline_stasis" in said
+    assert "horizons 1 s, 3 scenes: baseline_straight" in said
     summary = json.loads(bpb("report", str(runs), "--json").stdout)
-    assert summary["different_scenes"].startswith(warning)
-    assert warning in " ".join((tmp_path / "rep" / "report.html").read_text().split())
+    parts = {p["scenes"]: p for p in summary["datasets"]}
+    assert set(parts) == {"horizons 1, 3 s, 6 scenes", "horizons 1 s, 3 scenes"}
+    for scenes, run in (
+        ("horizons 1, 3 s, 6 scenes", "stasis"),
+        ("horizons 1 s, 3 scenes", "straight"),
+    ):
+        assert [r["run"] for r in parts[scenes]["leaderboard"]] == [f"baseline_{run}"]  # alone
+        assert parts[scenes]["different_scenes"] is None
+    page = " ".join((tmp_path / "rep" / "report.html").read_text().split())
+    assert "horizons 1 s, 3 scenes" in page and "horizons 1, 3 s, 6 scenes" in page
 
 
 def _stasis_runs(bpb: Callable[..., Done], dataset: Path, folder: Path, **runs: list[str]) -> None:
@@ -240,16 +250,18 @@ def _stasis_runs(bpb: Callable[..., Done], dataset: Path, folder: Path, **runs: 
 def test_runs_asked_other_scenes_or_more_epochs_are_told_apart(
     bpb: Callable[..., Done], tmp_path: Path, dataset: Path
 ) -> None:
-    # Two runs asked as many scenes but not the same ones (--scenes, --sample) were ranked with
-    # no warning, while a run asked the same scenes twice (--epochs 2) was warned about as
+    # Two runs asked as many scenes but not the same ones (--scenes, --sample) were ranked
+    # together, while a run asked the same scenes twice (--epochs 2) was warned about as
     # asked "different numbers of scenes (12, 24 ...)".
     runs = tmp_path / "runs"
     _stasis_runs(bpb, dataset, runs, a=["--scenes", "h1_0000"], b=["--scenes", "h1_0001"])
     summary = json.loads(bpb("report", str(runs / "a"), str(runs / "b"), "--json").stdout)
-    assert summary["different_scenes"] == (
-        "The runs were asked different scenes (3 scene-tasks each, not the same ones): "
-        "their scores are means over different scenes; compare them in the paired comparisons."
-    )
+    parts = summary["datasets"]  # one section per scene set, never one ranking
+    assert [[r["run"] for r in p["leaderboard"]] for p in parts] == [
+        ["a/baseline_stasis"],
+        ["b/baseline_stasis"],
+    ]
+    assert [p["scenes"] for p in parts] == ["horizons 1 s, 1 scene"] * 2
     again = tmp_path / "again"
     _stasis_runs(bpb, dataset, again, once=[], twice=["--epochs", "2"])
     both = bpb("report", str(again / "once"), str(again / "twice"), "--json")
