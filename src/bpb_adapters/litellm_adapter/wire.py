@@ -44,7 +44,7 @@ def label(args: Mapping[str, Any], notes: tuple[str, ...] = ()) -> str:
     credential-like arguments never name a run: the name becomes a folder."""
     parts = [
         f"{_SHORT.get(k, k)}={_short_value(v)}"
-        for k, v in sorted(args.items())
+        for k, v in sorted(recorded(args).items())
         if k not in _HEADERS and not _SECRET.search(k)
     ]
     return ",".join([*parts, *notes])
