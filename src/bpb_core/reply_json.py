@@ -1,18 +1,20 @@
 """Finding JSON objects in free model text: the paper's first-balanced-``{...}`` rule.
 
 A reply may wrap its answer in prose, code fences or a chain of thought that itself contains
-braces (LaTeX's ``\\frac{a}{b}`` by the hundred). :func:`balanced_objects` yields every top-level
-balanced ``{...}`` substring, however many, matching braces outside JSON strings only, so a
-``}`` inside ``"a } b"`` does not close an object. The search is linear in the reply: array
-operations over the positions of braces and quotes (:func:`_array_spans`); only a reply where a
-string inside an object holds a brace takes the plain scan (:class:`_Scan`, the reference),
-which looks at up to :data:`MAX_BRACES` runs of braces. Replies over :data:`MAX_REPLY_CHARS` are
-refused outright.
-:func:`extract` applies the rule that fits the prompt:
+braces (LaTeX's ``\\frac{a}{b}`` by the hundred). Inside an object, braces are matched outside
+JSON strings only, so a ``}`` inside ``"a } b"`` does not close an object; outside every object
+a quote is prose. A brace that never finds its match is skipped: the objects inside it count as
+top-level. Every top-level object is a candidate, however many there are; the search is one
+pass over the reply, linear in its length, and stops at the object that decides. Replies over
+:data:`MAX_REPLY_CHARS` are refused outright. :func:`extract` applies the rule that fits the
+prompt:
 
-- ``first``: without chain of thought, the first balanced object must validate (the paper's rule);
+- ``first``: without chain of thought, the first balanced object must validate (the paper's
+  rule); the pass runs from the left.
 - ``last-valid``: with chain of thought, the last balanced object that validates wins, so a
-  sketch of the format in the reasoning does not shadow the final answer.
+  sketch of the format in the reasoning does not shadow the final answer. The pass runs from
+  the right (over the reversed reply), so the answer is reached before the reasoning, and
+  nothing in the reasoning (an unclosed brace, an odd quote) can hide it.
 """
 
 from __future__ import annotations
@@ -22,9 +24,6 @@ import re
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
-import numpy as np
-import numpy.typing as npt
-
 from bpb_core.errors import ParseFailure
 
 T = TypeVar("T")
@@ -32,180 +31,81 @@ RULE_FIRST = "first"
 RULE_LAST_VALID = "last-valid"
 MAX_REPLY_CHARS = 1_048_576
 """Longer replies are a parse failure at once (no answer of any task is near this long)."""
-MAX_BRACES = 10_000
-"""Runs of braces (``{{{`` is one run) the plain scan looks at before it stops: it bounds the
-work on a reply whose strings hold braces; the array search has no such bound."""
 # Inside an object: skip (possessively, so a failed match never backtracks) everything but
-# braces and quotes, and whole JSON strings, up to the next brace. No match: a string that
-# never closes, or no brace left; either way nothing open can close any more.
-_NEXT_BRACE = re.compile(r'[^{}"]*+(?:"[^"\\]*+(?:\\.[^"\\]*+)*+"[^{}"]*+)*+([{}])', re.S)
-_RUN = re.compile(r"\{+|\}+")
+# braces and quotes, and whole JSON strings, up to the next run of equal braces. No match: a
+# string that never closes, or no brace left; either way nothing open can close any more.
+_FORWARD = re.compile(r'[^{}"]*+(?:"[^"\\]*+(?:\\.[^"\\]*+)*+"[^{}"]*+)*+(\{++|\}++)', re.S)
+# The same over the reversed reply: read backwards, a string ends at the first quote that no
+# odd run of backslashes follows (an odd run before a quote escapes it in the reply).
+_BACKWARD = re.compile(
+    r'[^{}"]*+(?:"(?:[^"]++|"(?=(?:\\\\)*+\\(?!\\)))*+"[^{}"]*+)*+(\{++|\}++)', re.S
+)
+_RUN = {"{": re.compile(r"(\{++)"), "}": re.compile(r"(\}++)")}
 
 
-class _Scan:
-    """Brace matching over runs of equal braces, keeping only the top-level closed objects.
+def _close(opened: list[range], count: int) -> int:
+    """Close the last ``count`` open braces (no more than are open) of the runs ``opened``;
+    returns the position of the outermost brace closed."""
+    while count > len(opened[-1]):
+        count -= len(opened.pop())
+    run = opened.pop()
+    if count < len(run):
+        opened.append(run[:-count])
+    return run[-count]
 
-    ``opened`` holds runs of open braces as ``[first position, count]``; ``levels`` holds, by
-    rising depth, the closed objects found at that depth. Closing an object drops the levels
-    deeper than it (objects inside it are not top-level).
+
+def _spans(text: str, opener: str, inside: re.Pattern[str]) -> Iterator[tuple[int, int]]:
+    """Yield ``(start, end)`` of the top-level balanced objects of ``text`` in text order.
+
+    An object is yielded as soon as its closing brace brings the depth back to 0; the objects
+    held inside a brace still open are yielded at the end, when that brace is known never to
+    close (nothing after it is at depth 0, so the order holds). ``opener`` is ``{`` for the
+    reply, ``}`` for the reversed reply. A run of equal braces (``{{{``, a model's repetition
+    loop) is one step: of the objects a run of closing braces ends, only the outermost can be
+    top-level.
     """
-
-    def __init__(self) -> None:
-        self.opened: list[list[int]] = []
-        self.depth = 0
-        self.levels: list[tuple[int, list[tuple[int, int]]]] = [(0, [])]
-
-    def open(self, index: int, count: int) -> None:
-        self.opened.append([index, count])
-        self.depth += count
-
-    def close(self, index: int, count: int) -> int:
-        """Close up to ``count`` braces at ``index``; returns how many closed."""
-        closed = left = min(count, self.depth)
-        outer = index
-        while left:
-            run = self.opened[-1]
-            if run[1] <= left:
-                self.opened.pop()
-                left -= run[1]
-                outer = run[0]
-            else:
-                run[1] -= left
-                outer, left = run[0] + run[1], 0
-        self.depth -= closed
-        while self.levels[-1][0] > self.depth:
-            self.levels.pop()
-        if self.levels[-1][0] < self.depth:
-            self.levels.append((self.depth, []))
-        self.levels[-1][1].append((outer, index + closed))
-        return closed
-
-    def spans(self) -> list[tuple[int, int]]:
-        return sorted(span for _, level in self.levels for span in level)
-
-
-def _scanned_spans(text: str) -> list[tuple[int, int]]:
-    """``(start, end)`` of the top-level balanced objects, in one plain pass over ``text``
-    (bounded by :data:`MAX_BRACES`). Braces left open at the end never close; the objects inside
-    them are top-level, as if the scan had resumed after each unclosed brace."""
-    scan = _Scan()
+    run = _RUN[opener]
+    opened: list[range] = []  # the runs of open braces
+    depth = 0
+    held: list[tuple[int, int]] = []  # outermost objects closed inside the open braces
     position = 0
-    for _ in range(MAX_BRACES):
-        if scan.depth:
-            found = _NEXT_BRACE.match(text, position)
-            if found is None:
-                break
-            index = found.start(1)
+    while True:
+        if opened:
+            found = inside.match(text, position)
         else:  # outside every object only an opening brace matters (quotes are prose)
-            index = text.find("{", position)
-            if index < 0:
-                break
-        run = _RUN.match(text, index)
-        assert run is not None  # index is at a brace
-        count = run.end() - index
-        if text[index] == "{":
-            scan.open(index, count)
-            position = run.end()
+            index = text.find(opener, position)
+            found = None if index < 0 else run.match(text, index)
+        if found is None:
+            break
+        index, position = found.span(1)
+        if text[index] == opener:
+            opened.append(range(index, position))
+            depth += position - index
+            continue
+        closed = min(position - index, depth)
+        depth -= closed
+        start, position = _close(opened, closed), index + closed  # the rest close nothing
+        while held and held[-1][0] > start:  # closed inside this one: not top-level
+            held.pop()
+        if opened:
+            held.append((start, position))
         else:
-            position = index + scan.close(index, count)
-    return scan.spans()
+            yield start, position
+    yield from held
 
 
-Ints = npt.NDArray[np.int64]
-Codes = npt.NDArray[np.uint8] | npt.NDArray[np.uint32]
-
-
-def _codes(text: str) -> Codes:
-    """The characters of ``text`` as numbers, one per character (a byte each when ASCII)."""
-    if text.isascii():
-        return np.frombuffer(text.encode("ascii"), dtype=np.uint8)
-    return np.frombuffer(text.encode("utf-32-le"), dtype=np.uint32)
-
-
-def _before(sorted_at: Ints, at: Ints) -> Ints:
-    """For each position of ``at``, how many of ``sorted_at`` lie before it."""
-    return np.searchsorted(sorted_at, at).astype(np.int64)
-
-
-def _counted_braces(codes: Codes) -> tuple[Ints, Ints, Ints]:
-    """Positions, steps (+1 open, -1 close) and depth after each brace that counts: a ``}`` with
-    nothing open is prose. Strings are not looked at here."""
-    at = np.flatnonzero((codes == 123) | (codes == 125))
-    step = (codes[at] == 123).astype(np.int64) * 2 - 1
-    raw = np.cumsum(step)
-    if not raw.size or raw.min() >= 0:  # no '}' ever finds nothing open
-        return at, step, raw
-    floor = np.minimum.accumulate(np.minimum(raw, 0))  # falls only where a '}' finds depth 0
-    counted = ~((step < 0) & (np.diff(floor, prepend=0) < 0))
-    return at[counted], step[counted], (raw - floor)[counted]
-
-
-def _depth_at(at: Ints, depth: Ints, where: Ints) -> Ints:
-    """The brace depth at each position of ``where`` (0 before the first brace)."""
-    seen = _before(at, where)
-    return np.where(seen > 0, depth[np.maximum(seen - 1, 0)], 0)
-
-
-def _escaped(codes: Codes, where: Ints) -> npt.NDArray[np.bool_]:
-    """Whether an odd run of backslashes stands right before each position of ``where``."""
-    plain = np.flatnonzero(codes != 92)
-    seen = _before(plain, where)
-    previous = np.where(seen > 0, plain[np.maximum(seen - 1, 0)], -1)
-    return np.asarray((where - previous - 1) % 2 == 1)
-
-
-def _strings_hold_no_brace(codes: Codes, at: Ints, depth: Ints) -> bool:
-    """Whether the JSON strings inside objects (from each unescaped quote at depth > 0 to the
-    next) hold no brace, and every escaped quote at depth > 0 is inside one: then the depths
-    computed without looking at strings are the plain scan's."""
-    quotes = np.flatnonzero(codes == 34)
-    inside = quotes[_depth_at(at, depth, quotes) > 0]
-    if not inside.size:
-        return True
-    escaped = _escaped(codes, inside)
-    bounds = inside[~escaped]  # an even count before a position: outside every string
-    braces_out = np.all(_before(bounds, at) % 2 == 0)
-    return bool(braces_out and np.all(_before(bounds, inside[escaped]) % 2 == 1))
-
-
-def _array_spans(text: str) -> tuple[Ints, Ints] | None:
-    """Starts and ends of the top-level balanced objects by array operations, or ``None`` when
-    a string inside an object holds a brace (the plain scan decides those).
-
-    An open brace and the close matching it share a level (the depth inside them); sorted by
-    level, then position, each level reads open, close, open, close, ... and at most one last
-    open that never closes. A pair is top-level when no pair holds it: at level 1, or after
-    the unclosed open of the level below. Those come out of the sort in text order.
-    """
-    codes = _codes(text)
-    at, step, depth = _counted_braces(codes)
-    if not _strings_hold_no_brace(codes, at, depth):
-        return None
-    level = depth + (step < 0)
-    order = np.argsort(level, kind="stable")
-    at, step, level = at[order], step[order], level[order]
-    pair = (step[:-1] > 0) & (step[1:] < 0) & (level[:-1] == level[1:])
-    unclosed = (step > 0) & ~np.append(pair, False)
-    below = np.full(int(level.max(initial=0)) + 2, np.iinfo(np.int64).max)
-    below[0] = -1
-    below[level[unclosed]] = at[unclosed]
-    starts, ends, levels = at[:-1][pair], at[1:][pair] + 1, level[:-1][pair]
-    top = starts > below[levels - 1]
-    return starts[top], ends[top]
-
-
-def _spans(text: str) -> list[tuple[int, int]]:
-    found = _array_spans(text)
-    if found is None:
-        return _scanned_spans(text)
-    return list(zip(found[0].tolist(), found[1].tolist(), strict=True))
+def _from_the_right(text: str) -> Iterator[tuple[int, int]]:
+    """The top-level balanced objects of ``text``, last first."""
+    size = len(text)
+    for start, end in _spans(text[::-1], "}", _BACKWARD):
+        yield size - end, size - start
 
 
 def balanced_objects(text: str) -> Iterator[str]:
     """Yield the top-level balanced ``{...}`` substrings of ``text`` from left to right, however
     many; an opening brace that never closes is skipped, so an unterminated fragment in the
     reasoning does not hide a later complete answer."""
-    for start, end in _spans(text):
+    for start, end in _spans(text, "{", _FORWARD):
         yield text[start:end]
 
 
@@ -214,6 +114,23 @@ def _decode(candidate: str) -> Any:
         return json.loads(candidate)
     except (ValueError, RecursionError) as exc:
         raise ParseFailure(f"not valid JSON: {exc}") from None
+
+
+def _last_valid(text: str, validate: Callable[[Any], T]) -> T:
+    tried: set[str] = set()  # reasoning repeats itself: each distinct object is tried once
+    last_error = ""
+    for start, end in _from_the_right(text):
+        candidate = text[start:end]
+        if candidate in tried:
+            continue
+        tried.add(candidate)
+        try:
+            return validate(_decode(candidate))
+        except ParseFailure as exc:
+            last_error = str(exc)
+    if not tried:
+        raise ParseFailure("no balanced {...} object in the reply")
+    raise ParseFailure(f"no object in the reply validates (last error: {last_error})")
 
 
 def extract(text: str, validate: Callable[[Any], T], *, cot: bool) -> tuple[T, str]:
@@ -236,20 +153,9 @@ def extract(text: str, validate: Callable[[Any], T], *, cot: bool) -> tuple[T, s
         raise ParseFailure(
             f"reply too long: {len(text):,} characters (at most {MAX_REPLY_CHARS:,})"
         )
-    spans = _spans(text)
-    if not spans:
+    if cot:
+        return _last_valid(text, validate), RULE_LAST_VALID
+    first = next(balanced_objects(text), None)
+    if first is None:
         raise ParseFailure("no balanced {...} object in the reply")
-    if not cot:
-        start, end = spans[0]
-        return validate(_decode(text[start:end])), RULE_FIRST
-    last_error, failed = "", set()  # reasoning repeats itself: each distinct object once
-    for start, end in reversed(spans):
-        candidate = text[start:end]
-        if candidate in failed:
-            continue
-        try:
-            return validate(_decode(candidate)), RULE_LAST_VALID
-        except ParseFailure as exc:
-            last_error = str(exc)
-            failed.add(candidate)
-    raise ParseFailure(f"no object in the reply validates (last error: {last_error})")
+    return validate(_decode(first)), RULE_FIRST
