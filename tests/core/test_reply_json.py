@@ -112,3 +112,68 @@ def test_unclosed_braces_before_the_answer() -> None:
 )
 def test_runs_of_braces_match_like_single_braces(text: str) -> None:
     assert list(balanced_objects(text)) == _reference(text)
+
+
+def _picked(value: Any) -> Any:
+    if not isinstance(value, dict) or "pick" not in value:
+        raise ParseFailure("no pick")
+    return value["pick"]
+
+
+# Reasoning with braces of every kind: LaTeX groups, an unclosed \left\{, stray closes, odd
+# quotes, escapes, format sketches and objects that are not the answer.
+NOISE = ["\\frac{a}{b}", "\\left\\{", "}", "{", '"', "\\", '\\"', '{"a": 1}',
+         '{"pick": [...]}', '"}"', "{x}", " v_{0}^{2} ", "\n"]  # fmt: skip
+REASONING = st.lists(
+    st.sampled_from(NOISE)
+    | st.text(alphabet=st.sampled_from('{}"\\ax:,[] '), max_size=8)
+    | st.text(max_size=8),
+    max_size=60,
+).map("".join)
+# After the answer: prose, a code fence, even an opening brace or a quote; no closing brace.
+TRAILING = st.text(alphabet=st.characters(blacklist_characters="}"), max_size=20)
+
+
+@settings(max_examples=400, deadline=None)
+@given(before=REASONING, pick=st.integers(), after=TRAILING, indent=st.sampled_from([None, 2]))
+def test_the_answer_after_any_reasoning_with_braces_is_found(
+    before: str, pick: int, after: str, indent: int | None
+) -> None:
+    answer = json.dumps({"note": 'a "}" and a {', "pick": pick}, indent=indent)
+    assert extract(before + answer + after, _picked, cot=True) == (pick, "last-valid")
+
+
+JSON_VALUES = st.recursive(
+    st.none() | st.integers() | st.text(alphabet=st.sampled_from('{}"\\ax'), max_size=6),
+    lambda inner: st.dictionaries(st.text(max_size=3), inner, max_size=3),
+    max_leaves=8,
+)
+PROSE = st.text(alphabet=st.sampled_from("{}ax \n"), max_size=10)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    parts=st.lists(st.tuples(PROSE, st.dictionaries(st.text(max_size=3), JSON_VALUES)), max_size=6)
+)
+def test_both_directions_try_the_same_objects(parts: list[tuple[str, dict[str, Any]]]) -> None:
+    # Objects whose strings hold braces, quotes and backslashes, between bits of quote-free
+    # prose with braces: last-valid tries, last first, what the left-to-right pass finds.
+    text = "".join(prose + json.dumps(value) for prose, value in parts)
+    seen: list[Any] = []
+
+    def refuse(value: Any) -> Any:
+        seen.append(value)
+        raise ParseFailure("refused")
+
+    with pytest.raises(ParseFailure):
+        extract(text, refuse, cot=True)
+    distinct = dict.fromkeys(reversed(list(balanced_objects(text))))  # each text once, last first
+    assert seen == [json.loads(c) for c in distinct if _decodes(c)]
+
+
+def _decodes(candidate: str) -> bool:
+    try:
+        json.loads(candidate)
+    except ValueError:
+        return False
+    return True
