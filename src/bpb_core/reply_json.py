@@ -40,6 +40,8 @@ _FORWARD = re.compile(r'[^{}"]*+(?:"[^"\\]*+(?:\\.[^"\\]*+)*+"[^{}"]*+)*+(\{++|\
 _BACKWARD = re.compile(
     r'[^{}"]*+(?:"(?:[^"]++|"(?=(?:\\\\)*+\\(?!\\)))*+"[^{}"]*+)*+(\{++|\}++)', re.S
 )
+# A JSON object opens with a key or closes at once: other groups ({a}, {{x}}) are not decoded.
+_OBJECT_START = re.compile(r'\{[ \t\n\r]*+["}]')
 _RUN = {"{": re.compile(r"(\{++)"), "}": re.compile(r"(\}++)")}
 
 
@@ -124,12 +126,15 @@ def _last_valid(text: str, validate: Callable[[Any], T]) -> T:
         if candidate in tried:
             continue
         tried.add(candidate)
+        if not _OBJECT_START.match(candidate):
+            continue
         try:
             return validate(_decode(candidate))
         except ParseFailure as exc:
             last_error = str(exc)
     if not tried:
         raise ParseFailure("no balanced {...} object in the reply")
+    last_error = last_error or "none is a JSON object"
     raise ParseFailure(f"no object in the reply validates (last error: {last_error})")
 
 
