@@ -30,10 +30,11 @@ def load(name: str) -> ModuleType:
     return module
 
 
-def test_extract_times_every_adversarial_family() -> None:
+def test_extract_times_every_adversarial_family_and_q1_reply() -> None:
     done = script("extract", "--repeats", "1")
     assert done.returncode in (0, 1), done.stderr  # 1: slower than the target on a busy machine
-    for family in load("extract").FAMILIES:
+    module = load("extract")
+    for family in [*module.FAMILIES, *module.Q1_REPLIES]:
         assert family in done.stdout, family
 
 

@@ -1,4 +1,4 @@
-"""The reply extractor: one pass, bounded, and only ParseFailure ever escapes."""
+"""The reply extractor: one linear pass, any number of objects, and only ParseFailure escapes."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from bpb_core.errors import ParseFailure
-from bpb_core.reply_json import MAX_BRACES, MAX_OBJECTS, MAX_REPLY_CHARS, balanced_objects, extract
+from bpb_core.reply_json import MAX_REPLY_CHARS, balanced_objects, extract
 
 PIECES = ["{", "}", '"', "\\", '\\"', '{"a":', "[", "]", ":", ",", "1" * 50, "x", " ", "{}",
           '"}"', '"{"', "\n", "1e999", "-", "null"]  # fmt: skip
@@ -30,7 +30,7 @@ def _validate(value: Any) -> Any:
 def _reference(text: str) -> list[str]:
     """The old quadratic scan (fresh string state at every start), for small texts."""
     out, position = [], 0
-    while len(out) < MAX_OBJECTS:
+    while True:
         start = text.find("{", position)
         if start < 0:
             return out
@@ -98,13 +98,13 @@ def test_a_reply_over_the_size_cap_is_a_parse_failure() -> None:
 
 
 def test_unclosed_braces_before_the_answer() -> None:
-    # The reply that froze a run for 25 s: 30,000 unclosed braces, then the answer. A run of
-    # equal braces is one step, so it is found at once.
+    # The reply that froze a run for 25 s: 30,000 unclosed braces, then the answer.
     text = "{" * 30_000 + ' reasoning... {"a": 1}'
     assert extract(text, _validate, cot=True) == ({"a": 1}, "last-valid")
-    # Text made of separate braces is searched up to MAX_BRACES runs only: a parse failure.
-    with pytest.raises(ParseFailure):
-        extract("{ " * (MAX_BRACES + 1) + ' {"a": 1}', _validate, cot=True)
+    # Separate braces, far more than the 10,000 runs the search used to stop at: still found.
+    text = "{ " * 200_000 + ' {"a": 1}'
+    assert extract(text, _validate, cot=True) == ({"a": 1}, "last-valid")
+    assert extract(text, _validate, cot=False) == ({"a": 1}, "first")
 
 
 @pytest.mark.parametrize(
@@ -112,3 +112,70 @@ def test_unclosed_braces_before_the_answer() -> None:
 )
 def test_runs_of_braces_match_like_single_braces(text: str) -> None:
     assert list(balanced_objects(text)) == _reference(text)
+
+
+def _picked(value: Any) -> Any:
+    if not isinstance(value, dict) or "pick" not in value:
+        raise ParseFailure("no pick")
+    return value["pick"]
+
+
+# Reasoning with braces of every kind: LaTeX groups, an unclosed \left\{, stray closes, odd
+# quotes, escapes, format sketches and objects that are not the answer.
+NOISE = ["\\frac{a}{b}", "\\left\\{", "}", "{", '"', "\\", '\\"', '{"a": 1}',
+         '{"pick": [...]}', '"}"', "{x}", " v_{0}^{2} ", "\n"]  # fmt: skip
+REASONING = st.lists(
+    st.sampled_from(NOISE)
+    | st.text(alphabet=st.sampled_from('{}"\\ax:,[] '), max_size=8)
+    | st.text(max_size=8),
+    max_size=60,
+).map("".join)
+# After the answer: prose, a code fence, even an opening brace or a quote; no closing brace.
+TRAILING = st.text(alphabet=st.characters(blacklist_characters="}"), max_size=20)
+
+
+@settings(max_examples=400, deadline=None)
+@given(before=REASONING, pick=st.integers(), after=TRAILING, indent=st.sampled_from([None, 2]))
+def test_the_answer_after_any_reasoning_with_braces_is_found(
+    before: str, pick: int, after: str, indent: int | None
+) -> None:
+    answer = json.dumps({"note": 'a "}" and a {', "pick": pick}, indent=indent)
+    assert extract(before + answer + after, _picked, cot=True) == (pick, "last-valid")
+
+
+JSON_VALUES = st.recursive(
+    st.none() | st.integers() | st.text(alphabet=st.sampled_from('{}"\\ax'), max_size=6),
+    lambda inner: st.dictionaries(st.text(max_size=3), inner, max_size=3),
+    max_leaves=8,
+)
+PROSE = st.text(alphabet=st.sampled_from("{}ax \n"), max_size=10)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    parts=st.lists(
+        st.tuples(PROSE, st.dictionaries(st.text(max_size=3), JSON_VALUES, max_size=3)), max_size=6
+    )
+)
+def test_both_directions_try_the_same_objects(parts: list[tuple[str, dict[str, Any]]]) -> None:
+    # Objects whose strings hold braces, quotes and backslashes, between bits of quote-free
+    # prose with braces: last-valid tries, last first, what the left-to-right pass finds.
+    text = "".join(prose + json.dumps(value) for prose, value in parts)
+    seen: list[Any] = []
+
+    def refuse(value: Any) -> Any:
+        seen.append(value)
+        raise ParseFailure("refused")
+
+    with pytest.raises(ParseFailure):
+        extract(text, refuse, cot=True)
+    distinct = dict.fromkeys(reversed(list(balanced_objects(text))))  # each text once, last first
+    assert seen == [json.loads(c) for c in distinct if _decodes(c)]
+
+
+def _decodes(candidate: str) -> bool:
+    try:
+        json.loads(candidate)
+    except ValueError:
+        return False
+    return True

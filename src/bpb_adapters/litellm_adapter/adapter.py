@@ -21,8 +21,14 @@ import time
 import uuid
 from typing import Any
 
-from bpb_adapters.litellm_adapter import prices, wire
-from bpb_adapters.litellm_adapter.aliases import preflight, provider_of, quick_preflight, resolve
+from bpb_adapters.litellm_adapter import prices, rules, wire
+from bpb_adapters.litellm_adapter.aliases import (
+    map_entry,
+    preflight,
+    provider_of,
+    quick_preflight,
+    resolve,
+)
 from bpb_adapters.litellm_adapter.errors import map_error
 from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
@@ -76,7 +82,8 @@ class LiteLLMAdapter:
         options: ``api_base``, model arguments, price overrides and aliases.
 
     Raises:
-        BadInput: A price override is malformed, or a model argument is NaN or infinite.
+        BadInput: A price override is malformed, a model argument is NaN or infinite, or the
+            provider rejects the arguments together (:mod:`~bpb_adapters.litellm_adapter.rules`).
     """
 
     def __init__(self, model: str, options: AdapterOptions) -> None:
@@ -85,7 +92,9 @@ class LiteLLMAdapter:
         bad = non_finite(self.args)
         if bad is not None:  # sent as JSON, which has no NaN: every call would fail
             raise BadInput(f"model argument {bad[0]}: must be a finite number, got {bad[1]!r}")
-        tag = options.label if options.label is not None else wire.label(self.args)
+        self._plan = rules.plan(self.model, self.args, map_entry(self.model))
+        self._hidden = wire.secrets(self.args)
+        tag = self._tag(options.label)
         self.name = f"litellm:{model}" + (f" [{tag}]" if tag else "")
         self._api_base = options.api_base
         # each adapter keeps the URIs of its recent images (a scene's tasks share one image)
@@ -98,6 +107,14 @@ class LiteLLMAdapter:
                 raise BadInput(f"price of {model}: {exc}") from None
         self._loaded: Any = None
         self._priced = False
+
+    def _tag(self, label: str | None) -> str:
+        """The option set's name: the user's label or one made from the arguments, then the
+        rules' rewrites (a label never hides that a budget was sent as an effort)."""
+        if label is None:
+            kept = {k: v for k, v in self.args.items() if k not in self._plan.replaced}
+            return wire.label(kept, self._plan.tags)
+        return ",".join([label, *self._plan.tags]) if label else ",".join(self._plan.tags)
 
     @property
     def _litellm(self) -> Any:
@@ -142,13 +159,13 @@ class LiteLLMAdapter:
         return preflight(self._litellm, self.model, self._api_base, self.args)
 
     def settings(self) -> dict[str, Any]:
-        """The model id, the model arguments (secrets masked) and the api_base, for run.json
-        (a resume may change the api_base: it does not shape answers)."""
-        return {
-            "model": self.model,
-            "model_args": wire.recorded(self.args),
-            "api_base": self._api_base,
-        }
+        """The model id, the model arguments (secrets masked), the provider rules' rewrites
+        and the api_base, for run.json (a resume may change the api_base: it does not shape
+        answers)."""
+        found = {"model": self.model, "model_args": wire.recorded(self.args)}
+        if self._plan.notes:
+            found["rules"] = list(self._plan.notes)
+        return {**found, "api_base": self._api_base}
 
     def _content(self, message: Message) -> str | list[dict[str, Any]]:
         if all(isinstance(p, TextPart) for p in message.parts):
@@ -165,12 +182,14 @@ class LiteLLMAdapter:
     async def complete(self, request: ModelRequest) -> ModelResponse:
         """Send ``request``; raise a :mod:`bpb_core.errors` model error on failure."""
         started = time.perf_counter()
-        requested: dict[str, Any] = {"temperature": request.temperature}
+        requested: dict[str, Any] = {}
+        if self._plan.temperature:
+            requested["temperature"] = request.temperature
         if request.max_tokens is not None:
             requested["max_tokens"] = request.max_tokens
         if request.response_schema is not None:
             requested["response_format"] = response_format(request)
-        requested.update(self.args)  # a model's own arguments win over the run's
+        requested.update(self._plan.args)  # a model's own arguments win over the run's
         kwargs: dict[str, Any] = {
             "model": self.model,
             "messages": [{"role": m.role, "content": self._content(m)} for m in request.messages],
@@ -190,13 +209,14 @@ class LiteLLMAdapter:
         except ModelError:
             raise
         except Exception as exc:
-            raise map_error(exc) from None
+            raise map_error(exc, self._hidden) from None
         finally:
             sent = wire.take(call_id)
         asked = {k: kwargs[k] for k in kwargs if k not in _PLUMBING}
         dropped = () if sent is None else wire.dropped(asked, sent)
         reply = self._response(raw, time.perf_counter() - started)
-        return dataclasses.replace(reply, sent=sent, dropped=dropped)
+        recorded = None if sent is None else wire.recorded(sent)  # headers ride in some bodies
+        return dataclasses.replace(reply, sent=recorded, dropped=dropped)
 
     def _response(self, raw: Any, latency: float) -> ModelResponse:
         """The reply in ``raw``: its text, token counts (reasoning and cached ones too), cost

@@ -106,6 +106,14 @@ def bundled_map() -> dict[str, Any]:
     return table if isinstance(table, dict) else {}
 
 
+def map_entry(model: str) -> dict[str, Any]:
+    """The entry of ``model`` (a litellm id, with or without its provider) in the bundled map,
+    empty when it has none."""
+    table = bundled_map()
+    entry = table.get(model) or table.get(model.split("/", 1)[-1]) or {}
+    return entry if isinstance(entry, dict) else {}
+
+
 def _unknown(model: str) -> str:
     return (
         f"litellm knows no provider for {model!r}: write PROVIDER/MODEL (openai/..., "
@@ -124,8 +132,7 @@ def quick_preflight(model: str, api_base: str | None, args: Mapping[str, Any]) -
     if provider and "api_key" not in args and not any(os.environ.get(v) for v in provider.env):
         names = " or ".join(provider.env)
         return f"{model}: environment variable {names} is not set (the provider's API key)"
-    entry = table.get(model) or table.get(model.split("/", 1)[-1]) or {}
-    route = "responses" if entry.get("mode") == "responses" else "chat"
+    route = "responses" if map_entry(model).get("mode") == "responses" else "chat"
     return _missing_module(model, route)
 
 

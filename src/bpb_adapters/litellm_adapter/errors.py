@@ -31,8 +31,11 @@ _KEY_SHAPE = re.compile(r"\b(sk|pk|key|AIza)[-_A-Za-z0-9]{16,}")
 _MAX_MESSAGE = 500
 
 
-def redact(text: str) -> str:
-    """Remove secret environment values and key-shaped tokens from ``text``."""
+def redact(text: str, hidden: tuple[str, ...] = ()) -> str:
+    """Remove ``hidden`` values (the adapter's header values and credential-like arguments),
+    secret environment values and key-shaped tokens from ``text``."""
+    for value in hidden:
+        text = text.replace(value, "***")
     for name, value in os.environ.items():
         if _SECRET_NAME.search(name) and len(value) >= 8 and value in text:
             text = text.replace(value, "***")
@@ -66,8 +69,9 @@ def _status(exc: BaseException) -> int | None:
     return status if isinstance(status, int) else None
 
 
-def map_error(exc: BaseException) -> ModelError:
-    """The bpb model error for an exception raised by ``litellm.acompletion``."""
+def map_error(exc: BaseException, hidden: tuple[str, ...] = ()) -> ModelError:
+    """The bpb model error for an exception raised by ``litellm.acompletion``; its message
+    holds none of ``hidden`` (see :func:`redact`)."""
     from litellm.exceptions import (
         APIConnectionError,
         AuthenticationError,
@@ -76,7 +80,7 @@ def map_error(exc: BaseException) -> ModelError:
         Timeout,
     )
 
-    message = redact(" ".join(f"{type(exc).__name__}: {exc}".split()))[:_MAX_MESSAGE]
+    message = redact(" ".join(f"{type(exc).__name__}: {exc}".split()), hidden)[:_MAX_MESSAGE]
     # An import error inside litellm (a provider route's module is missing), whatever litellm
     # wrapped it in: retrying cannot install the module.
     seen: BaseException | None = exc

@@ -22,8 +22,12 @@ from collections.abc import Iterator, Mapping
 from typing import Any
 
 _SHORT = {"reasoning_effort": "effort", "temperature": "temp"}
-_SECRET = re.compile(r"(key|token|secret|auth|password)", re.IGNORECASE)
-_NOT_IN_LABEL = frozenset({"extra_headers", "api_key"})
+# credential-like argument names: api_key, aws_session_token, vertex_credentials (not max_tokens)
+_SECRET = re.compile(
+    r"secret|passw|credential|(?:^|[_-])(?:key|token|auth\w*|bearer)(?:$|[_-])", re.IGNORECASE
+)
+_HEADERS = frozenset({"extra_headers", "headers"})
+MASK = "***"
 
 
 def _short_value(value: Any) -> str:
@@ -34,27 +38,63 @@ def _short_value(value: Any) -> str:
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-def label(args: Mapping[str, Any]) -> str:
-    """A short name of an option set, e.g. ``effort=high,max_tokens=4096`` (empty for none)."""
+def label(args: Mapping[str, Any], notes: tuple[str, ...] = ()) -> str:
+    """A short name of an option set, e.g. ``effort=high,max_tokens=4096`` (empty for none),
+    then the provider rules' short notes (``thinking=8000 as effort=high``). Headers and
+    credential-like arguments never name a run: the name becomes a folder."""
     parts = [
         f"{_SHORT.get(k, k)}={_short_value(v)}"
-        for k, v in sorted(args.items())
-        if k not in _NOT_IN_LABEL
+        for k, v in sorted(recorded(args).items())
+        if k not in _HEADERS and not _SECRET.search(k)
     ]
-    return ",".join(parts)
+    return ",".join([*parts, *notes])
 
 
-def recorded(args: Mapping[str, Any]) -> dict[str, Any]:
-    """``args`` for run.json: secret-looking header values and any ``api_key`` are masked."""
-    out: dict[str, Any] = {}
-    for key, value in args.items():
-        if key == "api_key":
-            out[key] = "***"
-        elif key == "extra_headers" and isinstance(value, Mapping):
-            out[key] = {h: "***" if _SECRET.search(h) else v for h, v in value.items()}
-        else:
-            out[key] = value
-    return out
+def recorded(value: Any) -> Any:
+    """``value`` (model arguments, or the parameters sent) as bpb writes it to any file: every
+    header value and every credential-like argument (``api_key``, ``aws_secret_access_key``,
+    at any depth) is masked, whatever the header is called (an organisation id or a proxy
+    token is the user's to share, not bpb's)."""
+    if isinstance(value, Mapping):
+        return {
+            str(k): _masked(v) if str(k) in _HEADERS or _SECRET.search(str(k)) else recorded(v)
+            for k, v in value.items()
+        }
+    if isinstance(value, list | tuple):
+        return [recorded(v) for v in value]
+    return value
+
+
+def _masked(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): MASK for k in value}
+    return MASK
+
+
+def secrets(args: Mapping[str, Any]) -> tuple[str, ...]:
+    """The values :func:`recorded` masks, as text: an error message quoting one (litellm
+    echoing a header, a proxy its token) is scrubbed with them."""
+    found: list[str] = []
+
+    def collect(value: Any, hidden: bool) -> None:
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                collect(v, hidden or str(k) in _HEADERS or bool(_SECRET.search(str(k))))
+        elif isinstance(value, list | tuple):
+            for v in value:
+                collect(v, hidden)
+        elif hidden and value is not None and len(str(value)) >= 4:
+            found.append(str(value))
+
+    collect(args, False)
+    return tuple(sorted(set(found), key=len, reverse=True))
+
+
+def scrub(text: str, hidden: tuple[str, ...]) -> str:
+    """``text`` with each of ``hidden`` replaced by the mask."""
+    for value in hidden:
+        text = text.replace(value, MASK)
+    return text
 
 
 _KEEP = 2048  # bodies waiting to be taken; a call takes its own right after it returns

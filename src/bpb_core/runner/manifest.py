@@ -2,10 +2,10 @@
 
 ``run.json`` records what a run was asked to do, with what software, and when. Resuming a run
 folder with different answer-shaping settings (adapter, its model arguments, dataset, input
-mode, chain of thought, force-numeric, temperature) would mix incomparable answers, so it is
-refused as bad input. The guard is kept twice: in ``run.json`` (written atomically) and as a
-configuration hash on every line of the attempts log, which guards a folder that lost its
-``run.json``.
+mode, chain of thought, force-numeric, temperature, max tokens: every option sent to the
+provider) would mix incomparable answers, so it is refused as bad input. The guard is kept
+twice: in ``run.json`` (written atomically) and as a configuration hash on every line of the
+attempts log, which guards a folder that lost its ``run.json``.
 
 One ``bpb run`` per run folder at a time: two runs writing one folder would pay every call twice
 and interleave their answers. The first run holds an exclusive ``flock`` on ``RUN_DIR/run.lock``
@@ -52,8 +52,11 @@ _GUARDED = (
     "force_numeric",
     "temperature",
     "structured_output",
+    "max_tokens",
 )
 _UNGUARDED_SETTINGS = ("api_base",)
+# No cap is a setting of its own: a run made without --max-tokens resumed with one is refused.
+_NONE_IS_A_VALUE = frozenset({"max_tokens"})
 
 
 def now() -> str:
@@ -94,10 +97,17 @@ def _guarded(manifest: dict[str, Any], key: str) -> Any:
     return value
 
 
+def _recorded(manifest: dict[str, Any], key: str) -> bool:
+    return key in manifest or key in manifest.get("options", {})
+
+
 def config_hash(manifest: dict[str, Any]) -> str:
     """A digest of a run's answer-shaping settings; every attempt logged carries it, so the
-    attempts log alone can refuse a resume that would mix answers."""
+    attempts log alone can refuse a resume that would mix answers. No output cap adds nothing
+    to the digest, so the hashes of runs logged before the cap was guarded still match."""
     shaping = {key: _guarded(manifest, key) for key in _GUARDED}
+    if shaping["max_tokens"] is None:
+        del shaping["max_tokens"]
     text = json.dumps(shaping, sort_keys=True, default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -108,11 +118,23 @@ def _check_resume(run_dir: Path, old: dict[str, Any], new: dict[str, Any]) -> No
         after = _guarded(new, key)
         if key == "cot" and isinstance(before, dict) and isinstance(after, dict):
             _check_cot(run_dir, before, after)
-        elif before is not None and before != after:
+        elif _differs(old, key, before, after):
             raise BadInput(
-                f"{run_dir / RUN_MANIFEST}: {key}: this folder holds a run with {before!r}, not "
-                f"{after!r}; use another --out to keep answers comparable"
+                f"{run_dir / RUN_MANIFEST}: {key}: this folder holds a run with "
+                f"{_shown(key, before)}, not {_shown(key, after)}; use another --out to keep "
+                "answers comparable"
             )
+
+
+def _differs(old: dict[str, Any], key: str, before: Any, after: Any) -> bool:
+    """Whether a resume changes ``key``; a setting the old run.json does not record (written
+    before bpb recorded it) is taken as unchanged."""
+    known = before is not None or (key in _NONE_IS_A_VALUE and _recorded(old, key))
+    return known and before != after
+
+
+def _shown(key: str, value: Any) -> str:
+    return "no cap" if key in _NONE_IS_A_VALUE and value is None else repr(value)
 
 
 def _check_cot(run_dir: Path, before: dict[str, Any], after: dict[str, Any]) -> None:

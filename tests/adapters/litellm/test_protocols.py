@@ -127,23 +127,22 @@ def test_protocol_end_to_end(
             assert entry["retry_in"] == pytest.approx(0.25), (fault, entry["error"])
 
 
-def test_anthropic_thinking_budget_reported_when_the_route_changes_it(
+def test_anthropic_thinking_budget_named_when_the_model_takes_an_effort_instead(
     dataset: Path, tmp_path: Path, registry: Registry, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """claude-opus-4.7 takes adaptive thinking only: litellm rewrites a budget into an effort,
-    and bpb records the budget as dropped instead of pretending it was used."""
+    """claude-opus-4.7 takes adaptive thinking only: bpb sends a budget as the effort litellm
+    would have made of it silently, names the translation and records the reasoning."""
     monkeypatch.setenv("ANTHROPIC_API_KEY", KEYS["ANTHROPIC_API_KEY"])
     thinking = {"type": "enabled", "budget_tokens": 2000}
     with fake_server(dataset) as server:
         options = AdapterOptions(api_base=server.url, model_args={"thinking": thinking})
         adapter = registry.adapter("litellm:claude-opus-4.7", options)
-        assert adapter.name == "litellm:claude-opus-4.7 [thinking=2000]"  # type: ignore[attr-defined]
+        name = "litellm:claude-opus-4.7 [thinking=2000 as effort=low,temp=default]"
+        assert adapter.name == name  # type: ignore[attr-defined]
         opts = RunOptions(timeout=10, retry=FAST, tasks=("q1",), limit=1, horizons=(1.0,))
         run_eval(dataset, adapter, tmp_path / "run", opts, registry=registry)
         seen = _requests(server)
-    assert "thinking" in seen[0]["params"]
+    assert seen[0]["params"]["output_config"] == {"effort": "low"}
     entry = next(read_attempts(tmp_path / "run"))
-    assert "thinking.budget_tokens" in entry["dropped"] and entry["reasoning"] == THOUGHT
+    assert entry["outcome"] == "ok" and entry["dropped"] == [] and entry["reasoning"] == THOUGHT
     assert entry["usage"]["reasoning_tokens"] > 0
-    manifest = read_manifest(tmp_path / "run") or {}
-    assert "thinking.budget_tokens" in manifest["dropped_params"]

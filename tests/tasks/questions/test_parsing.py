@@ -51,6 +51,30 @@ def test_cot_reply_with_braces_in_reasoning_uses_last_valid_object() -> None:
     assert parsed.value == Q1
 
 
+def _latex_reasoning(groups: int) -> str:
+    """Chain of thought as models write it: LaTeX (``\\frac{a}{b}`` is two groups), a
+    piecewise ``\\left\\{`` that never closes, quoted labels, an odd inch mark and a sketch
+    of the answer format, with ``groups`` ``{...}`` groups in all."""
+    steps = [
+        f"Step {k}: the cue ball travels $s_{{{k}}} = \\frac{{v_0^2 - v_{{{k}}}^2}}{{2 \\mu g}}$."
+        for k in range(groups // 4)
+    ]
+    return (
+        'The format is {"answers": [{"id": 1, "answer": "T or F"}, ...]}. '
+        '$d = \\left\\{ 2R \\text{ if touching}$, so ball 3 is "T", 5" from the rail.\n'
+        + "\n".join(steps)
+        + "\nFinal answer:\n"
+    )
+
+
+def test_a_q1_reply_with_400_brace_groups_of_reasoning_parses() -> None:
+    reasoning = _latex_reasoning(400)
+    assert reasoning.count("}") >= 400
+    text = f"{reasoning}```json\n{json.dumps(Q1, indent=2)}\n```\nThat is all."
+    parsed = TASKS["q1"].parse(text, SCENE, COT)
+    assert (parsed.value, parsed.rule) == (Q1, "last-valid")
+
+
 def test_documented_tolerances_case_whitespace_and_string_ids() -> None:
     reply = {
         "answers": [{"id": str(i), "answer": " t " if i == 1 else "f"} for i in range(6, 0, -1)]
@@ -119,7 +143,10 @@ def test_parser_on_arbitrary_unicode(text: str) -> None:
 @given(
     task=st.sampled_from(["q1", "q2", "q3"]),
     before=st.text(max_size=80),
-    noise=st.lists(st.sampled_from(["{", "}", '{"a": 1}', '"}"', "{x}"]), max_size=6),
+    noise=st.lists(
+        st.sampled_from(["{", "}", '{"a": 1}', '"}"', "{x}", '"', "\\left\\{", "\\frac{a}{b}"]),
+        max_size=12,
+    ),
 )
 def test_cot_finds_the_answer_after_arbitrary_reasoning(
     task: str, before: str, noise: list[str]

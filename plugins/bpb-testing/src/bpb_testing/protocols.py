@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from aiohttp import web
 
 from bpb_testing.fakereplies import reply_content
+from bpb_testing.rules import anthropic_error, anthropic_rejection
 
 if TYPE_CHECKING:
     from bpb_testing.fakeserver import FakeOpenAI
@@ -76,6 +77,9 @@ async def anthropic_messages(server: FakeOpenAI, request: web.Request) -> web.St
     """``POST /v1/messages``."""
     body = await request.json()
     server.record(request, "anthropic", body)
+    rejected = anthropic_rejection(body)
+    if rejected is not None:
+        return anthropic_error(rejected)
     text = _texts({"s": body.get("system"), "m": body.get("messages")}, ("text",))
     outcome = await server.answer(request, text, len(image_blocks(body)))
     if isinstance(outcome, web.StreamResponse):
