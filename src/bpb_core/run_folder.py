@@ -88,7 +88,7 @@ def make_run_folder(run_dir: Path) -> None:
         raise BadInput(f"{run_dir}: --out: cannot create the folder: {exc.strerror}") from None
 
 
-_TEMP = re.compile(r"\.(?P<name>.+)\.(?P<pid>[0-9]+)\.tmp")
+_TEMP = re.compile(r"\..+\.(?P<pid>[0-9]+)\.tmp")
 """The temporary file of an atomic write: ``.NAME.PID.tmp`` beside ``NAME``."""
 
 
@@ -109,29 +109,21 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         raise write_refused(path, exc) from None
 
 
-def remove_stale_temps(run_dir: Path) -> list[Path]:
+def remove_stale_temps(run_dir: Path) -> None:
     """Remove the temporary files (:func:`write_bytes_atomic`'s) that writers killed before
-    their rename left in ``run_dir`` and its scene folders; returns the files removed.
+    their rename left in ``run_dir`` and its scene folders.
 
     A file whose writer is still alive (a report writing ``scores.csv`` beside a run) is left
     to it; one that cannot be removed is left as it is (it hides no answer)."""
-    folders = [run_dir, *(key.dir(run_dir) for key in iter_scene_keys(run_dir))]
-    removed = []
-    for folder in folders:
-        for path in folder.glob(".*.tmp"):
-            found = _TEMP.fullmatch(path.name)
-            if found is None or _alive(int(found["pid"])):
-                continue
+    for path in (*run_dir.glob(".*.tmp"), *run_dir.glob("h*/scene_*/.*.tmp")):
+        found = _TEMP.fullmatch(path.name)
+        if found is not None and not _alive(int(found["pid"])):
             with contextlib.suppress(OSError):
                 path.unlink()
-                removed.append(path)
-    return removed
 
 
 def _alive(pid: int) -> bool:
     """Whether a process ``pid`` exists (this one included: its writes may be under way)."""
-    if pid == os.getpid():
-        return True
     try:
         os.kill(pid, 0)
     except PermissionError:  # another user's process

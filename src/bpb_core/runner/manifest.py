@@ -268,7 +268,7 @@ def run_lock(run_dir: Path) -> Iterator[None]:
         except BlockingIOError:
             holder = os.pread(handle, 64, 0).decode("ascii", "replace").strip() or "unknown"
             raise BadInput(
-                f"{run_dir}: in use by another bpb run (pid {holder}); wait for it to "
+                f"{run_dir}: in use by another bpb run or bpb human (pid {holder}); wait for it to "
                 "finish or stop it, then re-run to resume"
             ) from None
         try:  # a full disk refuses even these few bytes
