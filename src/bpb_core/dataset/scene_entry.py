@@ -114,7 +114,7 @@ def _parse_file(path: Path, identity: tuple[int, int, int]) -> dict[str, str]:
     except (OSError, ValueError) as exc:
         why = getattr(exc, "strerror", None) or exc
         raise BadInput(f"{path}: cannot read: {why}; {_UNCHECKED}") from None
-    recorded = {}
+    recorded: dict[str, str] = {}
     for number, line in enumerate(lines, 1):
         entry = parse_line(line)
         if entry is None:
