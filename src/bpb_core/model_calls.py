@@ -176,6 +176,46 @@ class AdapterOptions:
     model_args: dict[str, Any] = field(default_factory=dict)
     label: str | None = None
 
+    def __post_init__(self) -> None:
+        if self.api_base is not None:
+            check_api_base(self.api_base, "api_base")
+
+
+def check_api_base(value: object, where: str) -> None:
+    """Refuse an ``api_base`` no call could be sent to, before any is: each would be paid for
+    in retries and time, only to fail. ``where`` names it (``--api-base``, a run file's key).
+
+    Raises:
+        BadInput: One line naming ``where`` and what is wrong with the URL.
+    """
+    if not isinstance(value, str):
+        raise BadInput(f"{where}: expected a string, got {value!r}")
+    problem = _url_problem(value)
+    if problem is not None:
+        raise BadInput(f"{where} {problem}; expected a URL like http://127.0.0.1:8000/v1")
+
+
+def _url_problem(value: str) -> str | None:
+    """What stops ``value`` from being an endpoint's base URL, or ``None``."""
+    from urllib.parse import urlsplit
+
+    if not value or any(c.isspace() or not c.isprintable() for c in value):
+        return f"{value!r}: empty, or holds a space or a control character"
+    try:
+        url = urlsplit(value)
+        url.port  # noqa: B018 (a port that is no number from 0 to 65535 raises here)
+    except ValueError as exc:
+        return f"{value!r}: {exc}"
+    if url.username is not None or url.password is not None:  # the URL is kept in run.json
+        return "holds a user name or password: give keys in the provider's environment variable"
+    if url.scheme not in ("http", "https"):
+        return f"{value!r}: not an http:// or https:// URL"
+    if not url.hostname:
+        return f"{value!r}: names no host"
+    if url.query or url.fragment or value.endswith(("?", "#")):
+        return f"{value!r}: holds a query or fragment (the endpoint's path is appended to it)"
+    return None
+
 
 def split_spec(spec: str, flag: str = "--adapter") -> tuple[str, str]:
     """Split an adapter spec ``name:model`` at the first colon; a spec with no name or no model

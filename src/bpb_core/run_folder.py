@@ -11,9 +11,11 @@ skipped by readers and closed off before the next append.
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import json
 import os
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -86,11 +88,15 @@ def make_run_folder(run_dir: Path) -> None:
         raise BadInput(f"{run_dir}: --out: cannot create the folder: {exc.strerror}") from None
 
 
+_TEMP = re.compile(r"\..+\.(?P<pid>[0-9]+)\.tmp")
+"""The temporary file of an atomic write: ``.NAME.PID.tmp`` beside ``NAME``."""
+
+
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename, so a reader (or a run
     killed half-way) sees the old file or the new one, never a torn one. A write the system
     refuses (a full disk) is a :class:`WriteRefused` naming ``path``, left as it was."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # as _TEMP matches
     try:
         try:
             tmp.write_bytes(data)
@@ -101,6 +107,30 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise write_refused(path, exc) from None
+
+
+def remove_stale_temps(run_dir: Path) -> None:
+    """Remove the temporary files (:func:`write_bytes_atomic`'s) that writers killed before
+    their rename left in ``run_dir`` and its scene folders.
+
+    A file whose writer is still alive (a report writing ``scores.csv`` beside a run) is left
+    to it; one that cannot be removed is left as it is (it hides no answer)."""
+    for path in (*run_dir.glob(".*.tmp"), *run_dir.glob("h*/scene_*/.*.tmp")):
+        found = _TEMP.fullmatch(path.name)
+        if found is not None and not _alive(int(found["pid"])):
+            with contextlib.suppress(OSError):
+                path.unlink()
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process ``pid`` exists (this one included: its writes may be under way)."""
+    try:
+        os.kill(pid, 0)
+    except PermissionError:  # another user's process
+        return True
+    except (ProcessLookupError, OverflowError):  # OverflowError: past any pid there can be
+        return False
+    return True
 
 
 def write_json_atomic(path: Path, data: Any) -> None:
@@ -218,7 +248,10 @@ def live_run(run_dir: Path) -> str | None:
     except OSError:
         return None
     try:
-        pid = os.read(handle, 64).decode("ascii", "replace").strip()
+        try:
+            pid = os.read(handle, 64).decode("ascii", "replace").strip()
+        except OSError:  # not a file (a folder named run.lock): no run can hold it as a lock
+            return None
         if not pid or pid == str(os.getpid()):
             return None
         try:

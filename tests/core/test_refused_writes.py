@@ -12,6 +12,8 @@ from typing import IO
 
 import pytest
 
+from bpb_core.run_folder import read_attempts
+from support.fake_openai import fake_server
 from support.paths import tree
 
 BPB = str(Path(sys.executable).with_name("bpb"))
@@ -67,6 +69,44 @@ def test_a_run_the_disk_cuts_short_keeps_its_answers_and_says_how_to_resume(
     resumed = bpb(*run)
     assert resumed.returncode == 0, resumed.stderr
     assert answers(run_dir).items() >= kept.items() and len(answers(run_dir)) == 18
+
+
+def test_a_disk_full_before_the_run_starts_is_one_line_naming_the_lock(
+    dataset: Path, tmp_path: Path
+) -> None:
+    """It was "internal error: OSError: [Errno 27] File too large" (exit 3): the pid written
+    into ``run.lock`` was the first write, and nothing guarded it."""
+    out = tmp_path / "out"
+    done = bpb("run", "--data", str(dataset), "--adapter", "baseline:stasis", "--out", str(out),
+               limit=0)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"error: {out / 'baseline_stasis' / 'run.lock'}: cannot write: [Errno 27] File too "
+        "large; nothing was sent: make room, then run again"
+    ]
+
+
+def test_no_call_is_sent_after_the_disk_refuses_a_write(
+    dataset: Path, tmp_path: Path, secret_key: str
+) -> None:
+    """The calls queued for a slot went out after the first refused write, each paid for and
+    none kept (25 sent, 9 kept). One call at a time, the call whose reply could not be logged
+    is the last one the server sees."""
+    out = tmp_path / "out"
+    with fake_server(dataset, {"latency": 0.05}, tmp_path) as server:
+        done = bpb(
+            "run", "--data", str(dataset), "--adapter", "litellm:openai/fake-model",
+            "--api-base", server.api_base, "--concurrency", "1", "--out", str(out),
+            limit=5_000,  # run.json (under 4 kB) fits; the attempts log: about 4 lines of 18
+        )  # fmt: skip
+        sent = server.stats()["total"]
+    run_dir = out / "litellm_openai_fake-model"
+    assert done.returncode == 2, done.stderr
+    refused = f"error: {run_dir / 'attempts.jsonl'}: cannot write: [Errno 27] File too large"
+    assert done.stderr.strip().splitlines()[-1].startswith(f"{refused}; the run stopped")
+    kept = len(list(read_attempts(run_dir)))
+    assert 1 <= kept < 18
+    assert sent == kept + 1
 
 
 def test_a_report_the_disk_cuts_short_names_the_file_and_leaves_the_runs_alone(

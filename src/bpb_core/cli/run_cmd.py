@@ -67,8 +67,10 @@ def _adapter_options(
     api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
 ) -> AdapterOptions:
     from bpb_core.cli.run_file import check_price_table
-    from bpb_core.model_calls import AdapterOptions
+    from bpb_core.model_calls import AdapterOptions, check_api_base
 
+    if api_base is not None:  # checked before the rest: no adapter is built, no call sent
+        check_api_base(api_base, "--api-base")
     price_table: dict[str, dict[str, float]] = {}
     if prices is not None:
         try:

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.errors import BadInput
-from bpb_core.model_calls import AdapterOptions, known_cost, non_finite
+from bpb_core.model_calls import AdapterOptions, check_api_base, known_cost, non_finite
 
 _RUN_KEYS = {
     "timeout": (int, float),
@@ -111,9 +111,10 @@ def _check(where: str, table: Mapping[str, Any], spec_required: bool) -> None:
             raise BadInput(f"{where}.{key}: expected a number, got {value!r}")
         if value is not None and not 0 < value < math.inf:  # nan and inf too (TOML has both)
             raise BadInput(f"{where}.{key}: must be a positive finite number, got {value!r}")
-    for key in ("api_base", "label"):  # else litellm names no provider for an api_base of 3
-        if key in table and not isinstance(table[key], str):
-            raise BadInput(f"{where}.{key}: expected a string, got {table[key]!r}")
+    if "label" in table and not isinstance(table["label"], str):
+        raise BadInput(f"{where}.label: expected a string, got {table['label']!r}")
+    if "api_base" in table:  # else litellm names no provider for an api_base of 3
+        check_api_base(table["api_base"], f"{where}.api_base")
     for key in ("args", "headers", "price"):
         if key in table and not isinstance(table[key], dict):
             raise BadInput(f"{where}.{key}: expected a table")

@@ -35,6 +35,8 @@ def human(
 ) -> None:
     """Answer a dataset's questions in the browser; saved as a normal run (human:NAME),
     resumable, scenes in a seeded order."""
+    from bpb_core.run_folder import make_run_folder
+    from bpb_core.runner.manifest import run_lock
     from bpb_core.runner.options import RunOptions
     from bpb_core.web import HOST, require_web, serve
 
@@ -43,9 +45,11 @@ def human(
 
     chosen = tuple(params.csv_list(tasks, "--tasks"))
     options = RunOptions(tasks=chosen, horizons=params.horizons(horizons), limit=limit)
-    session = HumanSession(data, out, name, load_registry(), options, seed)
-    stderr().print(f"bpb human: open http://{HOST}:{port}/ (Ctrl-C stops; answers are kept)")
-    serve(human_app(session), port)
+    make_run_folder(out)
+    with run_lock(out):  # as bpb run's: a second session (or a run) on the folder is refused
+        session = HumanSession(data, out, name, load_registry(), options, seed)
+        stderr().print(f"bpb human: open http://{HOST}:{port}/ (Ctrl-C stops; answers are kept)")
+        serve(human_app(session), port)
 
 
 @click.command("view")

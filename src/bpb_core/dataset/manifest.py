@@ -114,6 +114,28 @@ def content_hash(fields: Mapping[str, Any]) -> str:
     return hashlib.sha256(body.encode()).hexdigest()
 
 
+def check_unedited(path: Path, fields: Mapping[str, Any] | None) -> None:
+    """Refuse the ``dataset.json`` at ``path`` (its ``fields`` as read) when it was edited after
+    ``bpb generate`` wrote it: its ``dataset_hash``, which runs record to identify the dataset,
+    no longer matches its content, so two different datasets would look the same. The hash is
+    recomputed from the file's own fields (:func:`content_hash`), so a manifest written by an
+    earlier bpb still matches; one without a hash, or hand-made (no ``format``), is not checked.
+    ``bpb run``, ``bpb human`` and ``bpb export`` all check it here.
+
+    Raises:
+        BadInput: One line naming ``dataset.json``.
+    """
+    if fields is None or "format" not in fields:
+        return
+    value = fields.get("dataset_hash")
+    if isinstance(value, str) and value and content_hash(fields) != value:
+        raise BadInput(
+            f"{path}: edited after the dataset was generated: its dataset_hash "
+            f"{value[:12]} no longer matches its content, and runs record that hash to "
+            "identify the dataset; restore the file or generate the dataset again"
+        )
+
+
 @dataclass(frozen=True)
 class IndexRow:
     """One line of ``index.csv``: a scene, the family's cells about it, and its stability.

@@ -9,7 +9,9 @@ and names every image file of the scene, so embedding code never spells a file n
 :func:`read_scene_file` (JSON through :func:`read_scene_model`), so a file changed after
 generation (an edited ``final.json`` would silently change every score) is refused in one line
 naming it, instead of being used. Folders without ``checksums.sha256`` (hand-made scenes) and
-files it does not list are read unchecked; ``Dataset.verify()`` lists every difference at once.
+files it does not list are read unchecked; a ``checksums.sha256`` that cannot be read or holds a
+line that is no checksum is refused naming it (else it would turn the check off).
+``Dataset.verify()`` lists every difference at once.
 """
 
 from __future__ import annotations
@@ -76,7 +78,8 @@ def check_recorded(path: Path, data: bytes) -> None:
     ``checksums.sha256`` records another hash for it.
 
     Raises:
-        BadInput: The hashes differ (names the file and what to do).
+        BadInput: The hashes differ (names the file and what to do), or
+            ``checksums.sha256`` cannot be read or holds a line that is no checksum (names it).
     """
     root = path.parent.parent.parent
     recorded = _recorded(root)
@@ -99,14 +102,30 @@ def _recorded(root: Path) -> dict[str, str]:
     return {} if identity is None else _parse_file(root / CHECKSUMS, identity)
 
 
+_UNCHECKED = f"regenerate the dataset, or remove {CHECKSUMS} to use its files unchecked"
+
+
 @lru_cache(maxsize=16)
 def _parse_file(path: Path, identity: tuple[int, int, int]) -> dict[str, str]:
+    """The hashes of ``path`` by scene file; a file that cannot be read, or a line that is no
+    checksum, is refused: skipped, it would turn the check off for the files it should list."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, ValueError):
-        return {}  # unreadable: Dataset.verify() says so; reading scenes does not depend on it
-    parsed = (parse_line(line) for line in lines)
-    return {rel: digest for digest, rel in (entry for entry in parsed if entry is not None)}
+    except (OSError, ValueError) as exc:
+        why = getattr(exc, "strerror", None) or exc
+        raise BadInput(f"{path}: cannot read: {why}; {_UNCHECKED}") from None
+    recorded: dict[str, str] = {}
+    for number, line in enumerate(lines, 1):
+        entry = parse_line(line)
+        if entry is None:
+            raise BadInput(
+                f"{path}: line {number}: not '<sha256>  <path inside the dataset>', so the "
+                f"scene files cannot be checked against it; {_UNCHECKED}"
+            )
+        recorded[entry[1]] = entry[0]
+    if not recorded:
+        raise BadInput(f"{path}: records no checksum; {_UNCHECKED}")
+    return recorded
 
 
 INPUT = "input"

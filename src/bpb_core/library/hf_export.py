@@ -29,8 +29,14 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import DescribesDataset
 from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
-from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.dataset.reader import Dataset, dataset_keys, load_dataset, open_folder
+from bpb_core.dataset.manifest import CHECKSUMS, check_unedited
+from bpb_core.dataset.reader import (
+    Dataset,
+    dataset_keys,
+    load_dataset,
+    manifest_file,
+    open_folder,
+)
 from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
 from bpb_core.interfaces import InputMode
@@ -113,8 +119,9 @@ def export_hf(
 
     Raises:
         BadInput: ``data`` is not a dataset, its scene folders do not match its ``index.csv``,
-            a task is unknown, a scene file is missing or damaged, or ``out`` holds other files
-            or cannot be a folder (a file, or under one).
+            its ``dataset.json`` was edited after generation, a task is unknown, a scene file
+            is missing or damaged, or ``out`` holds other files or cannot be a folder (a file,
+            or under one).
         WriteRefused: The system refused a write (a full disk): names the file.
     """
     from bpb_core.registry import make_registry
@@ -122,6 +129,7 @@ def export_hf(
     registry = registry or make_registry()
     dataset = load_dataset(data, registry=registry)
     dataset_keys(dataset.root)  # scene folders unlike index.csv: refused, as bpb run does
+    check_unedited(dataset.root / MANIFEST, manifest_file(dataset.root)[0])  # and an edit
     names = tuple(tasks or registry.tasks_for(dataset.family.name, default_only=True))
     objects = [registry.task(name) for name in names]
     index = csv.DictReader((dataset.root / INDEX).read_text(encoding="utf-8-sig").splitlines())

@@ -30,6 +30,7 @@ import threading
 from collections.abc import Callable, Coroutine, Iterator, Sequence
 from typing import Any, TypeVar
 
+from bpb_core.errors import WriteRefused
 from bpb_core.runner.budget import pair_name
 from bpb_core.runner.call import PairCall
 from bpb_core.runner.options import ProgressEvent
@@ -37,6 +38,8 @@ from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState
 
 INTERRUPTED = "interrupted"
+WRITE_REFUSED = "write-refused"
+FAILED = "failed"
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _OWNS_SIGNALS = contextvars.ContextVar("bpb_owns_signals", default=False)
 T = TypeVar("T")
@@ -148,8 +151,9 @@ async def _abandon(running: set[asyncio.Task[None]]) -> None:
 async def drive(state: RunState, plan: list[Pair]) -> None:
     """Run the pairs, in the plan's order, through a bounded window.
 
-    The first scene error stops new pairs, lets the ones in flight finish (their answers are
-    kept) and is raised. SIGINT/SIGTERM stop new pairs too (see
+    The first scene error (a refused write, a plugin's bug) stops every call not yet sent,
+    queued ones included, lets the ones in flight finish (their answers are kept where the disk
+    allows) and is raised. SIGINT/SIGTERM stop new pairs too (see
     :func:`interruptible`); a pair abandoned by a second signal stays unsent.
     Cancelling the run (``task.cancel()`` on a library caller's task) abandons the calls in
     flight the same way and waits for them to end, so none outlives the run (or its lock).
@@ -165,6 +169,9 @@ async def drive(state: RunState, plan: list[Pair]) -> None:
             state.not_sent(task)
         except Exception as exc:  # re-raised below, after the scenes in flight finish
             failures.append(exc)
+            # Now, not once the window is drained: the pairs queued for a slot would each be
+            # paid for, and on a disk that refused one write their replies could not be kept.
+            state.stop(WRITE_REFUSED if isinstance(exc, WriteRefused) else FAILED)
         finally:
             window.release()
 

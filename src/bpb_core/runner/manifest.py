@@ -7,15 +7,16 @@ provider) would mix incomparable answers, so it is refused as bad input. The gua
 twice: in ``run.json`` (written atomically) and as a configuration hash on every line of the
 attempts log, which guards a folder that lost its ``run.json``.
 
-One ``bpb run`` per run folder at a time: two runs writing one folder would pay every call twice
-and interleave their answers. The first run holds an exclusive ``flock`` on ``RUN_DIR/run.lock``
-(holding its pid) until it ends; a second run on the folder is refused as bad input naming the
-holder's pid. The operating system drops the lock when its process dies, however it dies, so a
-lock left by a dead run is simply taken over.
+One ``bpb run`` (or ``bpb human`` session) per run folder at a time: two runs writing one folder
+would pay every call twice and interleave their answers. The first run holds an exclusive
+``flock`` on ``RUN_DIR/run.lock`` (holding its pid) until it ends; a second run on the folder is
+refused as bad input naming the holder's pid. The operating system drops the lock when its
+process dies, however it dies, so a lock left by a dead run is simply taken over.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import fcntl
 import hashlib
@@ -31,9 +32,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.reader import DataFolder, open_folder
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, WriteRefused, write_refused
 from bpb_core.layout import ATTEMPTS, RUN_LOCK, RUN_MANIFEST
-from bpb_core.run_folder import AnswerRecord, iter_answers, read_manifest, write_manifest
+from bpb_core.run_folder import (
+    AnswerRecord,
+    iter_answers,
+    read_manifest,
+    remove_stale_temps,
+    write_manifest,
+)
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import dataset_hash
 from bpb_core.version import __version__
@@ -264,9 +271,13 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
 def run_lock(run_dir: Path) -> Iterator[None]:
     """Hold the run folder's lock for the block.
 
+    Taking it, the holder removes the temporary files that killed writers left in the folder
+    (:func:`~bpb_core.run_folder.remove_stale_temps`).
+
     Raises:
         BadInput: Another live process holds the folder (one line naming its pid), or the
             folder cannot hold a lock file (names the path).
+        WriteRefused: The system refused to write the lock file (a full disk; names it).
     """
     path = run_dir / RUN_LOCK
     try:
@@ -279,15 +290,22 @@ def run_lock(run_dir: Path) -> Iterator[None]:
         except BlockingIOError:
             holder = os.pread(handle, 64, 0).decode("ascii", "replace").strip() or "unknown"
             raise BadInput(
-                f"{run_dir}: in use by another bpb run (pid {holder}); wait for it to "
+                f"{run_dir}: in use by another bpb run or bpb human (pid {holder}); wait for it to "
                 "finish or stop it, then re-run to resume"
             ) from None
-        os.ftruncate(handle, 0)
-        os.pwrite(handle, f"{os.getpid()}\n".encode("ascii"), 0)
+        try:  # a full disk refuses even these few bytes
+            os.ftruncate(handle, 0)
+            os.pwrite(handle, f"{os.getpid()}\n".encode("ascii"), 0)
+        except OSError as exc:
+            raise WriteRefused(
+                f"{write_refused(path, exc)}; nothing was sent: make room, then run again"
+            ) from None
+        remove_stale_temps(run_dir)  # only the lock's holder may: no other writer is there
         try:
             yield
         finally:
-            os.ftruncate(handle, 0)
+            with contextlib.suppress(OSError):  # the lock itself is dropped just below
+                os.ftruncate(handle, 0)
             fcntl.flock(handle, fcntl.LOCK_UN)
     finally:
         os.close(handle)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.manifest import content_hash
+from bpb_core.dataset.manifest import check_unedited
 from bpb_core.dataset.reader import DataFolder, dataset_keys, open_folder
 from bpb_core.dataset.scene_entry import (
     check_image,
@@ -109,28 +109,6 @@ def check_images(folder: DataFolder, refs: Sequence[SceneRef], input_mode: str) 
             )
 
 
-def check_manifest(folder: DataFolder) -> None:
-    """Refuse a ``dataset.json`` edited after ``bpb generate`` wrote it: its ``dataset_hash``,
-    which runs record to identify the dataset, no longer matches its content, so two different
-    datasets would look the same. The hash is recomputed from the file's own fields
-    (:func:`~bpb_core.dataset.manifest.content_hash`), so a manifest written by an earlier bpb
-    still matches; one without a hash, or hand-made (no ``format``), is not checked.
-
-    Raises:
-        BadInput: One line naming ``dataset.json``.
-    """
-    recorded = folder.recorded
-    if recorded is None or "format" not in recorded:
-        return
-    value = recorded.get("dataset_hash")
-    if isinstance(value, str) and value and content_hash(recorded) != value:
-        raise BadInput(
-            f"{folder.root / MANIFEST}: edited after the dataset was generated: its dataset_hash "
-            f"{value[:12]} no longer matches its content, and runs record that hash to "
-            "identify the dataset; restore the file or generate the dataset again"
-        )
-
-
 def dataset_hash(folder: DataFolder) -> str:
     """A hash identifying the dataset: the manifest's own when it records one, else a digest of
     ``dataset.json`` (or, without a manifest, of every ``init.json``)."""
@@ -193,7 +171,7 @@ def asking(data: Path | DataFolder, options: RunOptions, registry: Registry) -> 
     for ref in scenes:  # read as scoring will: a damaged final.json stops the run up front
         read_scene_files(ref.folder, family.scene_model, family.truth_model)
     simulator = folder.simulator()
-    check_manifest(folder)  # after the checks that name a field, which say more
+    check_unedited(folder.root / MANIFEST, folder.recorded)  # after those naming a field
     return Asking(family, resolved, tasks, scenes, simulator, folder)
 
 

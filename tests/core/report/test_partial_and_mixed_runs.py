@@ -153,6 +153,16 @@ def test_a_run_still_running_is_reported_as_running_not_as_to_resume(tmp_path: P
     assert ended == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
 
 
+def test_a_folder_named_run_lock_is_no_run_running(
+    tmp_path: Path, bpb_report: Callable[..., Done]
+) -> None:
+    # bpb report exited 3 ("internal error: IsADirectoryError") reading the pid in run.lock
+    data = write_dataset(tmp_path / "data")
+    (_stopped_run(tmp_path, data) / "run.lock").mkdir()
+    summary = json.loads(bpb_report(tmp_path / "runs", "--json", check=True).stdout)
+    assert summary["incomplete"] == {"stopped": "incomplete: 6 calls never sent, re-run to resume"}
+
+
 def test_a_task_a_run_was_not_asked_is_not_called_too_incomplete(tmp_path: Path) -> None:
     # A run asked q1 only read "left out" (too incomplete) under q2, q3 and the suite, in the
     # leaderboard and its chart, while its own "left out" column said nothing was.

@@ -72,7 +72,7 @@ def test_a_second_run_on_the_folder_exits_2_and_no_call_is_paid_twice(
         counts = server.counts()
     assert second.returncode == 2
     line = second.stderr.strip()
-    assert "\n" not in line and f"in use by another bpb run (pid {first.pid})" in line
+    assert "\n" not in line and f"in use by another bpb run or bpb human (pid {first.pid})" in line
     assert len(counts) == 18 and set(counts.values()) == {1}  # zero calls paid twice
     assert not (tmp_path / "out" / RUN / "run.lock").read_text()  # released at the end
 

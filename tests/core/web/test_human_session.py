@@ -6,6 +6,8 @@ from __future__ import annotations
 import asyncio
 import functools
 import re
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -18,7 +20,9 @@ from bpb_core.run_folder import iter_answers, read_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession, human_app
 from support.inprocess import bpb
+from support.web_server import free_port
 
+BPB = str(Path(sys.executable).with_name("bpb"))
 LOCAL = "http://127.0.0.1"  # the apps answer only requests addressed to loopback names
 
 
@@ -171,3 +175,28 @@ def test_a_huge_post_is_refused_before_it_is_read_whole(
     assert start["status"] == 400 and b"form: Field exceeded maximum size" in body
     assert pulled <= 1_000_000  # the first chunk, not 90 MB
     assert list(iter_answers(tmp_path)) == []
+
+
+def test_a_second_bpb_human_on_one_run_folder_is_refused_while_the_first_serves(
+    small_dataset: Path, tmp_path: Path
+) -> None:
+    """Two sessions on one folder both started: two people answered the same scenes and the
+    later answer file replaced the earlier (and each rewrote ``run.json``)."""
+    run = tmp_path / "run"
+    args = ["human", "--data", str(small_dataset), "--out", str(run), "--port", str(free_port())]
+    first = subprocess.Popen([BPB, *args], stderr=subprocess.PIPE, text=True)
+    try:
+        assert first.stderr is not None and "open http" in first.stderr.readline()
+        manifest = (run / "run.json").read_bytes()
+        again = [BPB, *args[:-1], str(free_port())]  # a process: it must not serve for ever
+        second = subprocess.run(again, capture_output=True, text=True, timeout=60)
+        assert first.poll() is None
+    finally:
+        first.terminate()
+        first.wait(timeout=30)
+    assert second.returncode == 2
+    assert second.stderr.strip().splitlines() == [
+        f"error: {run}: in use by another bpb run or bpb human (pid {first.pid}); wait for it "
+        "to finish or stop it, then re-run to resume"
+    ]
+    assert (run / "run.json").read_bytes() == manifest
