@@ -26,7 +26,7 @@ def _params(server: FakeServer) -> list[dict[str, Any]]:
 
 
 def _run(dataset: Path, out: Path, registry: Registry, spec: str, base: str, on: bool) -> Any:
-    adapter = registry.adapter(spec, AdapterOptions(api_base=base))
+    adapter = registry.adapter(spec, AdapterOptions(api_base=base or None))
     options = RunOptions(limit=1, timeout=10, retry=FAST, structured_output=on)
     return run_eval(dataset, adapter, out, options, registry=registry)
 
