@@ -38,18 +38,19 @@ def human(
     from bpb_core.run_folder import make_run_folder
     from bpb_core.runner.manifest import run_lock
     from bpb_core.runner.options import RunOptions
-    from bpb_core.web import HOST, require_web, serve
+    from bpb_core.web import listen, require_web, serve, url
 
     require_web()
     from bpb_core.web.human import HumanSession, human_app
 
     chosen = tuple(params.csv_list(tasks, "--tasks"))
     options = RunOptions(tasks=chosen, horizons=params.horizons(horizons), limit=limit)
+    sock = listen(port)  # a port in use is refused before the run folder is made
     make_run_folder(out)
     with run_lock(out):  # as bpb run's: a second session (or a run) on the folder is refused
         session = HumanSession(data, out, name, load_registry(), options, seed)
-        stderr().print(f"bpb human: open http://{HOST}:{port}/ (Ctrl-C stops; answers are kept)")
-        serve(human_app(session), port)
+        stderr().print(f"bpb human: open {url(sock)} (Ctrl-C stops; answers are kept)")
+        serve(human_app(session), sock)
 
 
 @click.command("view")
@@ -57,11 +58,12 @@ def human(
 @click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
 def view(run_dirs: tuple[Path, ...], port: int) -> None:
     """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
-    from bpb_core.web import HOST, require_web, serve
+    from bpb_core.web import listen, require_web, serve, url
 
     require_web()
     from bpb_core.web.viewer import Viewer, viewer_app
 
+    sock = listen(port)
     viewer = Viewer.load(list(run_dirs), load_registry())
-    stderr().print(f"bpb view: open http://{HOST}:{port}/ (Ctrl-C stops)")
-    serve(viewer_app(viewer), port)
+    stderr().print(f"bpb view: open {url(sock)} (Ctrl-C stops)")
+    serve(viewer_app(viewer), sock)

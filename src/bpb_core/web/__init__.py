@@ -14,6 +14,7 @@ until it is used, so :func:`require_web` can say which is missing.
 from __future__ import annotations
 
 import functools
+import socket
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.errors import BadInput
@@ -50,12 +51,41 @@ def loopback_only() -> Middleware:
     return Middleware(TrustedHostMiddleware, allowed_hosts=list(NAMES))
 
 
-def serve(app: Any, port: int) -> None:
-    """Run ``app`` (built with :func:`loopback_only`) on http://127.0.0.1:``port`` until
+def listen(port: int) -> socket.socket:
+    """A socket bound to http://127.0.0.1:``port`` (``0``: a free one the system picks), taken
+    before anything else is done, so that a port in use is refused before a run folder is made.
+
+    Raises:
+        BadInput: The port cannot be bound (another program listens on it): one line naming
+            it, with the ``--port`` to choose.
+    """
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((HOST, port))
+        sock.listen()  # bound alone, the port could still be bound by another socket
+    except OSError as exc:
+        sock.close()
+        raise BadInput(
+            f"--port {port}: cannot listen on {HOST}:{port} ({exc.strerror or exc}); choose "
+            "another with --port, or --port 0 for a free one"
+        ) from None
+    return sock
+
+
+def url(sock: socket.socket) -> str:
+    """The address people open for a socket of :func:`listen` (the port it really got)."""
+    return f"http://{HOST}:{sock.getsockname()[1]}/"
+
+
+def serve(app: Any, sock: socket.socket) -> None:
+    """Run ``app`` (built with :func:`loopback_only`) on the socket of :func:`listen` until
     interrupted: the apps have no login, so no other machine may reach them."""
     import uvicorn
 
-    uvicorn.run(app, host=HOST, port=port, log_level="warning", access_log=False)
+    config = uvicorn.Config(app, log_level="warning", access_log=False)
+    with sock:
+        uvicorn.Server(config).run(sockets=[sock])
 
 
 @functools.cache

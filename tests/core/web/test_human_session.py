@@ -118,15 +118,33 @@ def test_the_closing_page_comes_when_every_scene_is_answered(
     assert 'id="done"' in client.get("/").text and session.next_scene() is None
 
 
-def test_the_apps_listen_on_loopback_only(monkeypatch: pytest.MonkeyPatch) -> None:
-    import uvicorn
-
+def test_the_apps_listen_on_loopback_only_on_the_port_asked_or_a_free_one() -> None:
     from bpb_core import web as serving
 
-    seen: dict[str, object] = {}
-    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw))
-    serving.serve(object(), 8765)
-    assert seen["host"] == "127.0.0.1" and seen["port"] == 8765
+    with serving.listen(0) as sock:  # --port 0: the system picks, and the URL names it
+        host, port = sock.getsockname()
+        assert host == "127.0.0.1" and port > 0
+        assert serving.url(sock) == f"http://127.0.0.1:{port}/"
+        with pytest.raises(BadInput) as taken:
+            serving.listen(port)
+    assert str(taken.value).startswith(f"--port {port}: cannot listen on 127.0.0.1:{port} (")
+    assert str(taken.value).endswith("choose another with --port, or --port 0 for a free one")
+
+
+def test_a_taken_port_is_one_line_exit_2_and_makes_no_run_folder(
+    capfd: pytest.CaptureFixture[str], small_dataset: Path, tmp_path: Path
+) -> None:
+    from bpb_core import web as serving
+
+    run = tmp_path / "run"
+    with serving.listen(0) as held:  # another program on the port
+        port = str(held.getsockname()[1])
+        done = bpb(capfd, "human", "--data", str(small_dataset), "--out", str(run), "--port", port)
+        viewed = bpb(capfd, "view", str(tmp_path), "--port", port)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert f"--port {port}: cannot listen" in done.stderr and "Errno" not in done.stderr
+    assert not run.exists()
+    assert viewed.returncode == 2 and f"--port {port}: cannot listen" in viewed.stderr
 
 
 def test_bad_command_lines_are_one_line_errors(
