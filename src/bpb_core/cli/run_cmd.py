@@ -2,7 +2,9 @@
 
 Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``); 1 the run finished with
 ``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the same command to resume);
-2 bad input, or an authentication failure (the run stops at once: fix the key and re-run).
+2 bad input, or an adapter stopped by an error no retry can fix (an unknown model, an invalid
+parameter, a spent quota, a refused key, a provider that cannot be reached: that adapter stops
+at once, the others of a sweep go on; fix it and re-run the same command to resume).
 """
 
 from __future__ import annotations
@@ -309,10 +311,10 @@ def _finish(results: list[RunResult], registry: Registry, data: DataFolder) -> i
     show_summary([r.run_dir for r in results], registry, [data])
     code = 0
     for result in results:
-        if result.stopped == "auth":
+        if result.stopped == "setup":
             stderr().print(
-                f"[red]error:[/] {escape(result.adapter)}: authentication failed, run stopped "
-                f"(check the provider key in the environment): {escape(result.error or '')}"
+                f"[red]error:[/] {escape(result.adapter)}: stopped, {escape(result.error or '')}; "
+                f"{result.not_sent} pairs not sent: fix it, then re-run the same command to resume"
             )
             code = 2
         elif result.api_errors or result.not_sent:
