@@ -36,7 +36,9 @@ Status = Literal["ok", "parse_error", "refused", "cut", "empty", "api_error"]
 """A pair's end: answered (``ok``); a reply with no answer: unparseable (``parse_error``),
 declined by the model or its safety filter (``refused``), cut at the token cap (``cut``), with
 no text (``empty``); or no reply (``api_error``, resumable)."""
-REPLIED: tuple[str, ...] = ("ok", "parse_error", "refused", "cut", "empty")
+NO_ANSWER: tuple[str, ...] = ("refused", "cut", "empty")
+"""Statuses of a reply that held no answer to parse (:mod:`bpb_core.runner.outcome`)."""
+REPLIED: tuple[str, ...] = ("ok", "parse_error", *NO_ANSWER)
 """The statuses of a pair that got a reply: complete, scored (all but ``ok`` as wrong)."""
 COMPLETE: frozenset[str] = frozenset(REPLIED)
 

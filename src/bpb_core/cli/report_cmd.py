@@ -35,6 +35,9 @@ USAGE_COLUMNS = {
     "latency_mean": "latency ms",
     "retries": "retries",
     "parse_error": "parse err",
+    "refused": "refused",
+    "cut": "cut",
+    "empty": "empty",
     "api_error": "api err",
     "missing": "missing",
 }
@@ -131,12 +134,14 @@ def _print_part(part: ReportPart, built: Report) -> None:
         headline_cells,
         horizon_cells,
     )
-    from bpb_core.results.completeness import incomplete_lines, unparsed_lines
+    from bpb_core.results.completeness import incomplete_lines, unanswered_lines, unparsed_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
     console.print(_cell_table(title, *headline_cells(part, rule)))
-    warned = [*incomplete_lines(part.results).items(), *unparsed_lines(part.results).items()]
+    results = part.results
+    warned = [*incomplete_lines(results).items(), *unanswered_lines(results).items()]
+    warned += unparsed_lines(results).items()
     for run, line in warned:
         console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
     for different in (different_scenes_note(part), different_conditions_note(part)):

@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Literal
 
 import pandas as pd
 
+from bpb_core.run_folder import NO_ANSWER
+
 if TYPE_CHECKING:
     from bpb_core.results.frames import Results
 
@@ -120,6 +122,25 @@ def unparsed_lines(results: Results) -> dict[str, str]:
         "how the run answered, not what it knows; see the failure gallery"
         for run, told in out.items()
     }
+
+
+def unanswered_lines(results: Results) -> dict[str, str]:
+    """Per run with replies that held no answer (refused by the model or its safety filter,
+    cut at the token cap, empty), what to say: how many per task, that they count as wrong in
+    the strict score, and for a cut the cap that cut it (a setting of the run, not the model's
+    knowledge)."""
+    calls = results.calls[results.calls["status"].astype(str).isin(NO_ANSWER)]
+    out: dict[str, str] = {}
+    for run, frame in calls.groupby("run", observed=True):
+        counts = frame.groupby(["task", "status"], observed=True).size()
+        told = "; ".join(
+            f"{task} " + ", ".join(f"{kind} {n}" for kind, n in by_kind.items() if n)
+            for task, by_kind in counts.unstack(fill_value=0).iterrows()
+        )
+        line = f"replies with no answer, scored wrong ({told})"
+        cut = frame["error"][frame["status"].astype(str) == "cut"].dropna()
+        out[str(run)] = f"{line}; {cut.iloc[0]}" if len(cut) else line
+    return out
 
 
 def _calls(count: int) -> str:

@@ -14,12 +14,11 @@ from typing import Any, Literal
 
 from bpb_core.model_calls import ModelResponse
 
-Unanswered = Literal["refused", "cut", "empty"]
-UNANSWERED: tuple[Unanswered, ...] = ("refused", "cut", "empty")
-"""Statuses of a pair whose reply held no answer to parse (scored wrong, never re-asked)."""
+NoAnswer = Literal["refused", "cut", "empty"]
+"""How a reply held no answer to parse (the pair's status: ``run_folder.NO_ANSWER``)."""
 
 
-def unanswered(response: ModelResponse) -> Unanswered | None:
+def unanswered(response: ModelResponse) -> NoAnswer | None:
     """``refused``, ``cut`` or ``empty`` for a reply that holds no answer; ``None`` for one
     to parse. A refusal wins over a cut, a cut over an empty text (a reply whose whole cap
     went on reasoning is cut, not empty)."""
@@ -49,7 +48,7 @@ def token_cap(response: ModelResponse, asked: int | None) -> str:
     return f"max_tokens={asked}" if asked is not None else "the provider's default max tokens"
 
 
-def unanswered_error(kind: Unanswered, response: ModelResponse, asked: int | None) -> str:
+def unanswered_error(kind: NoAnswer, response: ModelResponse, asked: int | None) -> str:
     """The one line a refused, cut or empty reply records as its error."""
     finish = response.provider_finish or response.finish_reason
     if kind == "refused":
