@@ -7,7 +7,8 @@ missing; each protocol's docstring says what uses it.
   :class:`Comparing`, :class:`CountsEvents`, :class:`TruthOfMany`, :class:`DescribesDataset`.
 - A simulator: :class:`ExpectsWork`, :class:`RunsMany`.
 - An adapter: :class:`KnowsFamilies`, :class:`UsesRegistry`, :class:`NeedsSimulator` (offline
-  ones), :class:`Preflighting`, :class:`Describing`, :class:`Pricing`, :class:`Estimating`.
+  ones), :class:`Preflighting`, :class:`Describing`, :class:`Pricing`, :class:`Estimating`,
+  :class:`Bounding`.
 - A task: :class:`AnswersInBrowser`, :class:`PublishesSchema`.
 - A scorer: :class:`ExplainsErrors`, :class:`DrawsOverlay`, :class:`ReportsMetrics`.
 - A ground truth: :class:`ExplainsInstability`.
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.interfaces import GroundTruth, SceneFamily, Simulator
-    from bpb_core.model_calls import Message
+    from bpb_core.model_calls import CallCeiling, Message
     from bpb_core.picture import ScenePicture
     from bpb_core.registry import Registry
 
@@ -232,6 +233,18 @@ class Estimating(Protocol):
     def estimate(self, messages: tuple[Message, ...]) -> tuple[int, float | None]:
         """Input tokens of ``messages`` by the provider's own counting (its image rule
         included) and their input cost in USD (``None`` when no price is known)."""
+
+
+@runtime_checkable
+class Bounding(Protocol):
+    """An adapter that can bound what a request may cost before it is sent: ``--max-cost``
+    reserves that much per call and never lets reservations pass the cap; ``--dry-run`` shows
+    the output cost at the cap."""
+
+    def ceiling(self, messages: tuple[Message, ...], max_tokens: int | None) -> CallCeiling | None:
+        """The request's input tokens and cost, and the most output tokens one call may bill
+        (``max_tokens`` is the run's cap; the adapter's own arguments may override it) with
+        their price; ``None`` when no price is known."""
 
 
 @runtime_checkable

@@ -31,6 +31,7 @@ INIT = "init.json"
 FINAL = "final.json"
 RUN_MANIFEST = "run.json"
 ATTEMPTS = "attempts.jsonl"
+SPENDING = "spending.jsonl"
 RUN_LOCK = "run.lock"
 _SCENE_DIR = re.compile(r"^scene_(\d{4,})$")
 _HORIZON_DIR = re.compile(r"^h(\d+(?:\.\d+)?)$")

@@ -133,6 +133,33 @@ class ModelResponse:
 
 
 @dataclass(frozen=True)
+class CallCeiling:
+    """The most one request may cost, known before it is sent (``--max-cost`` reserves it).
+
+    Attributes:
+        input_tokens: The request's input tokens as the adapter counts them.
+        input_cost: Their cost in USD.
+        output_tokens: The most output tokens (reasoning included) one call may bill: its
+            ``max_tokens``, else the model's output limit; ``None`` when no bound is known.
+        output_price: USD per output token (the dearer of the output and reasoning prices).
+        basis: Where the figures come from, for the user (tokenizer, prices, output limit).
+    """
+
+    input_tokens: int
+    input_cost: float
+    output_tokens: int | None
+    output_price: float
+    basis: str = ""
+
+    @property
+    def output_cost(self) -> float | None:
+        """The cost of ``output_tokens`` (``None`` without a bound, unless output is free)."""
+        if self.output_tokens is None:
+            return 0.0 if self.output_price == 0 else None
+        return self.output_tokens * self.output_price
+
+
+@dataclass(frozen=True)
 class AdapterOptions:
     """Options every adapter factory receives; adapters ignore what does not apply to them.
 

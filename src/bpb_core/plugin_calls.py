@@ -15,10 +15,10 @@ import json
 import random
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.capabilities import Describing, KnowsFamilies, Preflighting, Pricing
+from bpb_core.capabilities import Bounding, Describing, KnowsFamilies, Preflighting, Pricing
 from bpb_core.errors import PluginBug, blamed, named
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
-from bpb_core.model_calls import Message, known_cost
+from bpb_core.model_calls import CallCeiling, Message, known_cost
 
 if TYPE_CHECKING:
     from bpb_core.capabilities import (
@@ -280,6 +280,27 @@ def estimated_input(
             return tokens, None if cost is None else float(cost)
     expected = "(input tokens, cost): an int at least 0 and a finite float at least 0 or None"
     raise returned(origin, what, f"{estimate!r:.80}", expected)
+
+
+def call_ceiling(
+    adapter: object, origin: str, messages: tuple[Message, ...], max_tokens: int | None
+) -> CallCeiling | None:
+    """``adapter.ceiling(messages, max_tokens)`` (``None`` without :class:`Bounding`), checked:
+    a :class:`CallCeiling` of counts at least 0 and finite costs at least 0, or ``None``."""
+    if not isinstance(adapter, Bounding):
+        return None
+    what = f"{named('adapter', adapter)}: ceiling()"
+    with blamed(origin, what):
+        ceiling = adapter.ceiling(messages, max_tokens)
+    if ceiling is None:
+        return None
+    if isinstance(ceiling, CallCeiling) and _count(ceiling.input_tokens):
+        out = ceiling.output_tokens
+        prices = (ceiling.input_cost, ceiling.output_price)
+        if (out is None or _count(out)) and all(known_cost(p) is not None for p in prices):
+            return ceiling
+    expected = "a CallCeiling (counts >= 0, finite costs >= 0) or None"
+    raise returned(origin, what, f"{ceiling!r:.80}", expected)
 
 
 def _checked_line(origin: str, what: str, line: object) -> str | None:

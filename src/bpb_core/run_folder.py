@@ -167,10 +167,11 @@ def completed_epochs(run_dir: Path) -> set[tuple[str, str, int]]:
 
 
 class AttemptLog:
-    """Append-only JSON-lines log of every model call, flushed after each line."""
+    """Append-only JSON-lines log of every model call, flushed after each line (``name``:
+    another log of the run folder kept the same way, such as its spending ledger)."""
 
-    def __init__(self, run_dir: Path) -> None:
-        self.path = run_dir / ATTEMPTS
+    def __init__(self, run_dir: Path, name: str = ATTEMPTS) -> None:
+        self.path = run_dir / name
         with writing(self.path):
             run_dir.mkdir(parents=True, exist_ok=True)
             self._file = self.path.open("a+b")
@@ -197,9 +198,10 @@ class AttemptLog:
             self._file.close()
 
 
-def read_attempts(run_dir: Path) -> Iterator[dict[str, Any]]:
-    """Every complete line of the attempts log (a torn line from a killed run is skipped)."""
-    path = run_dir / ATTEMPTS
+def read_attempts(run_dir: Path, name: str = ATTEMPTS) -> Iterator[dict[str, Any]]:
+    """Every complete line of the attempts log (or the log ``name``; a torn line from a killed
+    run is skipped)."""
+    path = run_dir / name
     if not path.exists():
         return
     with path.open("rb") as handle:

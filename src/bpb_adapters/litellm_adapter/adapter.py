@@ -27,6 +27,7 @@ from bpb_adapters.litellm_adapter.errors import map_error
 from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
 from bpb_core.model_calls import (
     AdapterOptions,
+    CallCeiling,
     Message,
     ModelRequest,
     ModelResponse,
@@ -122,6 +123,19 @@ class LiteLLMAdapter:
         """Input tokens and input cost of ``messages`` by the provider's rules."""
         provider = provider_of(self._litellm, self.model, self._api_base)
         return prices.estimate(self._litellm, self.model, provider, messages, self.priced)
+
+    def ceiling(self, messages: tuple[Message, ...], max_tokens: int | None) -> CallCeiling | None:
+        """The most one call with ``messages`` may cost: its input as :meth:`estimate` counts
+        it, and output at the call's token cap (``None`` without a price)."""
+        tokens, cost = self.estimate(messages)
+        price = prices.output_price(self._litellm, self.model) if cost is not None else None
+        if cost is None or price is None:
+            return None
+        limit, source = prices.output_limit(self._litellm, self.model, max_tokens, self.args)
+        priced_by = "the run's price" if self._override is not None else "litellm's price map"
+        provider = provider_of(self._litellm, self.model, self._api_base) or "openai"
+        basis = f"litellm token counter, {provider} image rule; {priced_by}; output cap {source}"
+        return CallCeiling(tokens, cost, limit, price, basis)
 
     def preflight(self) -> str | None:
         """Provider known, key present, route modules importable (one line if not)."""

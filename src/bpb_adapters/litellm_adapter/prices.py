@@ -1,5 +1,5 @@
-"""Prices: overrides registered with litellm, and the input tokens and cost of a request before
-it is sent (``bpb run --dry-run``).
+"""Prices: overrides registered with litellm, the input tokens and cost of a request before it
+is sent (``bpb run --dry-run``), and the most its output may cost (``--max-cost`` reserves it).
 
 An override is USD per token: ``{"input": .., "output": .., "cache_read": .., "reasoning": ..}``
 (``cache_read`` and ``reasoning`` optional; cached input costs ``input`` unless ``cache_read``
@@ -108,3 +108,40 @@ def estimate(
     except Exception:  # litellm raises many types for unmapped models: no price known
         return tokens, None
     return tokens, float(prompt_cost)
+
+
+_LIMIT_ARGS = ("max_tokens", "max_completion_tokens", "max_output_tokens")
+
+
+def output_limit(
+    litellm: Any, model: str, asked: int | None, args: Mapping[str, Any]
+) -> tuple[int | None, str]:
+    """The most output tokens one call may bill, and where that figure comes from: the
+    model's own arguments (they win over the run's ``max_tokens``; with several, the largest),
+    else the run's ``max_tokens``, else litellm's model info for the model."""
+    given = {k: args[k] for k in _LIMIT_ARGS if isinstance(args.get(k), int)}
+    if asked is not None and "max_tokens" not in given:
+        given["--max-tokens"] = asked
+    if given:
+        key = max(given, key=lambda k: given[k])
+        return given[key], f"{key} {given[key]:,}" + ("" if key.startswith("-") else " (args)")
+    try:
+        info = litellm.get_model_info(model)
+    except Exception:  # litellm raises many types for unmapped models: no limit known
+        return None, "no output limit known"
+    limit = info.get("max_output_tokens") or info.get("max_tokens")
+    if not isinstance(limit, int) or limit <= 0:
+        return None, "no output limit known"
+    return limit, f"the model's output limit {limit:,} (litellm model info)"
+
+
+def output_price(litellm: Any, model: str) -> float | None:
+    """USD per output token: the dearer of litellm's output and reasoning prices for the model
+    (overrides included), or ``None`` without one."""
+    try:
+        info = litellm.get_model_info(model)
+    except Exception:  # litellm raises many types for unmapped models: no price known
+        return None
+    found = [known_cost(info.get(k)) for k in ("output_cost_per_token", _FIELDS["reasoning"])]
+    known = [p for p in found if p is not None]
+    return max(known) if known else None

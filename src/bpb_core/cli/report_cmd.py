@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING, Any
 
 import click
 from rich.markup import escape
-from rich.table import Table
 
 from bpb_core.cli.console import load_registry, stderr, stdout
+from bpb_core.cli.fit import Name, print_fitted
 from bpb_core.cli.params import PATH, FiniteFloat, counted
 
 if TYPE_CHECKING:
@@ -138,7 +138,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
-    console.print(_cell_table(title, *headline_cells(part, rule)))
+    _cell_table(title, *headline_cells(part, rule))
     results = part.results
     warned = [*incomplete_lines(results).items(), *unanswered_lines(results).items()]
     warned += unparsed_lines(results).items()
@@ -156,18 +156,18 @@ def _print_part(part: ReportPart, built: Report) -> None:
         table = tables[f"{task}_metrics"]
         frame = table[["run", "baseline", "complete", *epoch_columns(table), *notes]]
         title = f"{task} metrics beside accuracy (answered only)"
-        console.print(_frame_table(title, frame, percent=True))
+        _frame_table(title, frame, percent=True)
         for name, note in notes.items():
             console.print(f"[dim]{escape(name)}: {escape(note)}[/]", highlight=False)
     horizon = horizon_cells(tables["accuracy_answered"], rule)
-    console.print(_cell_table("Accuracy by horizon (answered only; \\[answered share])", *horizon))
+    _cell_table("Accuracy by horizon (answered only; \\[answered share])", *horizon)
     if not tables["metadata"].empty:
         from bpb_core.results.tables import metadata_by_horizon
 
         wide = metadata_by_horizon(tables["metadata"])
-        console.print(_frame_table("Adapters' own measurements by horizon", wide, percent=False))
+        _frame_table("Adapters' own measurements by horizon", wide, percent=False)
     if part.results.suites:
-        console.print(_stable_table(tables, part.results.suites[0].name))
+        _stable_table(tables, part.results.suites[0].name)
         console.print(_exclusions(tables["stable_exclusions"]))
     for diagnostic in part.diagnostics:
         if diagnostic.terminal:
@@ -176,24 +176,18 @@ def _print_part(part: ReportPart, built: Report) -> None:
             shown += epoch_columns(table)
             frame = table[["run", "baseline", *shown, *diagnostic.terminal]]
             percent = (*diagnostic.percent, "complete")
-            console.print(_frame_table(diagnostic.title, frame, percent=percent))
+            _frame_table(diagnostic.title, frame, percent=percent)
     use = tables["usage"].assign(latency_mean=lambda f: (1000 * f["latency_mean"]).round(0))
     use = use.rename(columns=USAGE_COLUMNS)[["run", "baseline", *USAGE_COLUMNS.values()]]
-    console.print(_frame_table("Usage", use, percent=False))
+    _frame_table("Usage", use, percent=False)
 
 
-def _cell_table(title: str, head: list[str], rows: Rows) -> Table:
-    """A rich table of report cells: partial cells carry their answered share in brackets,
+def _cell_table(title: str, head: list[str], rows: Rows) -> None:
+    """Print a table of report cells: partial cells carry their answered share in brackets,
     short ones are dim."""
-    table = Table(title=title)
-    for name in head:
-        left = name in ("run", "task")
-        table.add_column(name, justify="left" if left else "right", no_wrap=True)
-    for baseline, cells in rows:
-        texts = [_cell_text(c) for c in cells]
-        texts[0] = _name(cells[0].text, baseline)
-        table.add_row(*texts)
-    return table
+    keys = int(head[1:2] == ["task"])
+    fitted = [(_name(cells[0].text, b), [_cell_text(c) for c in cells[1:]]) for b, cells in rows]
+    print_fitted(stdout(), title, head, fitted, keys=keys)
 
 
 def _cell_text(cell: Cell) -> str:
@@ -203,39 +197,37 @@ def _cell_text(cell: Cell) -> str:
     return f"[yellow]{text}[/]" if cell.css == "partial" else text
 
 
-def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[str]) -> Table:
-    """A rich table of ``frame``; ``percent`` is True (every float column), False, or the
+def _frame_table(title: str, frame: pd.DataFrame, *, percent: bool | Sequence[str]) -> None:
+    """Print a table of ``frame``; ``percent`` is True (every float column), False, or the
     columns shown as percentages."""
-    table = Table(title=title)
-    columns = [c for c in frame.columns if c != "baseline"]
-    for name in columns:
-        left = name in ("run", "task")
-        table.add_column(str(name), justify="left" if left else "right", no_wrap=name == "run")
-    for row in frame.to_dict(orient="records"):
-        cells = [
-            _cell(row[c], percent is True or (percent is not False and c in percent))
-            for c in columns
-        ]
-        cells[0] = _name(str(row["run"]), bool(row.get("baseline", False)))
-        table.add_row(*cells)
-    return table
+    columns = [c for c in frame.columns if c not in ("baseline", "run")]
+    rows = [
+        (
+            _name(str(row["run"]), bool(row.get("baseline", False))),
+            [
+                _cell(row[c], percent is True or (percent is not False and c in percent))
+                for c in columns
+            ],
+        )
+        for row in frame.to_dict(orient="records")
+    ]
+    head = ["run", *map(str, columns)]
+    print_fitted(stdout(), title, head, rows, keys=int(columns[:1] == ["task"]))
 
 
-def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> Table:
-    table = Table(title=f"All scenes vs the stable subset (strict {suite})")
-    for name in ("run", f"{suite}, all", f"{suite}, stable", "stable scene-tasks"):
-        table.add_column(name, justify="left" if name == "run" else "right", no_wrap=True)
+def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> None:
+    head = ["run", f"{suite}, all", f"{suite}, stable", "stable scene-tasks"]
     stable = {str(r["run"]): r for r in tables["leaderboard_stable"].to_dict(orient="records")}
+    rows = []
     for row in tables["leaderboard"].to_dict(orient="records"):
-        run = str(row["run"])
-        kept = stable.get(run)
-        table.add_row(
-            _name(run, bool(row["baseline"])),
+        kept = stable.get(str(row["run"]))
+        cells = [
             _pct(row[suite]),
             "–" if kept is None else _pct(kept[suite]),
             "0" if kept is None else _scene_tasks(kept),
-        )
-    return table
+        ]
+        rows.append((_name(str(row["run"]), bool(row["baseline"])), cells))
+    print_fitted(stdout(), f"All scenes vs the stable subset (strict {suite})", head, rows)
 
 
 def _scene_tasks(row: Mapping[Any, Any]) -> str:
@@ -250,9 +242,9 @@ def _exclusions(frame: pd.DataFrame) -> str:
     return "Scenes left out of the stable subset: " + ", ".join(parts)
 
 
-def _name(run: str, baseline: bool) -> str:
-    """``run`` as rich text (run names carry option sets in brackets: [effort=high])."""
-    return f"[dim]{escape(run)} (baseline)[/]" if baseline else escape(run)
+def _name(run: str, baseline: bool) -> Name:
+    """``run``'s name cell (baselines dim; run names carry option sets: [effort=high])."""
+    return Name(run, " (baseline)", "dim") if baseline else Name(run)
 
 
 def _pct(value: Any) -> str:
@@ -268,4 +260,4 @@ def _cell(value: Any, percent: bool) -> str:
         if math.isnan(value):
             return "–"
         return _pct(value) if percent else f"{value:.3g}"
-    return str(value)
+    return escape(str(value))

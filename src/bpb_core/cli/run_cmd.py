@@ -1,10 +1,11 @@
 """``bpb run``: ask models the benchmark's questions (a thin wrapper over bpb_core.runner).
 
-Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``); 1 the run finished with
-``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the same command to resume);
-2 bad input, or an adapter stopped by an error no retry can fix (an unknown model, an invalid
-parameter, a spent quota, a refused key, a provider that cannot be reached: that adapter stops
-at once, the others of a sweep go on; fix it and re-run the same command to resume).
+Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``), or a ``--pilot`` done;
+1 the run finished with ``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the
+same command to resume); 2 bad input, or an adapter stopped by an error no retry can fix (an
+unknown model, an invalid parameter, a spent quota, a refused key, a provider that cannot be
+reached: that adapter stops at once, the others of a sweep go on; fix it and re-run the same
+command to resume).
 """
 
 from __future__ import annotations
@@ -206,8 +207,21 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 @input_mode_option
 @click.option("--api-base", help="Base URL of an OpenAI-compatible or provider endpoint.")
-@click.option("--dry-run", is_flag=True, help="Count calls and estimate tokens; send nothing.")
-@click.option("--max-cost", type=positive(), help="Stop sending once USD spent.")
+@click.option(
+    "--dry-run", is_flag=True, help="Count calls, estimate tokens and USD (a range); send nothing."
+)
+@click.option(
+    "--pilot",
+    type=click.IntRange(min=1),
+    help="Send N pairs per adapter, print the projection from their real usage and stop "
+    "(a later run resumes from them).",
+)
+@click.option(
+    "--max-cost",
+    type=positive(),
+    help="Most USD the command may spend, over all its adapters and sessions (each call's "
+    "worst case is reserved before it is sent).",
+)
 @click.option("--seed", type=int, default=0, show_default=True)
 @counted("--retries", default=6, low=0, help="Retries after 429/5xx/timeouts/connection errors.")
 @counted("--reasks", default=2, low=0, help="Escalating re-asks after a malformed answer.")
@@ -236,7 +250,7 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
 )
 def run(**kw: Any) -> None:
     """Ask each adapter every task about every selected scene; resume by re-running."""
-    from bpb_core.cli.run_file import prepare, refuse_unpriced
+    from bpb_core.cli.run_file import prepare, refuse_unbounded, refuse_unpriced
     from bpb_core.dataset.reader import open_folder
     from bpb_core.layout import check_writable_folder
     from bpb_core.runner.options import RetryPolicy, RunOptions
@@ -254,8 +268,11 @@ def run(**kw: Any) -> None:
     tasks = tasks or registry.tasks_for(data.family.name, default_only=True)
     if not ready:
         ready = prepare(registry, _plans(kw, _offline_adapters(registry, data)), check=check)
-    if kw["max_cost"] is not None and not kw["allow_unpriced"] and not kw["dry_run"]:
-        refuse_unpriced(ready)
+    capped = [p for p in ready if kw["max_cost"] is not None or "max_cost" in p.plan.run]
+    if capped and not kw["dry_run"]:
+        if not kw["allow_unpriced"]:
+            refuse_unpriced(capped)
+        refuse_unbounded(capped, kw["max_tokens"])
     given = {f.name: kw[f.name] for f in fields(RunOptions) if f.name in kw}  # as click parsed
     given.update(
         tasks=tuple(tasks),
@@ -274,30 +291,43 @@ def run(**kw: Any) -> None:
 
     for item in ready:  # before any adapter's first call
         check_simulator_for(data, item.name, item.adapter, registry)
-    results = _run_all(data, out, ready, options, registry)
-    raise click.exceptions.Exit(_finish(results, registry, data))
+    results = _run_all(data, out, ready, options, registry, kw["pilot"])
+    if kw["pilot"] is not None:
+        from bpb_core.cli.run_output import show_dry_run
+
+        show_dry_run(data, out, ready, options, registry, pilot=True)
+    raise click.exceptions.Exit(_finish(results, registry, data, summary=kw["pilot"] is None))
 
 
 def _run_all(
-    data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
+    data: DataFolder,
+    out: Path,
+    ready: list[Prepared],
+    options: RunOptions,
+    registry: Registry,
+    pilot: int | None,
 ) -> list[RunResult]:
     from bpb_core.cli.run_output import RichProgress, make_bar
     from bpb_core.runner import run_eval, slug
+    from bpb_core.runner.budget import command_budget
 
+    shared = command_budget(options.max_cost, [out / slug(item.name) for item in ready])
     results = []
     with make_bar() as bar:
         display = RichProgress(bar)
-        for item in ready:
+        for item in ready:  # --max-cost is the command's; a run file's max_cost the adapter's
             results.append(
                 run_eval(
                     data,
                     item.adapter,
                     out / slug(item.name),
-                    replace(options, **item.plan.run),
+                    replace(options, max_cost=None, **item.plan.run),
                     registry=registry,
                     progress=display,
                     spec=item.name,
                     flag="--adapter",
+                    shared_budget=shared,
+                    pilot=pilot,
                 )
             )
             if results[-1].stopped == "interrupted":  # Ctrl-C / SIGTERM stops every adapter
@@ -305,10 +335,14 @@ def _run_all(
     return results
 
 
-def _finish(results: list[RunResult], registry: Registry, data: DataFolder) -> int:
-    from bpb_core.cli.run_output import show_summary
+def _finish(
+    results: list[RunResult], registry: Registry, data: DataFolder, *, summary: bool = True
+) -> int:
+    from bpb_core.cli.run_output import show_spending, show_summary
 
-    show_summary([r.run_dir for r in results], registry, [data])
+    if summary:
+        show_summary([r.run_dir for r in results], registry, [data])
+    show_spending(results)
     code = 0
     for result in results:
         if result.stopped == "setup":
@@ -321,9 +355,12 @@ def _finish(results: list[RunResult], registry: Registry, data: DataFolder) -> i
             why = {"max-cost": "max cost reached; ", "interrupted": "interrupted; "}.get(
                 result.stopped or "", ""
             )
+            how = "re-run the same command to resume"
+            if result.stopped == "max-cost":  # the cap counts earlier sessions: a re-run sends none
+                how = "re-run with a higher --max-cost (it counts every session) to send them"
             stderr().print(
                 f"[yellow]{escape(result.adapter)}:[/] {why}{result.api_errors} api errors, "
-                f"{result.not_sent} not sent; re-run the same command to resume"
+                f"{result.not_sent} not sent; {how}"
             )
             code = max(code, 1)
     return code

@@ -13,6 +13,7 @@ A run file lists adapters, each with its own options::
     concurrency = 4                 # calls in flight
     rpm = 60                        # requests per minute
     tpm = 200000                    # tokens per minute (input plus output)
+    max_cost = 20                   # USD this adapter's folder may spend, all sessions
     args = {reasoning_effort = "high", max_tokens = 16000}
     headers = {"anthropic-beta" = "..."}
     price = {input = 2.5e-6, output = 1.5e-5, cache_read = 2.5e-7}
@@ -40,6 +41,7 @@ _RUN_KEYS = {
     "concurrency": (int,),
     "rpm": (int, float),
     "tpm": (int, float),
+    "max_cost": (int, float),
 }
 _KEYS = {"spec", "label", "api_base", "args", "headers", "price", *_RUN_KEYS}
 
@@ -52,7 +54,7 @@ class AdapterPlan:
         spec: ``name:model``.
         options: What the adapter factory receives (api_base, model arguments, prices, label).
         run: Per-adapter overrides of the run options (``timeout``, ``concurrency``, ``rpm``,
-            ``tpm``).
+            ``tpm``, ``max_cost``: a cap of its own within the command's ``--max-cost``).
     """
 
     spec: str
@@ -245,6 +247,24 @@ def prepare(registry: Any, plans: list[AdapterPlan], *, check: bool = True) -> l
             )
         raise BadInput(f"--adapter {twice[0]}: given twice with the same options; add a label")
     return ready
+
+
+def refuse_unbounded(ready: list[Prepared], max_tokens: int | None) -> None:
+    """A hard cap reserves each call's worst case: refuse a capped adapter that has a price
+    but knows no output limit for its calls (no ``--max-tokens``, none in its args, none in its
+    model's information).
+
+    Raises:
+        BadInput: One line naming the adapter and the way out.
+        PluginBug: An adapter's ``ceiling()`` raised or returned something else.
+    """
+    from bpb_core.plugin_calls import call_ceiling
+    from bpb_core.runner.budget import unbounded
+
+    for item in ready:
+        ceiling = call_ceiling(item.adapter, item.origin, (), max_tokens)
+        if ceiling is not None and ceiling.output_cost is None:
+            raise BadInput(unbounded(item.name))
 
 
 def refuse_unpriced(ready: list[Prepared]) -> None:

@@ -13,12 +13,13 @@ from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress as RichBar, TextColumn
-from rich.table import Table
+from rich.table import Column, Table
 
 from bpb_core.cli.console import stderr, stdout
+from bpb_core.cli.fit import Name, print_fitted
 from bpb_core.errors import BpbError
 from bpb_core.runner import slug
-from bpb_core.runner.dry_run import dry_run
+from bpb_core.runner.dry_run import TYPICAL_OUTPUT, DryRun, dry_run, plus
 from bpb_core.runner.options import ProgressEvent
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from bpb_core.cli.run_file import Prepared
     from bpb_core.dataset.reader import DataFolder
     from bpb_core.registry import Registry
-    from bpb_core.runner.options import RunOptions
+    from bpb_core.runner.options import RunOptions, RunResult
 
 
 FAILED = ("parse_error", "refused", "cut", "empty", "api_error")
@@ -99,32 +100,89 @@ def make_bar() -> RichBar:
 
 
 def show_dry_run(
-    data: DataFolder, out: Path, ready: list[Prepared], options: RunOptions, registry: Registry
+    data: DataFolder,
+    out: Path,
+    ready: list[Prepared],
+    options: RunOptions,
+    registry: Registry,
+    *,
+    pilot: bool = False,
 ) -> None:
-    """Print, per adapter and task, the calls a run would send, those already done, and the
-    estimated input tokens and USD (nothing is sent)."""
+    """Print, per adapter and task and in total, the calls a run would send, those already
+    done, the estimated input tokens and USD, the output USD typical and at the cap, and the
+    basis of each figure (nothing is sent). After ``--pilot`` it is the projection from the
+    pilot's real usage."""
+    title = "bpb run --pilot: projection from the pilot's real usage (not sent)"
     table = Table(
-        "adapter",
-        "task",
-        "calls",
-        "already done",
-        "est. input tokens",
-        "est. input USD",
-        title="bpb run --dry-run (nothing sent; output tokens not included)",
-    )
+        Column("adapter", no_wrap=True, min_width=max(len(item.name) for item in ready)),
+        "task", "calls", "done before", "input tokens", "input USD",
+        "output USD typical", "output USD at cap", "projected USD",
+        title=title if pilot else "bpb run --dry-run (nothing sent)",
+    )  # fmt: skip
+    sums: list[float | None] = [0.0, 0.0, 0.0, 0.0]
+    notes = []
     for item in ready:
         plan = dry_run(data, out / slug(item.name), options, registry, item.adapter, item.origin)
         for task in options.tasks:
-            cost = plan.input_cost.get(task, 0.0)
+            row = plan.task(task)
+            money = [row.input_cost, row.typical_output_cost, row.cap_output_cost, row.projected]
+            sums = [plus(a, b) for a, b in zip(sums, money, strict=True)]
             table.add_row(
-                escape(item.name),
-                task,
-                str(plan.calls.get(task, 0)),
-                str(plan.done.get(task, 0)),
-                f"{plan.input_tokens.get(task, 0):,}",
-                "no price" if cost is None else f"${cost:.4f}",
-            )
+                escape(item.name), task, str(row.calls), str(row.done),
+                f"{row.input_tokens:,}", *(_usd(v) for v in money),
+            )  # fmt: skip
+        notes.append(_basis(item.name, plan, options.tasks, out / slug(item.name)))
+    table.add_row("total", "", "", "", "", *(_usd(v) for v in sums), end_section=True)
     stdout().print(table)
+    for line in notes:
+        stdout().print(escape(line), highlight=False, soft_wrap=True)
+
+
+def _usd(value: float | None) -> str:
+    return "no price" if value is None else f"${value:,.4f}"
+
+
+def _basis(name: str, plan: DryRun, tasks: Iterable[str], folder: Path) -> str:
+    """Where one adapter's figures come from: its count and prices, the output cap, and the
+    typical output (the pairs already done, or the assumption before any)."""
+    priced = plan.basis or "input ~ characters / 4 (the adapter cannot price a call)"
+    seen = {t: plan.task(t).seen for t in tasks if plan.task(t).seen}
+    if seen:
+        each = ", ".join(f"{t} {n} at {plan.task(t).typical_tokens:,.0f}" for t, n in seen.items())
+        typical = f"typical and projected: the real usage of pairs done in {folder} ({each} "
+        typical += "output tokens per pair, re-asks included)"
+    else:
+        typical = f"typical: an assumed {TYPICAL_OUTPUT:,} output tokens per call, or the cap "
+        typical += "if lower (no replies yet; --pilot N measures them)"
+    return f"basis {name}: {priced}; {typical}"
+
+
+def show_spending(results: Iterable[RunResult]) -> None:
+    """Print, per capped run, what was spent (all sessions), reserved and left, and the pairs
+    the cap kept from being sent."""
+    for result in results:
+        budget = result.budget
+        if budget.get("cap") is None and budget.get("command_cap") is None:
+            continue
+        stderr().print(escape(spending_line(result.adapter, budget)), highlight=False)
+
+
+def spending_line(adapter: str, budget: dict[str, Any]) -> str:
+    """One line: spent, reserved and left under each cap, and the pairs the cap kept."""
+    parts = [f"{adapter}: spent ${budget['spent']:.4f} (all sessions)"]
+    if budget.get("cap") is not None:
+        parts.append(f"its cap ${budget['cap']:.4f}, ${budget['left']:.4f} left")
+    if budget.get("command_cap") is not None:
+        parts.append(
+            f"--max-cost ${budget['command_cap']:.4f} over the command: "
+            f"${budget['command_spent']:.4f} spent, ${budget['command_left']:.4f} left"
+        )
+    parts.append(f"reserved ${budget['reserved']:.4f}")
+    kept = budget.get("kept_by_cap") or []
+    if kept:
+        shown = ", ".join(kept[:5]) + (", ..." if len(kept) > 5 else "")
+        parts.append(f"the cap kept {len(kept)} pairs from being sent ({shown})")
+    return "; ".join(parts)
 
 
 _NOT_SCORES = (
@@ -146,7 +204,7 @@ def show_summary(
         return
     if frame is None or frame.empty:
         return
-    stdout().print(_table(frame))
+    _print_table(frame)
     for run, line in frame.attrs.get("incomplete", {}).items():
         stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     parents = sorted({str(d.parent) for d in run_dirs})
@@ -158,17 +216,15 @@ def show_summary(
     )
 
 
-def _table(frame: pd.DataFrame) -> Table:
+def _print_table(frame: pd.DataFrame) -> None:
     """Answered-only scores and completeness first, the strict score beside each."""
     names = [
         c for c in frame.columns
         if c not in _NOT_SCORES and c != "short" and not c.endswith("_answered")
     ]  # fmt: skip
-    table = Table(title="bpb run: scores (answered only; strict in brackets)")
-    for column in ("adapter", "complete", *names, "left out"):
-        table.add_column(column, justify="left" if column == "adapter" else "right")
+    rows = []
     for _, row in frame.iterrows():
-        cells = [escape(str(row["adapter"])), _pct(row["completeness"])]
+        cells = [_pct(row["completeness"])]
         for name in names:
             answered, strict = row[f"{name}_answered"], row[name]
             if not math.isnan(float(answered)):
@@ -176,8 +232,9 @@ def _table(frame: pd.DataFrame) -> Table:
             else:  # too incomplete, or not asked (a suite with a task the run lacks)
                 cells.append("left out" if row["short"] else "–")
         cells.append(escape(str(row["short"])) or "–")
-        table.add_row(*cells)
-    return table
+        rows.append((Name(str(row["adapter"])), cells))
+    title = "bpb run: scores (answered only; strict in brackets)"
+    print_fitted(stdout(), title, ["adapter", "complete", *names, "left out"], rows)
 
 
 def _pct(value: float) -> str:

@@ -343,13 +343,12 @@ def evaluate(
 
     ``adapters`` is a list of specs or adapter objects; one spec or object alone is a list of
     one (a spec is never taken letter by letter). An adapter stopped by an authentication
-    failure does not stop the others.
+    failure does not stop the others; the options' ``max_cost`` caps them all together.
     """
     kwargs.setdefault("flag", "adapters")  # messages name the caller's parameter
-    return [
-        run_eval(data, adapter, Path(out) / runner.slug(_spec(adapter)), options, **kwargs)
-        for adapter in _listed(adapters)
-    ]
+    runs = [(Path(out) / runner.slug(_spec(adapter)), adapter) for adapter in _listed(adapters)]
+    options = runner.sharing_cap(options, [d for d, _ in runs], kwargs)  # one cap for all
+    return [run_eval(data, adapter, run_dir, options, **kwargs) for run_dir, adapter in runs]
 
 
 def _listed(adapters: Sequence[str | ModelAdapter] | str | ModelAdapter) -> list[Any]:

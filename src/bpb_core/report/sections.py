@@ -307,7 +307,33 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
         body = html.table(table, percent=percent, drop=_dropped(table))
         out.append((diagnostic.title, body))
     out.append(("Tokens, cost, latency, retries", usage_table(tables["usage"])))
+    spending = spending_table(part)
+    if not spending.empty:
+        out.append(("Spending and the cost cap (--max-cost)", html.table(spending)))
     return out
+
+
+def spending_table(part: ReportPart) -> pd.DataFrame:
+    """Per capped run, as its last session left it (``run.json``): the caps, USD spent over
+    all sessions, reserved (calls abandoned in flight, counted as spent by the next session)
+    and left, and the pairs the cap kept from being sent."""
+    rows = []
+    for run in part.results.runs:
+        budget = (run.manifest.get("last_session") or {}).get("budget") or {}
+        if budget.get("cap") is None and budget.get("command_cap") is None:
+            continue
+        kept = [str(k) for k in budget.get("kept_by_cap") or []]
+        lefts = [v for v in (budget.get("left"), budget.get("command_left")) if v is not None]
+        rows.append(
+            {
+                "run": run.label, "cap $": budget.get("cap"),
+                "command cap $": budget.get("command_cap"), "spent $": budget.get("spent"),
+                "reserved $": budget.get("reserved"), "left $": min(lefts),
+                "kept by the cap": len(kept),
+                "pairs kept": ", ".join(kept[:20]) + (" ..." if len(kept) > 20 else ""),
+            }
+        )  # fmt: skip
+    return pd.DataFrame(rows)
 
 
 def epoch_columns(table: pd.DataFrame) -> list[str]:

@@ -31,6 +31,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
 from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
 from bpb_core.run_folder import write_answer
+from bpb_core.runner.budget import Hold, pair_name
 from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.outcome import unanswered, unanswered_error
 from bpb_core.runner.scenes import SceneRef
@@ -80,7 +81,7 @@ class PairCall:
     async def _attempt(self) -> bool:
         """One attempt; True when the pair is settled."""
         if not self.state.may_send():
-            self.state.not_sent(self.task)
+            self.state.not_sent(self.task, self.pair)
             return True
         prompt = PromptOptions(
             self.state.options.input_mode,
@@ -93,6 +94,7 @@ class PairCall:
         try:
             async with self.state.slot():  # held until the reply is logged and written
                 request = self._request(prompt)  # a task's bug stops the run: PluginBug
+                hold = await self.state.reserve(request, self.pair)
                 started = time.perf_counter()
                 spec = self.state.spec
                 try:
@@ -101,16 +103,24 @@ class PairCall:
                     with blamed(self.state.origin(spec), f"adapter {spec!r}: complete()"):
                         response = await self.state.adapter.complete(request)
                 except ModelError as error:
+                    if hold is not None:  # a timed-out call may have been billed: in full
+                        cost = None if isinstance(error, ModelTimeout) else 0.0
+                        await self.state.settle(hold, cost, self.pair)
                     delay = await self._failed(error, time.perf_counter() - started)
                 else:
-                    return await self._replied(self._checked(response), prompt)
+                    return await self._replied(self._checked(response), prompt, hold)
         except NotSent:
-            self.state.not_sent(self.task)
+            self.state.not_sent(self.task, self.pair)
             return True
         if delay is None:
             return True
         await wait_unless(self.state.stopping, asyncio.sleep(delay))  # outside the slot
         return False
+
+    @property
+    def pair(self) -> str:
+        """The pair's name in the spending ledger and the run's summary."""
+        return pair_name(self.ref.scene_id, self.task, self.epoch)
 
     def _request(self, prompt: PromptOptions) -> ModelRequest:
         task, origin = self.state.tasks[self.task], self.state.origin(self.task)
@@ -174,11 +184,14 @@ class PairCall:
         }
         await self.state.offload(self.state.log.append, entry)
 
-    async def _replied(self, response: ModelResponse, prompt: PromptOptions) -> bool:
+    async def _replied(
+        self, response: ModelResponse, prompt: PromptOptions, hold: Hold | None
+    ) -> bool:
         if response.cost is not None and known_cost(response.cost) is None:
             response = dataclasses.replace(response, cost=None)  # an adapter's NaN: unknown
         self.tally.add(response)
         self.state.account(response)
+        await self.state.settle(hold, response.cost, self.pair, response.usage.input_tokens)
         self.finish_reason = response.finish_reason
         self.metadata = dict(response.metadata)
         kind = unanswered(response)

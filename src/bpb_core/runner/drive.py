@@ -30,6 +30,7 @@ import threading
 from collections.abc import Callable, Coroutine, Iterator, Sequence
 from typing import Any, TypeVar
 
+from bpb_core.runner.budget import pair_name
 from bpb_core.runner.call import PairCall
 from bpb_core.runner.options import ProgressEvent
 from bpb_core.runner.scenes import SceneRef
@@ -122,7 +123,7 @@ def interruptible(state: RunState, jobs: set[asyncio.Task[None]]) -> Iterator[No
 
 async def _pair(state: RunState, ref: SceneRef, task: str, epoch: int) -> None:
     if not state.may_send():
-        state.not_sent(task)
+        state.not_sent(task, pair_name(ref.scene_id, task, epoch))
         return
     scene = await state.offload(ref.load)
     image = None if state.options.input_mode == "state" else await state.offload(ref.image)

@@ -233,6 +233,7 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
         "cost": None if state.unpriced else state.spent,
         "tokens": state.tokens,
         "error": None if state.setup_error is None else str(state.setup_error),
+        "budget": state.spending.summary(),
     }
     write_manifest(run_dir, manifest)
 

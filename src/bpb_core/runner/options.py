@@ -8,7 +8,7 @@ from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, Protocol, get_args
+from typing import Any, Literal, Protocol, get_args
 
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import InputMode
@@ -56,7 +56,8 @@ class RunOptions:
         temperature: Sampling temperature (0, as in the paper).
         force_numeric: Ask for numbers where a task would otherwise allow null.
         input_mode: ``image``, ``image+state`` or ``state``.
-        max_cost: Stop sending calls once the run has spent this many USD.
+        max_cost: The most USD the run folder may spend over all its sessions: each call's
+            worst case is reserved before it is sent (:mod:`bpb_core.runner.budget`).
         seed: Seed for adapters with randomness, for the call order and for ``sample``.
         retry: Retry policy.
         scenes: Only these scene ids (``None`` for all selected by ``horizons``/``limit``).
@@ -197,6 +198,8 @@ class RunResult:
             ``None``.
         error: What to fix, one line, when ``stopped`` is ``setup`` (an error no retry can
             fix, or a provider that cannot be reached).
+        budget: Spent (all sessions), reserved and left, the caps and the pairs the cap kept
+            from being sent (:meth:`bpb_core.runner.budget.Spending.summary`).
     """
 
     run_dir: Path
@@ -206,6 +209,7 @@ class RunResult:
     tokens: int = 0
     stopped: str | None = None
     error: str | None = None
+    budget: dict[str, Any] = field(default_factory=dict)
 
     @property
     def api_errors(self) -> int:

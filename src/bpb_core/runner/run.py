@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import random
 import re
 from collections import Counter
@@ -25,7 +26,8 @@ from bpb_core.layout import MANIFEST
 from bpb_core.model_calls import AdapterOptions, adapter_problem, split_spec
 from bpb_core.plugin_calls import answer_refusal, described_settings, preflight_problem
 from bpb_core.run_folder import COMPLETE, AttemptLog, iter_answers, make_run_folder
-from bpb_core.runner.drive import call_order, drive, run_sync
+from bpb_core.runner.budget import Budget, Spending, command_budget, open_ledger
+from bpb_core.runner.drive import Pair, call_order, drive, run_sync
 from bpb_core.runner.history import History, read_history, recover_answers
 from bpb_core.runner.manifest import finish_manifest, run_lock, start_manifest
 from bpb_core.runner.options import NoProgress, Progress, ProgressEvent, RunOptions, RunResult
@@ -102,6 +104,8 @@ async def run_eval_async(
     progress: Progress | None = None,
     spec: str | None = None,
     flag: str = "adapter",
+    shared_budget: Budget | None = None,
+    pilot: int | None = None,
 ) -> RunResult:
     """Async form of :func:`run_eval` (for callers already inside an event loop). The set-up
     (the registry and the adapter built, the dataset and the run folder read) runs in a worker
@@ -114,6 +118,7 @@ async def run_eval_async(
         options, refs = asked.options, asked.scenes
         opened = await asyncio.to_thread(_opening, asked, name, run_dir, plugins, settings)
         history, held, manifest = opened
+        ledger, spent_before = await asyncio.to_thread(open_ledger, run_dir)
         state = RunState(
             adapter=model,
             spec=name,
@@ -130,6 +135,8 @@ async def run_eval_async(
             simulator=asked.simulator,
             config_hash=manifest["config_hash"],
             history=history,
+            spending=Spending(Budget(options.max_cost, spent_before), shared_budget),
+            ledger=ledger,
             origins={
                 **{task: plugins.origin("task", task) for task in asked.tasks},
                 name: adapter_origin(plugins, name, model),
@@ -143,6 +150,8 @@ async def run_eval_async(
             plan = [(r, t, e) for r, t, e in plan if (r.scene_id, t, e) not in done]
             ids = {ref.scene_id for ref in refs}
             before = Counter(t for s, t, _ in done if s in ids)  # pairs done in earlier sessions
+            if pilot is not None:  # a pilot tops the folder up to its share: none paid twice
+                plan = pilot_pairs(plan, pilot, options.tasks, before)
             for task in options.tasks:
                 todo = sum(1 for _, t, _ in plan if t == task)
                 state.progress.update(ProgressEvent(name, task, "skipped", count=before[task]))
@@ -159,6 +168,8 @@ async def run_eval_async(
             state.io.shutdown(wait=True)
             with _kept_quiet(not ended):  # the disk that refused the run refuses these too
                 state.log.close()
+            with _kept_quiet(not ended):
+                ledger.close()
             with _kept_quiet(not ended):
                 finish_manifest(run_dir, manifest, state)
         return _result(state, before)
@@ -195,6 +206,23 @@ def _prepare(
     settings = described_settings(model, origin)
     make_run_folder(run_dir)
     return asked, model, spec, registry, settings
+
+
+def pilot_pairs(
+    plan: list[Pair], count: int, tasks: Sequence[str], done: Counter[str]
+) -> list[Pair]:
+    """For ``--pilot``: the first pairs of ``plan`` (a seeded random order, so a uniform sample
+    of the full run) that bring the pairs done to ``count``, spread evenly over the tasks
+    (``done``: pairs already done per task, which count towards it)."""
+    share = -(-count // max(len(tasks), 1))
+    taken = Counter(done)
+    left = count - sum(done[t] for t in tasks)
+    chosen: list[Pair] = []
+    for ref, task, epoch in plan:
+        if len(chosen) < left and taken[task] < share:
+            taken[task] += 1
+            chosen.append((ref, task, epoch))
+    return chosen
 
 
 def _kept_quiet(failing: bool) -> contextlib.AbstractContextManager[None]:
@@ -259,7 +287,21 @@ def _result(state: RunState, before: Counter[str]) -> RunResult:
         tokens=state.tokens,
         stopped=state.stop_reason,
         error=None if state.setup_error is None else str(state.setup_error),
+        budget=state.spending.summary(),
     )
+
+
+def sharing_cap(
+    options: RunOptions | None, run_dirs: Sequence[Path], kwargs: dict[str, Any]
+) -> RunOptions:
+    """The options each adapter of one command runs with: their ``max_cost`` becomes one
+    budget all of them share (put in ``kwargs`` as ``shared_budget``), counting what their
+    folders' earlier sessions spent."""
+    options = options or RunOptions()
+    if options.max_cost is None or "shared_budget" in kwargs:
+        return options
+    kwargs["shared_budget"] = command_budget(options.max_cost, run_dirs)
+    return dataclasses.replace(options, max_cost=None)
 
 
 def run_eval(
@@ -278,7 +320,9 @@ def run_eval(
         options: Run options.
         **kwargs: ``registry``, ``adapter_options``, ``progress``, ``spec`` (the run's name
             when ``adapter`` is an object), ``flag`` (what messages call the adapter:
-            ``adapter`` by default, ``--adapter`` from the command line).
+            ``adapter`` by default, ``--adapter`` from the command line), ``shared_budget``
+            (a :class:`~bpb_core.runner.budget.Budget` capping several runs together),
+            ``pilot`` (send only enough pairs to have N done, spread over the tasks).
 
     Returns:
         Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.
@@ -297,8 +341,10 @@ def evaluate(
 ) -> list[RunResult]:
     """Run several adapters one after the other, each into ``out/<slug(spec)>/``.
 
-    An adapter stopped by a setup failure (``stopped="setup"``) does not stop the others.
+    An adapter stopped by a setup failure (``stopped="setup"``) does not stop the others. The
+    options' ``max_cost`` caps them all together, earlier sessions of their folders included.
     """
     kwargs.setdefault("flag", "adapters")
     data = open_folder(data, kwargs.get("registry"))
+    options = sharing_cap(options, [out / slug(spec) for spec in adapters], kwargs)
     return [run_eval(data, spec, out / slug(spec), options, **kwargs) for spec in adapters]

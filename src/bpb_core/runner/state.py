@@ -25,8 +25,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from bpb_core.errors import ConnectionFailure, SetupFailure
 from bpb_core.interfaces import ModelAdapter, Task
-from bpb_core.model_calls import ModelResponse
+from bpb_core.model_calls import ModelRequest, ModelResponse
+from bpb_core.plugin_calls import call_ceiling
 from bpb_core.run_folder import AnswerRecord, AttemptLog, UsageRecord
+from bpb_core.runner.budget import Hold, Spending, reservation_entry, settlement_entry
 from bpb_core.runner.options import Progress, ProgressEvent, RunOptions
 
 if TYPE_CHECKING:
@@ -153,6 +155,9 @@ class RunState:
     origins: dict[str, str] = field(default_factory=dict)
     """Who supplied each task (by name) and the adapter (under ``spec``), as
     ``Registered.origin``: a plugin's bug stops the run with one line naming it."""
+    spending: Spending = field(default_factory=Spending)
+    ledger: AttemptLog | None = None
+    """The run folder's spending ledger (:mod:`bpb_core.runner.budget`)."""
 
     def origin(self, name: str) -> str:
         """Who supplied the task or adapter ``name`` (the name itself when not known)."""
@@ -173,8 +178,7 @@ class RunState:
 
     def may_send(self) -> bool:
         """False once the run must stop sending (cost cap reached, setup failed, interrupted)."""
-        cap = self.options.max_cost
-        if cap is not None and self.spent >= cap and self.stop_reason is None:
+        if self.spending.exhausted and self.stop_reason is None:
             self.stop("max-cost")
         return self.stop_reason is None
 
@@ -233,8 +237,49 @@ class RunState:
                 raise NotSent
             yield
 
+    async def reserve(self, request: ModelRequest, pair: str) -> Hold | None:
+        """Hold the worst case of ``request`` against the run's caps before it is sent,
+        waiting while calls in flight may free room (``None``: no cap, or a call the adapter
+        cannot price, sent uncounted as ``--allow-unpriced`` lets it be).
+
+        Raises:
+            NotSent: It does not fit with no other call in flight (the run stops: ``max-cost``),
+                or the run stopped while it waited.
+            BadInput: The adapter knows no output limit for the call.
+        """
+        spending = self.spending
+        if not spending.capped:
+            return None
+        messages, limit = request.messages, request.max_tokens
+        ceiling = call_ceiling(self.adapter, self.origin(self.spec), messages, limit)
+        if ceiling is None:
+            return None
+        amount = spending.amount(ceiling, self.spec)
+        while (hold := spending.hold(amount, ceiling.input_tokens)) is None:
+            if not spending.in_flight:
+                self.stop("max-cost")
+                raise NotSent
+            await wait_unless(self.stopping, spending.room().wait())
+            if not self.may_send():
+                raise NotSent
+        if self.ledger is not None:  # on disk before the call goes: a kill cannot lose it
+            await self.offload(self.ledger.append, reservation_entry(hold, pair))
+        return hold
+
+    async def settle(
+        self, hold: Hold | None, cost: float | None, pair: str, input_tokens: int | None = None
+    ) -> None:
+        """Count a finished call: its ``cost`` (``None``: unknown, counted at the reservation)
+        and free its reservation; the ledger records it."""
+        basis = "reply" if cost is not None else "reservation" if hold else "unpriced"
+        usd = cost if cost is not None else hold.amount if hold else 0.0
+        self.spending.settle(hold, usd, input_tokens)
+        if self.ledger is not None:
+            await self.offload(self.ledger.append, settlement_entry(hold, usd, pair, basis))
+        self.may_send()  # a cap spent: wake the calls queued for a slot now
+
     def account(self, response: ModelResponse) -> None:
-        """Add a reply's tokens and cost to the run totals."""
+        """Add a reply's tokens and cost to this session's totals."""
         used = (response.usage.input_tokens or 0) + (response.usage.output_tokens or 0)
         self.replied, self.failing = True, None
         self.tokens += used
@@ -243,7 +288,6 @@ class RunState:
             self.unpriced = True
         else:
             self.spent += response.cost
-            self.may_send()  # the cap reached: wake the calls queued for a slot now
         if response.model_id:
             self.model_id = response.model_id
 
@@ -272,8 +316,11 @@ class RunState:
         scored = "scored wrong, not re-asked; the report counts them per task"
         self.progress.update(ProgressEvent(self.spec, task, "warning", reason=f"{error}: {scored}"))
 
-    def not_sent(self, task: str) -> None:
-        """Record a pair left unsent (cost cap or setup stop); it stays resumable."""
+    def not_sent(self, task: str, pair: str = "") -> None:
+        """Record a pair left unsent (cost cap or setup stop); it stays resumable. ``pair``:
+        ``scene/task``, kept in the run's summary when the cost cap stopped it."""
+        if pair and self.stop_reason == "max-cost":
+            self.spending.kept.append(pair)
         self.count(task, "not_sent")
         self.progress.update(ProgressEvent(self.spec, task, "done", status="not_sent"))
 

@@ -41,7 +41,7 @@ def test_image_rules_per_provider() -> None:
 
 def _table(stdout: str) -> dict[str, list[str]]:
     rows = [[c.strip() for c in line.split("│")[1:-1]] for line in stdout.splitlines()]
-    return {f"{r[0]}/{r[1]}": r[2:] for r in rows if len(r) == 6 and r[0].startswith("litellm")}
+    return {f"{r[0]}/{r[1]}": r[2:] for r in rows if len(r) == 9 and r[0].startswith("litellm")}
 
 
 def test_dry_run_shows_tokens_and_dollars_per_adapter_without_keys(
@@ -66,6 +66,10 @@ def test_dry_run_shows_tokens_and_dollars_per_adapter_without_keys(
     costs = {key.split(":")[1].split("/")[0]: v[3] for key, v in table.items()}
     assert costs["qwen3.6-plus"] == "no price" and costs["gpt-5.4"].startswith("$")
     assert float(costs["claude-opus-4.7"][1:]) > 0
+    # no --max-tokens: the output cap is the model's limit (litellm model info), 128,000 tokens
+    # for gpt-5.4 at $15 per million
+    assert table["litellm:gpt-5.4/q1"][5] == f"${6 * 128_000 * 15e-6:,.4f}"
+    assert "the model's output limit 128,000" in done.stdout
 
 
 def test_max_cost_refuses_unpriced_adapters_unless_priced_or_allowed(
@@ -74,6 +78,7 @@ def test_max_cost_refuses_unpriced_adapters_unless_priced_or_allowed(
     monkeypatch.setenv("DASHSCOPE_API_KEY", "sk-dash-bpbtest-0123456789abcdef")
     with fake_server(dataset) as server:
         base = ["run", "--data", str(dataset), "--tasks", "q1", "--limit", "1", "--max-cost", "1",
+                "--max-tokens", "100",
                 "--api-base", server.api_base, "--adapter", "litellm:qwen3.6-plus"]  # fmt: skip
         refused = run_bpb(*base, "--out", str(tmp_path / "a"))
         assert refused.returncode == 2 and "qwen3.6-plus" in refused.stderr

@@ -98,6 +98,5 @@ def test_replies_without_an_answer_are_classified_on_every_protocol(
     assert report.returncode == 0, report.stderr
     said = json.loads(report.stdout)["unanswered"]
     assert list(said.values()) == [
-        "replies with no answer, scored wrong (q1 cut 1, empty 1, refused 2); "
-        + (cut.error or "")
+        "replies with no answer, scored wrong (q1 cut 1, empty 1, refused 2); " + (cut.error or "")
     ]

@@ -183,7 +183,8 @@ def test_dry_run_sends_nothing(cli: Callable[..., Done], dataset: Path, tmp_path
         )
         assert done.returncode == 0, done.stderr
         assert server.stats()["total"] == 0
-    rows = [line.split("│") for line in done.stdout.splitlines() if "fake-model" in line]
+    lines = done.stdout.splitlines()
+    rows = [line.split("│") for line in lines if "fake-model│" in line.replace(" ", "")]
     table = {cells[2].strip(): [c.strip() for c in cells[3:6]] for cells in rows}
     assert sorted(table) == ["q1", "q2", "q3"]
     for task, (calls, before, tokens) in table.items():

@@ -23,6 +23,10 @@ example answer the prompt itself shows. It injects the faults it was told to:
   ``safety``: a safety filter blocks the reply (``finish_reason: content_filter``, Responses
   ``incomplete_details.reason: content_filter``, Anthropic ``refusal``, Gemini ``SAFETY``).
 
+With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
+(``completion_tokens`` = the request's ``max_completion_tokens`` or ``max_tokens``), the worst
+case a spending cap must hold against.
+
 Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/TASK":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``);
@@ -85,12 +89,14 @@ class FakeOpenAI:
         self.requests: list[dict[str, Any]] = []
 
     def configure(self, config: dict[str, Any]) -> None:
-        """Replace the fault plan (keys ``faults``, ``schedule``, ``retry_after``, ``hang``)."""
+        """Replace the fault plan (keys ``faults``, ``schedule``, ``retry_after``, ``hang``,
+        ``latency``, ``bill_max_tokens``)."""
         self.faults: dict[str, list[str]] = config.get("faults", {})
         self.schedule: list[str] = config.get("schedule", [])
         self.retry_after = float(config.get("retry_after", 0.2))
         self.hang = float(config.get("hang", 30.0))
         self.latency = float(config.get("latency", self.latency))
+        self.bill_max_tokens = bool(config.get("bill_max_tokens", False))
 
     def _fault(self, key: str, seen: int) -> str:
         plan = self.faults.get(key) or self.faults.get("*/" + key.split("/")[-1]) or []
@@ -134,7 +140,13 @@ class FakeOpenAI:
         outcome = await self.answer(request, *prompt_text(body))
         if isinstance(outcome, web.StreamResponse):
             return outcome
-        return web.json_response(model_reply(body.get("model", "fake"), *outcome))
+        reply = model_reply(body.get("model", "fake"), *outcome)
+        cap = body.get("max_completion_tokens") or body.get("max_tokens")
+        if self.bill_max_tokens and isinstance(cap, int):
+            usage = reply["usage"]
+            usage["completion_tokens"] = cap
+            usage["total_tokens"] = usage["prompt_tokens"] + cap
+        return web.json_response(reply)
 
     def record(self, request: web.Request, protocol: str, body: dict[str, Any]) -> None:
         """Keep what a request carried, without its text or image bytes (``GET /requests``)."""

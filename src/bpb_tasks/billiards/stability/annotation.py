@@ -170,6 +170,8 @@ def tally_copies(
             tally.any_flip += 1
             tally.flips.add(UNFINISHED)
             continue
+        if other == reference:  # most copies: nothing flipped, nothing to count
+            continue
         names = list(flipped(reference, other))
         tally.flips.update(names)
         tally.any_flip += bool(names)
