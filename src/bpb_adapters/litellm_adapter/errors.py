@@ -2,9 +2,10 @@
 
 The runner decides what to retry from the bpb error class alone: 429 becomes
 :class:`RateLimited` carrying the server's Retry-After, 5xx and unreadable bodies
-:class:`ServerError`, timeouts :class:`ModelTimeout`, dropped connections
-:class:`ConnectionFailure`. What no retry can fix and every call would meet is a
-:class:`SetupFailure` naming its cause, which stops the adapter: 401/403
+:class:`ServerError`, timeouts :class:`ModelTimeout`, connections that fail
+:class:`ConnectionFailure` (found in the exception's chain: litellm reports a refused
+connection as a 500 on the OpenAI and Anthropic routes). What no retry can fix and every call
+would meet is a :class:`SetupFailure` naming its cause, which stops the adapter: 401/403
 (:class:`AuthenticationFailed`), 404 (the model or the endpoint not found), 400 (an invalid
 parameter), 402, a 429 whose quota is spent (``insufficient_quota``), and an import error inside
 litellm (a provider route's module missing), whatever litellm wrapped it in. A 400 about one
@@ -85,16 +86,26 @@ def _spent_quota(exc: BaseException) -> bool:
     return any(marker in said for marker in _QUOTA)
 
 
-def _missing_module(exc: BaseException) -> bool:
-    """Whether an import error lies in ``exc``'s chain (however litellm wrapped it)."""
+def _chain(exc: BaseException) -> list[BaseException]:
+    """``exc`` and the exceptions it was raised from, nearest first (a few levels: litellm
+    wraps the HTTP stack's error in its own, and that in an openai SDK one)."""
+    chain: list[BaseException] = []
     seen: BaseException | None = exc
-    for _ in range(5):
-        if seen is None:
-            break
-        if isinstance(seen, ImportError):
-            return True
+    while seen is not None and len(chain) < 8:
+        chain.append(seen)
         seen = seen.__cause__ or seen.__context__
-    return "No module named" in str(exc)
+    return chain
+
+
+def _missing_module(chain: list[BaseException]) -> bool:
+    """Whether an import error lies in the chain (however litellm wrapped it)."""
+    return any(isinstance(e, ImportError) for e in chain) or "No module named" in str(chain[0])
+
+
+def _unreachable(chain: list[BaseException]) -> bool:
+    """Whether the connection itself failed (refused, reset, DNS, TLS: an ``OSError`` under
+    the HTTP stack), which litellm reports on some routes as a 500 ``InternalServerError``."""
+    return any(isinstance(e, OSError) and not isinstance(e, TimeoutError) for e in chain)
 
 
 def map_error(exc: BaseException) -> ModelError:
@@ -110,8 +121,8 @@ def map_error(exc: BaseException) -> ModelError:
     )
 
     message = redact(" ".join(f"{type(exc).__name__}: {exc}".split()))[:_MAX_MESSAGE]
-    status = _status(exc)
-    if _missing_module(exc):  # retrying cannot install the module
+    status, chain = _status(exc), _chain(exc)
+    if _missing_module(chain):  # retrying cannot install the module
         return SetupFailure("provider module missing", message)
     if isinstance(exc, RateLimitError) or status == 429:
         if _spent_quota(exc):
@@ -123,7 +134,7 @@ def map_error(exc: BaseException) -> ModelError:
         return AuthenticationFailed("authentication failed (401): check the key", message)
     if isinstance(exc, PermissionDeniedError) or status == 403:
         return AuthenticationFailed("permission denied (403): the key may not use it", message)
-    if isinstance(exc, APIConnectionError):
+    if isinstance(exc, APIConnectionError) or _unreachable(chain):
         return ConnectionFailure(message)
     if isinstance(exc, ContextWindowExceededError | ContentPolicyViolationError):
         return RequestRejected(message)  # about this prompt alone

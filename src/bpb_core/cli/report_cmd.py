@@ -134,16 +134,13 @@ def _print_part(part: ReportPart, built: Report) -> None:
         headline_cells,
         horizon_cells,
     )
-    from bpb_core.results.completeness import incomplete_lines, unanswered_lines, unparsed_lines
+    from bpb_core.results.completeness import warning_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
     _cell_table(title, *headline_cells(part, rule))
-    results = part.results
-    warned = [*incomplete_lines(results).items(), *unanswered_lines(results).items()]
-    warned += unparsed_lines(results).items()
-    for run, line in warned:
-        console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
+    for run, line in warning_lines(part.results):
+        console.print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     for different in (different_scenes_note(part), different_conditions_note(part)):
         if different:
             console.print(f"[yellow]{escape(different)}[/]", highlight=False)

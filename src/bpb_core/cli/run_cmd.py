@@ -348,7 +348,8 @@ def _finish(
         if result.stopped == "setup":
             stderr().print(
                 f"[red]error:[/] {escape(result.adapter)}: stopped, {escape(result.error or '')}; "
-                f"{result.not_sent} pairs not sent: fix it, then re-run the same command to resume"
+                f"{result.not_sent} pairs not sent: fix it, then re-run the same command to resume",
+                soft_wrap=True,  # one line, however long the provider's message
             )
             code = 2
         elif result.api_errors or result.not_sent:

@@ -205,7 +205,7 @@ def show_summary(
     if frame is None or frame.empty:
         return
     _print_table(frame)
-    for run, line in frame.attrs.get("incomplete", {}).items():
+    for run, line in frame.attrs.get("warnings", []):
         stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     parents = sorted({str(d.parent) for d in run_dirs})
     where = " ".join(parents) if parents else "RUN_DIR"

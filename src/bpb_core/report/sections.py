@@ -17,13 +17,7 @@ from markupsafe import Markup
 
 from bpb_core.report import html
 from bpb_core.report.html import Cell
-from bpb_core.results.completeness import (
-    incomplete_lines,
-    level,
-    unanswered_lines,
-    unparsed_lines,
-    worst_cells,
-)
+from bpb_core.results.completeness import level, warning_lines, worst_cells
 from bpb_core.results.tables import metadata_by_horizon
 
 if TYPE_CHECKING:
@@ -206,9 +200,7 @@ def incomplete_notes(part: ReportPart) -> Markup:
     """One warning line per run with calls that failed on infrastructure or were never sent,
     one per run with replies that held no answer (refused, cut, empty: per task), and one per
     run with tasks mostly answered in a form its parser could not read."""
-    lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results).items()]
-    lines += [f"{run}: {text}" for run, text in unanswered_lines(part.results).items()]
-    lines += [f"{run}: {text}" for run, text in unparsed_lines(part.results).items()]
+    lines = [f"{run}: {text}" for run, text in warning_lines(part.results)]
     return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
 
 

@@ -143,5 +143,16 @@ def unanswered_lines(results: Results) -> dict[str, str]:
     return out
 
 
+def warning_lines(results: Results) -> list[tuple[str, str]]:
+    """Every ``(run, line)`` a table of scores is to be read with: calls unanswered
+    (:func:`incomplete_lines`), replies that held no answer (:func:`unanswered_lines`), tasks
+    mostly unparsed (:func:`unparsed_lines`)."""
+    return [
+        *incomplete_lines(results).items(),
+        *unanswered_lines(results).items(),
+        *unparsed_lines(results).items(),
+    ]
+
+
 def _calls(count: int) -> str:
     return f"{count} call" if count == 1 else f"{count} calls"

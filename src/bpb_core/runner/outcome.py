@@ -56,5 +56,6 @@ def unanswered_error(kind: NoAnswer, response: ModelResponse, asked: int | None)
         return f"refused by the model or its safety filter (finish {finish}){said}"
     if kind == "cut":
         cap = token_cap(response, asked)
-        return f"cut at the token cap ({cap}, finish {finish}): a setting of the run; raise it"
+        setting = "a setting of the run, raise --max-tokens"
+        return f"cut at the token cap ({cap}, finish {finish}): {setting}"
     return f"empty reply (finish {finish})"

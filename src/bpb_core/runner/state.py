@@ -314,7 +314,8 @@ class RunState:
             return
         self.unanswered_seen.add(kind)
         scored = "scored wrong, not re-asked; the report counts them per task"
-        self.progress.update(ProgressEvent(self.spec, task, "warning", reason=f"{error}: {scored}"))
+        said = f"{error} ({scored})"
+        self.progress.update(ProgressEvent(self.spec, task, "warning", reason=said))
 
     def not_sent(self, task: str, pair: str = "") -> None:
         """Record a pair left unsent (cost cap or setup stop); it stays resumable. ``pair``:

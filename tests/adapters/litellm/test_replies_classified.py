@@ -5,7 +5,8 @@ The fake server answers as each API documents it: OpenAI chat's ``refusal`` fiel
 ``finish_reason`` ``content_filter``/``length``, Responses' ``refusal`` item and
 ``incomplete_details``, Anthropic's ``stop_reason`` ``refusal``/``max_tokens``, Gemini's
 ``finishReason`` ``SAFETY``/``MAX_TOKENS`` with no content. litellm sends real HTTP to it through
-``bpb run``; ``bpb report --json`` reads the run back.
+``bpb run``; ``bpb report`` reads the run back (JSON, the terminal and the HTML page), the cut
+named as a setting of the run with its cap.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import pytest
 from bpb_testing.fakereplies import REFUSAL
+from markupsafe import escape
 
 from bpb_core.run_folder import iter_answers, read_attempts
 from support.fake_openai import fake_server
@@ -94,9 +96,12 @@ def test_replies_without_an_answer_are_classified_on_every_protocol(
     refusal = lines["h1_0000"].get("refusal")
     assert refusal == (REFUSAL if case.refusal_text else None)
     assert (REFUSAL in (records["h1_0000"].error or "")) == case.refusal_text
+    line = "replies with no answer, scored wrong (q1 cut 1, empty 1, refused 2); "
+    line += cut.error or ""
     report = bpb(capfd, "report", str(folder), "--json", "--bootstrap", "10")
     assert report.returncode == 0, report.stderr
-    said = json.loads(report.stdout)["unanswered"]
-    assert list(said.values()) == [
-        "replies with no answer, scored wrong (q1 cut 1, empty 1, refused 2); " + (cut.error or "")
-    ]
+    assert list(json.loads(report.stdout)["unanswered"].values()) == [line]
+    shown = bpb(capfd, "report", str(folder), "--out", str(tmp_path / "pages"), "--bootstrap", "10")
+    assert shown.returncode == 0, shown.stderr
+    assert line in " ".join(shown.stdout.split())  # the terminal, under the leaderboard
+    assert str(escape(line)) in (tmp_path / "pages" / "report.html").read_text(encoding="utf-8")
