@@ -17,7 +17,7 @@ import json
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -36,8 +36,9 @@ Status = Literal["ok", "parse_error", "refused", "cut", "empty", "api_error"]
 """A pair's end: answered (``ok``); a reply with no answer: unparseable (``parse_error``),
 declined by the model or its safety filter (``refused``), cut at the token cap (``cut``), with
 no text (``empty``); or no reply (``api_error``, resumable)."""
-NO_ANSWER: tuple[str, ...] = ("refused", "cut", "empty")
-"""Statuses of a reply that held no answer to parse (:mod:`bpb_core.runner.outcome`)."""
+NoAnswer = Literal["refused", "cut", "empty"]
+"""How a reply held no answer to parse (:mod:`bpb_core.runner.outcome`)."""
+NO_ANSWER: tuple[str, ...] = get_args(NoAnswer)
 REPLIED: tuple[str, ...] = ("ok", "parse_error", *NO_ANSWER)
 """The statuses of a pair that got a reply: complete, scored (all but ``ok`` as wrong)."""
 COMPLETE: frozenset[str] = frozenset(REPLIED)

@@ -10,12 +10,10 @@ cap set too low is a setting of the run, not something the model got wrong.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from typing import Any, Literal
+from typing import Any
 
 from bpb_core.model_calls import ModelResponse
-
-NoAnswer = Literal["refused", "cut", "empty"]
-"""How a reply held no answer to parse (the pair's status: ``run_folder.NO_ANSWER``)."""
+from bpb_core.run_folder import NoAnswer
 
 
 def unanswered(response: ModelResponse) -> NoAnswer | None:
