@@ -1,6 +1,7 @@
 """``bpb run``: ask models the benchmark's questions (a thin wrapper over bpb_core.runner).
 
-Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``), or a ``--pilot`` done;
+Exit codes: 0 every (scene, task) got a reply (``ok``, ``parse_error``, ``refused``, ``cut``,
+``empty``), or a ``--pilot`` done;
 1 the run finished with ``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the
 same command to resume); 2 bad input, or an adapter stopped by an error no retry can fix (an
 unknown model, an invalid parameter, a spent quota, a refused key, a provider that cannot be
@@ -223,7 +224,13 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     "worst case is reserved before it is sent).",
 )
 @click.option("--seed", type=int, default=0, show_default=True)
-@counted("--retries", default=6, low=0, help="Retries after 429/5xx/timeouts/connection errors.")
+@counted(
+    "--retries",
+    default=6,
+    low=0,
+    help="Retries after 429/5xx/timeouts/connection errors (5 connection failures in a row, "
+    "or 30 s of them, stop the adapter).",
+)
 @counted("--reasks", default=2, low=0, help="Escalating re-asks after a malformed answer.")
 @click.option(
     "--prices",

@@ -97,15 +97,34 @@ def test_a_3000_pair_run_at_a_closed_port_exits_2_in_under_30_s(
     # each of the 5 was retryable and left for the resume: every pair is still to send
 
 
-def test_the_other_adapters_of_a_sweep_go_on(
-    dataset: Path, tmp_path: Path, capfd: pytest.CaptureFixture[str]
+ROUTES = {  # each protocol's model and what --api-base adds to the server's root
+    "openai-chat": ("kimi-k2.5", "/v1"),
+    "openai-responses": ("gpt-5.4-pro", "/v1"),
+    "anthropic": ("claude-opus-4.5", ""),
+    "gemini": ("gemini-3-flash-preview", "/v1beta"),
+}
+
+
+@pytest.mark.parametrize("route", list(ROUTES))
+def test_a_closed_port_stops_the_adapter_on_every_route_and_the_sweep_goes_on(
+    route: str,
+    dataset: Path,
+    tmp_path: Path,
+    capfd: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    # litellm reports a refused connection as a 500 on some routes: each must still stop fast
+    for variable in ("ANTHROPIC_API_KEY", "GEMINI_API_KEY", "MOONSHOT_API_KEY"):
+        monkeypatch.setenv(variable, KEY)
+    alias, path = ROUTES[route]
     out = tmp_path / "out"
     done = _run(
-        capfd, dataset, out, "--adapter", MODEL, "--adapter", "baseline:stasis",
-        "--api-base", f"http://127.0.0.1:{_closed_port()}/v1",
+        capfd, dataset, out, "--adapter", f"litellm:{alias}", "--adapter", "baseline:stasis",
+        "--api-base", f"http://127.0.0.1:{_closed_port()}{path}",
     )  # fmt: skip
     assert done.returncode == 2, done.stderr
-    assert "error: litellm:openai/fake-model: stopped, provider unreachable" in done.stderr
+    assert f"error: litellm:{alias}: stopped, provider unreachable" in done.stderr
+    folder = next(p for p in out.iterdir() if p.name.startswith("litellm_"))
+    assert len(list(read_attempts(folder))) == 5
     stasis = [r for _, r in iter_answers(out / "baseline_stasis")]
     assert len(stasis) == 18 and all(r.status == "ok" for r in stasis)
