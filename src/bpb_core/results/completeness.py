@@ -62,31 +62,35 @@ def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str
 REJECTED = ("RequestRejected:",)
 """How the error of a call the API refused (a 4xx other than a rate limit) begins: re-running
 sends the same request again, so it is not counted with infrastructure failures."""
+SETUP = ("SetupFailure:", "AuthenticationFailed:")
+"""How the error of a call that stopped its adapter begins (an unknown model, a refused key, an
+unreachable provider): a setting to fix before the re-run, not an infrastructure failure."""
 
 
 def incomplete_lines(results: Results) -> dict[str, str]:
-    """Per run with unanswered calls, what to say: how many failed on infrastructure
-    (``api_error``), were refused by the API (an ``api_error`` whose error is one of
-    :data:`REJECTED`) or were never sent (``missing``), and that re-running resumes them; for a
-    run still running when it was read, that its calls are not answered yet."""
+    """Per run with unanswered calls, what to say: how many stopped their adapter (an
+    ``api_error`` whose error is one of :data:`SETUP`), failed on infrastructure
+    (``api_error``), were refused by the API (one of :data:`REJECTED`) or were never sent
+    (``missing``), and that re-running resumes them; for a run still running when it was read,
+    that its calls are not answered yet."""
     calls = results.calls
-    errors = calls["status"].astype(str) == "api_error"
-    refused = errors & calls["error"].fillna("").astype(str).str.startswith(REJECTED)
-    status = calls["status"].astype(str).where(~refused, "rejected")
-    counts = calls.assign(status=status).groupby(["run", "status"], observed=True).size()
+    counts = calls.assign(status=_failures(calls)).groupby(["run", "status"], observed=True).size()
     live = {run.label: run.live for run in results.runs if run.live is not None}
     out: dict[str, str] = {}
     for run, row in counts.unstack(fill_value=0).iterrows():
         failed = int(row.get("api_error", 0))
         rejected = int(row.get("rejected", 0))
         unsent = int(row.get("missing", 0))
-        if str(run) in live and failed + rejected + unsent:
+        setup = int(row.get("setup", 0))
+        waiting = failed + rejected + unsent + setup
+        if str(run) in live and waiting:
             out[str(run)] = (
                 f"still running (bpb run pid {live[str(run)]}): "
-                f"{_calls(failed + rejected + unsent)} not answered yet; report again when it ends"
+                f"{_calls(waiting)} not answered yet; report again when it ends"
             )
             continue
-        parts = [f"{_calls(failed)} failed on infrastructure"] if failed else []
+        parts = [f"{_calls(setup)} stopped by a setup error (fix it first)"] if setup else []
+        parts += [f"{_calls(failed)} failed on infrastructure"] if failed else []
         parts += [f"{_calls(unsent)} never sent"] if unsent else []
         line = f"{' and '.join(parts)}, re-run to resume" if parts else ""
         if rejected:
@@ -98,6 +102,16 @@ def incomplete_lines(results: Results) -> dict[str, str]:
         if line:
             out[str(run)] = f"incomplete: {line}"
     return out
+
+
+def _failures(calls: pd.DataFrame) -> pd.Series:
+    """Each call's status, an ``api_error`` told apart as ``rejected`` or ``setup`` by how its
+    error begins."""
+    status = calls["status"].astype(str)
+    said = calls["error"].fillna("").astype(str)
+    for kind, starts in (("rejected", REJECTED), ("setup", SETUP)):
+        status = status.where(~((status == "api_error") & said.str.startswith(starts)), kind)
+    return status
 
 
 UNPARSED_SHARE = 0.5

@@ -57,6 +57,8 @@ def test_an_error_no_retry_can_fix_costs_one_call(
     assert len(errors) == 1 and cause in errors[0], done.stderr
     assert "17 pairs not sent" in errors[0] and "re-run the same command to resume" in errors[0]
     assert KEY not in done.stdout + done.stderr
+    said = " ".join(done.stderr.split())  # the summary names the cause, not the infrastructure
+    assert "incomplete: 1 call stopped by a setup error (fix it first) and 17 calls" in said
     with fake_server(dataset, None, tmp_path) as fixed:  # the cause fixed: the same command
         again = _run(
             capfd, dataset, tmp_path / "out", "--adapter", MODEL, "--api-base", fixed.api_base,
