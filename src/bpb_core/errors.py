@@ -200,9 +200,27 @@ class ConnectionFailure(RetryableModelError):
     """The connection could not be made or broke off."""
 
 
-class AuthenticationFailed(ModelError):
-    """401/403: the key is missing or wrong. The runner stops the whole run on this."""
+class SetupFailure(ModelError):
+    """An error no retry can fix and every call of the adapter would meet: the model is not
+    found, a parameter is invalid, the quota is spent, the key is refused, or the provider
+    cannot be reached at all. The runner stops the adapter on its first occurrence (the
+    other adapters of a sweep go on); ``bpb run`` exits 2.
+
+    Args:
+        cause: What is wrong, in a few words the one-line message leads with
+            (``model not found``).
+        message: The provider's own message (secrets redacted).
+    """
+
+    def __init__(self, cause: str, message: str = "") -> None:
+        self.cause = cause
+        super().__init__(f"{cause}: {message}" if message else cause)
+
+
+class AuthenticationFailed(SetupFailure):
+    """401/403: the key is missing, wrong, or not allowed to use the model."""
 
 
 class RequestRejected(ModelError):
-    """Any other 4xx: the request itself is wrong, so retrying cannot help."""
+    """A 4xx about this request alone (its prompt too long for the context window, its content
+    refused by a policy filter): retrying cannot help, but other requests may succeed."""

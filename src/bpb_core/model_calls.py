@@ -104,10 +104,15 @@ class ModelResponse:
         cost: Cost in USD, ``None`` when unknown (never a made-up 0).
         latency: Seconds from request to reply.
         model_id: The provider's model id that answered.
-        finish_reason: ``stop``, ``length`` (cut off by the token limit) and so on.
+        finish_reason: ``stop``, ``length`` (cut off by the token limit), ``content_filter``
+            (refused or blocked by a safety filter) and so on, as OpenAI names them.
         sent: The parameters that actually went on the wire (``None`` when not known).
         dropped: Requested parameters the provider route did not send (``temperature`` ...).
-        reasoning: Reasoning text the provider returned, if any.
+        reasoning: Reasoning text (or reasoning summary) the provider returned, if any.
+        refusal: What the model said when it declined (OpenAI's ``refusal``), if it did.
+        provider_finish: The provider's own word for how the reply ended (Anthropic
+            ``refusal``, Gemini ``SAFETY``, Responses ``incomplete: max_output_tokens``), which
+            ``finish_reason`` maps onto OpenAI's vocabulary.
         metadata: The adapter's own measurements about this answer (JSON-ready, flat: names to
             numbers, yes/no values or strings), stored with the answer and summarised by the
             report per horizon; e.g. an offline adapter's error in reading its input.
@@ -122,6 +127,8 @@ class ModelResponse:
     sent: dict[str, Any] | None = None
     dropped: tuple[str, ...] = ()
     reasoning: str | None = None
+    refusal: str | None = None
+    provider_finish: str | None = None
     metadata: dict[str, bool | float | str] = field(default_factory=dict)
 
 

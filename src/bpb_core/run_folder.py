@@ -4,7 +4,8 @@ writer of each, used by the runner and by the results alike.
 Layout (mirrors the dataset): ``RUN_DIR/run.json``, ``RUN_DIR/attempts.jsonl`` and one
 ``RUN_DIR/h{t}/scene_{i:04d}/{task}.json`` per answered (scene, task). Answer files are written
 atomically (temporary file, then rename), so a killed run leaves either the whole file or none;
-a (scene, task) whose file says ``ok`` or ``parse_error`` is complete and never asked again.
+a (scene, task) whose file says it got a reply (:data:`REPLIED`) is complete and never asked
+again.
 The attempts log is appended and flushed line by line; a torn last line from a killed process is
 skipped by readers and closed off before the next append.
 """
@@ -18,7 +19,7 @@ import os
 import re
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -33,8 +34,16 @@ from bpb_core.layout import (
 )
 from bpb_core.validated_files import describe_validation_error, validate_mapping
 
-Status = Literal["ok", "parse_error", "api_error"]
-COMPLETE: frozenset[str] = frozenset({"ok", "parse_error"})
+Status = Literal["ok", "parse_error", "refused", "cut", "empty", "api_error"]
+"""A pair's end: answered (``ok``); a reply with no answer: unparseable (``parse_error``),
+declined by the model or its safety filter (``refused``), cut at the token cap (``cut``), with
+no text (``empty``); or no reply (``api_error``, resumable)."""
+NoAnswer = Literal["refused", "cut", "empty"]
+"""How a reply held no answer to parse (:mod:`bpb_core.runner.outcome`)."""
+NO_ANSWER: tuple[str, ...] = get_args(NoAnswer)
+REPLIED: tuple[str, ...] = ("ok", "parse_error", *NO_ANSWER)
+"""The statuses of a pair that got a reply: complete, scored (all but ``ok`` as wrong)."""
+COMPLETE: frozenset[str] = frozenset(REPLIED)
 
 
 class UsageRecord(BaseModel):

@@ -62,6 +62,9 @@ def _import_litellm() -> Any:
     litellm.suppress_debug_info = True
     litellm.set_verbose = False
     litellm.telemetry = False
+    # A reasoning effort sent through OpenAI's Responses API asks for the reasoning summary
+    # too (``reasoning.summary``): it is kept with the answer, as other providers' thinking is.
+    litellm.reasoning_auto_summary = True
     logger = logging.getLogger("LiteLLM")
     if logger.level == logging.NOTSET:  # bpb reports through its own channels; a level the
         logger.setLevel(logging.ERROR)  # calling program chose is its own
@@ -211,12 +214,15 @@ class LiteLLMAdapter:
         except Exception as exc:
             raise map_error(exc, self._hidden) from None
         finally:
-            sent = wire.take(call_id)
+            sent, (finish, refusal) = wire.take(call_id)
         asked = {k: kwargs[k] for k in kwargs if k not in _PLUMBING}
         dropped = () if sent is None else wire.dropped(asked, sent)
         reply = self._response(raw, time.perf_counter() - started)
         recorded = None if sent is None else wire.recorded(sent)  # headers ride in some bodies
-        return dataclasses.replace(reply, sent=recorded, dropped=dropped)
+        refusal = refusal or reply.refusal
+        return dataclasses.replace(
+            reply, sent=recorded, dropped=dropped, refusal=refusal, provider_finish=finish
+        )
 
     def _response(self, raw: Any, latency: float) -> ModelResponse:
         """The reply in ``raw``: its text, token counts (reasoning and cached ones too), cost
@@ -238,6 +244,8 @@ class LiteLLMAdapter:
             except Exception:  # litellm raises many types for unmapped models: no price known
                 cost = None
         reasoning = getattr(choice.message, "reasoning_content", None)
+        extra = getattr(choice.message, "provider_specific_fields", None)
+        refusal = extra.get("refusal") if isinstance(extra, dict) else None
         return ModelResponse(
             text=text,
             usage=Usage(  # all None without a usage
@@ -251,6 +259,7 @@ class LiteLLMAdapter:
             model_id=str(getattr(raw, "model", "") or self.model),
             finish_reason=getattr(choice, "finish_reason", None),
             reasoning=str(reasoning)[:_REASONING_CAP] if reasoning else None,
+            refusal=str(refusal) if refusal else None,
         )
 
 

@@ -5,6 +5,9 @@ the OpenAI-style ones (``reasoning_effort``, ``max_tokens``, ``temperature``, ``
 provider and passes provider-native ones (Anthropic's ``thinking``) through. ``extra_headers``
 carries extra HTTP headers.
 
+The reply's body is caught the same way, after the HTTP call, for the provider's own finish
+reason and a refusal (:func:`verdict`), which litellm's normalised reply loses.
+
 With ``drop_params`` litellm silently leaves out what a model does not take (``temperature`` for
 reasoning models), and it maps arguments onto each provider's own fields (``reasoning_effort``
 becomes Anthropic's ``output_config.effort`` or Gemini's ``thinkingConfig``). The provider's
@@ -120,6 +123,13 @@ _LANDS_AS: dict[str, tuple[str, ...]] = {
 _NOT_IN_BODY = frozenset({"extra_headers", "api_key", "api_version", "extra_body"})
 
 _bodies: OrderedDict[str, dict[str, Any]] = OrderedDict()
+_verdicts: OrderedDict[str, tuple[str | None, str | None]] = OrderedDict()
+
+
+def _kept(store: OrderedDict[str, Any], call_id: str, value: Any) -> None:
+    store[call_id] = value
+    while len(store) > _KEEP:
+        store.popitem(last=False)
 
 
 def install(litellm: Any) -> None:
@@ -131,17 +141,59 @@ def install(litellm: Any) -> None:
             call_id = kwargs.get("litellm_call_id")
             body = (kwargs.get("additional_args") or {}).get("complete_input_dict")
             if isinstance(call_id, str) and isinstance(body, Mapping):
-                _bodies[call_id] = {k: v for k, v in body.items() if k not in _CONTENT}
-                while len(_bodies) > _KEEP:
-                    _bodies.popitem(last=False)
+                _kept(_bodies, call_id, {k: v for k, v in body.items() if k not in _CONTENT})
+
+        def log_post_api_call(
+            self, kwargs: Any, response_obj: Any, start_time: Any, end_time: Any
+        ) -> None:
+            call_id, reply = kwargs.get("litellm_call_id"), kwargs.get("original_response")
+            if isinstance(call_id, str) and isinstance(reply, str):
+                _kept(_verdicts, call_id, verdict(reply))
 
     if not any(type(cb).__name__ == "_Catcher" for cb in litellm.callbacks):
         litellm.callbacks.append(_Catcher())
 
 
-def take(call_id: str) -> dict[str, Any] | None:
-    """The parameters sent by the call ``call_id`` (``None`` when litellm logged no body)."""
-    return _bodies.pop(call_id, None)
+def verdict(reply: str) -> tuple[str | None, str | None]:
+    """The provider's own word for how a reply ended, and the model's refusal text, from the
+    reply body of any of the four protocols (``(None, None)`` for a body that is not JSON).
+
+    litellm maps Anthropic's ``stop_reason: refusal`` and Gemini's ``SAFETY`` both onto
+    ``content_filter``, and its Responses bridge drops a ``refusal`` item: the body keeps them.
+    """
+    try:
+        body = json.loads(reply)
+    except ValueError:
+        return None, None
+    if not isinstance(body, dict):
+        return None, None
+    if "stop_reason" in body:  # Anthropic Messages
+        return _word(body.get("stop_reason")), None
+    if "candidates" in body or "promptFeedback" in body:  # Gemini generateContent
+        first = _first(body.get("candidates"))
+        blocked = (body.get("promptFeedback") or {}).get("blockReason")
+        return _word(first.get("finishReason") or blocked), None
+    if body.get("object") == "response":  # OpenAI Responses
+        why = (body.get("incomplete_details") or {}).get("reason")
+        parts = [p for item in body.get("output") or [] for p in item.get("content") or []]
+        refusals = [p.get("refusal") for p in parts if p.get("type") == "refusal"]
+        return _word(f"incomplete: {why}" if why else body.get("status")), _word(*refusals[:1])
+    first = _first(body.get("choices"))  # OpenAI chat completions
+    return _word(first.get("finish_reason")), _word((first.get("message") or {}).get("refusal"))
+
+
+def _first(items: Any) -> dict[str, Any]:
+    return items[0] if isinstance(items, list) and items and isinstance(items[0], dict) else {}
+
+
+def _word(value: Any = None) -> str | None:
+    return value if isinstance(value, str) and value else None
+
+
+def take(call_id: str) -> tuple[dict[str, Any] | None, tuple[str | None, str | None]]:
+    """The parameters sent by the call ``call_id`` (``None`` when litellm logged no body) and
+    the :func:`verdict` of its reply (``(None, None)`` when it logged none)."""
+    return _bodies.pop(call_id, None), _verdicts.pop(call_id, (None, None))
 
 
 def _keys(value: Any) -> Iterator[tuple[str, Any]]:

@@ -35,6 +35,9 @@ USAGE_COLUMNS = {
     "latency_mean": "latency ms",
     "retries": "retries",
     "parse_error": "parse err",
+    "refused": "refused",
+    "cut": "cut",
+    "empty": "empty",
     "api_error": "api err",
     "missing": "missing",
 }
@@ -141,7 +144,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
         reference_cells,
         reference_sources,
     )
-    from bpb_core.results.completeness import incomplete_lines, unparsed_lines
+    from bpb_core.results.completeness import warning_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"
@@ -150,9 +153,8 @@ def _print_part(part: ReportPart, built: Report) -> None:
         _cell_table("Published figures beside your runs", *reference_cells(part))
         for line in [REFERENCE_NOTE, *reference_sources(part)]:
             console.print(escape(line), highlight=False, style="dim")
-    warned = [*incomplete_lines(part.results).items(), *unparsed_lines(part.results).items()]
-    for run, line in warned:
-        console.print(f"[yellow]{escape(run)}: {line}[/]", highlight=False)
+    for run, line in warning_lines(part.results):
+        console.print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     for different in (different_scenes_note(part), different_conditions_note(part)):
         if different:
             console.print(f"[yellow]{escape(different)}[/]", highlight=False)

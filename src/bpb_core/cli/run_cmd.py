@@ -1,9 +1,12 @@
 """``bpb run``: ask models the benchmark's questions (a thin wrapper over bpb_core.runner).
 
-Exit codes: 0 every (scene, task) answered (``ok`` or ``parse_error``), or a ``--pilot`` done;
+Exit codes: 0 every (scene, task) got a reply (``ok``, ``parse_error``, ``refused``, ``cut``,
+``empty``), or a ``--pilot`` done;
 1 the run finished with ``api_error`` pairs or pairs left unsent by ``--max-cost`` (re-run the
-same command to resume);
-2 bad input, or an authentication failure (the run stops at once: fix the key and re-run).
+same command to resume); 2 bad input, or an adapter stopped by an error no retry can fix (an
+unknown model, an invalid parameter, a spent quota, a refused key, a provider that cannot be
+reached: that adapter stops at once, the others of a sweep go on; fix it and re-run the same
+command to resume).
 """
 
 from __future__ import annotations
@@ -229,7 +232,13 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     show_default=True,
     help="Seed of the call order, of --sample and of adapters with randomness.",
 )
-@counted("--retries", default=6, low=0, help="Retries after 429/5xx/timeouts/connection errors.")
+@counted(
+    "--retries",
+    default=6,
+    low=0,
+    help="Retries after 429/5xx/timeouts/connection errors (5 connection failures in a row, "
+    "or 30 s of them, stop the adapter).",
+)
 @counted("--reasks", default=2, low=0, help="Escalating re-asks after a malformed answer.")
 @click.option(
     "--prices",
@@ -351,10 +360,11 @@ def _finish(
     show_spending(results)
     code = 0
     for result in results:
-        if result.stopped == "auth":
+        if result.stopped == "setup":
             stderr().print(
-                f"[red]error:[/] {escape(result.adapter)}: authentication failed, run stopped "
-                f"(check the provider key in the environment): {escape(result.error or '')}"
+                f"[red]error:[/] {escape(result.adapter)}: stopped, {escape(result.error or '')}; "
+                f"{result.not_sent} pairs not sent: fix it, then re-run the same command to resume",
+                soft_wrap=True,  # one line, however long the provider's message
             )
             code = 2
         elif result.api_errors or result.not_sent:

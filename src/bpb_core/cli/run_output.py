@@ -32,6 +32,12 @@ if TYPE_CHECKING:
     from bpb_core.runner.options import RunOptions, RunResult
 
 
+FAILED = ("parse_error", "refused", "cut", "empty", "api_error")
+"""Final statuses other than ``ok`` of a pair that was sent."""
+_SHORT = {"parse_error": "parse", "api_error": "api"}
+_ALWAYS = ("parse_error", "api_error")  # shown even at 0; the rest only once they happen
+
+
 @dataclass
 class _Row:
     task_id: TaskID
@@ -40,10 +46,10 @@ class _Row:
 
     def fields(self) -> dict[str, Any]:
         n, cost = self.counts, "$?" if self.cost is None else f"${self.cost:.4f}"
-        text = (
-            f"ok {n['ok']} failed {n['parse_error'] + n['api_error']} (parse {n['parse_error']}, "
-            f"api {n['api_error']}) retrying {n['retry']} tok {n['tokens']:,} {cost}"
-        )
+        failed = sum(n[s] for s in FAILED)
+        kinds = ", ".join(f"{_SHORT.get(s, s)} {n[s]}" for s in FAILED if n[s] or s in _ALWAYS)
+        text = f"ok {n['ok']} failed {failed} ({kinds}) retrying {n['retry']} "
+        text += f"tok {n['tokens']:,} {cost}"
         if n["skipped"]:
             text += f" | {n['skipped']} done before"
         if n["not_sent"]:
@@ -77,7 +83,7 @@ class RichProgress:
                 row.cost = None if event.cost is None else row.cost + event.cost
         else:  # planned, skipped (done before), retry
             n[event.kind] += event.count
-        finished = n["ok"] + n["parse_error"] + n["api_error"] + n["not_sent"]
+        finished = n["ok"] + sum(n[s] for s in FAILED) + n["not_sent"]
         self._bar.update(row.task_id, total=n["planned"], completed=finished, **row.fields())
 
 
@@ -199,7 +205,7 @@ def show_summary(
     if frame is None or frame.empty:
         return
     _print_table(frame)
-    for run, line in frame.attrs.get("incomplete", {}).items():
+    for run, line in frame.attrs.get("warnings", []):
         stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     parents = sorted({str(d.parent) for d in run_dirs})
     where = " ".join(parents) if parents else "RUN_DIR"

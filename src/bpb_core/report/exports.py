@@ -23,7 +23,7 @@ from bpb_core.report.sections import (
     headline_cells,
     horizon_cells,
 )
-from bpb_core.results.completeness import incomplete_lines, unparsed_lines
+from bpb_core.results.completeness import incomplete_lines, unanswered_lines, unparsed_lines
 
 if TYPE_CHECKING:
     from bpb_core.report.parts import Completeness, ReportPart
@@ -138,6 +138,7 @@ def part_json(part: ReportPart) -> dict[str, Any]:
         "by_horizon": records(by_horizon),
         "completeness": records(tables["accuracy"][cells]),
         "incomplete": incomplete_lines(results),
+        "unanswered": unanswered_lines(results),
         "unparsed": unparsed_lines(results),
         "different_scenes": different_scenes_note(part),
         "different_conditions": different_conditions_note(part),

@@ -23,6 +23,7 @@ from bpb_core.picture import ScenePicture
 from bpb_core.plugin_calls import returned
 from bpb_core.registry import SuiteInfo
 from bpb_core.results.tables import scene_scores
+from bpb_core.run_folder import REPLIED
 from bpb_core.scored_units import object_origin
 
 if TYPE_CHECKING:
@@ -74,7 +75,7 @@ def scene_totals(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.Da
         observed=True,
     )
     wide.columns.name = None
-    answered = scenes.assign(ok=scenes["status"].isin(["ok", "parse_error"]))
+    answered = scenes.assign(ok=scenes["status"].isin(REPLIED))
     all_ok = answered.groupby(["run", "horizon", "index"], observed=True)["ok"].all()
     wide = wide.reset_index()
     keys = pd.MultiIndex.from_frame(wide[["run", "horizon", "index"]])

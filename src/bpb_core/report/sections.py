@@ -17,7 +17,7 @@ from markupsafe import Markup
 
 from bpb_core.report import html
 from bpb_core.report.html import Cell
-from bpb_core.results.completeness import incomplete_lines, level, unparsed_lines, worst_cells
+from bpb_core.results.completeness import level, warning_lines, worst_cells
 from bpb_core.results.tables import metadata_by_horizon
 
 if TYPE_CHECKING:
@@ -238,9 +238,9 @@ def _condition(name: str, calls: pd.DataFrame, column: str, words: dict[str, str
 
 def incomplete_notes(part: ReportPart) -> Markup:
     """One warning line per run with calls that failed on infrastructure or were never sent,
-    and one per run with tasks mostly answered in a form its parser could not read."""
-    lines = [f"{run}: {text}" for run, text in incomplete_lines(part.results).items()]
-    lines += [f"{run}: {text}" for run, text in unparsed_lines(part.results).items()]
+    one per run with replies that held no answer (refused, cut, empty: per task), and one per
+    run with tasks mostly answered in a form its parser could not read."""
+    lines = [f"{run}: {text}" for run, text in warning_lines(part.results)]
     return Markup("").join(Markup("<p class='warn'>{}</p>").format(line) for line in lines)
 
 
@@ -397,7 +397,8 @@ USAGE_HEADERS = {
     "reasoning_tokens": "reason tok", "cached_tokens": "cached tok", "cost": "cost $",
     "cost_unknown": "cost unknown", "latency_mean": "latency mean ms",
     "latency_median": "latency median ms", "retries": "retries", "ok": "ok",
-    "parse_error": "parse err", "api_error": "api err", "missing": "missing",
+    "parse_error": "parse err", "refused": "refused", "cut": "cut", "empty": "empty",
+    "api_error": "api err", "missing": "missing",
     "tokens_per_call": "tok/call",
 }  # fmt: skip
 

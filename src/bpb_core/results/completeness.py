@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Literal
 
 import pandas as pd
 
+from bpb_core.run_folder import NO_ANSWER
+
 if TYPE_CHECKING:
     from bpb_core.results.frames import Results
 
@@ -60,31 +62,35 @@ def excluded_tasks(acc: pd.DataFrame, min_complete: float) -> dict[str, list[str
 REJECTED = ("RequestRejected:",)
 """How the error of a call the API refused (a 4xx other than a rate limit) begins: re-running
 sends the same request again, so it is not counted with infrastructure failures."""
+SETUP = ("SetupFailure:", "AuthenticationFailed:")
+"""How the error of a call that stopped its adapter begins (an unknown model, a refused key, an
+unreachable provider): a setting to fix before the re-run, not an infrastructure failure."""
 
 
 def incomplete_lines(results: Results) -> dict[str, str]:
-    """Per run with unanswered calls, what to say: how many failed on infrastructure
-    (``api_error``), were refused by the API (an ``api_error`` whose error is one of
-    :data:`REJECTED`) or were never sent (``missing``), and that re-running resumes them; for a
-    run still running when it was read, that its calls are not answered yet."""
+    """Per run with unanswered calls, what to say: how many stopped their adapter (an
+    ``api_error`` whose error is one of :data:`SETUP`), failed on infrastructure
+    (``api_error``), were refused by the API (one of :data:`REJECTED`) or were never sent
+    (``missing``), and that re-running resumes them; for a run still running when it was read,
+    that its calls are not answered yet."""
     calls = results.calls
-    errors = calls["status"].astype(str) == "api_error"
-    refused = errors & calls["error"].fillna("").astype(str).str.startswith(REJECTED)
-    status = calls["status"].astype(str).where(~refused, "rejected")
-    counts = calls.assign(status=status).groupby(["run", "status"], observed=True).size()
+    counts = calls.assign(status=_failures(calls)).groupby(["run", "status"], observed=True).size()
     live = {run.label: run.live for run in results.runs if run.live is not None}
     out: dict[str, str] = {}
     for run, row in counts.unstack(fill_value=0).iterrows():
         failed = int(row.get("api_error", 0))
         rejected = int(row.get("rejected", 0))
         unsent = int(row.get("missing", 0))
-        if str(run) in live and failed + rejected + unsent:
+        setup = int(row.get("setup", 0))
+        waiting = failed + rejected + unsent + setup
+        if str(run) in live and waiting:
             out[str(run)] = (
                 f"still running (bpb run pid {live[str(run)]}): "
-                f"{_calls(failed + rejected + unsent)} not answered yet; report again when it ends"
+                f"{_calls(waiting)} not answered yet; report again when it ends"
             )
             continue
-        parts = [f"{_calls(failed)} failed on infrastructure"] if failed else []
+        parts = [f"{_calls(setup)} stopped by a setup error (fix it first)"] if setup else []
+        parts += [f"{_calls(failed)} failed on infrastructure"] if failed else []
         parts += [f"{_calls(unsent)} never sent"] if unsent else []
         line = f"{' and '.join(parts)}, re-run to resume" if parts else ""
         if rejected:
@@ -96,6 +102,16 @@ def incomplete_lines(results: Results) -> dict[str, str]:
         if line:
             out[str(run)] = f"incomplete: {line}"
     return out
+
+
+def _failures(calls: pd.DataFrame) -> pd.Series:
+    """Each call's status, an ``api_error`` told apart as ``rejected`` or ``setup`` by how its
+    error begins."""
+    status = calls["status"].astype(str)
+    said = calls["error"].fillna("").astype(str)
+    for kind, starts in (("rejected", REJECTED), ("setup", SETUP)):
+        status = status.where(~((status == "api_error") & said.str.startswith(starts)), kind)
+    return status
 
 
 UNPARSED_SHARE = 0.5
@@ -120,6 +136,36 @@ def unparsed_lines(results: Results) -> dict[str, str]:
         "how the run answered, not what it knows; see the failure gallery"
         for run, told in out.items()
     }
+
+
+def unanswered_lines(results: Results) -> dict[str, str]:
+    """Per run with replies that held no answer (refused by the model or its safety filter,
+    cut at the token cap, empty), what to say: how many per task, that they count as wrong in
+    the strict score, and for a cut the cap that cut it (a setting of the run, not the model's
+    knowledge)."""
+    calls = results.calls[results.calls["status"].astype(str).isin(NO_ANSWER)]
+    out: dict[str, str] = {}
+    for run, frame in calls.groupby("run", observed=True):
+        counts = frame.groupby(["task", "status"], observed=True).size()
+        told = "; ".join(
+            f"{task} " + ", ".join(f"{kind} {n}" for kind, n in by_kind.items() if n)
+            for task, by_kind in counts.unstack(fill_value=0).iterrows()
+        )
+        line = f"replies with no answer, scored wrong ({told})"
+        cut = frame["error"][frame["status"].astype(str) == "cut"].dropna()
+        out[str(run)] = f"{line}; {cut.iloc[0]}" if len(cut) else line
+    return out
+
+
+def warning_lines(results: Results) -> list[tuple[str, str]]:
+    """Every ``(run, line)`` a table of scores is to be read with: calls unanswered
+    (:func:`incomplete_lines`), replies that held no answer (:func:`unanswered_lines`), tasks
+    mostly unparsed (:func:`unparsed_lines`)."""
+    return [
+        *incomplete_lines(results).items(),
+        *unanswered_lines(results).items(),
+        *unparsed_lines(results).items(),
+    ]
 
 
 def _calls(count: int) -> str:

@@ -29,7 +29,7 @@ from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.plugin_calls import parsed_answer
 from bpb_core.registry import SuiteInfo
-from bpb_core.results.completeness import incomplete_lines
+from bpb_core.results.completeness import warning_lines
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
 from bpb_core.results.tables import summary
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer, write_bytes_atomic
@@ -169,8 +169,9 @@ def write_scores(
     run_dirs: Sequence[Path], registry: Registry | None = None, folders: Iterable[DataFolder] = ()
 ) -> pd.DataFrame | None:
     """Write ``scores.csv`` (scored units) into each run folder and return the summary table
-    (``None`` when there is nothing to score); ``attrs["incomplete"]`` maps each run with
-    unanswered calls to the line saying so. ``folders``: the runs' datasets, already read."""
+    (``None`` when there is nothing to score); ``attrs["warnings"]`` holds the ``(run, line)``
+    warnings to print under it (:func:`~bpb_core.results.completeness.warning_lines`).
+    ``folders``: the runs' datasets, already read."""
     if not run_dirs:
         return None
     results = load_results(list(run_dirs), registry=registry, folders=folders)
@@ -182,7 +183,7 @@ def write_scores(
         text = written[written["run"] == run.label].to_csv(index=False)
         write_bytes_atomic(run.path / "scores.csv", text.encode("utf-8"))
     table = summary(frame, results.suites)
-    table.attrs["incomplete"] = incomplete_lines(results)  # what the summary must say
+    table.attrs["warnings"] = warning_lines(results)  # what the summary must say
     return table
 
 

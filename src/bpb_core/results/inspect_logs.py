@@ -29,7 +29,7 @@ from typing import Any
 from bpb_core.dataset.hf_import import cache_root
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST, SceneKey
-from bpb_core.run_folder import AnswerRecord, UsageRecord, write_answer, write_manifest
+from bpb_core.run_folder import REPLIED, AnswerRecord, UsageRecord, write_answer, write_manifest
 
 LOG_SUFFIXES = (".eval", ".json")
 PREFIX = "inspect"
@@ -168,7 +168,7 @@ def _record(sample: Any, adapter: str) -> AnswerRecord | None:
         index=int(meta["index"]),
         task=str(meta["task"]),
         adapter=adapter,
-        status=status if status in ("ok", "parse_error") else "api_error",
+        status=status if status in REPLIED else "api_error",
         answer=json.loads(score.answer) if score is not None and score.answer else None,
         rule=extra.get("rule"),
         finish_reason=str(choices[0].stop_reason) if choices else None,

@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.results.completeness import DEFAULT_MIN_COMPLETE, excluded_tasks
+from bpb_core.run_folder import REPLIED
 
 if TYPE_CHECKING:
     from bpb_core.registry import SuiteInfo
@@ -237,7 +238,7 @@ def usage(calls: pd.DataFrame) -> pd.DataFrame:
         retries=("retries", "sum"),
     )
     status = calls.groupby([*RUN_COLUMNS, "status"], observed=True).size().unstack(fill_value=0)
-    names = ["ok", "parse_error", "api_error", "missing"]
+    names = [*REPLIED, "api_error", "missing"]
     out[names] = status.reindex(index=out.index, columns=names, fill_value=0).astype("int64")
     out["tokens_per_call"] = (out["input_tokens"] + out["output_tokens"]) / out["calls"]
     return out.reset_index()

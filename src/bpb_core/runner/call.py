@@ -3,7 +3,10 @@
 Infrastructure errors (429, 5xx, timeouts, dropped connections) are retried with exponential
 backoff and full jitter, honouring a server's Retry-After; a timeout also lengthens the next
 timeout. A malformed answer is re-asked in a fresh conversation with an escalated prompt and a
-longer timeout. Other 4xx fail at once. An authentication failure stops the whole run.
+longer timeout; a refused, cut or empty reply is recorded as such and not re-asked
+(:mod:`.outcome`). A 4xx about one request fails that pair at once. An error no retry can fix (a
+:class:`SetupFailure`: unknown model, invalid parameter, spent quota, refused key) stops the
+adapter at its first occurrence; so do repeated connection failures.
 """
 
 from __future__ import annotations
@@ -16,11 +19,12 @@ from typing import Any
 
 from bpb_core.capabilities import PublishesSchema
 from bpb_core.errors import (
-    AuthenticationFailed,
+    ConnectionFailure,
     ModelError,
     ModelTimeout,
     ParseFailure,
     PluginBug,
+    SetupFailure,
     blamed,
 )
 from bpb_core.interfaces import PromptOptions
@@ -29,6 +33,7 @@ from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_sche
 from bpb_core.run_folder import write_answer
 from bpb_core.runner.budget import Hold, pair_name
 from bpb_core.runner.options import ProgressEvent
+from bpb_core.runner.outcome import unanswered, unanswered_error
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import NotSent, RunState, Tally, wait_unless
 
@@ -43,10 +48,7 @@ def _parse(
             task, call.state.origin(call.task), response.text, call.scene, prompt
         )
     except ParseFailure as failure:
-        reason = str(failure)
-        if response.finish_reason == "length":
-            reason = f"reply cut off by the token limit (finish_reason length); {reason}"
-        return None, None, reason
+        return None, None, str(failure)
     return parsed.value, parsed.rule, None
 
 
@@ -192,12 +194,50 @@ class PairCall:
         await self.state.settle(hold, response.cost, self.pair, response.usage.input_tokens)
         self.finish_reason = response.finish_reason
         self.metadata = dict(response.metadata)
-        # Parsing is linear but a reply may be up to a megabyte: keep the event loop serving.
-        value, rule, error = await asyncio.to_thread(_parse, self, response, prompt)
+        kind = unanswered(response)
+        if kind is None:
+            # Parsing is linear but a reply may be up to a megabyte: keep the loop serving.
+            value, rule, error = await asyncio.to_thread(_parse, self, response, prompt)
+        else:
+            value, rule = None, None
+            error = unanswered_error(kind, response, self.state.options.max_tokens)
+        outcome = kind or ("ok" if error is None else "parse_error")
+        await self._log_reply(response, outcome, value, rule, error)
+        self.state.note_dropped(self.task, response.dropped)
+        if error is None:
+            await self._settle("ok", value, rule)
+            return True
+        self.last_error = error
+        if kind is not None:  # asking again the same way would buy the same reply
+            self.state.note_unanswered(self.task, kind, error)
+            await self._settle(kind)
+            return True
+        if self.reasks >= self.state.options.retry.max_reasks:
+            await self._settle("parse_error")
+            return True
+        self.reasks += 1
+        self.escalation += 1
+        self.timeout *= self.state.options.retry.timeout_growth
+        self._retrying("format")
+        return False
+
+    async def _log_reply(
+        self,
+        response: ModelResponse,
+        outcome: str,
+        value: dict[str, Any] | None,
+        rule: str | None,
+        error: str | None,
+    ) -> None:
+        """Append the reply's attempt line: its outcome, text, finish and refusal, usage."""
+        said = {"refusal": response.refusal} if response.refusal else {}
+        if response.provider_finish not in (None, response.finish_reason):
+            said["provider_finish"] = response.provider_finish
         await self._log(
-            outcome="ok" if error is None else "parse_error",
+            outcome=outcome,
             text=response.text,
             finish_reason=response.finish_reason,
+            **said,
             usage=vars(response.usage),
             cost=response.cost,
             latency=response.latency,
@@ -210,32 +250,21 @@ class PairCall:
             reasoning=response.reasoning,
             **({"metadata": response.metadata} if response.metadata else {}),
         )
-        self.state.note_dropped(self.task, response.dropped)
-        if error is None:
-            await self._settle("ok", value, rule)
-            return True
-        self.last_error = error
-        if self.reasks >= self.state.options.retry.max_reasks:
-            await self._settle("parse_error")
-            return True
-        self.reasks += 1
-        self.escalation += 1
-        self.timeout *= self.state.options.retry.timeout_growth
-        self._retrying("format")
-        return False
 
     async def _failed(self, error: ModelError, elapsed: float) -> float | None:
         """Log a failed call; settle the pair and return None, or return the seconds to back
-        off before another try."""
+        off before another try. An error no retry can fix stops the adapter; so do too many
+        connection failures in a row (:meth:`RunState.connection_failed`)."""
         self.last_error = f"{type(error).__name__}: {error}"
         policy = self.state.options.retry
+        if isinstance(error, SetupFailure):
+            self.state.stop_for_setup(error)
+        elif isinstance(error, ConnectionFailure):
+            self.state.connection_failed(error)
         retry = error.retryable and self.retries < policy.max_retries
         delay = self._backoff(error) if retry else None
         await self._log(outcome="api_error", error=self.last_error, latency=elapsed, retry_in=delay)
-        if isinstance(error, AuthenticationFailed):
-            self.state.auth_error = self.state.auth_error or error
-            self.state.stop("auth", overrides=True)
-        if delay is None or isinstance(error, AuthenticationFailed):
+        if delay is None:
             await self._settle("api_error")
             return None
         self.retries += 1

@@ -19,12 +19,11 @@ from pathlib import Path
 from typing import Any
 
 from bpb_core.model_calls import known_cost
-from bpb_core.run_folder import read_attempts, write_answer
+from bpb_core.run_folder import REPLIED, read_attempts, write_answer
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import RunState, Tally
 
 _USAGE = ("input_tokens", "output_tokens", "reasoning_tokens", "cached_tokens")
-REPLIED = ("ok", "parse_error")
 
 
 @dataclass

@@ -261,7 +261,7 @@ def finish_manifest(run_dir: Path, manifest: dict[str, Any], state: RunState) ->
         "statuses": state.statuses,
         "cost": None if state.unpriced else state.spent,
         "tokens": state.tokens,
-        "error": None if state.auth_error is None else str(state.auth_error),
+        "error": None if state.setup_error is None else str(state.setup_error),
         "budget": state.spending.summary(),
     }
     write_manifest(run_dir, manifest)

@@ -24,6 +24,10 @@ class RetryPolicy:
         max_delay: Cap on one backoff (and on a server's Retry-After).
         max_reasks: Re-asks after a malformed answer, each escalating the prompt.
         timeout_growth: Factor applied to the timeout after a timeout and on each re-ask.
+        max_transport_failures: Connection failures in a row (refused, DNS, TLS) after which
+            the adapter stops: the provider cannot be reached.
+        transport_window: Seconds of connection failures with no reply between after which the
+            adapter stops, however few they were.
     """
 
     max_retries: int = 6
@@ -31,6 +35,8 @@ class RetryPolicy:
     max_delay: float = 60.0
     max_reasks: int = 2
     timeout_growth: float = 1.5
+    max_transport_failures: int = 5
+    transport_window: float = 30.0
 
 
 @dataclass(frozen=True)
@@ -188,8 +194,10 @@ class RunResult:
             plus ``done_before`` (complete from an earlier run) and ``not_sent``.
         cost: USD spent in this invocation (``None`` if any reply had no price).
         tokens: Input + output tokens in this invocation.
-        stopped: Why the run stopped early (``max-cost``, ``auth``), or ``None``.
-        error: The authentication error message when ``stopped`` is ``auth``.
+        stopped: Why the run stopped early (``max-cost``, ``setup``, ``interrupted``), or
+            ``None``.
+        error: What to fix, one line, when ``stopped`` is ``setup`` (an error no retry can
+            fix, or a provider that cannot be reached).
         budget: Spent (all sessions), reserved and left, the caps and the pairs the cap kept
             from being sent (:meth:`bpb_core.runner.budget.Spending.summary`).
     """
@@ -210,5 +218,5 @@ class RunResult:
 
     @property
     def not_sent(self) -> int:
-        """Pairs never sent (stopped by the cost cap or an auth failure)."""
+        """Pairs never sent (stopped by the cost cap or a setup failure)."""
         return sum(c["not_sent"] for c in self.statuses.values())

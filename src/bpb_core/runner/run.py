@@ -286,7 +286,7 @@ def _result(state: RunState, before: Counter[str]) -> RunResult:
         cost=None if state.unpriced else state.spent,
         tokens=state.tokens,
         stopped=state.stop_reason,
-        error=None if state.auth_error is None else str(state.auth_error),
+        error=None if state.setup_error is None else str(state.setup_error),
         budget=state.spending.summary(),
     )
 
@@ -326,7 +326,8 @@ def run_eval(
 
     Returns:
         Per-task status counts, cost and tokens; ``stopped`` says why it stopped early.
-        An authentication failure sets ``stopped="auth"``; the CLI turns it into exit code 2.
+        An error no retry can fix (an unknown model, a refused key, an unreachable provider)
+        sets ``stopped="setup"`` and ``error``; the CLI turns it into exit code 2.
     """
     return run_sync(lambda: run_eval_async(data, adapter, run_dir, options, **kwargs))
 
@@ -340,8 +341,8 @@ def evaluate(
 ) -> list[RunResult]:
     """Run several adapters one after the other, each into ``out/<slug(spec)>/``.
 
-    An adapter stopped by an authentication failure does not stop the others. The options'
-    ``max_cost`` caps them all together, earlier sessions of their folders included.
+    An adapter stopped by a setup failure (``stopped="setup"``) does not stop the others. The
+    options' ``max_cost`` caps them all together, earlier sessions of their folders included.
     """
     kwargs.setdefault("flag", "adapters")
     data = open_folder(data, kwargs.get("registry"))

@@ -2,8 +2,13 @@
 
 Requests are paced by optional requests-per-minute and tokens-per-minute caps shared by all
 calls of a run. Every wait takes the run's ``stop`` event and returns early once it is set
-(Ctrl-C, SIGTERM, ``--max-cost``, an authentication failure): a call queued for a slot minutes
-ahead must not hold the run open after it has stopped sending.
+(Ctrl-C, SIGTERM, ``--max-cost``, a setup failure): a call queued for a slot minutes ahead must
+not hold the run open after it has stopped sending.
+
+Until the adapter has replied once, its calls go one at a time: an error that every call would
+meet (an unknown model, a refused key) then costs one call, not ``--concurrency`` of them. A
+provider that cannot be reached stops the adapter after the retry policy's transport budget
+(so many connection failures in a row, or so many seconds of them with no reply between).
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from bpb_core.errors import AuthenticationFailed
+from bpb_core.errors import ConnectionFailure, SetupFailure
 from bpb_core.interfaces import ModelAdapter, Task
 from bpb_core.model_calls import ModelRequest, ModelResponse
 from bpb_core.plugin_calls import call_ceiling
@@ -105,7 +110,7 @@ class TokenBudget:
 
 
 class NotSent(Exception):
-    """The run stopped sending (cost cap or auth failure) while this call waited for a slot."""
+    """The run stopped sending (cost cap or setup failure) while this call waited for a slot."""
 
 
 @dataclass
@@ -130,12 +135,19 @@ class RunState:
     unpriced: bool = False
     tokens: int = 0
     stop_reason: str | None = None
-    auth_error: AuthenticationFailed | None = None
+    setup_error: SetupFailure | None = None
+    replied: bool = False
+    """Whether the adapter has returned a reply in this session (calls go one at a time till
+    then)."""
+    first_call: asyncio.Lock = field(default_factory=asyncio.Lock)
+    failing: tuple[int, float] | None = None
+    """Connection failures in a row and when the first of them came (``None`` after a reply)."""
     model_id: str = ""
     statuses: dict[str, dict[str, int]] = field(default_factory=dict)
     family: str = ""
     simulator: str | None = None
     dropped: set[str] = field(default_factory=set)
+    unanswered_seen: set[str] = field(default_factory=set)
     config_hash: str = ""
     history: History | None = None
     interrupts: int = 0
@@ -165,7 +177,7 @@ class RunState:
         return Tally() if self.history is None else self.history.prior(scene_id, task, epoch)
 
     def may_send(self) -> bool:
-        """False once the run must stop sending (cost cap reached, auth failed, interrupted)."""
+        """False once the run must stop sending (cost cap reached, setup failed, interrupted)."""
         if self.spending.exhausted and self.stop_reason is None:
             self.stop("max-cost")
         return self.stop_reason is None
@@ -178,6 +190,36 @@ class RunState:
             self.stop_reason = reason
         self.stopping.set()
 
+    def stop_for_setup(self, error: SetupFailure) -> None:
+        """Stop the adapter for good on an error every call would meet (the first is kept)."""
+        self.setup_error = self.setup_error or error
+        self.stop("setup", overrides=True)
+
+    def connection_failed(self, error: ConnectionFailure) -> None:
+        """Count a connection that failed; past the transport budget the adapter stops as for a
+        setup failure, naming the endpoint's trouble."""
+        now = time.monotonic()
+        count, since = self.failing or (0, now)
+        self.failing = count + 1, since
+        policy = self.options.retry
+        if count + 1 >= policy.max_transport_failures or now - since >= policy.transport_window:
+            cause = (
+                f"provider unreachable: {count + 1} connection failures in a row over "
+                f"{now - since:.0f} s with no reply; check --api-base and the network"
+            )
+            self.stop_for_setup(SetupFailure(cause, str(error)))
+
+    @contextlib.asynccontextmanager
+    async def _alone_until_replied(self) -> AsyncIterator[None]:
+        """Hold the first-call lock while the adapter has not replied yet (a call queued on
+        it goes on at once, without it, when the call before it got a reply)."""
+        if not self.replied:
+            async with self.first_call:
+                if not self.replied:
+                    yield
+                    return
+        yield
+
     @contextlib.asynccontextmanager
     async def slot(self) -> AsyncIterator[None]:
         """Hold one of the ``--concurrency`` slots, within the rate limit.
@@ -188,7 +230,7 @@ class RunState:
         Raises:
             NotSent: The run stopped sending while this call waited for a slot.
         """
-        async with self.slots:
+        async with self.slots, self._alone_until_replied():
             await self.limiter.wait(self.stopping)  # both return early once the run stops
             await self.budget.wait(self.stopping)
             if not self.may_send():  # checked again here: the cap may be hit while we queued
@@ -239,6 +281,7 @@ class RunState:
     def account(self, response: ModelResponse) -> None:
         """Add a reply's tokens and cost to this session's totals."""
         used = (response.usage.input_tokens or 0) + (response.usage.output_tokens or 0)
+        self.replied, self.failing = True, None
         self.tokens += used
         self.budget.spent(used)
         if response.cost is None:
@@ -264,8 +307,18 @@ class RunState:
             )
         )
 
+    def note_unanswered(self, task: str, kind: str, error: str) -> None:
+        """Warn once per run about replies of each ``kind`` (refused, cut, empty): a cut
+        names the cap, a setting of the run the user may want to raise."""
+        if kind in self.unanswered_seen:
+            return
+        self.unanswered_seen.add(kind)
+        scored = "scored wrong, not re-asked; the report counts them per task"
+        said = f"{error} ({scored})"
+        self.progress.update(ProgressEvent(self.spec, task, "warning", reason=said))
+
     def not_sent(self, task: str, pair: str = "") -> None:
-        """Record a pair left unsent (cost cap or auth stop); it stays resumable. ``pair``:
+        """Record a pair left unsent (cost cap or setup stop); it stays resumable. ``pair``:
         ``scene/task``, kept in the run's summary when the cost cap stopped it."""
         if pair and self.stop_reason == "max-cost":
             self.spending.kept.append(pair)

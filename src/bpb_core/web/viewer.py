@@ -36,7 +36,7 @@ from bpb_core.model_calls import prompt_text
 from bpb_core.plugin_calls import prompt_messages
 from bpb_core.report.gallery import drawing
 from bpb_core.results.frames import Results, load_results
-from bpb_core.run_folder import AnswerRecord, read_answer, read_attempts
+from bpb_core.run_folder import REPLIED, AnswerRecord, read_answer, read_attempts
 from bpb_core.web import error_page, loopback_only, plugin_bug_page, render
 
 if TYPE_CHECKING:
@@ -226,7 +226,7 @@ def _pairs(units: pd.DataFrame) -> pd.DataFrame:
         units=("correct", "size"),
         right=("correct", "sum"),
     ).reset_index()
-    answered = frame["status"].isin(["ok", "parse_error"])
+    answered = frame["status"].isin(REPLIED)
     frame["verdict"] = "wrong"
     frame.loc[answered & (frame["right"] == frame["units"]), "verdict"] = "correct"
     frame.loc[~answered, "verdict"] = "unanswered"

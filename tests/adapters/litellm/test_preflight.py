@@ -13,7 +13,7 @@ import pytest
 
 from bpb_adapters.litellm_adapter.adapter import _import_litellm
 from bpb_adapters.litellm_adapter.errors import map_error
-from bpb_core.errors import RequestRejected, RetryableModelError
+from bpb_core.errors import RetryableModelError, SetupFailure
 from support.fake_openai import fake_server
 from support.inprocess import Done, bpb
 
@@ -65,8 +65,8 @@ def test_import_errors_and_missing_models_are_not_retried() -> None:
     from litellm.exceptions import APIConnectionError, NotFoundError
 
     wrapped = APIConnectionError("OpenAIException - No module named 'mcp'", "openai", "gpt-5.4-pro")
-    assert isinstance(map_error(wrapped), RequestRejected)
-    missing = NotFoundError("model gpt-9 does not exist", "openai", "gpt-9")
-    assert isinstance(map_error(missing), RequestRejected)
+    assert isinstance(map_error(wrapped), SetupFailure)  # stops the adapter: no retry helps
+    missing = map_error(NotFoundError("model gpt-9 does not exist", "openai", "gpt-9"))
+    assert isinstance(missing, SetupFailure) and missing.cause.startswith("not found (404)")
     dropped = map_error(APIConnectionError("reset by peer", "openai", "x"))
     assert isinstance(dropped, RetryableModelError)

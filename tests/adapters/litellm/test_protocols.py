@@ -51,7 +51,8 @@ class Case:
 
 CASES = [
     Case("gpt-5.4-pro", "openai-responses", "/v1", "openai-responses",
-         {"reasoning_effort": "high"}, {"reasoning": {"effort": "high"}}, True,
+         {"reasoning_effort": "high"}, {"reasoning": {"effort": "high", "summary": "detailed"}},
+         True,
          ("429", "503", "500")),
     Case("claude-opus-4.7", "anthropic", "", "anthropic-base64",
          {"max_tokens": 4000}, {"max_tokens": 4000}, True, ("429", "529", "503", "500"), False),

@@ -9,11 +9,19 @@ is asked and answers correctly from the ground truth; an unknown prompt is answe
 example answer the prompt itself shows. It injects the faults it was told to:
 
 - ``ok``: a correct answer (``cot``: reasoning with braces, then the answer);
-- ``429``, ``503``, ``529`` (with Retry-After), ``500``, ``401``, ``400``: HTTP errors;
+- ``429``, ``503``, ``529`` (with Retry-After), ``500``, ``401``, ``403``, ``404``, ``400``,
+  ``quota`` (429 ``insufficient_quota``), ``context`` (400 ``context_length_exceeded``): HTTP
+  errors, each body in the protocol's documented error shape;
 - ``hang``: no reply for ``hang`` seconds (past the client's timeout), then a correct one;
 - ``truncated``: the body stops before its Content-Length and the connection drops;
 - ``nonjson``: a 200 whose body is HTML; ``malformed``: prose with no JSON;
-- ``partial``: JSON missing items; ``length``: an answer cut off with finish_reason ``length``.
+- ``partial``: JSON missing items; ``length``: an answer cut off at the token cap
+  (``finish_reason: length``, Anthropic ``stop_reason: max_tokens``, Gemini ``MAX_TOKENS``,
+  Responses ``incomplete_details.reason: max_output_tokens``);
+- ``empty``: a reply with no text; ``refusal``: the model declines (OpenAI's ``refusal`` field
+  and Responses ``refusal`` item, Anthropic ``stop_reason: refusal``, Gemini ``SAFETY``);
+  ``safety``: a safety filter blocks the reply (``finish_reason: content_filter``, Responses
+  ``incomplete_details.reason: content_filter``, Anthropic ``refusal``, Gemini ``SAFETY``).
 
 With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
 (``completion_tokens`` = the request's ``max_completion_tokens`` or ``max_tokens``), the worst
@@ -105,9 +113,10 @@ class FakeOpenAI:
         phase["last"] = now
 
     async def answer(
-        self, request: web.Request, text: str, images: int
+        self, request: web.Request, text: str, images: int, protocol: str = "openai"
     ) -> tuple[str, str] | web.StreamResponse:
-        """The fault and correct answer for a prompt, or the reply of a transport/HTTP fault."""
+        """The fault and correct answer for a prompt, or the reply of a transport/HTTP fault
+        (an error body in ``protocol``'s shape: ``openai``, ``anthropic`` or ``gemini``)."""
         self._arrive()
         if request.headers.get("Authorization") or request.headers.get("x-api-key"):
             self.auth_seen += 1
@@ -121,7 +130,7 @@ class FakeOpenAI:
             await asyncio.sleep(self.latency)
         if fault == "hang":
             await asyncio.sleep(self.hang)
-        special = await fault_reply(request, fault, self.retry_after)
+        special = await fault_reply(request, fault, self.retry_after, protocol)
         return special if special is not None else (fault, answer)
 
     async def chat(self, request: web.Request) -> web.StreamResponse:

@@ -17,17 +17,19 @@ from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
-from bpb_testing.fakereplies import reply_content
+from bpb_testing.fakereplies import REFUSAL, reply_content
 from bpb_testing.rules import anthropic_error, anthropic_rejection
 
 if TYPE_CHECKING:
     from bpb_testing.fakeserver import FakeOpenAI
 
 THOUGHT = "Thinking about where each object goes."
-_FINISH = {
-    "anthropic": {"stop": "end_turn", "length": "max_tokens"},
-    "gemini": {"stop": "STOP", "length": "MAX_TOKENS"},
-}
+_FINISH = {  # how each API says a reply ended (see reply_content's kinds)
+    "anthropic": {"stop": "end_turn", "length": "max_tokens", "refusal": "refusal",
+                  "safety": "refusal"},
+    "gemini": {"stop": "STOP", "length": "MAX_TOKENS", "refusal": "SAFETY", "safety": "SAFETY"},
+}  # fmt: skip
+_BLOCKED = [{"category": "HARM_CATEGORY_DANGEROUS_CONTENT", "probability": "HIGH", "blocked": True}]
 
 
 def _walk(value: Any) -> list[dict[str, Any]]:
@@ -81,14 +83,15 @@ async def anthropic_messages(server: FakeOpenAI, request: web.Request) -> web.St
     if rejected is not None:
         return anthropic_error(rejected)
     text = _texts({"s": body.get("system"), "m": body.get("messages")}, ("text",))
-    outcome = await server.answer(request, text, len(image_blocks(body)))
+    outcome = await server.answer(request, text, len(image_blocks(body)), "anthropic")
     if isinstance(outcome, web.StreamResponse):
         return outcome
     content, finish = reply_content(*outcome)
     blocks: list[dict[str, Any]] = []
     if body.get("thinking"):
         blocks.append({"type": "thinking", "thinking": THOUGHT, "signature": "fake-signature"})
-    blocks.append({"type": "text", "text": content})
+    if content:  # an empty reply and a refusal have no text block
+        blocks.append({"type": "text", "text": content})
     return web.json_response(
         {
             "id": f"msg_fake{time.time_ns()}",
@@ -119,23 +122,14 @@ async def gemini_generate(server: FakeOpenAI, request: web.Request) -> web.Strea
         },
         ("text",),
     )
-    outcome = await server.answer(request, text, len(image_blocks(body)))
+    outcome = await server.answer(request, text, len(image_blocks(body)), "gemini")
     if isinstance(outcome, web.StreamResponse):
         return outcome
     content, finish = reply_content(*outcome)
     model = request.match_info["model"].split(":")[0]
     return web.json_response(
         {
-            "candidates": [
-                {
-                    "content": {
-                        "role": "model",
-                        "parts": [{"text": THOUGHT, "thought": True}, {"text": content}],
-                    },
-                    "finishReason": _FINISH["gemini"][finish],
-                    "index": 0,
-                }
-            ],
+            "candidates": [_gemini_candidate(content, finish)],
             "usageMetadata": {
                 "promptTokenCount": 1000,
                 "cachedContentTokenCount": 100,
@@ -148,37 +142,54 @@ async def gemini_generate(server: FakeOpenAI, request: web.Request) -> web.Strea
     )
 
 
+def _gemini_candidate(content: str, finish: str) -> dict[str, Any]:
+    """A candidate: a blocked one has no ``content`` and says which rating blocked it; an empty
+    one has a ``content`` with no parts."""
+    candidate: dict[str, Any] = {"finishReason": _FINISH["gemini"][finish], "index": 0}
+    if finish in ("refusal", "safety"):
+        candidate["safetyRatings"] = _BLOCKED
+        return candidate
+    parts = [{"text": THOUGHT, "thought": True}, {"text": content}] if content else []
+    candidate["content"] = {"role": "model", "parts": parts}
+    return candidate
+
+
+def _responses_output(body: dict[str, Any], content: str, finish: str) -> list[dict[str, Any]]:
+    """The output items: the reasoning item (its summary only when the request asked for one,
+    ``reasoning.summary``) and the message, whose content is a ``refusal`` item when the model
+    declined; a reply the filter stopped has no message."""
+    asked = (body.get("reasoning") or {}).get("summary")
+    summary = [{"type": "summary_text", "text": THOUGHT}] if asked else []
+    items: list[dict[str, Any]] = [{"type": "reasoning", "id": "rs_fake", "summary": summary}]
+    if finish == "safety":
+        return items
+    part = {"type": "output_text", "text": content, "annotations": []}
+    if finish == "refusal":
+        part = {"type": "refusal", "refusal": REFUSAL}
+    message = {"type": "message", "id": "msg_fake", "role": "assistant", "content": [part]}
+    items.append({**message, "status": "completed" if finish == "stop" else "incomplete"})
+    return items
+
+
 async def openai_responses(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
     """``POST /v1/responses``."""
     body = await request.json()
     server.record(request, "openai-responses", body)
     text = _texts({"i": body.get("instructions"), "m": body.get("input")}, ("text",))
-    outcome = await server.answer(request, text, len(image_blocks(body)))
+    outcome = await server.answer(request, text, len(image_blocks(body)), "openai")
     if isinstance(outcome, web.StreamResponse):
         return outcome
     content, finish = reply_content(*outcome)
+    incomplete = {"length": "max_output_tokens", "safety": "content_filter"}.get(finish)
     return web.json_response(
         {
             "id": f"resp_fake{time.time_ns()}",
             "object": "response",
             "created_at": int(time.time()),
-            "status": "completed" if finish == "stop" else "incomplete",
-            "incomplete_details": None if finish == "stop" else {"reason": "max_output_tokens"},
+            "status": "incomplete" if incomplete else "completed",
+            "incomplete_details": {"reason": incomplete} if incomplete else None,
             "model": body.get("model", "fake"),
-            "output": [
-                {
-                    "type": "reasoning",
-                    "id": "rs_fake",
-                    "summary": [{"type": "summary_text", "text": THOUGHT}],
-                },
-                {
-                    "type": "message",
-                    "id": "msg_fake",
-                    "status": "completed",
-                    "role": "assistant",
-                    "content": [{"type": "output_text", "text": content, "annotations": []}],
-                },
-            ],
+            "output": _responses_output(body, content, finish),
             "usage": {
                 "input_tokens": 1000,
                 "input_tokens_details": {"cached_tokens": 100},
