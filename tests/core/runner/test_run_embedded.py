@@ -23,7 +23,8 @@ from bpb_core.runner.run import run_eval_async
 
 
 class Gated:
-    """The oracle's answers, each held until ``release`` is set; counts the calls started."""
+    """The oracle's answers, each but the first held until ``release`` is set (a run sends one
+    call at a time until its adapter has replied once); counts the calls started."""
 
     name = "fake:gated"
 
@@ -35,9 +36,10 @@ class Gated:
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         self.started += 1
-        if self.started >= 2:
-            self.two_started.set()
-        await self.release.wait()
+        if self.started > 1:  # two held calls: the first reply opened --concurrency 2
+            if self.started == 3:
+                self.two_started.set()
+            await self.release.wait()
         right: ModelResponse = await self.oracle.complete(request)  # type: ignore[attr-defined]
         return right
 
@@ -79,11 +81,11 @@ def test_a_cancelled_run_stops_its_calls_and_resumes(
         return at_cancel, adapter.started, others
 
     at_cancel, later, others = asyncio.run(host())
-    assert at_cancel == 2 and later == 2, "no call is sent after the run was cancelled"
+    assert at_cancel == 3 and later == 3, "no call is sent after the run was cancelled"
     assert not others, f"tasks left running in the host's loop: {others}"
     assert _lock_free(run_dir)
     assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
-    assert not list(iter_answers(run_dir))  # the two calls in flight were abandoned
+    assert len(list(iter_answers(run_dir))) == 1  # the two calls in flight were abandoned
 
     again = Gated(registry.adapter("baseline:oracle"))
     again.release.set()
@@ -154,7 +156,8 @@ def test_run_eval_works_inside_a_running_event_loop(
 
 
 class ThreadGated:
-    """The oracle's answers, held until ``release`` is set; usable from any thread."""
+    """The oracle's answers, each but the first held until ``release`` is set; usable from any
+    thread."""
 
     name = "fake:gated"
 
@@ -166,10 +169,11 @@ class ThreadGated:
 
     async def complete(self, request: ModelRequest) -> ModelResponse:
         self.started += 1
-        if self.started >= 2:
-            self.two_started.set()
-        while not self.release.is_set():
-            await asyncio.sleep(0.01)
+        if self.started > 1:  # two held calls: the first reply opened --concurrency 2
+            if self.started == 3:
+                self.two_started.set()
+            while not self.release.is_set():
+                await asyncio.sleep(0.01)
         right: ModelResponse = await self.oracle.complete(request)  # type: ignore[attr-defined]
         return right
 
@@ -209,7 +213,7 @@ def test_an_interrupt_of_run_eval_in_a_running_loop_stops_the_run(
     at_interrupt = adapter.started
     adapter.release.set()
     time.sleep(0.2)
-    assert adapter.started == at_interrupt == 2
+    assert adapter.started == at_interrupt == 3
     assert not [t for t in threading.enumerate() if t.name == "bpb-run"]
     assert _lock_free(run_dir)
     assert json.loads((run_dir / "run.json").read_text())["stopped"] == "interrupted"
