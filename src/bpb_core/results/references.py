@@ -46,9 +46,8 @@ def reference_table(
     for run, adapter, model in models.drop_duplicates().itertuples(index=False):
         keys = {model_key(str(adapter)), model_key(str(model))}
         mine = units[units["run"] == run]
-        metrics = set(tasks_of(mine)) | {
-            s.name for s in suites if set(s.weights) <= set(tasks_of(mine))
-        }
+        tasks = set(tasks_of(mine))
+        metrics = tasks | {s.name for s in suites if set(s.weights) <= tasks}
         for reference in references:
             figures = [
                 f for f in reference.figures if model_key(f.model) in keys and f.metric in metrics
