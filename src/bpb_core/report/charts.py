@@ -15,6 +15,7 @@ run never reads as "accuracy falls with horizon".
 from __future__ import annotations
 
 import io
+import textwrap
 from collections.abc import Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -31,13 +32,24 @@ if TYPE_CHECKING:
 
 # Okabe-Ito: distinguishable with every common colour-vision deficiency and in greyscale order.
 _MODEL_COLOURS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000"]
-_BASELINE_STYLES: list[dict[str, Any]] = [
-    {"color": "#4d4d4d", "ls": "--", "hatch": "//", "marker": "s"},
-    {"color": "#969696", "ls": ":", "hatch": "..", "marker": "^"},
-    {"color": "#737373", "ls": "-.", "hatch": "xx", "marker": "D"},
-    {"color": "#bdbdbd", "ls": (0, (6, 2, 1, 2)), "hatch": "\\\\", "marker": "v"},
+# After each round of the colours the next variant: (hatch, line style, marker). 7 colours x 4
+# variants keep 28 models apart in bars and in lines, more than the paper's 17.
+_VARIANTS: list[tuple[str, Any, str]] = [
+    ("", "-", "o"),
+    ("//", "--", "s"),
+    ("..", ":", "^"),
+    ("xx", "-.", "D"),
+]
+_BASELINE_COLOURS = ["#4d4d4d", "#969696", "#737373", "#bdbdbd"]
+_BASELINE_VARIANTS: list[tuple[str, Any, str]] = [
+    ("//", "--", "s"),
+    ("..", ":", "^"),
+    ("xx", "-.", "D"),
+    ("\\\\", (0, (6, 2, 1, 2)), "v"),
 ]
 SHORT_FACE = "#f0f0f0"
+# the width of one bar of the by-horizon chart: its value label, rotated, at 5.5 pt plus a gap
+_BAR_INCHES = 0.115
 
 
 def label(run: str, baseline: bool) -> str:
@@ -111,12 +123,17 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     ordered = runs.assign(run=runs["run"].astype(str)).drop_duplicates("run").sort_values("run")
     for row in ordered.itertuples():
         if row.baseline:
-            styles[str(row.run)] = dict(_BASELINE_STYLES[baselines % len(_BASELINE_STYLES)])
+            # a shifted variant per round of greys: 16 baselines keep apart
+            k, greys = baselines, len(_BASELINE_COLOURS)
+            colour = _BASELINE_COLOURS[k % greys]
+            hatch, ls, marker = _BASELINE_VARIANTS[(k + k // greys) % len(_BASELINE_VARIANTS)]
             baselines += 1
         else:
             colour = _MODEL_COLOURS[models % len(_MODEL_COLOURS)]
-            styles[str(row.run)] = {"color": colour, "ls": "-", "hatch": "", "marker": "o"}
+            variant = (models // len(_MODEL_COLOURS)) % len(_VARIANTS)
+            hatch, ls, marker = _VARIANTS[variant]
             models += 1
+        styles[str(row.run)] = {"color": colour, "ls": ls, "hatch": hatch, "marker": marker}
     return styles
 
 
@@ -130,6 +147,23 @@ def leaderboards(
     no_value: str = "left out (too incomplete)",
     unasked: Mapping[str, Collection[str]] | None = None,
 ) -> bytes:
+    """:func:`leaderboard_figure` as PNG bytes."""
+    fig = leaderboard_figure(
+        board, metrics, ci, titles, xlabel=xlabel, no_value=no_value, unasked=unasked
+    )
+    return png(fig)
+
+
+def leaderboard_figure(
+    board: pd.DataFrame,
+    metrics: Sequence[str],
+    ci: pd.DataFrame | None = None,
+    titles: Mapping[str, str] | None = None,
+    *,
+    xlabel: str = "mean accuracy over horizons (%)",
+    no_value: str = "left out (too incomplete)",
+    unasked: Mapping[str, Collection[str]] | None = None,
+) -> Figure:
     """One leaderboard per metric (each task, then each suite): horizontal bars, best on
     top, every baseline also drawn as a dashed line across the panel (the floors and the
     ceiling on the same axis); a zero is drawn as a tick on the axis so it reads as a value;
@@ -170,12 +204,17 @@ def leaderboards(
         others = set(unasked.get(metric, ()))
         left_out = [run for run in missing if run not in others]
         not_asked = [run for run in missing if run in others]
-        note = f"\n{no_value}: {', '.join(left_out)}" if left_out else ""
-        note += f"\nnot asked: {', '.join(not_asked)}" if not_asked else ""
+        note = f"\n{_wrapped(f'{no_value}: ' + ', '.join(left_out))}" if left_out else ""
+        note += f"\n{_wrapped('not asked: ' + ', '.join(not_asked))}" if not_asked else ""
         ax.set_xlabel(xlabel + note, fontsize=8)
         ax.set_title(titles.get(metric, metric), fontsize=10)
         ax.grid(axis="x", alpha=0.3)
-    return png(fig)
+    return fig
+
+
+def _wrapped(text: str) -> str:
+    """A list of run names under a 6.2-inch panel, in lines that fit it at 8 pt."""
+    return "\n".join(textwrap.wrap(text, 90, break_on_hyphens=False))
 
 
 def _error_bars(ax: Any, ranked: pd.DataFrame, ci: pd.DataFrame, metric: str) -> Any:
@@ -211,19 +250,37 @@ def accuracy_by_horizon(
     min_complete: float = 0.9,
     view: str = "answered only",
 ) -> bytes:
+    """:func:`by_horizon_figure` as PNG bytes."""
+    fig = by_horizon_figure(accuracy, order, suites, titles, min_complete=min_complete, view=view)
+    return png(fig)
+
+
+def by_horizon_figure(
+    accuracy: pd.DataFrame,
+    order: Sequence[str],
+    suites: Sequence[SuiteInfo] = (),
+    titles: Mapping[str, str] | None = None,
+    *,
+    min_complete: float = 0.9,
+    view: str = "answered only",
+) -> Figure:
     """One panel per task (and per suite): grouped bars by horizon, one bar per run in
-    ``order``."""
+    ``order``. The figure widens with the bars (runs x horizons) so that no two value labels
+    overlap, and the legend takes as many columns as the width holds."""
     titles = titles or {}
     panels = {str(t): accuracy[accuracy["task"] == t] for t in sorted(accuracy["task"].unique())}
     for suite in suites:
         panels[suite.name] = suite_by_horizon(accuracy, suite)
     horizons = sorted(float(h) for h in accuracy["horizon"].unique())
     runs = [r for r in order if r in set(accuracy["run"].astype(str))]
-    wide = len(runs) * len(horizons) > 14
-    ncols = 1 if wide or len(panels) == 1 else 2
+    bars = len(runs) * len(horizons)
+    ncols = 1 if bars > 14 or len(panels) == 1 else 2
     nrows = (len(panels) + ncols - 1) // ncols
-    width = 7.0 if ncols == 1 else 3.5 * ncols
-    fig, axes = figure(nrows, ncols, (width, 2.6 * nrows + 0.5 + 0.18 * len(runs)))
+    # a bar at least as wide as its rotated value label (_BAR_INCHES), plus the axis's margin
+    width = max(7.0 if ncols == 1 else 3.5 * ncols, _BAR_INCHES * bars / 0.84 + 1.2)
+    legend_cols = max(1, min(len(runs), int(width // 2.4)))
+    legend_rows = -(-len(runs) // legend_cols)
+    fig, axes = figure(nrows, ncols, (width, 2.6 * nrows + 0.7 + 0.16 * legend_rows))
     styles = run_styles(accuracy[["run", "baseline"]])
     for ax in list(axes.flat)[len(panels) :]:
         ax.set_visible(False)
@@ -234,11 +291,11 @@ def accuracy_by_horizon(
     baseline = accuracy.assign(run=accuracy["run"].astype(str)).groupby("run")["baseline"].first()
     handles = [_handle(styles[r], label(r, bool(baseline[r]))) for r in runs]
     fig.legend(
-        handles=handles, loc="outside lower center", ncols=min(len(runs), 3), fontsize=7,
+        handles=handles, loc="outside lower center", ncols=legend_cols, fontsize=7,
         title=f"* under 100% answered; pale = under {100 * min_complete:.0f}%, left out",
         title_fontsize=7, frameon=False,
     )  # fmt: skip
-    return png(fig)
+    return fig
 
 
 def _handle(style: dict[str, Any], text: str) -> Any:
