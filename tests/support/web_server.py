@@ -34,9 +34,10 @@ def free_port() -> int:
 
 
 @contextmanager
-def serving(app: Any) -> Iterator[str]:
-    """Serve ``app`` on loopback; yields its base URL and stops the server afterwards."""
-    port = free_port()
+def serving(app: Any, port: int = 0) -> Iterator[str]:
+    """Serve ``app`` on loopback (on ``port``, default a free one); yields its base URL and stops
+    the server afterwards."""
+    port = port or free_port()
     config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, daemon=True)

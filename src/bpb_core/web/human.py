@@ -1,12 +1,18 @@
 """``bpb human``: a person's answering session (which scene comes next, the page it shows, turning
 a posted form into stored answers) and the Starlette app that serves it, one scene at a time.
 
-``GET /`` shows the next unanswered scene (or a closing page), ``POST /answer`` stores it or
-answers 400 with the field at fault, ``GET /image/<scene_id>`` serves the scene's input image.
-The scenes come in an order shuffled by the seed; a (scene, task) answered before is never asked
-again, so closing the browser and starting again resumes. Every posted field is checked before
-anything is stored: a bad form stores nothing and says which field is wrong. Each page carries
-the session's random token, so a page of another site cannot post answers into the run.
+``GET /`` shows the next unanswered scene (or a closing page), ``GET /?scene=<id>`` a scene
+answered before (to see or change its answer: "back"), ``POST /answer`` stores a scene's answers
+or answers 400 with the field at fault, ``POST /skip`` puts the scene asked after the others,
+``POST /undo`` removes the answers saved last and asks that scene again, ``GET /image/<scene_id>``
+serves the scene's input image. The scenes come in an order shuffled by the seed; a (scene, task)
+answered before is not asked again, so closing the browser and starting again resumes. Every
+posted field is checked before anything is stored: a bad form stores nothing and says which field
+is wrong, and a task's form refuses an untouched page (no answer is "nothing happens" by
+default). The page keeps its draft in the browser (``localStorage``, under the run folder's
+key), so a reload, the browser's back button after a refused post, or a page reloaded after the
+app restarts brings back what was ticked and placed. Each page carries the session's random
+token, so a page of another site cannot post answers into the run.
 
 A task's browser form hooks (:class:`~bpb_core.capabilities.AnswersInBrowser`) are called
 checked: each runs under :func:`~bpb_core.errors.blamed` and its value is checked, so a task's
@@ -16,6 +22,7 @@ page) instead of a bare 500, or an answer stored that is no answer.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import random
@@ -26,6 +33,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
 
 from markupsafe import Markup
 from PIL import Image
@@ -40,7 +48,14 @@ from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed, named
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import prompt_text, valid_unicode
 from bpb_core.plugin_calls import parsed_answer, prompt_messages
-from bpb_core.run_folder import AttemptLog, completed, write_answer
+from bpb_core.run_folder import (
+    AttemptLog,
+    answer_path,
+    completed,
+    read_attempts,
+    write_answer,
+    write_json_atomic,
+)
 from bpb_core.runner.manifest import start_manifest
 from bpb_core.runner.options import RunOptions
 from bpb_core.runner.scenes import SceneRef, asking
@@ -60,6 +75,8 @@ MAX_MS = 24 * 3600 * 1000
 # stops reading past it, so a post cannot make the app hold more than MAX_FIELDS of these
 # (Starlette's defaults, 1000 fields of 1 MB, let any web page make it hold a gigabyte).
 MAX_FIELD_BYTES = 16 * MAX_VALUE + 1024
+SKIPPED = "human_skipped.json"
+"""The run folder's file of the scenes a person skipped, in the order skipped."""
 RESERVED = ("prefix", "image_width", "image_height")
 """Template values core adds to a task's :meth:`~AnswersInBrowser.form_context`."""
 
@@ -77,6 +94,10 @@ class Page:
     forms: dict[str, dict[str, Any]]
     done: int
     total: int
+    back: str | None = None
+    """The scene answered before this one (``None``: the first)."""
+    answered: bool = False
+    """The scene was answered before: saving changes its answer."""
 
 
 @dataclass
@@ -92,6 +113,9 @@ class HumanSession:
     token: str = field(default_factory=lambda: secrets.token_hex(16), init=False, repr=False)
     order: list[SceneRef] = field(default_factory=list, init=False)
     tasks: dict[str, Task] = field(default_factory=dict, init=False)
+    skipped: list[str] = field(default_factory=list, init=False)
+    """Scenes skipped, asked after the others in the order skipped (kept in ``SKIPPED`` of the
+    run folder, so a restart keeps them last)."""
 
     def __post_init__(self) -> None:
         if not NAME.match(self.name):
@@ -107,6 +131,9 @@ class HumanSession:
             for ref in self.order:  # a damaged image stops the session now, not on its page
                 ref.image()
         random.Random(f"human:{self.seed}").shuffle(self.order)
+        with contextlib.suppress(OSError, ValueError):  # none skipped yet, or not readable
+            ids = {ref.scene_id for ref in self.order}
+            self.skipped = [s for s in json.loads((self.run_dir / SKIPPED).read_text()) if s in ids]
         count = len(self.order)
         start_manifest(self.run_dir, self.spec, self.data, self.options, self.registry, count)
 
@@ -115,13 +142,70 @@ class HumanSession:
         """The run's adapter name, ``human:<name>``."""
         return f"human:{self.name}"
 
+    @property
+    def draft_key(self) -> str:
+        """The browser's key of this run's drafts: the same across restarts of the app."""
+        return f"bpb-human:{self.run_dir.resolve()}"
+
     def next_scene(self) -> SceneRef | None:
-        """The first scene in the order with a task not yet answered (``None`` when done)."""
+        """The first scene in the order with a task not yet answered, skipped ones after the
+        others (``None`` when done)."""
         done = completed(self.run_dir)
-        for ref in self.order:
-            if any((ref.scene_id, task) not in done for task in self.tasks):
-                return ref
-        return None
+        open_ = [r for r in self.order if any((r.scene_id, t) not in done for t in self.tasks)]
+        later = {sid: n for n, sid in enumerate(self.skipped)}
+        last = len(later)
+        return min(open_, key=lambda r: later.get(r.scene_id, -1) - last, default=None)
+
+    def scene(self, scene_id: str) -> SceneRef | None:
+        """The scene ``scene_id`` of this session (``None``: not one of its scenes)."""
+        return next((ref for ref in self.order if ref.scene_id == scene_id), None)
+
+    def history(self) -> list[SceneRef]:
+        """The scenes answered in full, in the order their answers were saved last."""
+        done = completed(self.run_dir)
+        full = {r.scene_id for r in self.order if all((r.scene_id, t) in done for t in self.tasks)}
+        saved: dict[str, float] = {}
+        for entry in read_attempts(self.run_dir):
+            sid = entry.get("scene_id")
+            if sid in full and isinstance(entry.get("time"), float):
+                saved[sid] = max(saved.get(sid, 0.0), entry["time"])
+        answered = [r for r in self.order if r.scene_id in full]
+        return sorted(answered, key=lambda r: saved.get(r.scene_id, 0.0))
+
+    def skip(self, fields: Mapping[str, str]) -> None:
+        """Ask the scene being asked after the others.
+
+        Raises:
+            FormError: Not this session's page, or not the scene being asked.
+        """
+        self._check_token(fields)
+        ref = self.next_scene()
+        if ref is None or fields.get("scene") != ref.scene_id:
+            raise FormError("scene: not the scene being asked (answered already, or stale page)")
+        self.skipped = [sid for sid in self.skipped if sid != ref.scene_id] + [ref.scene_id]
+        write_json_atomic(self.run_dir / SKIPPED, self.skipped)
+
+    def undo(self, fields: Mapping[str, str]) -> SceneRef:
+        """Remove the answers saved last; returns their scene, to be asked again.
+
+        Raises:
+            FormError: Not this session's page, or nothing answered yet.
+        """
+        self._check_token(fields)
+        history = self.history()
+        if not history:
+            raise FormError("undo: nothing answered yet in this run")
+        ref = history[-1]
+        for task in self.tasks:
+            answer_path(self.run_dir, ref.key, task).unlink(missing_ok=True)
+        return ref
+
+    def _check_token(self, fields: Mapping[str, str]) -> None:
+        if not secrets.compare_digest(fields.get("token", ""), self.token):
+            raise FormError(
+                "token: not this session's page (another site, or the app restarted: reload "
+                "the page, its draft is kept)"
+            )
 
     def page(self, ref: SceneRef) -> Page:
         """The prompts (exactly as a model gets them) and the task forms' values of ``ref``.
@@ -138,8 +222,11 @@ class HumanSession:
             prompts[name] = prompt_text(messages)
             assert isinstance(task, AnswersInBrowser)
             forms[name] = form_context(task, origin, scene, image)
-        done = len({sid for sid, _ in completed(self.run_dir)})
-        return Page(ref, prompts, forms, done, len(self.order))
+        history = [r.scene_id for r in self.history()]
+        answered = ref.scene_id in history
+        before = history[: history.index(ref.scene_id)] if answered else history
+        back = before[-1] if before else None
+        return Page(ref, prompts, forms, len(history), len(self.order), back, answered)
 
     def form(self, task: str, context: dict[str, Any], width: int, height: int) -> str:
         """The HTML of ``task``'s form on a page (``context`` from :meth:`page`; the input
@@ -169,16 +256,15 @@ class HumanSession:
         """Check every field of a posted form and store one answer per task.
 
         Raises:
-            FormError: A field is unknown, missing or invalid, or the scene is not the one
-                being asked; nothing is stored.
+            FormError: A field is unknown, missing or invalid, or the scene is not one of the
+                session's; nothing is stored.
             PluginBug: A task's read_form() or parse() raised or returned something else than
                 it should, naming its plugin; nothing is stored.
         """
-        if not secrets.compare_digest(fields.get("token", ""), self.token):
-            raise FormError("token: not this session's page (another site, or a restarted app)")
-        ref = self.next_scene()
-        if ref is None or fields.get("scene") != ref.scene_id:
-            raise FormError("scene: not the scene being asked (answered already, or stale page)")
+        self._check_token(fields)
+        ref = self.scene(fields.get("scene", ""))
+        if ref is None:  # any scene of the session: the next, or one answered before (back)
+            raise FormError("scene: not a scene of this session")
         answers = self._read(fields, ref)
         seconds = max(time.time() - shown_at, 0.0)
         log = AttemptLog(self.run_dir)
@@ -309,7 +395,10 @@ def human_app(session: HumanSession) -> Starlette:
     """The app answering ``session``'s dataset."""
 
     async def index(request: Request) -> Response:
-        ref = session.next_scene()
+        asked = request.query_params.get("scene")
+        ref = session.next_scene() if asked is None else session.scene(asked)
+        if asked is not None and ref is None:
+            return error_page(f"scene {asked[:40]!r}: not in this session", 404)
         if ref is None:
             return HTMLResponse(render("human_done.html", session=session))
         scene = ref.load()
@@ -332,15 +421,9 @@ def human_app(session: HumanSession) -> Starlette:
         return HTMLResponse(html)
 
     async def answer(request: Request) -> Response:
-        try:
-            form = await request.form(
-                max_files=0, max_fields=MAX_FIELDS, max_part_size=MAX_FIELD_BYTES
-            )
-        except HTTPException as exc:  # too many or too long fields, a malformed body
-            return error_page(f"form: {exc.detail}")
-        fields = {k: v for k, v in form.multi_items() if isinstance(v, str)}
-        if len(fields) != len(form.multi_items()):
-            return error_page("form: repeated or file fields")
+        fields = await _fields(request)
+        if isinstance(fields, Response):
+            return fields
         try:
             shown = float(fields.get("shown", ""))
         except ValueError:
@@ -353,6 +436,26 @@ def human_app(session: HumanSession) -> Starlette:
             return error_page(str(exc))
         return RedirectResponse("/", status_code=303)
 
+    async def skip(request: Request) -> Response:
+        fields = await _fields(request)
+        if isinstance(fields, Response):
+            return fields
+        try:
+            session.skip(fields)
+        except FormError as exc:
+            return error_page(str(exc))
+        return RedirectResponse("/", status_code=303)
+
+    async def undo(request: Request) -> Response:
+        fields = await _fields(request)
+        if isinstance(fields, Response):
+            return fields
+        try:
+            ref = session.undo(fields)
+        except FormError as exc:
+            return error_page(str(exc))
+        return RedirectResponse(f"/?scene={quote(ref.scene_id)}", status_code=303)
+
     async def image(request: Request) -> Response:
         sid = request.path_params["scene_id"]
         for ref in session.order:
@@ -364,11 +467,26 @@ def human_app(session: HumanSession) -> Starlette:
         routes=[
             Route("/", index),
             Route("/answer", answer, methods=["POST"]),
+            Route("/skip", skip, methods=["POST"]),
+            Route("/undo", undo, methods=["POST"]),
             Route("/image/{scene_id}", image),
         ],
         middleware=[loopback_only()],
         exception_handlers={PluginBug: plugin_bug_page},  # nothing stored
     )
+
+
+async def _fields(request: Request) -> dict[str, str] | Response:
+    """The posted form's fields, or the error page of a form too large, malformed or holding
+    repeated or file fields."""
+    try:
+        form = await request.form(max_files=0, max_fields=MAX_FIELDS, max_part_size=MAX_FIELD_BYTES)
+    except HTTPException as exc:  # too many or too long fields, a malformed body
+        return error_page(f"form: {exc.detail}")
+    fields = {k: v for k, v in form.multi_items() if isinstance(v, str)}
+    if len(fields) != len(form.multi_items()):
+        return error_page("form: repeated or file fields")
+    return fields
 
 
 def _image_size(png: bytes) -> tuple[int, int]:

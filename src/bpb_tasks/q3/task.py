@@ -155,14 +155,15 @@ class Q3Task(BilliardsQuestion):
         }
 
     def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
-        """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket`` (one per ball)."""
+        """Every ball's ``pos<id>``: ``x,y`` in metres or ``pocket`` (one per ball, none empty)."""
         names = {f"pos{b.id}": b.id for b in scene.balls}
         for key in fields:
             if key not in names:
                 raise ValueError(f"{key}: not a field of this form")
-        missing = [key for key in names if key not in fields]
-        if missing:
-            raise ValueError(f"{missing[0]}: missing (every ball needs a place)")
+        missing = [key for key in names if not fields.get(key, "").strip()]
+        if missing:  # an untouched form is no answer: "rests" says a ball stays
+            where = f"place ball {names[missing[0]]} or confirm it rests"
+            raise ValueError(f"{missing[0]}: missing ({where}; every ball needs a place)")
         predictions = [{"id": i, "pos": _position(k, fields[k], scene)} for k, i in names.items()]
         return {"predictions": sorted(predictions, key=lambda p: int(p["id"]))}
 

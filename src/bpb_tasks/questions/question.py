@@ -11,8 +11,9 @@ each task adds its question, the JSON format with an example, and the reply inst
 :class:`~bpb_tasks.billiards.scene.model.Scene` and prompt options only.
 
 People answer in the browser (``bpb human``) on the forms ``forms/<task>.html``: Q1 and Q2 are
-ticks (a ticked ball or wall is ``T``, the rest ``F``); Q3 places every ball by dragging its
-marker over the scene image, onto a pocket for a pocketed ball.
+ticks (a ticked ball or wall is ``T``, the rest ``F``, and "none of them" must be ticked to say
+so); Q3 places every ball by dragging its marker over the scene image (onto a pocket for a
+pocketed ball), by the arrow keys on a marker, by typing ``x,y``, or confirms it rests.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from bpb_tasks.billiards.truth.final import FinalState
 from bpb_tasks.questions.answers import check_ids, load, schema_of
 
 MAX_VALUE = 64  # characters of a posted form value shown in an error
+NONE = "none"  # the field of the Q1/Q2 forms' "none of them" box
 
 
 def colour(ball_id: int) -> str:
@@ -259,14 +261,20 @@ class LabelQuestion(BilliardsQuestion):
         return json.dumps({"answers": items})
 
     def read_form(self, fields: Mapping[str, str], scene: Scene) -> dict[str, Any]:
-        """Ticked units are ``T``, the others ``F``."""
+        """Ticked units are ``T``, the others ``F``; ``none`` ticked says the cue ball touches
+        none. A form with nothing ticked is no answer (an untouched page is not "no contact")."""
         units = self.units(scene)
         names = [self.field(u) for u in units]
         for key, value in fields.items():
-            if key not in names:
+            if key not in names and key != NONE:
                 raise ValueError(f"{key}: not a field of this form")
             if value != "T":
                 raise ValueError(f"{key}: a ticked box posts T, got {value[:MAX_VALUE]!r}")
+        ticked = [name for name in names if name in fields]
+        if NONE in fields and ticked:
+            raise ValueError(f"{NONE}: ticked together with {ticked[0]}")
+        if NONE not in fields and not ticked:
+            raise ValueError(f"{NONE}: missing (tick what the cue ball touches, or 'none of them')")
         answers = [{self.key: u, "answer": "T" if self.field(u) in fields else "F"} for u in units]
         return {"answers": answers}
 

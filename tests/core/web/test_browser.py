@@ -78,12 +78,14 @@ def test_people_answer_in_the_browser_and_the_viewer_shows_every_pair(
         asked = []
         for step in range(3):
             page.goto(url + "/")
-            sid = page.locator('input[name="scene"]').get_attribute("value")
+            sid = page.locator('#answer-form input[name="scene"]').get_attribute("value")
             asked.append(sid)
             assert page.locator("#scene-image").evaluate("i => i.naturalWidth") > 0
             assert "Task Q1" in page.locator("pre.prompt").first.inner_text()
             page.locator('input[name="q1.ball2"]').check()
             page.locator('input[name="q2.TOP"]').check()
+            for rests in page.locator("button.rests").all():  # every ball placed or resting
+                rests.click()
             _drag(page, 0, (0.5 + 0.3 * step, 0.5))
             _drag(page, 1, (2.0, 1.0))  # onto the top-right pocket
             if step == 0:

@@ -111,6 +111,7 @@ def test_a_flawed_read_form_names_the_task_plugin_and_stores_nothing(
     client = _client(small_dataset, tmp_path / "run")
     page = client.get("/").text
     form = dict(re.findall(r'name="(scene|shown|token)" value="([^"]+)"', page))
+    form["badform.none"] = "T"  # the person says: no wall
     monkeypatch.setattr(BadFormTask, "flaw", flaw)
     reply = client.post("/answer", data=form, follow_redirects=False)
     assert reply.status_code == 500

@@ -33,9 +33,9 @@ def _session(data: Path, run: Path, registry: Registry, seed: int = 0) -> HumanS
 def _valid_form(client: TestClient) -> dict[str, str]:
     page = client.get("/").text
     form = dict(re.findall(r'name="(scene|shown|token)" value="([^"]+)"', page))
-    places = r'name="(q3\.pos\d+)" id="[^"]+" data-ball="\d+"\s+value="([^"]+)"'
-    form |= dict(re.findall(places, page))
-    return form | {"q1.ball1": "T", "ms.q1": "1500"}
+    rests = r'class="rests" data-ball="(\d+)"\s+data-start="([^"]+)"'  # each ball rests
+    form |= {f"q3.pos{ball}": start for ball, start in re.findall(rests, page)}
+    return form | {"q1.ball1": "T", "q2.none": "T", "ms.q1": "1500"}
 
 
 def test_order_is_seeded_and_a_new_session_resumes(
@@ -74,7 +74,10 @@ def test_order_is_seeded_and_a_new_session_resumes(
         ({"q3.pos2": None}, "q3.pos2: missing"),
         ({"ms.q1": "-4"}, "ms.q1: expected whole milliseconds"),
         ({"ms.q1": "\u00b2"}, "ms.q1: expected whole milliseconds"),  # isdigit(), not int()
-        ({"scene": "h9_0000"}, "scene: not the scene being asked"),
+        ({"scene": "h9_0000"}, "scene: not a scene of this session"),
+        ({"q1.ball1": None}, "q1.none: missing"),  # an untouched Q1 is no answer
+        ({"q2.TOP": "T"}, "q2.none: ticked together with TOP"),
+        ({"q3.pos1": ""}, "q3.pos1: missing (place ball 1 or confirm it rests"),
         ({"shown": "soon"}, "shown: expected the time"),
         ({"q2.TOP": "T" * 500}, "longer than 200 characters"),
         ({"<script>x": "T"}, "&lt;script&gt;x: not a field"),

@@ -13,7 +13,7 @@ from support.questions import questions
 from support.runner_scenes import make_scene
 
 SCENE = make_scene(1.0, 0)
-NAMES = ["ball1", "ball2", "ball6", "TOP", "LEFT", "pos0", "pos3", "pos6", "x", ""]
+NAMES = ["ball1", "ball2", "ball6", "TOP", "LEFT", "none", "pos0", "pos3", "pos6", "x", ""]
 VALUES = ["T", "F", "pocket", "0.5,0.5", "1e9,0", "nan,1", "0.1,0.2,0.3", "", "<b>"]
 
 
@@ -57,6 +57,20 @@ def test_ticks_and_places_become_the_answer_format() -> None:
         q3.read_form({k: v for k, v in places.items() if k != "pos6"}, SCENE)
     with pytest.raises(ValueError, match="off the table"):
         q3.read_form(places | {"pos1": "2.5,0.5"}, SCENE)
+
+
+def test_an_untouched_form_is_no_answer_and_none_must_be_said() -> None:
+    q1, q2, q3 = (questions()[t] for t in ("q1", "q2", "q3"))
+    for question in (q1, q2):
+        with pytest.raises(ValueError, match="none: missing"):
+            question.read_form({}, SCENE)  # nothing ticked is not "no contact"
+        answers = question.read_form({"none": "T"}, SCENE)["answers"]
+        assert {a["answer"] for a in answers} == {"F"}
+    with pytest.raises(ValueError, match="none: ticked together with ball2"):
+        q1.read_form({"none": "T", "ball2": "T"}, SCENE)
+    untouched = {f"pos{b.id}": "" for b in SCENE.balls}  # what an untouched page posts
+    with pytest.raises(ValueError, match=r"pos0: missing \(place ball 0 or confirm it rests"):
+        q3.read_form(untouched, SCENE)
 
 
 def test_drag_markers_sit_on_the_image_frame(small_dataset: Path) -> None:
