@@ -1,9 +1,12 @@
 """``bpb view``: the (run, scene, task) pairs of some runs, filtered, everything about one pair,
 and the Starlette app that serves them.
 
-``GET /`` lists pairs (query parameters ``model``, ``task``, ``horizon``, ``stable``,
-``verdict``, ``page``), ``GET /pair/<run>/<scene_id>/<task>`` shows one, ``GET /image/...`` and
-``GET /overlay/...`` serve its pictures. An unknown filter value is a 400 naming it.
+``GET /`` lists pairs (query parameters ``dataset``, ``model``, ``task``, ``horizon``,
+``stable``, ``verdict``, ``page``), a section per dataset (runs over different datasets answered
+different questions), ``GET /pair/<run>/<scene_id>/<task>`` shows one, ``GET /image/...`` and
+``GET /overlay/...`` serve its pictures. An unknown filter value is a 400 naming it. A pair's
+items show the scorer's own unit columns beside truth and answer (an ``<name>_x``/``<name>_y``
+pair as one point), and the distance where the scorer gives one.
 
 Pairs come from the results frames (:func:`~bpb_core.results.frames.load_results`); a pair is
 ``correct`` when every scored unit of it is, ``unanswered`` when the run has no answer for it
@@ -66,6 +69,8 @@ class PairView:
     units: pd.DataFrame
     verdict: str
     prompt_note: str = ""
+    dataset: str = ""
+    """The run's dataset, as the index names it."""
 
     @property
     def answer_json(self) -> str:
@@ -88,12 +93,13 @@ class Viewer:
     def load(cls, paths: list[Path], registry: Registry) -> Viewer:
         """Read and score ``paths`` (run folders or folders of them)."""
         results = load_results(paths, registry=registry)
-        return cls(results, registry, _pairs(results.units))
+        return cls(results, registry, _pairs(results.units, dataset_names(results)))
 
     def choices(self) -> dict[str, list[str]]:
         """The values each filter can take."""
         frame = self.pairs
         return {
+            "dataset": sorted(str(v) for v in frame["dataset"].unique()),
             "model": sorted(str(v) for v in frame["adapter"].unique()),
             "task": sorted(str(v) for v in frame["task"].unique()),
             "horizon": [f"{h:g}" for h in sorted(frame["horizon"].unique())],
@@ -140,11 +146,40 @@ class Viewer:
             prompts, note = self._prompts(run, key, task, record, attempts), ""
         except QueryError as exc:  # the input image is gone: the rest of the page still shows
             prompts, note = [], f"not rebuilt: {exc}"
-        verdict = _pairs(rows)["verdict"].iloc[0]
-        units = rows[["unit", "truth", "pred", "correct", "distance", "status"]]
+        verdict = _pairs(rows, dataset_names(self.results))["verdict"].iloc[0]
+        units = self._items(rows, task)
+        dataset = dataset_names(self.results)[run.dataset_id]
         return PairView(
-            run, run_id, key, task, record, prompts, attempts, units, str(verdict), note
+            run, run_id, key, task, record, prompts, attempts, units, str(verdict), note, dataset
         )
+
+    def _items(self, rows: pd.DataFrame, task: str) -> pd.DataFrame:
+        """The pair's items as shown: item, truth, answer, the verdict (``unanswered`` where the
+        run has no answer), the distance (where the scorer gives one) and the scorer's own
+        columns (``<name>_x``/``<name>_y`` as one point ``(x, y)``; empty where absent)."""
+        own = list(self.registry.scorer_for(task).columns) if task in self.results.tasks else []
+        answered = rows["status"].isin(REPLIED)
+        shown = pd.DataFrame(
+            {
+                "item": rows["unit"].astype(str),
+                "truth": rows["truth"].map(_cell),
+                "answer": rows["pred"].where(answered).map(_cell),
+                "verdict": rows["correct"].map(lambda c: "right" if c else "wrong"),
+            }
+        )
+        shown["verdict"] = shown["verdict"].where(answered.to_numpy(), "unanswered")
+        if rows["distance"].notna().any():
+            shown["distance"] = rows["distance"].map(lambda d: _cell(d, "{:.4f}"))
+        for name in own:
+            if name.endswith("_y") and name[:-1] + "x" in own:
+                continue
+            if name.endswith("_x") and name[:-1] + "y" in own:
+                xs, ys = rows[name], rows[name[:-1] + "y"]
+                points = [_point(x, y) for x, y in zip(xs, ys, strict=True)]
+                shown[f"{name[:-2]} (x, y)"] = points
+            else:
+                shown[name] = rows[name].map(_cell)
+        return shown.reset_index(drop=True)
 
     def image(self, run_id: int, scene_id: str) -> bytes:
         """The input image the run's models were shown for ``scene_id``.
@@ -216,9 +251,34 @@ class Viewer:
         return out
 
 
-def _pairs(units: pd.DataFrame) -> pd.DataFrame:
-    """One row per (run, scene, task) with its verdict."""
-    keys = ["run", "adapter", "model", "task", "horizon", "index", "scene_id"]
+def dataset_names(results: Results) -> dict[str, str]:
+    """Each dataset's name on the pages: its folder and the start of its hash."""
+    names = {}
+    for run in results.runs:
+        hashed = run.dataset_id if run.dataset_id != str(run.dataset) else ""
+        names[run.dataset_id] = (
+            f"{run.dataset.name} ({hashed[:12]})" if hashed else str(run.dataset)
+        )
+    return names
+
+
+def _cell(value: object, form: str = "{}") -> str:
+    """A unit value as text: empty for a missing one (NaN, None)."""
+    if value is None or (isinstance(value, float) and value != value):
+        return ""
+    return form.format(value) if isinstance(value, float) else str(value)
+
+
+def _point(x: object, y: object) -> str:
+    if not isinstance(x, float) or not isinstance(y, float) or x != x or y != y:
+        return ""
+    return f"({x:.4f}, {y:.4f})"
+
+
+def _pairs(units: pd.DataFrame, datasets: Mapping[str, str]) -> pd.DataFrame:
+    """One row per (run, scene, task) with its verdict and its dataset's name, by dataset."""
+    units = units.assign(dataset=units["dataset"].astype(str).map(datasets))
+    keys = ["dataset", "run", "adapter", "model", "task", "horizon", "index", "scene_id"]
     grouped = units.groupby(keys, observed=True, sort=True)
     frame = grouped.agg(
         stable=("stable", "first"),
