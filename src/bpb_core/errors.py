@@ -9,8 +9,10 @@ else unexpected is 3.
 from __future__ import annotations
 
 import errno
+import importlib
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
+from types import ModuleType
 from typing import Self
 
 
@@ -44,6 +46,20 @@ class BadInput(BpbError):
     """The user gave something bpb cannot use: a file, a field, an option (exit code 2)."""
 
     exit_code = 2
+
+
+def need_module(name: str, what: str, install: str) -> ModuleType:
+    """``import name`` for ``what`` (a command or component), or a :class:`BadInput` saying
+    what needs the module and how to install it (``install``, e.g. ``pip install 'bpb[report]'``),
+    so a missing optional package is one line and exit 2, never an internal error.
+
+    Raises:
+        BadInput: The module (or a part of it) cannot be imported.
+    """
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:
+        raise BadInput(f"{what} needs {exc.name or name}: {install}") from None
 
 
 class WriteRefused(BpbError):

@@ -13,7 +13,6 @@ import asyncio
 import base64
 import dataclasses
 import functools
-import importlib
 import logging
 import os
 import re
@@ -30,7 +29,7 @@ from bpb_adapters.litellm_adapter.aliases import (
     resolve,
 )
 from bpb_adapters.litellm_adapter.errors import map_error
-from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError
+from bpb_core.errors import BadInput, ModelError, ModelTimeout, ServerError, need_module
 from bpb_core.model_calls import (
     AdapterOptions,
     CallCeiling,
@@ -53,7 +52,7 @@ def _import_litellm() -> Any:
     name, before = "LITELLM_LOCAL_MODEL_COST_MAP", os.environ.get("LITELLM_LOCAL_MODEL_COST_MAP")
     os.environ[name] = "True"
     try:
-        litellm: Any = importlib.import_module("litellm")
+        litellm: Any = need_module("litellm", "the litellm adapter", "pip install 'bpb[litellm]'")
     finally:
         if before is None:
             os.environ.pop(name, None)

@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 
 from bpb_core.dataset.manifest import CHECKSUMS
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, need_module
 from bpb_core.layout import FINAL, INDEX, INIT, MANIFEST, SceneKey
 from bpb_core.validated_files import read_bytes
 
@@ -94,7 +94,7 @@ def _unpack(path: Path, shards: list[Path], target: Path) -> None:
 
 
 def _unpack_shard(shard: Path, out: Path) -> None:
-    import pyarrow.parquet as pq
+    pq = need_module("pyarrow.parquet", "reading a Hugging Face export", "pip install 'bpb[hf]'")
 
     try:
         table = pq.read_table(shard, columns=_COLUMNS)

@@ -38,7 +38,15 @@ from bpb_core.dataset.reader import (
     open_folder,
 )
 from bpb_core.dataset.scene_entry import read_scene_file
-from bpb_core.errors import NO_ROOM, BadInput, UnknownName, WriteRefused, write_refused, writing
+from bpb_core.errors import (
+    NO_ROOM,
+    BadInput,
+    UnknownName,
+    WriteRefused,
+    need_module,
+    write_refused,
+    writing,
+)
 from bpb_core.interfaces import InputMode
 from bpb_core.layout import (
     FINAL,
@@ -256,8 +264,9 @@ def _write_split(
     out: Path, split: str, rows: list[dict[str, Any]], size: int
 ) -> tuple[list[str], int]:
     """Write the shards of ``split``; their names and the split's size in Arrow bytes."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+    hf = "pip install 'bpb[hf]'"
+    pa = need_module("pyarrow", "a Hugging Face export", hf)
+    pq = need_module("pyarrow.parquet", "a Hugging Face export", hf)
 
     chunks = [rows[i : i + size] for i in range(0, len(rows), size)] or [[]]
     metadata = {"huggingface": json.dumps({"info": {"features": FEATURES}}, sort_keys=True)}

@@ -34,7 +34,7 @@ import math
 import sys
 from typing import Any
 
-from bpb_core.errors import BadInput
+from bpb_core.errors import BadInput, need_module
 from bpb_tasks.billiards.scene.model import Scene, table_box
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.engine import SimulationError
@@ -120,7 +120,7 @@ def stable_dt(scene: Scene) -> float:
 class _PymunkRun:
     def __init__(self, scene: Scene, dt: float, on_table: bool = True) -> None:
         """``on_table``: fail a ball off the table and put back one sunk into a cushion."""
-        import pymunk
+        pymunk = need_module("pymunk", "the pymunk simulator", "pip install 'bpb[pymunk]'")
 
         self.scene, self.dt, self.t, self.on_table = scene, dt, 0.0, on_table
         phys = scene.physics
