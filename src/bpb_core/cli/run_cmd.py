@@ -141,6 +141,23 @@ def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     return generate_dataset(quick, QUICK_PER_HORIZON, [1, 2, 3, 4, 5], seed, registry=registry)
 
 
+def _note_unpriced(ready: list[Prepared], prices: Path) -> None:
+    """A ``--prices`` table that prices none of an adapter's calls is said now, with the table's
+    keys: a key that is not the model's litellm name (``my-vlm`` for ``openai/my-vlm``) would
+    else show the live cost as ``$?`` all run."""
+    from bpb_core.plugin_calls import price_known
+
+    for item in ready:
+        if price_known(item.adapter, item.origin) is False:
+            keys = ", ".join(sorted(item.plan.options.prices)) or "none"
+            stderr().print(
+                f"[yellow]note:[/] {escape(str(prices))}: --prices: no price for "
+                f"{escape(item.name)} (its keys: {escape(keys)}); key it by the model's litellm "
+                "name, or its cost is unknown ($?)",
+                highlight=False, soft_wrap=True,
+            )  # fmt: skip
+
+
 @click.command("run")
 @click.option(
     "--data", type=PATH, help="Dataset folder (default: a small generated one in OUT/data)."
@@ -283,6 +300,8 @@ def run(**kw: Any) -> None:
     tasks = tasks or registry.tasks_for(data.family.name, default_only=True)
     if not ready:
         ready = prepare(registry, _plans(kw, _offline_adapters(registry, data)), check=check)
+    if kw["prices"] is not None:
+        _note_unpriced(ready, kw["prices"])
     capped = [p for p in ready if kw["max_cost"] is not None or "max_cost" in p.plan.run]
     if capped and not kw["dry_run"]:
         if not kw["allow_unpriced"]:

@@ -127,3 +127,21 @@ def test_non_finite_price_is_refused_before_any_call(
     line = done.stderr.strip()
     assert "\n" not in line and str(path) in line and field in line, line
     assert "finite number >= 0" in line and not out.exists()
+
+
+def test_a_price_table_missing_the_model_is_said_before_the_run(
+    run_bpb: RunBpb, dataset: Path, tmp_path: Path, secret_key: str
+) -> None:
+    # keyed by a short name, the table priced nothing and the live cost read "$?" all run
+    for key, said in (("fake", True), ("openai/fake", False)):
+        prices = tmp_path / f"{key.replace('/', '_')}.json"
+        prices.write_text(json.dumps({key: {"input": 1e-6, "output": 1e-6}}))
+        with fake_server(dataset) as server:
+            done = run_bpb(
+                "run", "--data", str(dataset), "--tasks", "q1", "--limit", "1",
+                "--api-base", server.api_base, "--adapter", "litellm:openai/fake",
+                "--prices", str(prices), "--out", str(tmp_path / prices.stem),
+            )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        note = f"--prices: no price for litellm:openai/fake (its keys: {key})"
+        assert (note in done.stderr) == said, done.stderr
