@@ -128,7 +128,11 @@ def generate_dataset(
         if target.exists() and (not target.is_dir() or any(target.iterdir())):
             is_dataset = (target / MANIFEST).is_file()
             if not (overwrite and is_dataset):
-                hint = "pass --overwrite" if is_dataset else "choose a new or empty folder"
+                hint = (
+                    "pass overwrite=True (--overwrite)"
+                    if is_dataset
+                    else "choose a new or empty folder"
+                )
                 raise BadInput(f"{target}: --out: exists and is not an empty folder; {hint}")
         check_writable_folder(target)
         with partial_folder(target, "bpb generate") as partial:

@@ -35,6 +35,10 @@ if TYPE_CHECKING:
     from bpb_core.registry import Registry
 
 
+# the hint of a run that has no images to show, in the library's and the CLI's terms
+STATE = "use input mode 'state' (--input-mode state)"
+
+
 @dataclass(frozen=True)
 class SceneRef:
     """A scene of the dataset, not yet loaded."""
@@ -66,14 +70,13 @@ class SceneRef:
         name = self.family.input_image
         if name is None:
             raise BadInput(
-                f"{self.folder}: the {self.family.name} scene family has no images; "
-                "use --input-mode state"
+                f"{self.folder}: the {self.family.name} scene family has no images; {STATE}"
             )
         path = self.folder / name
         try:
             data = path.read_bytes()
         except OSError:
-            raise BadInput(f"{path}: missing; use --input-mode state for text-only runs") from None
+            raise BadInput(f"{path}: missing; {STATE} for text-only runs") from None
         check_image(path, data)
         check_recorded(path, data)
         return data
@@ -95,18 +98,14 @@ def check_images(folder: DataFolder, refs: Sequence[SceneRef], input_mode: str) 
     if recorded is not None and recorded.get("images") is False:
         raise BadInput(
             f"{data}: generated with --no-images ({MANIFEST}: images: false), so it has no "
-            "images to show; use --input-mode state"
+            f"images to show; {STATE}"
         )
     for ref in refs:
         name = ref.family.input_image
         if name is None:
-            raise BadInput(
-                f"{data}: the {ref.family.name} scene family has no images; use --input-mode state"
-            )
+            raise BadInput(f"{data}: the {ref.family.name} scene family has no images; {STATE}")
         if not (ref.folder / name).is_file():
-            raise BadInput(
-                f"{ref.folder / name}: missing; use --input-mode state for text-only runs"
-            )
+            raise BadInput(f"{ref.folder / name}: missing; {STATE} for text-only runs")
 
 
 def dataset_hash(folder: DataFolder) -> str:

@@ -75,7 +75,7 @@ def test_existing_folder_is_refused_unless_overwrite(tmp_path: Path) -> None:
               "--workers", "1", "--no-images"]  # fmt: skip
     assert bpb(*common).returncode == 0
     again = bpb(*common)
-    assert again.returncode == 2 and "pass --overwrite" in again.stderr
+    assert again.returncode == 2 and "pass overwrite=True (--overwrite)" in again.stderr
     assert bpb(*common, "--overwrite").returncode == 0
 
 

@@ -250,7 +250,7 @@ def test_image_input_on_a_dataset_generated_without_images_is_refused_before_the
     assert made.returncode == 0, made.stderr
     line = (
         f"{data}: generated with --no-images (dataset.json: images: false), so it has no "
-        "images to show; use --input-mode state"
+        "images to show; use input mode 'state' (--input-mode state)"
     )
     for extra in ([], ["--dry-run"], ["--input-mode", "image+state"]):
         refused = cli("run", "--data", str(data), "--adapter", "baseline:stasis",
