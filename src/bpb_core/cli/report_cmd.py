@@ -22,8 +22,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from bpb_core.report.build import Report, ReportPart
-    from bpb_core.report.html import Cell
-    from bpb_core.report.sections import Rows
+    from bpb_core.report.sections import Cell, Rows
 
 
 USAGE_COLUMNS = {

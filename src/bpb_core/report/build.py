@@ -26,10 +26,10 @@ import pandas as pd
 
 from bpb_core.errors import BadInput, WriteRefused, blamed, writing
 from bpb_core.plugin_calls import returned
-from bpb_core.report import charts as ch, gallery, html
+from bpb_core.report import charts as ch, gallery
 from bpb_core.report.exports import part_json, write_exports
 from bpb_core.report.parts import Completeness, ReportPart, report_parts, report_tables
-from bpb_core.report.sections import headline, sections
+from bpb_core.report.sections import headline, render_page, sections
 from bpb_core.results.frames import Results, load_results
 from bpb_core.results.tables import metrics
 
@@ -180,7 +180,7 @@ def write_report(
         scorers = {task: registry.scorer_for(task) for task in part.results.tasks}
         origins = {task: registry.scorer_entry(task).origin for task in scorers}
         cases += gallery.build_cases(part.results, scorers, gallery_size, origins)
-        answered += len(gallery.scene_totals(part.results.units, part.results.suites))
+        answered += len(gallery.scene_totals(part.results))
         pages.append(
             {
                 "name": part.title,
@@ -196,7 +196,7 @@ def write_report(
             name = f"{i:02d}_{_slug(case.run)}_{case.scene_id}.png"
             files[f"gallery:{i}"] = _write(out / "gallery" / name, case.png)
     files.update(_export_frames(report, out))
-    page = html.render(
+    page = render_page(
         title="bpb report", parts=pages, cases=cases, answered=answered, titles=names
     )
     files["html"] = _write(out / "report.html", page.encode("utf-8"))

@@ -15,13 +15,14 @@ import numpy as np
 import pandas as pd
 
 from bpb_core.errors import writing
-from bpb_core.report.html import Cell, plain
 from bpb_core.report.sections import (
+    Cell,
     Rows,
     different_conditions_note,
     different_scenes_note,
     headline_cells,
     horizon_cells,
+    plain,
 )
 from bpb_core.results.completeness import incomplete_lines, unanswered_lines, unparsed_lines
 

@@ -10,7 +10,7 @@ the scenes and lays them out.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -21,8 +21,6 @@ from bpb_core.errors import blamed
 from bpb_core.layout import SceneKey
 from bpb_core.picture import ScenePicture
 from bpb_core.plugin_calls import returned
-from bpb_core.registry import SuiteInfo
-from bpb_core.results.tables import scene_scores
 from bpb_core.run_folder import REPLIED
 from bpb_core.scored_units import object_origin
 
@@ -46,16 +44,14 @@ class Case:
     png: bytes = b""
 
 
-def worst_cases(
-    units: pd.DataFrame, count: int = 8, suites: Sequence[SuiteInfo] = ()
-) -> pd.DataFrame:
+def worst_cases(results: Results, count: int = 8) -> pd.DataFrame:
     """Up to ``count`` answered (run, scene) pairs with the lowest score.
 
     Runs take turns (models before baselines, each run's worst scene first), so one bad run
     does not fill the gallery; only scenes answered in every task and not fully right qualify.
     Equal scores keep scene order (horizon, then index).
     """
-    wide = scene_totals(units, suites)
+    wide = scene_totals(results)
     # ties in scene order, (horizon, index): the id's numbers as numbers (h3_9999 before
     # h3_10000, h3 before h10), not the id's text
     wide = wide[wide[SCORE] < 1.0].sort_values([SCORE, "horizon", "index"], kind="stable")
@@ -64,10 +60,10 @@ def worst_cases(
     return ranked.head(count).drop(columns="turn").reset_index(drop=True)
 
 
-def scene_totals(units: pd.DataFrame, suites: Sequence[SuiteInfo] = ()) -> pd.DataFrame:
+def scene_totals(results: Results) -> pd.DataFrame:
     """One row per fully answered (run, scene): each task's score and ``score``, the weighted
     score of the first suite whose tasks the scene was asked (else the mean over its tasks)."""
-    scenes = scene_scores(units)
+    scenes, suites = results.scenes, results.suites
     wide = scenes.pivot_table(
         index=["run", "baseline", "horizon", "index", "scene_id"],
         columns="task",
@@ -110,7 +106,7 @@ def build_cases(
     runs = {run.label: run for run in results.runs}
     units = results.units
     cases = []
-    for row in worst_cases(units, count, results.suites).to_dict(orient="records"):
+    for row in worst_cases(results, count).to_dict(orient="records"):
         run, sid = runs[str(row["run"])], str(row["scene_id"])
         rows = units[(units["run"] == run.label) & (units["scene_id"] == sid)]
         key = SceneKey(float(row["horizon"]), int(row["index"]))

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -225,8 +225,9 @@ def report_tables(
     runs of its model (:func:`~bpb_core.results.references.reference_table`).
     """
     rule = completeness or Completeness()
-    units, calls, suites = results.units, results.calls, results.suites
-    keep = asdict(rule)
+    units, calls, suites, scenes = results.units, results.calls, results.suites, results.scenes
+    keep: dict[str, Any] = {**asdict(rule), "scenes": scenes}
+    boot: dict[str, Any] = {"n_boot": n_boot, "seed": seed, "scenes": scenes}
     tables = {
         "summary": summary(units, suites, **keep),
         "leaderboard": leaderboard(units, suites, **keep),
@@ -234,16 +235,16 @@ def report_tables(
         "leaderboard_stable": leaderboard(units, suites, stable_only=True, **keep),
         "by_horizon": by_horizon(units, **keep),
         "by_horizon_answered": by_horizon(units, view="answered", **keep),
-        "pairs": all_pairs(units, suites, n_boot=n_boot, seed=seed, view="answered"),
+        "pairs": all_pairs(units, suites, view="answered", **boot),
         "stable_exclusions": stable_exclusions(units),
         "usage": usage(calls),
         "metadata": metadata_table(calls),
-        "references": reference_table(units, suites, references, n_boot=n_boot, seed=seed),
+        "references": reference_table(units, suites, references, **boot),
     }
     for suffix, view in (("", "strict"), ("_answered", "answered")):
-        acc = accuracy(units, view=view)  # type: ignore[arg-type]
+        acc = accuracy(units, view=view, scenes=scenes)  # type: ignore[arg-type]
         tables[f"accuracy{suffix}"] = acc.assign(level=cell_levels(acc, rule.min_complete))
-        ci = bootstrap_ci(units, suites, view=view, n_boot=n_boot, seed=seed)  # type: ignore[arg-type]
+        ci = bootstrap_ci(units, suites, view=view, **boot)  # type: ignore[arg-type]
         tables[f"bootstrap{suffix}"] = _blank(ci, tables[f"leaderboard{suffix}"])
     tables["completeness"] = tables["accuracy"].drop(columns=["accuracy", "scenes"])
     done = tables["leaderboard"].set_index("run")[["completeness", "epochs"]]

@@ -1,27 +1,141 @@
-"""The HTML sections of one report part: the headline (answered-only first), accuracy by horizon
-with every cell's completeness, and the other tables.
+"""How one report part is shown: the HTML sections (the headline, answered-only first; accuracy
+by horizon with every cell's completeness; the other tables) and the self-contained page.
 
 A cell under 100% answered carries its completeness as a note; a cell under the threshold is
 greyed and reads "left out", so no table states a finding that comes from missing data.
+
+The page is rendered with jinja2 (autoescaped) from ``templates/``: inline CSS, charts and
+gallery images as base64 data URIs. It loads nothing from anywhere (no fonts, scripts or styles
+from the network), so it works offline and can be mailed around as one file. A small inline
+script marks ``<body>`` with ``data-images-ok="yes"`` once every image has decoded, which the
+tests read from headless Chromium.
 """
 
 from __future__ import annotations
 
+import base64
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from functools import cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 from markupsafe import Markup
 
-from bpb_core.report import html
-from bpb_core.report.html import Cell
+from bpb_core.report.gallery import Case
 from bpb_core.results.completeness import level, warning_lines, worst_cells
 from bpb_core.results.tables import metadata_by_horizon
 
 if TYPE_CHECKING:
+    import jinja2
+
     from bpb_core.report.parts import Completeness, ReportPart
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One table cell: its text, a small note after it (``<sup>``), a CSS class and a
+    tooltip."""
+
+    text: str
+    note: str = ""
+    css: str = ""
+    title: str = ""
+
+
+@cache
+def _environment() -> jinja2.Environment:
+    import jinja2
+
+    loader = jinja2.PackageLoader("bpb_core.report", "templates")
+    return jinja2.Environment(loader=loader, autoescape=True, undefined=jinja2.StrictUndefined)
+
+
+def data_uri(png: bytes) -> str:
+    """``data:image/png;base64,...`` for ``png``."""
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def plain(value: object, percent: bool) -> Cell:
+    """A cell of a plain value: NaN as a dash, floats as percentages or 4 digits."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return Cell("–")
+    if isinstance(value, bool):
+        return Cell("yes" if value else "no")
+    if isinstance(value, float):
+        return Cell(f"{100 * value:.1f}%" if percent else f"{value:.4g}")
+    return Cell(str(value))
+
+
+def html_cells(
+    head: Sequence[str], rows: Sequence[tuple[bool, Sequence[Cell]]], empty: str
+) -> Markup:
+    """An HTML table of ready cells; ``rows`` are (baseline, cells) pairs."""
+    items = [{"baseline": baseline, "cells": list(row)} for baseline, row in rows]
+    template = _environment().get_template("table.html")
+    return Markup(template.render(head=list(head), rows=items, empty=empty))
+
+
+def html_table(
+    frame: pd.DataFrame,
+    *,
+    percent: Collection[str] = (),
+    drop: Sequence[str] = ("adapter", "model"),
+    empty: str = "nothing to show",
+    headers: dict[str, str] | None = None,
+) -> Markup:
+    """An HTML table of ``frame``: ``percent`` columns as percentages, baseline rows greyed and
+    marked; ``headers`` renames columns for display."""
+    columns = [c for c in frame.columns if c not in drop and c != "baseline"]
+    rows = [
+        (bool(row.get("baseline", False)), [plain(row[c], c in percent) for c in columns])
+        for row in frame.to_dict(orient="records")
+    ]
+    names = headers or {}
+    return html_cells([names.get(str(c), str(c)) for c in columns], rows, empty)
+
+
+def render_page(
+    *,
+    title: str,
+    parts: Sequence[dict[str, Any]],
+    cases: Sequence[Case],
+    answered: int = 0,
+    titles: Mapping[str, str] | None = None,
+) -> str:
+    """The whole page: per dataset its runs, headline sections, charts and sections, then the
+    failure gallery.
+
+    Each part is a dict with ``name``, ``runs`` (dicts), ``headline`` and ``sections``
+    ((heading, HTML body) pairs), ``charts`` ({title: PNG bytes}) and ``chart_notes``
+    ({title: a line shown under the chart}). ``titles`` names the tasks in the gallery (a task
+    without one keeps its name).
+    """
+    shown = [{**p, "charts": [(k, data_uri(v)) for k, v in p["charts"].items()]} for p in parts]
+    template = _environment().get_template("report.html")
+    return template.render(
+        title=title,
+        when=datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        parts=shown,
+        cases=[_case(c, titles or {}) for c in cases],
+        answered=answered,
+    )
+
+
+def _case(case: Case, titles: Mapping[str, str]) -> dict[str, Any]:
+    scores = ", ".join(f"{k} {100 * v:.0f}%" for k, v in case.scores.items() if not math.isnan(v))
+    named = [(titles.get(task) or task, items) for task, items in case.wrong.items()]
+    wrong = [(f"{name} wrong" if items else name, items) for name, items in named]  # or all right
+    uri = data_uri(case.png) if case.png else ""
+    return {"run": case.run, "scene_id": case.scene_id, "horizon": f"{case.horizon:g}"} | {
+        "scores": scores,
+        "uri": uri,
+        "wrong": wrong,
+    }
+
 
 LEFT_OUT = "left out"
 
@@ -61,14 +175,14 @@ def headline(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     """The leaderboard leading with the answered-only scores and completeness, the strict score
     beside, and what is incomplete."""
     head, rows = headline_cells(part, rule)
-    body = _headline_note(part, rule) + html.cells(head, rows, "no runs")
+    body = _headline_note(part, rule) + html_cells(head, rows, "no runs")
     out = [("Leaderboard (answered only; strict beside)", body + incomplete_notes(part))]
     if not part.tables["references"].empty:
         sources = Markup("").join(
             Markup("<p class='muted'>{}</p>").format(line) for line in reference_sources(part)
         )
         note = Markup("<p class='muted'>{}</p>").format(REFERENCE_NOTE)
-        body = note + html.cells(*reference_cells(part), "no figures") + sources
+        body = note + html_cells(*reference_cells(part), "no figures") + sources
         out.append(("Published figures beside your runs", body))
     for task in part.metric_notes:
         out.append((f"{task} metrics beside accuracy (answered only)", metrics_body(part, task)))
@@ -84,7 +198,7 @@ def metrics_body(part: ReportPart, task: str) -> Markup:
     table = part.tables[f"{task}_metrics"]
     percent = (*notes, "complete")
     listed = Markup("<ul class='muted'>{}</ul>").format(items)
-    return html.table(table, percent=percent, drop=_dropped(table)) + listed
+    return html_table(table, percent=percent, drop=_dropped(table)) + listed
 
 
 def headline_cells(part: ReportPart, rule: Completeness) -> tuple[list[str], Rows]:
@@ -302,7 +416,7 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     ).format(pct(rule.min_complete))
     out = [
         *(
-            (f"Accuracy by horizon ({view})", key + html.cells(*cells, "no answers"))
+            (f"Accuracy by horizon ({view})", key + html_cells(*cells, "no answers"))
             for view, cells in (
                 ("answered only", horizon_cells(tables["accuracy_answered"], rule)),
                 ("strict", horizon_cells(tables["accuracy"], rule)),
@@ -310,7 +424,7 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
         ),
         (
             "Leaderboard on stable scenes (strict)",
-            html.table(
+            html_table(
                 tables["leaderboard_stable"],
                 percent=[*scores, "completeness", "worst_cell"],
                 drop=_dropped(tables["leaderboard_stable"]),
@@ -318,15 +432,15 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
                 headers={"expected": "scene-tasks", "epochs": "epochs (answers per scene-task)"},
             )
             + Markup('<p class="muted">Scenes left out of the stable subset, by reason:</p>')
-            + html.table(tables["stable_exclusions"]),
+            + html_table(tables["stable_exclusions"]),
         ),
         (
             "Bootstrap 95% intervals (answered only)",
-            html.table(tables["bootstrap_answered"], percent=("estimate", "lo", "hi")),
+            html_table(tables["bootstrap_answered"], percent=("estimate", "lo", "hi")),
         ),
         (
             "Paired comparisons (a minus b, scenes both answered, exact sign test)",
-            html.table(pairs, percent=("a_score", "b_score", "diff", "lo", "hi"))
+            html_table(pairs, percent=("a_score", "b_score", "diff", "lo", "hi"))
             if not pairs.empty
             else Markup("<p class='muted'>no model runs to compare</p>"),
         ),
@@ -336,12 +450,12 @@ def sections(part: ReportPart, rule: Completeness) -> list[tuple[str, Markup]]:
     for diagnostic in part.diagnostics:
         table = tables[diagnostic.name]
         percent = (*diagnostic.percent, "complete")
-        body = html.table(table, percent=percent, drop=_dropped(table))
+        body = html_table(table, percent=percent, drop=_dropped(table))
         out.append((diagnostic.title, body))
     out.append(("Tokens, cost, latency, retries", usage_table(tables["usage"])))
     spending = spending_table(part)
     if not spending.empty:
-        out.append(("Spending and the cost cap (--max-cost)", html.table(spending)))
+        out.append(("Spending and the cost cap (--max-cost)", html_table(spending)))
     return out
 
 
@@ -389,7 +503,7 @@ def _metadata_section(frame: pd.DataFrame) -> tuple[str, Markup]:
         "Counts of scenes, means and maxima: "
         "<i>tables/metadata.csv</i>.</p>"
     )
-    return "Adapters' own measurements by horizon", note + html.table(metadata_by_horizon(frame))
+    return "Adapters' own measurements by horizon", note + html_table(metadata_by_horizon(frame))
 
 
 USAGE_HEADERS = {
@@ -409,4 +523,4 @@ def usage_table(frame: pd.DataFrame) -> Markup:
     for name in ("latency_mean", "latency_median"):
         shown[name] = (1000 * shown[name]).round(0)
     shown["tokens_per_call"] = shown["tokens_per_call"].round(0)
-    return html.table(shown, headers=USAGE_HEADERS)
+    return html_table(shown, headers=USAGE_HEADERS)

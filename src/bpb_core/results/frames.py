@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,7 +32,7 @@ from bpb_core.plugin_calls import parsed_answer
 from bpb_core.registry import SuiteInfo
 from bpb_core.results.completeness import warning_lines
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
-from bpb_core.results.tables import summary
+from bpb_core.results.tables import scene_scores, summary
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer, write_bytes_atomic
 from bpb_core.scored_units import (
     SCORER_INPUT,
@@ -107,6 +108,12 @@ class Results:
     def tasks(self) -> list[str]:
         """Tasks in the units frame, sorted."""
         return sorted(str(t) for t in self.units["task"].unique())
+
+    @cached_property
+    def scenes(self) -> pd.DataFrame:
+        """The scene scores of :attr:`units` (:func:`~bpb_core.results.tables.scene_scores`),
+        computed once: every table of a report derives from them."""
+        return scene_scores(self.units)
 
 
 def load_results(

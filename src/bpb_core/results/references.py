@@ -34,25 +34,29 @@ def reference_table(
     *,
     n_boot: int = 2000,
     seed: int = 0,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
-    """One row per (model run, stated figure of its model): see the module docstring.
+    """One row per (model run, stated figure of its model): see the module docstring
+    (``scenes``: the :func:`~bpb_core.results.tables.scene_scores` of ``units``, if computed).
 
     Returns:
         Columns :data:`COLUMNS`; ``horizon`` NaN for a mean, ``estimate``/``lo``/``hi``/
         ``diff`` NaN where the run cannot be compared (``note`` says why).
     """
     rows: list[dict[str, Any]] = []
+    scenes = scene_scores(units) if scenes is None else scenes
     models = units.loc[~units["baseline"].astype(bool), ["run", "adapter", "model"]]
     for run, adapter, model in models.drop_duplicates().itertuples(index=False):
         keys = {model_key(str(adapter)), model_key(str(model))}
         mine = units[units["run"] == run]
+        scored = scenes[scenes["run"] == run]
         tasks = set(tasks_of(mine))
         metrics = tasks | {s.name for s in suites if set(s.weights) <= tasks}
         for reference in references:
             figures = [
                 f for f in reference.figures if model_key(f.model) in keys and f.metric in metrics
             ]
-            rows += _run_rows(str(run), mine, suites, reference, figures, n_boot, seed)
+            rows += _run_rows(str(run), mine, scored, suites, reference, figures, n_boot, seed)
     return pd.DataFrame(rows, columns=COLUMNS).astype({c: "float64" for c in _NUMBERS})
 
 
@@ -62,6 +66,7 @@ _NUMBERS = ("horizon", "estimate", "lo", "hi", "stated", "diff")
 def _run_rows(
     run: str,
     units: pd.DataFrame,
+    scenes: pd.DataFrame,
     suites: Sequence[SuiteInfo],
     reference: ReferenceInfo,
     figures: Sequence[Figure],
@@ -74,8 +79,13 @@ def _run_rows(
     for span in dict.fromkeys(_span(f, reference) for f in figures):
         missing = sorted(set(span) - have)
         sub = units[units["horizon"].round(9).isin(span)]
-        scores = _scores(sub, suites, n_boot, seed) if not missing else {}
-        note = _note(missing, sub)
+        scored = scenes[scenes["horizon"].round(9).isin(span)]
+        scores: dict[str, Any] = {}
+        if not missing:
+            ci = bootstrap_ci(sub, suites, n_boot=n_boot, seed=seed, scenes=scored)
+            values = ci[["estimate", "lo", "hi"]].to_numpy(dtype=float).tolist()
+            scores = dict(zip(ci["metric"].astype(str), map(tuple, values), strict=True))
+        note = _note(missing, scored["status"])
         for figure in (f for f in figures if _span(f, reference) == span):
             rows.append(_row(run, reference, figure, scores.get(figure.metric), note))
     return rows
@@ -87,19 +97,12 @@ def _span(figure: Figure, reference: ReferenceInfo) -> tuple[float, ...]:
     return tuple(round(float(h), 9) for h in spans)
 
 
-def _scores(
-    units: pd.DataFrame, suites: Sequence[SuiteInfo], n_boot: int, seed: int
-) -> dict[str, tuple[float, float, float]]:
-    ci = bootstrap_ci(units, suites, view="strict", n_boot=n_boot, seed=seed)
-    values = ci[["estimate", "lo", "hi"]].to_numpy(dtype=float).tolist()
-    return {str(m): (e, lo, hi) for m, (e, lo, hi) in zip(ci["metric"], values, strict=True)}
-
-
-def _note(missing: Sequence[float], units: pd.DataFrame) -> str:
+def _note(missing: Sequence[float], status: pd.Series) -> str:
+    """Why a run's figure is blank, or how much of its scenes it answered (``status``: of each
+    scene score)."""
     if missing:
         listed = ", ".join(f"{h:g}" for h in missing)
         return f"not comparable: the run has no scenes at horizon {listed} s"
-    status = scene_scores(units)["status"]
     answered = float((~status.isin(UNANSWERED)).mean()) if len(status) else 0.0
     return "" if answered >= 1 else f"{answered:.0%} answered (unanswered count as wrong)"
 

@@ -40,11 +40,14 @@ RUN_COLUMNS = ["run", "adapter", "model", "baseline"]
 SCENE_KEYS = ["run", "task", "horizon", "index", "scene_id", "epoch"]
 
 
-def scene_scores(units: pd.DataFrame, *, stable_only: bool = False) -> pd.DataFrame:
-    """One row per (run, task, scene): ``score`` in [0, 1], ``status``, ``stable``, run columns."""
-    frame = units[units["stable"].fillna(False).astype(bool)] if stable_only else units
+def scene_scores(units: pd.DataFrame) -> pd.DataFrame:
+    """One row per (run, task, scene): ``score`` in [0, 1], ``status``, ``stable``, run columns.
+
+    Every table below starts from them; a caller deriving several tables from one units frame
+    computes them once and passes them as ``scenes`` (:attr:`Results.scenes
+    <bpb_core.results.frames.Results.scenes>`), never modifying them."""
     keys = [*SCENE_KEYS, "scene_rule"]
-    grouped = frame.groupby(keys, observed=True, sort=False)
+    grouped = units.groupby(keys, observed=True, sort=False)
     scores = grouped["correct"].agg(["mean", "min"])
     first = grouped[["status", "stable", "adapter", "model", "baseline"]].first()
     out = pd.concat([scores, first], axis=1).reset_index()
@@ -76,7 +79,11 @@ def _in_view(scenes: pd.DataFrame, view: View) -> pd.DataFrame:
 
 
 def accuracy(
-    units: pd.DataFrame, *, view: View = "strict", stable_only: bool = False
+    units: pd.DataFrame,
+    *,
+    view: View = "strict",
+    stable_only: bool = False,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
     """Accuracy per run, task and horizon, with scene counts and completeness.
 
@@ -86,8 +93,10 @@ def accuracy(
         once; ``answered`` (not api_error/missing) and ``expected`` count answers, ``epochs``
         per scene-task (``--epochs``), so ``completeness`` is the share of answers given.
     """
-    scenes = scene_scores(units, stable_only=stable_only)
-    scenes["answered"] = ~scenes["status"].isin(UNANSWERED)
+    scenes = scene_scores(units) if scenes is None else scenes
+    if stable_only:
+        scenes = scenes[scenes["stable"].fillna(False).astype(bool)]
+    scenes = scenes.assign(answered=~scenes["status"].isin(UNANSWERED))
     keys = [*RUN_COLUMNS, "task", "horizon"]
     counts = scenes.groupby(keys, observed=True).agg(
         expected=("score", "size"), answered=("answered", "sum"), epochs=("epoch", "max")
@@ -112,11 +121,12 @@ def by_horizon(
     stable_only: bool = False,
     min_complete: float = DEFAULT_MIN_COMPLETE,
     include_incomplete: bool = False,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
     """Wide table: one row per (run, task), one column per horizon, ``mean`` over horizons,
     then each horizon's completeness (``h1_complete``, ...). ``mean`` is NaN when a cell is
     under ``min_complete`` answered, unless ``include_incomplete``."""
-    acc = accuracy(units, view=view, stable_only=stable_only)
+    acc = accuracy(units, view=view, stable_only=stable_only, scenes=scenes)
     keys = ["run", "baseline", "task"]
     cells = acc.assign(run=acc["run"].astype(str)).set_index([*keys, "horizon"])
     wide = cells["accuracy"].unstack("horizon")  # keeps cells with no answer (NaN)
@@ -157,6 +167,7 @@ def leaderboard(
     sort_by: str | None = None,
     min_complete: float = DEFAULT_MIN_COMPLETE,
     include_incomplete: bool = False,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
     """One row per run: each task's score (mean over horizons), each suite's weighted total,
     completeness; best first (by ``sort_by``, default the first suite, else the mean task).
@@ -168,7 +179,7 @@ def leaderboard(
     ``min_complete``. ``expected`` counts the scene-tasks the run was asked, each once;
     ``epochs`` is how many times each was asked (``--epochs``; completeness counts answers).
     """
-    acc = accuracy(units, view=view, stable_only=stable_only)
+    acc = accuracy(units, view=view, stable_only=stable_only, scenes=scenes)
     tasks = tasks_of(units)
     means = acc.pivot_table(
         index=RUN_COLUMNS, columns="task", values="accuracy", aggfunc="mean", observed=True
@@ -202,13 +213,15 @@ def leaderboard(
 
 def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: Any) -> pd.DataFrame:
     """Strict leaderboard plus each suite's answered-only score and the completeness, best
-    first (``options``: ``min_complete``, ``include_incomplete`` of :func:`leaderboard`).
+    first (``options``: ``min_complete``, ``include_incomplete``, ``scenes`` of
+    :func:`leaderboard`).
 
     Columns: ``run, adapter, model, baseline``, each task and each suite followed by its
     answered-only score ``<name>_answered``, ``completeness, worst_cell, short, expected,
     epochs`` (``expected``: scene-task pairs the run should have answered, each once however
     many ``epochs`` it asked them).
     """
+    options.setdefault("scenes", scene_scores(units))
     strict = leaderboard(units, suites, view="strict", **options)
     answered = leaderboard(units, suites, view="answered", **options).set_index("run")
     for name in metrics(units, suites):

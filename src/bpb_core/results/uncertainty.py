@@ -33,13 +33,16 @@ def score_matrix(
     run: str,
     suites: Sequence[SuiteInfo] = (),
     view: View = "strict",
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
     """Scene scores of one run: index (horizon, scene_id), one column per task of ``units``
-    (NaN = left out of the view or not asked) plus one per suite (its weighted scene score)."""
+    (NaN = left out of the view or not asked) plus one per suite (its weighted scene score).
+    ``scenes``: the :func:`~bpb_core.results.tables.scene_scores` of ``units``, if computed."""
     tasks = tasks_of(units)
-    scenes = scene_scores(units[units["run"] == run])
+    scenes = scene_scores(units) if scenes is None else scenes
+    scenes = scenes[scenes["run"] == run]
     if view == "answered":
-        scenes.loc[scenes["status"].isin(UNANSWERED), "score"] = np.nan
+        scenes = scenes.assign(score=scenes["score"].mask(scenes["status"].isin(UNANSWERED)))
     wide = scenes.pivot_table(
         index=["horizon", "scene_id"], columns="task", values="score", observed=True, dropna=False
     ).reindex(columns=tasks)
@@ -102,8 +105,10 @@ def bootstrap_ci(
     n_boot: int = 2000,
     seed: int = 0,
     level: float = 0.95,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
-    """Leaderboard scores with bootstrap confidence intervals over scenes.
+    """Leaderboard scores with bootstrap confidence intervals over scenes (``scenes``: as for
+    :func:`score_matrix`).
 
     Returns:
         Columns ``run, adapter, model, baseline, metric, estimate, lo, hi, scenes``; ``metric``
@@ -113,8 +118,9 @@ def bootstrap_ci(
     tasks = tasks_of(units)
     names = [*tasks, *(s.name for s in suites)]
     runs = units[RUN_COLUMNS].drop_duplicates().to_dict(orient="records")
+    scenes = scene_scores(units) if scenes is None else scenes
     for info in runs:
-        matrix = score_matrix(units, str(info["run"]), suites, view)
+        matrix = score_matrix(units, str(info["run"]), suites, view, scenes)
         point, reps = _horizon_means(matrix, tasks, suites, _rng(seed, str(info["run"])), n_boot)
         lo, hi = _interval(reps, level)
         for j, metric in enumerate(names):
@@ -147,8 +153,10 @@ def paired_comparison(
     n_boot: int = 2000,
     seed: int = 0,
     level: float = 0.95,
+    scenes: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
-    """Run ``a`` minus run ``b`` on the scenes both answered, per metric.
+    """Run ``a`` minus run ``b`` on the scenes both answered, per metric (``scenes``: as for
+    :func:`score_matrix`).
 
     Raises:
         BadInput: The two runs answered different datasets (same scene ids, other scenes).
@@ -163,7 +171,8 @@ def paired_comparison(
     if datasets[a] != datasets[b]:
         raise BadInput(f"runs {a!r} and {b!r}: answered different datasets; nothing to pair")
     tasks = tasks_of(units)
-    left, right = score_matrix(units, a, suites, view), score_matrix(units, b, suites, view)
+    scenes = scene_scores(units) if scenes is None else scenes
+    left, right = (score_matrix(units, run, suites, view, scenes) for run in (a, b))
     shared = left.index.intersection(right.index)
     diff = left.loc[shared] - right.loc[shared]
     left, right = left.loc[shared].where(diff.notna()), right.loc[shared].where(diff.notna())
@@ -172,11 +181,11 @@ def paired_comparison(
     b_point, _ = _horizon_means(right, tasks, suites, None, 0)
     lo, hi = _interval(reps, level)
     names = [*tasks, *(s.name for s in suites)]
-    scenes = diff[names].notna().sum().to_numpy()
+    counts = diff[names].notna().sum().to_numpy()
     wins, losses = (diff[names] > 0).sum().to_numpy(), (diff[names] < 0).sum().to_numpy()
     columns = {"a": a, "b": b, "metric": names, "a_score": a_point, "b_score": b_point}
-    columns |= {"diff": point, "lo": lo, "hi": hi, "scenes": scenes, "wins": wins}
-    columns |= {"losses": losses, "ties": scenes - wins - losses}
+    columns |= {"diff": point, "lo": lo, "hi": hi, "scenes": counts, "wins": wins}
+    columns |= {"losses": losses, "ties": counts - wins - losses}
     columns["p_value"] = [sign_test(int(w), int(n)) for w, n in zip(wins, losses, strict=True)]
     return pd.DataFrame(columns)
 
@@ -204,5 +213,6 @@ def all_pairs(
     else:
         pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1 :]]
     pairs = [(a, b) for a, b in pairs if _datasets(units, a) == _datasets(units, b)]
+    kwargs.setdefault("scenes", scene_scores(units))
     frames = [paired_comparison(units, a, b, suites, **kwargs) for a, b in pairs]  # type: ignore[arg-type]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()

@@ -353,13 +353,13 @@ def test_a_run_given_twice_is_counted_once_and_said_so(
 
 def test_gallery_headings_use_task_titles_and_say_all_right_plainly() -> None:
     """Before: "POCKETED wrong:" (the name upper-cased) and "Q2 wrong: all right"."""
-    from bpb_core.report import html
     from bpb_core.report.gallery import Case
+    from bpb_core.report.sections import render_page
 
     wrong = {"pocketed": [], "q2": ["TOP: said F, truth T"], "gone": []}
     case = Case("run", "h1_0000", 1.0, {"pocketed": 1.0, "q2": 0.0}, wrong)
     titles = {"q2": "Q2 wall contacts", "pocketed": "Balls pocketed"}
-    page = html.render(title="t", parts=[], cases=[case], titles=titles)
+    page = render_page(title="t", parts=[], cases=[case], titles=titles)
     page = re.sub(r"\s+", " ", page)
     assert "<span>Balls pocketed:</span> all right" in page
     assert "<span>Q2 wall contacts wrong:</span> <ul><li>TOP: said F, truth T" in page
