@@ -143,7 +143,7 @@ def _print_part(part: ReportPart, built: Report) -> None:
         reference_cells,
         reference_sources,
     )
-    from bpb_core.results.completeness import warning_lines
+    from bpb_core.results.tables import warning_lines
 
     tables, rule, console = part.tables, built.completeness, stdout()
     title = "Leaderboard (answered only, strict beside; mean over horizons)"

@@ -5,7 +5,7 @@ colour each (Okabe-Ito); baseline runs are drawn in grey with hatching (bars) or
 and their names carry a ``[baseline]`` mark, so models are read against the floors and the
 ceiling.
 
-Accuracy by horizon (:func:`accuracy_by_horizon`) is in the paper's form: grouped bars per task,
+Accuracy by horizon (:func:`by_horizon_figure`) is in the paper's form: grouped bars per task,
 one group per horizon, one bar per run, every bar labelled with its value. Completeness is drawn,
 not hidden: a cell under 100% answered carries a ``*`` after its value; a cell under the
 threshold is drawn as a pale outline labelled "left out" with its answered share, so a stopped
@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from bpb_core.results.completeness import level
+from bpb_core.results.tables import level
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -137,23 +137,6 @@ def run_styles(runs: pd.DataFrame) -> dict[str, dict[str, Any]]:
     return styles
 
 
-def leaderboards(
-    board: pd.DataFrame,
-    metrics: Sequence[str],
-    ci: pd.DataFrame | None = None,
-    titles: Mapping[str, str] | None = None,
-    *,
-    xlabel: str = "mean accuracy over horizons (%)",
-    no_value: str = "left out (too incomplete)",
-    unasked: Mapping[str, Collection[str]] | None = None,
-) -> bytes:
-    """:func:`leaderboard_figure` as PNG bytes."""
-    fig = leaderboard_figure(
-        board, metrics, ci, titles, xlabel=xlabel, no_value=no_value, unasked=unasked
-    )
-    return png(fig)
-
-
 def leaderboard_figure(
     board: pd.DataFrame,
     metrics: Sequence[str],
@@ -239,20 +222,6 @@ def suite_by_horizon(accuracy: pd.DataFrame, suite: SuiteInfo) -> pd.DataFrame:
     out = pd.DataFrame({"accuracy": sum(w * wide[t] for t, w in suite.weights.items())})
     out["completeness"] = done[list(suite.weights)].min(axis=1)
     return out.reset_index()
-
-
-def accuracy_by_horizon(
-    accuracy: pd.DataFrame,
-    order: Sequence[str],
-    suites: Sequence[SuiteInfo] = (),
-    titles: Mapping[str, str] | None = None,
-    *,
-    min_complete: float = 0.9,
-    view: str = "answered only",
-) -> bytes:
-    """:func:`by_horizon_figure` as PNG bytes."""
-    fig = by_horizon_figure(accuracy, order, suites, titles, min_complete=min_complete, view=view)
-    return png(fig)
 
 
 def by_horizon_figure(

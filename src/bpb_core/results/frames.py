@@ -30,9 +30,8 @@ from bpb_core.errors import BadInput, ParseFailure, PluginBug, blamed
 from bpb_core.interfaces import PromptOptions
 from bpb_core.plugin_calls import parsed_answer
 from bpb_core.registry import SuiteInfo
-from bpb_core.results.completeness import warning_lines
 from bpb_core.results.reading import RunFolder, find_runs, warn_stray_answers
-from bpb_core.results.tables import scene_scores, summary
+from bpb_core.results.tables import scene_scores, summary, warning_lines
 from bpb_core.run_folder import AnswerRecord, answer_path, read_answer, write_bytes_atomic
 from bpb_core.scored_units import (
     SCORER_INPUT,
@@ -177,7 +176,7 @@ def write_scores(
 ) -> pd.DataFrame | None:
     """Write ``scores.csv`` (scored units) into each run folder and return the summary table
     (``None`` when there is nothing to score); ``attrs["warnings"]`` holds the ``(run, line)``
-    warnings to print under it (:func:`~bpb_core.results.completeness.warning_lines`).
+    warnings to print under it (:func:`~bpb_core.results.tables.warning_lines`).
     ``folders``: the runs' datasets, already read."""
     if not run_dirs:
         return None

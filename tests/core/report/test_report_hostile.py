@@ -51,7 +51,7 @@ def test_dollar_signs_in_run_names_and_titles_are_drawn_as_text(
 ) -> None:
     import pandas as pd
 
-    from bpb_core.report.charts import leaderboards
+    from bpb_core.report.charts import leaderboard_figure, png as to_png
 
     os.rename(runs / "litellm_model", runs / "price $\\frac{$ run")  # matplotlib math: invalid
     monkeypatch.setenv("COLUMNS", "160")
@@ -61,5 +61,5 @@ def test_dollar_signs_in_run_names_and_titles_are_drawn_as_text(
     assert done.returncode == 0, done.stderr
     assert "price $\\frac{$ run" in (tmp_path / "out" / "report.html").read_text()
     board = pd.DataFrame({"run": ["a$", "b$^{$"], "baseline": [False, True], "m": [0.5, 0.2]})
-    png = leaderboards(board, ["m"], titles={"m": "a plugin's $\\frac{$ title"})
+    png = to_png(leaderboard_figure(board, ["m"], titles={"m": "a plugin's $\\frac{$ title"}))
     assert png.startswith(b"\x89PNG")

@@ -33,8 +33,7 @@ from bpb_core import (
 from bpb_core.errors import PluginBug
 from bpb_core.library import mark
 from bpb_core.registry import PluginSource, make_registry
-from bpb_core.report.build import build_report
-from bpb_core.report.parts import report_parts
+from bpb_core.report.build import build_report, report_parts
 from bpb_core.results import load_results
 from bpb_core.runner import RunOptions, run_eval
 from bpb_core.web.viewer import Viewer
