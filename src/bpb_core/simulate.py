@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from bpb_core.capabilities import TruthOfMany
-from bpb_core.dataset.jobs import check_workers, started_pool, worker_signals
+from bpb_core.dataset.generate import check_workers, started_pool, worker_signals
 from bpb_core.dataset.manifest import check_simulator
 from bpb_core.dataset.reader import DataFolder, open_folder
 from bpb_core.errors import BadInput, BpbError, PluginBug

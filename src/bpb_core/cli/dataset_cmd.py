@@ -17,7 +17,7 @@ from bpb_core.errors import BadInput
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
 
-    from bpb_core.dataset.jobs import GenerateProgress
+    from bpb_core.dataset.generate import GenerateProgress
     from bpb_core.dataset.manifest import DatasetManifest
 
 
@@ -39,7 +39,7 @@ def parse_horizons(text: str) -> list[float]:
 
 
 class RichProgress:
-    """Draws :class:`~bpb_core.dataset.jobs.GenerateProgress` events on rich progress bars."""
+    """Draws :class:`~bpb_core.dataset.generate.GenerateProgress` events on rich progress bars."""
 
     def __init__(self, bar: Progress) -> None:
         self._bar = bar
@@ -57,7 +57,7 @@ class RichProgress:
 def _progress() -> Iterator[GenerateProgress]:
     """The bars in a terminal; in a log or a pipe, where rich would draw nothing, no bar at
     all: it costs its import and time per scene even when drawing nothing."""
-    from bpb_core.dataset.jobs import NoProgress
+    from bpb_core.dataset.generate import NoProgress
 
     if not console.stderr().is_terminal:
         yield NoProgress()
@@ -140,8 +140,7 @@ def generate(
     overwrite: bool,
 ) -> None:
     """Generate a dataset: scenes, ground truth, images, index, stats and manifest."""
-    from bpb_core.dataset.generate import generate_dataset
-    from bpb_core.dataset.jobs import check_per_horizon, check_workers
+    from bpb_core.dataset.generate import check_per_horizon, check_workers, generate_dataset
     from bpb_core.dataset.reader import read_manifest
 
     check_per_horizon(per_horizon)

@@ -29,7 +29,7 @@ from bpb_core.layout import INDEX, MANIFEST, horizon_label
 from bpb_core.plugin_calls import json_values, returned
 
 if TYPE_CHECKING:
-    from bpb_core.dataset.jobs import SceneResult
+    from bpb_core.dataset.generate import SceneResult
     from bpb_core.registry import Registry
 
 FORMAT = "bpb-dataset/1"

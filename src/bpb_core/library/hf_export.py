@@ -36,8 +36,8 @@ from bpb_core.dataset.reader import (
     load_dataset,
     manifest_file,
     open_folder,
+    read_scene_file,
 )
-from bpb_core.dataset.scene_entry import read_scene_file
 from bpb_core.errors import (
     NO_ROOM,
     BadInput,
@@ -61,7 +61,7 @@ from bpb_core.model_calls import prompt_text
 from bpb_core.version import __version__
 
 if TYPE_CHECKING:
-    from bpb_core.dataset.scene_entry import DatasetScene
+    from bpb_core.dataset.reader import DatasetScene
     from bpb_core.interfaces import Task
     from bpb_core.registry import Registry
 

@@ -31,8 +31,16 @@ from bpb_core.capabilities import ReportsMetrics
 from bpb_core.errors import BadInput, PluginBug, WriteRefused, blamed, writing
 from bpb_core.plugin_calls import returned
 from bpb_core.registry import DiagnosticInfo, ReferenceInfo
-from bpb_core.report import charts as ch, gallery
-from bpb_core.report.sections import headline, part_json, render_page, sections, write_exports
+from bpb_core.report import charts as ch
+from bpb_core.report.sections import (
+    build_cases,
+    headline,
+    part_json,
+    render_page,
+    scene_totals,
+    sections,
+    write_exports,
+)
 from bpb_core.results.frames import Results, load_results
 from bpb_core.results.reading import RunFolder
 from bpb_core.results.tables import (
@@ -502,8 +510,8 @@ def write_report(
         files.update(write_exports(part, out, prefix, report.completeness))
         scorers = {task: registry.scorer_for(task) for task in part.results.tasks}
         origins = {task: registry.scorer_entry(task).origin for task in scorers}
-        cases += gallery.build_cases(part.results, scorers, gallery_size, origins)
-        answered += len(gallery.scene_totals(part.results))
+        cases += build_cases(part.results, scorers, gallery_size, origins)
+        answered += len(scene_totals(part.results))
         pages.append(
             {
                 "name": part.title,

@@ -19,10 +19,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.dataset.manifest import check_unedited
-from bpb_core.dataset.reader import DataFolder, dataset_keys, open_folder
-from bpb_core.dataset.scene_entry import (
+from bpb_core.dataset.reader import (
+    DataFolder,
     check_image,
     check_recorded,
+    dataset_keys,
+    open_folder,
     read_scene_files,
     read_scene_model,
 )
@@ -56,7 +58,7 @@ class SceneRef:
 
         Raises:
             BadInput: The file is missing, invalid (names the file and the field) or changed
-                after generation (:mod:`bpb_core.dataset.scene_entry`).
+                after generation (:mod:`bpb_core.dataset.reader`).
         """
         return read_scene_model(self.folder / INIT, self.family.scene_model)
 

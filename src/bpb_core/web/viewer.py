@@ -37,7 +37,7 @@ from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import SceneKey
 from bpb_core.model_calls import prompt_text
 from bpb_core.plugin_calls import prompt_messages
-from bpb_core.report.gallery import drawing
+from bpb_core.report.sections import drawing
 from bpb_core.results.frames import Results, load_results
 from bpb_core.run_folder import REPLIED, AnswerRecord, read_answer, read_attempts
 from bpb_core.web import error_page, loopback_only, plugin_bug_page, render

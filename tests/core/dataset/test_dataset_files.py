@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from bpb_core.dataset import generate_dataset, load_dataset
-from bpb_core.dataset.jobs import Job, produce, worker_setup
+from bpb_core.dataset.generate import Job, produce, worker_setup
 from bpb_core.errors import BadInput
 from bpb_core.layout import SceneKey
 from bpb_core.registry import Registry

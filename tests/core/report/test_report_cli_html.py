@@ -353,8 +353,7 @@ def test_a_run_given_twice_is_counted_once_and_said_so(
 
 def test_gallery_headings_use_task_titles_and_say_all_right_plainly() -> None:
     """Before: "POCKETED wrong:" (the name upper-cased) and "Q2 wrong: all right"."""
-    from bpb_core.report.gallery import Case
-    from bpb_core.report.sections import render_page
+    from bpb_core.report.sections import Case, render_page
 
     wrong = {"pocketed": [], "q2": ["TOP: said F, truth T"], "gone": []}
     case = Case("run", "h1_0000", 1.0, {"pocketed": 1.0, "q2": 0.0}, wrong)
