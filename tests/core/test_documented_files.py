@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.dataset.hf_import import cache_root
+from bpb_core.dataset.reader import cache_root
 from bpb_core.layout import SceneKey
 from bpb_core.run_folder import AnswerRecord, write_answer
 from support.paths import DOCS

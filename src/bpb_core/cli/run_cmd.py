@@ -126,7 +126,7 @@ def _check_names(registry: Registry, tasks: list[str], adapters: list[str]) -> N
 
 def _data(data: Path | None, out: Path, seed: int, registry: Registry) -> Path:
     if data is not None:
-        from bpb_core.dataset.hf_import import resolve_data
+        from bpb_core.dataset.reader import resolve_data
 
         return resolve_data(data)
     quick = out / "data"

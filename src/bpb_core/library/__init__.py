@@ -27,8 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import PublishesSchema
 from bpb_core.dataset.generate import generate_dataset
-from bpb_core.dataset.hf_import import resolve_data
-from bpb_core.dataset.reader import Dataset, DatasetScene, load_dataset
+from bpb_core.dataset.reader import Dataset, DatasetScene, load_dataset, resolve_data
 from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import InputMode, PromptOptions
 from bpb_core.library.hf_export import HfExport, export_hf

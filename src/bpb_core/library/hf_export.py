@@ -4,7 +4,7 @@ One row per scene and task, split by horizon (``data/h3-00000-of-00001.parquet``
 image (an ``Image`` feature), the scene id, horizon and index, the task, the exact prompt text
 per input mode, the target answer as JSON, the stability flag and annotation, the scene's family
 cells of ``index.csv``, and ``init.json`` and ``final.json`` verbatim (so ``bpb run`` can read
-the export back, see :mod:`bpb_core.dataset.hf_import`). ``bpb/`` keeps ``dataset.json``,
+the export back, see :mod:`bpb_core.dataset.reader`). ``bpb/`` keeps ``dataset.json``,
 ``index.csv`` and ``checksums.sha256`` verbatim (so ``verify()`` checks the scene files an export
 carries). The same dataset gives the same bytes.
 
@@ -28,15 +28,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from bpb_core.capabilities import DescribesDataset
-from bpb_core.dataset.hf_import import DATA, SIDE, is_hf_export, shard_name
 from bpb_core.dataset.manifest import CHECKSUMS, check_unedited
 from bpb_core.dataset.reader import (
+    DATA,
+    SIDE,
     Dataset,
     dataset_keys,
+    is_hf_export,
     load_dataset,
     manifest_file,
     open_folder,
     read_scene_file,
+    shard_name,
 )
 from bpb_core.errors import (
     NO_ROOM,

@@ -36,8 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bpb_core.dataset.hf_import import cache_root
-from bpb_core.dataset.reader import DataFolder, dataset_keys, open_folder, read_truth
+from bpb_core.dataset.reader import DataFolder, cache_root, dataset_keys, open_folder, read_truth
 from bpb_core.errors import BadInput
 from bpb_core.layout import RUN_MANIFEST, SceneKey, iter_scene_keys, select_keys
 from bpb_core.model_calls import valid_unicode

@@ -25,8 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bpb_core.capabilities import Estimating
-from bpb_core.dataset.hf_import import resolve_data
-from bpb_core.dataset.reader import check_image, dataset_family
+from bpb_core.dataset.reader import check_image, dataset_family, resolve_data
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
 from bpb_core.layout import INIT, MANIFEST

@@ -29,7 +29,7 @@ import random
 import re
 import secrets
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -420,60 +420,58 @@ def human_app(session: HumanSession) -> Starlette:
         )
         return HTMLResponse(html)
 
-    async def answer(request: Request) -> Response:
-        fields = await _fields(request)
-        if isinstance(fields, Response):
-            return fields
+    def answer(fields: dict[str, str]) -> str:
         try:
             shown = float(fields.get("shown", ""))
         except ValueError:
-            return error_page("shown: expected the time the page was shown")
+            raise FormError("shown: expected the time the page was shown") from None
         if not 0 < shown <= time.time() + 5:
-            return error_page("shown: not a time this page could have been shown")
-        try:
-            session.submit(fields, shown)
-        except FormError as exc:
-            return error_page(str(exc))
-        return RedirectResponse("/", status_code=303)
+            raise FormError("shown: not a time this page could have been shown")
+        session.submit(fields, shown)
+        return "/"
 
-    async def skip(request: Request) -> Response:
-        fields = await _fields(request)
-        if isinstance(fields, Response):
-            return fields
-        try:
-            session.skip(fields)
-        except FormError as exc:
-            return error_page(str(exc))
-        return RedirectResponse("/", status_code=303)
+    def skip(fields: dict[str, str]) -> str:
+        session.skip(fields)
+        return "/"
 
-    async def undo(request: Request) -> Response:
-        fields = await _fields(request)
-        if isinstance(fields, Response):
-            return fields
-        try:
-            ref = session.undo(fields)
-        except FormError as exc:
-            return error_page(str(exc))
-        return RedirectResponse(f"/?scene={quote(ref.scene_id)}", status_code=303)
+    def undo(fields: dict[str, str]) -> str:
+        return f"/?scene={quote(session.undo(fields).scene_id)}"
 
     async def image(request: Request) -> Response:
         sid = request.path_params["scene_id"]
-        for ref in session.order:
-            if ref.scene_id == sid:
-                return Response(ref.image(), media_type="image/png")
-        return error_page(f"scene {sid!r}: not in this session", 404)
+        ref = session.scene(sid)
+        if ref is None:
+            return error_page(f"scene {sid!r}: not in this session", 404)
+        return Response(ref.image(), media_type="image/png")
 
     return Starlette(
         routes=[
             Route("/", index),
-            Route("/answer", answer, methods=["POST"]),
-            Route("/skip", skip, methods=["POST"]),
-            Route("/undo", undo, methods=["POST"]),
+            Route("/answer", _posted(answer), methods=["POST"]),
+            Route("/skip", _posted(skip), methods=["POST"]),
+            Route("/undo", _posted(undo), methods=["POST"]),
             Route("/image/{scene_id}", image),
         ],
         middleware=[loopback_only()],
         exception_handlers={PluginBug: plugin_bug_page},  # nothing stored
     )
+
+
+def _posted(action: Callable[[dict[str, str]], str]) -> Callable[[Request], Any]:
+    """The endpoint of a posted form: ``action`` on its fields, then a redirect to the page it
+    names; a form it refuses (:class:`FormError`) or one :func:`_fields` refuses is an error
+    page."""
+
+    async def endpoint(request: Request) -> Response:
+        fields = await _fields(request)
+        if isinstance(fields, Response):
+            return fields
+        try:
+            return RedirectResponse(action(fields), status_code=303)
+        except FormError as exc:
+            return error_page(str(exc))
+
+    return endpoint
 
 
 async def _fields(request: Request) -> dict[str, str] | Response:
