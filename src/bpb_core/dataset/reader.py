@@ -57,7 +57,7 @@ if TYPE_CHECKING:
 
 DATA = "data"
 SIDE = "bpb"
-_COLUMNS = ["horizon", "index", "image", "scene", "truth"]
+_SHARD_COLUMNS = ["horizon", "index", "image", "scene", "truth"]
 
 
 def shard_name(split: str, number: int, count: int) -> str:
@@ -132,7 +132,7 @@ def _unpack_shard(shard: Path, out: Path) -> None:
     pq = need_module("pyarrow.parquet", "reading a Hugging Face export", "pip install 'bpb[hf]'")
 
     try:
-        table = pq.read_table(shard, columns=_COLUMNS)
+        table = pq.read_table(shard, columns=_SHARD_COLUMNS)
     except Exception as exc:  # pyarrow raises several types for a bad file
         raise BadInput(f"{shard}: not a bpb export shard: {exc}") from None
     for number, row in enumerate(table.to_pylist()):
