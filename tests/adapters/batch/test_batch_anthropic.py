@@ -75,11 +75,15 @@ def test_litellm_retrieves_and_downloads_but_cannot_create(
             (f"run1-{i:03d}", "succeeded") for i in range(3)
         ]
         for call in (
-            lambda: litellm.create_batch(completion_window="24h", endpoint="/v1/chat/completions",
-                                         input_file_id="file-x", **kw),
+            lambda: litellm.create_batch(
+                completion_window="24h",
+                endpoint="/v1/chat/completions",
+                input_file_id="file-x",
+                **kw,
+            ),
             lambda: litellm.cancel_batch(batch_id=batch.id, **kw),
             lambda: litellm.list_batches(**kw),
-        ):  # fmt: skip
+        ):
             with pytest.raises(Exception, match="support"):
                 call()
 

@@ -45,11 +45,20 @@ def _lines(
     ]
 
 
-def _submit(server: Any, lines: list[dict[str, Any]], endpoint: str = "/v1/chat/completions",
-            metadata: dict[str, str] | None = None) -> Any:  # fmt: skip
+def _submit(
+    server: Any,
+    lines: list[dict[str, Any]],
+    endpoint: str = "/v1/chat/completions",
+    metadata: dict[str, str] | None = None,
+) -> Any:
     file = litellm.create_file(file=("batch.jsonl", _jsonl(lines)), purpose="batch", **_kw(server))
-    return litellm.create_batch(completion_window="24h", endpoint=endpoint, input_file_id=file.id,
-                                metadata=metadata, **_kw(server))  # fmt: skip
+    return litellm.create_batch(
+        completion_window="24h",
+        endpoint=endpoint,
+        input_file_id=file.id,
+        metadata=metadata,
+        **_kw(server),
+    )
 
 
 def _file(server: Any, file_id: str | None) -> dict[str, dict[str, Any]]:
@@ -111,7 +120,10 @@ def test_failed_requests_go_to_the_error_file(batch_server: Start, requests: Any
         assert (batch.request_counts.completed, batch.request_counts.failed) == (N - 3, 3)
         errors = _file(server, batch.error_file_id)
         assert {cid: line["response"]["status_code"] for cid, line in errors.items()} == {
-            "run1-001": 500, "run1-003": 429, "run1-004": 400}  # fmt: skip
+            "run1-001": 500,
+            "run1-003": 429,
+            "run1-004": 400,
+        }
         assert errors["run1-003"]["response"]["body"]["error"]["code"] == "rate_limit_exceeded"
         assert len(_file(server, batch.output_file_id)) == N - 3
         assert sorted(server.paid()) == sorted(
@@ -179,8 +191,12 @@ def _failed(server: Any, lines: list[dict[str, Any]] | bytes) -> list[dict[str, 
     """Submit an input file and return the failed batch's errors."""
     content = lines if isinstance(lines, bytes) else _jsonl(lines)
     file = litellm.create_file(file=("in.jsonl", content), purpose="batch", **_kw(server))
-    batch = litellm.create_batch(completion_window="24h", endpoint="/v1/chat/completions",
-                                 input_file_id=file.id, **_kw(server))  # fmt: skip
+    batch = litellm.create_batch(
+        completion_window="24h",
+        endpoint="/v1/chat/completions",
+        input_file_id=file.id,
+        **_kw(server),
+    )
     batch = litellm.retrieve_batch(batch_id=batch.id, **_kw(server))
     assert batch.status == "failed" and batch.request_counts.total == 0
     assert batch.output_file_id is None
@@ -211,14 +227,19 @@ def test_inputs_the_api_refuses(batch_server: Start, requests: Any) -> None:
             "mismatched_endpoint"
         ]
         with pytest.raises(Exception, match="too large"):
-            litellm.create_file(file=("big.jsonl", _jsonl(_lines(requests, n=200))), purpose="batch",
-                                **_kw(server))  # fmt: skip
+            litellm.create_file(
+                file=("big.jsonl", _jsonl(_lines(requests, n=200))), purpose="batch", **_kw(server)
+            )
         file = litellm.create_file(
             file=("a.jsonl", _jsonl(lines)), purpose="user_data", **_kw(server)
         )
         with pytest.raises(Exception, match="purpose 'batch'"):
-            litellm.create_batch(completion_window="24h", endpoint="/v1/chat/completions",
-                                 input_file_id=file.id, **_kw(server))  # fmt: skip
+            litellm.create_batch(
+                completion_window="24h",
+                endpoint="/v1/chat/completions",
+                input_file_id=file.id,
+                **_kw(server),
+            )
         with pytest.raises(Exception, match="metadata"):
             _submit(server, lines, metadata={f"k{i}": "v" for i in range(17)})
         assert server.paid() == {} and server.stats()["processed"] == {}

@@ -31,7 +31,7 @@ from typing import Any
 from aiohttp import web
 
 from bpb_testing.batch_anthropic import rfc3339
-from bpb_testing.batches import BatchStore, Entry, Job
+from bpb_testing.batches import BatchStore, Entry, Handler, Job
 
 _STATES = {None: "BATCH_STATE_RUNNING", "completed": "BATCH_STATE_SUCCEEDED",
            "failed": "BATCH_STATE_FAILED", "cancelled": "BATCH_STATE_CANCELLED",
@@ -185,8 +185,9 @@ def _entries(store: BatchStore, config: dict[str, Any], size: int) -> list[Entry
     return entries
 
 
-def add_routes(app: web.Application, store: BatchStore) -> None:
-    """Route Gemini's batch mode and Files API to ``store``."""
+def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
+    """Route Gemini's batch mode and Files API to ``store``; give the handlers of
+    ``GET /v1/batches`` and ``GET /v1/batches/{id}``."""
 
     async def create(request: web.Request) -> web.Response:
         raw = await request.read()
@@ -261,7 +262,7 @@ def add_routes(app: web.Application, store: BatchStore) -> None:
                 ),
                 "data": b"",
             }
-            url = f"{request.scheme}://{request.host}/upload/v1beta/files?upload_id={upload_id}"
+            url = f"{request.scheme}://{request.host}{request.path}?upload_id={upload_id}"
             return web.json_response(
                 {}, headers={"X-Goog-Upload-URL": url, "X-Goog-Upload-Status": "active"}
             )
@@ -294,12 +295,16 @@ def add_routes(app: web.Application, store: BatchStore) -> None:
             return error(404, "NOT_FOUND", "File not found.")
         return web.Response(body=file["content"], content_type="application/octet-stream")
 
-    app.router.add_post("/v1beta/models/{model:[^/:]+}:batchGenerateContent", create)
+    # The REST reference says v1beta; google-genai 3.x calls v1, whose GET /v1/batches and
+    # /v1/batches/{id} OpenAI's Batch API shares (bpb_testing.batches routes those by key header)
+    for version in ("v1beta", "v1"):
+        app.router.add_post(f"/{version}/models/{{model:[^/:]+}}:batchGenerateContent", create)
+        app.router.add_post(f"/{version}/batches/{{batch_id:[^/:]+}}:cancel", cancel)
+        app.router.add_delete(f"/{version}/batches/{{batch_id:[^/:]+}}", delete)
+        app.router.add_post(f"/upload/{version}/files", upload)
+        for prefix in (f"/download/{version}", f"/{version}"):
+            app.router.add_get(prefix + "/files/{file_id:[^/:]+}:download", download)
     app.router.add_get("/v1beta/batches", listing)
-    app.router.add_post("/v1beta/batches/{batch_id:[^/:]+}:cancel", cancel)
     app.router.add_get("/v1beta/batches/{batch_id:[^/:]+}", retrieve)
-    app.router.add_delete("/v1beta/batches/{batch_id:[^/:]+}", delete)
-    app.router.add_post("/upload/v1beta/files", upload)
-    for prefix in ("/download/v1beta", "/v1beta"):
-        app.router.add_get(prefix + "/files/{file_id:[^/:]+}:download", download)
     app.router.add_get("/v1beta/files/{file_id:[^/:]+}", file_get)
+    return {"list": listing, "retrieve": retrieve}

@@ -28,7 +28,7 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_testing.batches import BatchStore, Entry, Job
+from bpb_testing.batches import BatchStore, Entry, Handler, Job
 
 ENDPOINTS = {"/v1/chat/completions": "openai-chat", "/v1/responses": "openai-responses"}
 PURPOSES = ("assistants", "batch", "fine-tune", "vision", "user_data", "evals")
@@ -239,8 +239,9 @@ def _metadata_error(metadata: Any) -> str | None:
     return None
 
 
-def add_routes(app: web.Application, store: BatchStore) -> None:
-    """Route the Files and Batch APIs to ``store``."""
+def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
+    """Route the Files and Batch APIs to ``store``; give the handlers of ``GET /v1/batches``
+    and ``GET /v1/batches/{id}``."""
 
     async def upload(request: web.Request) -> web.Response:
         form = await request.post()
@@ -387,6 +388,7 @@ def add_routes(app: web.Application, store: BatchStore) -> None:
         app.router.add_delete(f"{prefix}/files/{{file_id}}", file_delete)
         app.router.add_get(f"{prefix}/files/{{file_id}}/content", file_content)
         app.router.add_post(f"{prefix}/batches", create)
-        app.router.add_get(f"{prefix}/batches", listing)
-        app.router.add_get(f"{prefix}/batches/{{batch_id}}", retrieve)
         app.router.add_post(f"{prefix}/batches/{{batch_id}}/cancel", cancel)
+    app.router.add_get("/batches", listing)
+    app.router.add_get("/batches/{batch_id}", retrieve)
+    return {"list": listing, "retrieve": retrieve}

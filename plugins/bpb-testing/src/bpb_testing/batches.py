@@ -31,6 +31,7 @@ import itertools
 import math
 import time
 from collections import Counter
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -57,6 +58,7 @@ LIMITS = {
     "gemini_inline_bytes": 20 * 1024 * 1024,  # inline requests of one batch
     "gemini_file_bytes": 2 * 1024 * 1024 * 1024,  # an uploaded file
 }
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 _TRANSPORT = ("truncated", "nonjson")  # faults with no meaning inside a batch: a 500
 
 
@@ -301,6 +303,18 @@ def add_batch_routes(app: web.Application, server: FakeOpenAI) -> None:
 
     app.router.add_get("/batch/stats", stats)
     app.router.add_post("/batch/clock", clock)
-    batch_openai.add_routes(app, store)
+    gemini = batch_gemini.add_routes(app, store)  # first: its /v1/files/{id}:download
+    openai = batch_openai.add_routes(app, store)
     batch_anthropic.add_routes(app, store)
-    batch_gemini.add_routes(app, store)
+
+    def by_key(name: str) -> Handler:
+        """Gemini's handler for a request with Google's API key, else OpenAI's."""
+
+        async def route(request: web.Request) -> web.StreamResponse:
+            google = "x-goog-api-key" in request.headers or "key" in request.query
+            return await (gemini if google else openai)[name](request)
+
+        return route
+
+    app.router.add_get("/v1/batches", by_key("list"))
+    app.router.add_get("/v1/batches/{batch_id}", by_key("retrieve"))
