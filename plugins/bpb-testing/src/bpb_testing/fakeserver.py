@@ -23,7 +23,8 @@ example answer the prompt itself shows. It injects the faults it was told to:
   ``safety``: a safety filter blocks the reply (``finish_reason: content_filter``, Responses
   ``incomplete_details.reason: content_filter``, Anthropic ``refusal``, Gemini ``SAFETY``).
 
-With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
+With ``keep_bodies`` ``GET /requests`` also gives each request's whole body (a batch line must
+be the synchronous request: a test compares them). With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
 (``completion_tokens`` = the request's ``max_completion_tokens`` or ``max_tokens``), the worst
 case a spending cap must hold against.
 
@@ -31,6 +32,9 @@ Faults are given per ``scene/task`` key as a list consumed one per request (``{"
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``);
 ``GET /requests`` what the recent requests carried (parameters, headers, image blocks; no text).
+The same port serves each provider's batch API (OpenAI's Files and Batch APIs, Anthropic's
+Message Batches, Gemini's batch mode: :mod:`bpb_testing.batches`, config key ``batch``), whose
+requests are answered with the same replies and faults.
 Run it with ``python -m bpb_testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
 """
 
@@ -83,6 +87,7 @@ class FakeOpenAI:
         self.hang = float(config.get("hang", 30.0))
         self.latency = float(config.get("latency", self.latency))
         self.bill_max_tokens = bool(config.get("bill_max_tokens", False))
+        self.keep_bodies = bool(config.get("keep_bodies", False))
         if hasattr(self, "batches"):
             self.batches.configure(config.get("batch", {}))
 
@@ -143,9 +148,11 @@ class FakeOpenAI:
         return web.json_response(reply)
 
     def record(self, request: web.Request, protocol: str, body: dict[str, Any]) -> None:
-        """Keep what a request carried, without its text or image bytes (``GET /requests``)."""
+        """Keep what a request carried, without its text or image bytes (``GET /requests``);
+        with ``keep_bodies``, its whole body too (``body``)."""
         self.requests.append(
             {
+                **({"body": body} if self.keep_bodies else {}),
                 "protocol": protocol,
                 "path": request.path,
                 "query": dict(request.query),
