@@ -23,10 +23,10 @@ example answer the prompt itself shows. It injects the faults it was told to:
   ``safety``: a safety filter blocks the reply (``finish_reason: content_filter``, Responses
   ``incomplete_details.reason: content_filter``, Anthropic ``refusal``, Gemini ``SAFETY``).
 
-With ``keep_bodies`` ``GET /requests`` also gives each request's whole body (a batch line must
-be the synchronous request: a test compares them). With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
+With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
 (``completion_tokens`` = the request's ``max_completion_tokens`` or ``max_tokens``), the worst
-case a spending cap must hold against.
+case a spending cap must hold against. With ``keep_bodies`` ``GET /requests`` also gives each
+request's whole body (a batch line must be the synchronous request: a test compares them).
 
 Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/TASK":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
