@@ -23,7 +23,7 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_testing.batches import BatchStore, Entry, Job
+from bpb_testing.batches import BatchStore, Entry, Job, created
 
 _CUSTOM_ID = re.compile(r"^[a-zA-Z0-9_-]{1,64}$")
 _ENDED = {"expired": "expired", "cancelled": "canceled"}
@@ -112,7 +112,7 @@ def add_routes(app: web.Application, store: BatchStore) -> None:
     def base(request: web.Request) -> str:
         return f"{request.scheme}://{request.host}"
 
-    async def create(request: web.Request) -> web.Response:
+    async def create(request: web.Request) -> web.StreamResponse:
         raw = await request.read()
         try:
             body = json.loads(raw)
@@ -126,7 +126,7 @@ def add_routes(app: web.Application, store: BatchStore) -> None:
         entries = [Entry(r["custom_id"], "anthropic", r["params"]) for r in requests]
         job = store.add_job("anthropic", "msgbatch_fake", entries)
         store.advance(job)
-        return web.json_response(batch_object(job, base(request)))
+        return await created(request, job, batch_object(job, base(request)))
 
     def find(request: web.Request) -> Job | None:
         return store.job("anthropic", request.match_info["batch_id"])

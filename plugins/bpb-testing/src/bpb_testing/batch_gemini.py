@@ -31,7 +31,7 @@ from typing import Any
 from aiohttp import web
 
 from bpb_testing.batch_anthropic import rfc3339
-from bpb_testing.batches import BatchStore, Entry, Handler, Job
+from bpb_testing.batches import BatchStore, Entry, Handler, Job, created
 
 _STATES = {None: "BATCH_STATE_RUNNING", "completed": "BATCH_STATE_SUCCEEDED",
            "failed": "BATCH_STATE_FAILED", "cancelled": "BATCH_STATE_CANCELLED",
@@ -189,7 +189,7 @@ def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
     """Route Gemini's batch mode and Files API to ``store``; give the handlers of
     ``GET /v1/batches`` and ``GET /v1/batches/{id}``."""
 
-    async def create(request: web.Request) -> web.Response:
+    async def create(request: web.Request) -> web.StreamResponse:
         raw = await request.read()
         body = json.loads(raw)
         batch = body.get("batch") if isinstance(body, dict) else None
@@ -207,7 +207,7 @@ def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
             display_name=batch.get("displayName", ""),
             inline="requests" in batch["inputConfig"],
         )
-        return web.json_response(operation(store, job))
+        return await created(request, job, operation(store, job))
 
     def find(request: web.Request) -> Job | None:
         return store.job("gemini", request.match_info["batch_id"])

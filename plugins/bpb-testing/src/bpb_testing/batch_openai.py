@@ -28,7 +28,7 @@ from typing import Any
 
 from aiohttp import web
 
-from bpb_testing.batches import BatchStore, Entry, Handler, Job
+from bpb_testing.batches import BatchStore, Entry, Handler, Job, created
 
 ENDPOINTS = {"/v1/chat/completions": "openai-chat", "/v1/responses": "openai-responses"}
 PURPOSES = ("assistants", "batch", "fine-tune", "vision", "user_data", "evals")
@@ -290,7 +290,7 @@ def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
         del store.files[file["id"]]
         return web.json_response({"id": file["id"], "object": "file", "deleted": True})
 
-    async def create(request: web.Request) -> web.Response:
+    async def create(request: web.Request) -> web.StreamResponse:
         body = await request.json()
         for key in ("input_file_id", "endpoint", "completion_window"):
             if key not in body:
@@ -335,7 +335,7 @@ def add_routes(app: web.Application, store: BatchStore) -> dict[str, Handler]:
             model=model,
         )
         job.errors = errors
-        return web.json_response(batch_object(store, job))
+        return await created(request, job, batch_object(store, job))
 
     def find(request: web.Request) -> Job | None:
         return store.job("openai", request.match_info["batch_id"])

@@ -17,8 +17,11 @@ spends ``validating`` seconds validating, then answers its requests evenly over 
 seconds (all at once when it is 0), ``finalizing`` seconds finalizing, and ends; it expires when
 its window (24 h; Gemini 48 h) ends first. ``stall_after`` stops every job after that many
 requests (a provider that falls behind: the job expires with the rest unanswered); ``plan``
-gives per job, in the order they are created, ``{"stall_after": N}`` or ``{"fail": "MESSAGE"}``
-(the provider fails the whole job). All are set under ``batch`` in the server's config.
+gives per job, in the order they are created, ``{"stall_after": N}``, ``{"fail": "MESSAGE"}``
+(the provider fails the whole job) or ``{"drop_reply": true}`` (the provider accepts the job and
+the connection drops before its reply: a client killed between the provider accepting a batch
+and recording it, which must find and adopt the job by listing). All are set under ``batch`` in
+the server's config.
 
 ``GET /batch/stats`` says how often each ``custom_id`` was answered with a reply the provider
 bills (``paid``; an error, a cancelled or an expired request is not billed) and how often it was
@@ -37,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 
 from aiohttp import web
 
-from bpb_testing.fakereplies import HTTP_FAULTS, error_body, model_reply
+from bpb_testing.fakereplies import HTTP_FAULTS, error_body, fault_reply, model_reply
 from bpb_testing.protocols import anthropic_body, gemini_body, request_prompt, responses_body
 from bpb_testing.rules import anthropic_rejection
 
@@ -90,6 +93,7 @@ class Job:
     info: dict[str, Any] = field(default_factory=dict)  # provider fields: endpoint, metadata...
     stall_after: int | None = None
     fail: str | None = None
+    drop_reply: bool = False  # accepted, but the connection drops before the reply
     errors: list[dict[str, Any]] = field(default_factory=list)  # validation errors (failed)
     started: float | None = None  # validation over: in progress
     finalizing: float | None = None
@@ -157,6 +161,7 @@ class BatchStore:
             step = self.plan[self.created_jobs]
             job.stall_after = step.get("stall_after", job.stall_after)
             job.fail = step.get("fail")
+            job.drop_reply = bool(step.get("drop_reply", False))
         self.created_jobs += 1
         self.jobs[job.id] = job
         return job
@@ -273,6 +278,15 @@ class BatchStore:
             "files": len(self.files),
             "clock": self.now(),
         }
+
+
+async def created(request: web.Request, job: Job, body: dict[str, Any]) -> web.StreamResponse:
+    """The reply to a create call: ``body``, or with ``drop_reply`` a cut connection."""
+    if job.drop_reply:
+        dropped = await fault_reply(request, "truncated", 0.0)
+        assert dropped is not None
+        return dropped
+    return web.json_response(body)
 
 
 def reply_body(entry: Entry, fault: str, answer: str, model: str) -> dict[str, Any]:
