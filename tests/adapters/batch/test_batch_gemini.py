@@ -142,3 +142,18 @@ def test_refused_and_litellm_reach(batch_server: Start, requests: Any) -> None:
         with pytest.raises(Exception, match="support"):
             litellm.retrieve_batch(batch_id="batches/x", **kw)
         assert server.stats()["jobs"] == {}
+
+
+def test_failed_job(batch_server: Start, requests: Any) -> None:
+    """A job the provider fails whole (``fail`` in the job plan): ``JOB_STATE_FAILED``, no
+    output, nothing billed."""
+    with batch_server(
+        batch={"plan": [{"fail": "Internal error while processing the batch."}]}
+    ) as server:
+        client = _client(server)
+        job = client.batches.create(
+            model=MODEL, src=_inline(requests, n=3), config={"display_name": "f"}
+        )
+        job = client.batches.get(name=job.name)
+        assert job.state == "JOB_STATE_FAILED" and job.dest is None
+        assert server.paid() == {}
