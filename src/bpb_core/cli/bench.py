@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from bpb_core.cli.params import PATH
+from bpb_core.cli.console import PATH
 
 if TYPE_CHECKING:
     from bpb_core.bench.sim_report import SimBench

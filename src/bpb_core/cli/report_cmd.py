@@ -14,9 +14,16 @@ from typing import TYPE_CHECKING, Any
 import click
 from rich.markup import escape
 
-from bpb_core.cli.console import load_registry, stderr, stdout
-from bpb_core.cli.fit import Name, print_fitted
-from bpb_core.cli.params import PATH, FiniteFloat, counted
+from bpb_core.cli.console import (
+    PATH,
+    FiniteFloat,
+    Name,
+    counted,
+    load_registry,
+    print_fitted,
+    stderr,
+    stdout,
+)
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from bpb_core.cli import params
+from bpb_core.cli import console
 from bpb_core.cli.console import load_registry, stderr
 
 PORT_HELP = "Port on 127.0.0.1 (the apps never listen on other interfaces)."
@@ -15,12 +15,12 @@ PORTS = click.IntRange(0, 65535)
 
 
 @click.command("human")
-@click.option("--data", required=True, type=params.PATH, help="Dataset folder.")
-@click.option("--out", required=True, type=params.PATH, help="Run folder.")
+@click.option("--data", required=True, type=console.PATH, help="Dataset folder.")
+@click.option("--out", required=True, type=console.PATH, help="Run folder.")
 @click.option("--name", default="anonymous", show_default=True, help="Who answers (human:NAME).")
 @click.option("--tasks", help="Comma-separated tasks (default: the family's default tasks).")
-@params.horizons_option
-@params.limit_option
+@console.horizons_option
+@console.limit_option
 @click.option("--seed", default=0, show_default=True, help="Seed of the scene order.")
 @click.option("--port", default=8765, show_default=True, type=PORTS, help=PORT_HELP)
 def human(
@@ -43,8 +43,8 @@ def human(
     require_web()
     from bpb_core.web.human import HumanSession, human_app
 
-    chosen = tuple(params.csv_list(tasks, "--tasks"))
-    options = RunOptions(tasks=chosen, horizons=params.horizons(horizons), limit=limit)
+    chosen = tuple(console.csv_list(tasks, "--tasks"))
+    options = RunOptions(tasks=chosen, horizons=console.horizons(horizons), limit=limit)
     sock = listen(port)  # a port in use is refused before the run folder is made
     make_run_folder(out)
     with run_lock(out):  # as bpb run's: a second session (or a run) on the folder is refused
@@ -54,7 +54,7 @@ def human(
 
 
 @click.command("view")
-@click.argument("run_dirs", nargs=-1, required=True, type=params.PATH)
+@click.argument("run_dirs", nargs=-1, required=True, type=console.PATH)
 @click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
 def view(run_dirs: tuple[Path, ...], port: int) -> None:
     """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
