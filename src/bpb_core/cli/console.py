@@ -86,6 +86,10 @@ def positive() -> FiniteFloat:
     return FiniteFloat(min=0, min_open=True)
 
 
+PORT_HELP = "Port on 127.0.0.1 (the apps never listen on other interfaces)."
+PORTS = click.IntRange(0, 65535)
+"""``--port`` of the commands that serve a web app (``human``, ``view``)."""
+
 input_mode_option = click.option(
     "--input-mode",
     type=click.Choice(["image", "image+state", "state"]),

@@ -30,8 +30,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "export": ("dataset_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
     "report": ("report_cmd", "report", "Score and compare runs; charts and HTML."),
     "prompt": ("run_cmd", "prompt", "Print the exact messages sent for a scene."),
-    "human": ("web_cmd", "human", "Answer the questions in the browser (a run)."),
-    "view": ("web_cmd", "view", "Browse runs in the browser, pair by pair."),
+    "human": ("run_cmd", "human", "Answer the questions in the browser (a run)."),
+    "view": ("report_cmd", "view", "Browse runs in the browser, pair by pair."),
     "simulate": ("simulate_cmd", "simulate", "Simulate scenes; print final.json lines."),
 }
 

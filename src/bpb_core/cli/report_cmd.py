@@ -1,4 +1,5 @@
-"""``bpb report RUN_DIR... [--out DIR] [--json]``: compare runs in the terminal, write a report.
+"""``bpb report RUN_DIR... [--out DIR] [--json]``: compare runs in the terminal, write a report;
+``bpb view``: browse them in a local web app on 127.0.0.1 (see :mod:`bpb_core.web`).
 
 A thin wrapper over :func:`bpb_core.report.build.build_report`; this module only renders tables.
 """
@@ -16,6 +17,8 @@ from rich.markup import escape
 
 from bpb_core.cli.console import (
     PATH,
+    PORT_HELP,
+    PORTS,
     FiniteFloat,
     Name,
     counted,
@@ -279,3 +282,19 @@ def _cell(value: Any, percent: bool) -> str:
             return "–"
         return _pct(value) if percent else f"{value:.3g}"
     return escape(str(value))
+
+
+@click.command("view")
+@click.argument("run_dirs", nargs=-1, required=True, type=PATH)
+@click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
+def view(run_dirs: tuple[Path, ...], port: int) -> None:
+    """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
+    from bpb_core.web import listen, require_web, serve, url
+
+    require_web()
+    from bpb_core.web.viewer import Viewer, viewer_app
+
+    sock = listen(port)
+    viewer = Viewer.load(list(run_dirs), load_registry())
+    stderr().print(f"bpb view: open {url(sock)} (Ctrl-C stops)")
+    serve(viewer_app(viewer), sock)

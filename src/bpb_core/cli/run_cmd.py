@@ -1,5 +1,6 @@
 """``bpb run`` and ``bpb prompt``: ask models the benchmark's questions (a thin wrapper over
-bpb_core.runner), and print the exact messages a run would send for one scene and task.
+bpb_core.runner), and print the exact messages a run would send for one scene and task;
+``bpb human``: people answer them in a local web app on 127.0.0.1 (see :mod:`bpb_core.web`).
 
 Exit codes: 0 every (scene, task) got a reply (``ok``, ``parse_error``, ``refused``, ``cut``,
 ``empty``), or a ``--pilot`` done;
@@ -54,8 +55,11 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress as RichBar, TextColumn
 from rich.table import Column, Table
 
+from bpb_core.cli import console
 from bpb_core.cli.console import (
     PATH,
+    PORT_HELP,
+    PORTS,
     FiniteFloat,
     Name,
     counted,
@@ -347,7 +351,6 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
 
 
 def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
-
     base = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
     cli_args = model_args(kw["model_args"])
     plans = [AdapterPlan(spec, replace(base, model_args=dict(cli_args))) for spec in adapters]
@@ -359,7 +362,6 @@ def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
 def _adapter_options(
     api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
 ) -> AdapterOptions:
-
     if api_base is not None:  # checked before the rest: no adapter is built, no call sent
         check_api_base(api_base, "--api-base")
     price_table: dict[str, dict[str, float]] = {}
@@ -911,3 +913,42 @@ def prompt(
         click.echo(f"--- {message.role} ---")
         for part in message.parts:
             click.echo(describe_image(part) if isinstance(part, ImagePart) else part.text)
+
+
+@click.command("human")
+@click.option("--data", required=True, type=PATH, help="Dataset folder.")
+@click.option("--out", required=True, type=PATH, help="Run folder.")
+@click.option("--name", default="anonymous", show_default=True, help="Who answers (human:NAME).")
+@click.option("--tasks", help="Comma-separated tasks (default: the family's default tasks).")
+@horizons_option
+@limit_option
+@click.option("--seed", default=0, show_default=True, help="Seed of the scene order.")
+@click.option("--port", default=8765, show_default=True, type=PORTS, help=PORT_HELP)
+def human(
+    data: Path,
+    out: Path,
+    name: str,
+    tasks: str | None,
+    horizons: str | None,
+    limit: int | None,
+    seed: int,
+    port: int,
+) -> None:
+    """Answer a dataset's questions in the browser; saved as a normal run (human:NAME),
+    resumable, scenes in a seeded order."""
+    from bpb_core.run_folder import make_run_folder
+    from bpb_core.runner.manifest import run_lock
+    from bpb_core.runner.options import RunOptions
+    from bpb_core.web import listen, require_web, serve, url
+
+    require_web()
+    from bpb_core.web.human import HumanSession, human_app
+
+    chosen = tuple(csv_list(tasks, "--tasks"))
+    options = RunOptions(tasks=chosen, horizons=console.horizons(horizons), limit=limit)
+    sock = listen(port)  # a port in use is refused before the run folder is made
+    make_run_folder(out)
+    with run_lock(out):  # as bpb run's: a second session (or a run) on the folder is refused
+        session = HumanSession(data, out, name, load_registry(), options, seed)
+        stderr().print(f"bpb human: open {url(sock)} (Ctrl-C stops; answers are kept)")
+        serve(human_app(session), sock)
