@@ -121,6 +121,11 @@ def counted(*decls: str, default: int, low: int = 1, help: str | None = None) ->
     return click.option(*decls, type=kind, default=default, show_default=True, help=help)
 
 
+def pct(value: Any) -> str:
+    """A share as ``12.3%``; ``–`` when it is missing (``None`` or NaN)."""
+    return "–" if value is None or math.isnan(float(value)) else f"{100 * value:.1f}%"
+
+
 def csv_list(value: str | None, option: str) -> list[str]:
     """The items of a comma-separated ``option`` (none when it is not given).
 

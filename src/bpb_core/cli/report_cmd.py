@@ -23,6 +23,7 @@ from bpb_core.cli.console import (
     Name,
     counted,
     load_registry,
+    pct,
     print_fitted,
     stderr,
     stdout,
@@ -243,8 +244,8 @@ def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> None:
     for row in tables["leaderboard"].to_dict(orient="records"):
         kept = stable.get(str(row["run"]))
         cells = [
-            _pct(row[suite]),
-            "–" if kept is None else _pct(kept[suite]),
+            pct(row[suite]),
+            "–" if kept is None else pct(kept[suite]),
             "0" if kept is None else _scene_tasks(kept),
         ]
         rows.append((_name(str(row["run"]), bool(row["baseline"])), cells))
@@ -268,19 +269,11 @@ def _name(run: str, baseline: bool) -> Name:
     return Name(run, " (baseline)", "dim") if baseline else Name(run)
 
 
-def _pct(value: Any) -> str:
-    return (
-        "–"
-        if value is None or (isinstance(value, float) and math.isnan(value))
-        else f"{100 * value:.1f}%"
-    )
-
-
 def _cell(value: Any, percent: bool) -> str:
     if isinstance(value, float):
         if math.isnan(value):
             return "–"
-        return _pct(value) if percent else f"{value:.3g}"
+        return pct(value) if percent else f"{value:.3g}"
     return escape(str(value))
 
 

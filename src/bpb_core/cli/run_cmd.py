@@ -70,6 +70,7 @@ from bpb_core.cli.console import (
     input_mode_option,
     limit_option,
     load_registry,
+    pct,
     positive,
     print_fitted,
     stderr,
@@ -589,30 +590,16 @@ def run(**kw: Any) -> None:
     if kw["dry_run"]:
         show_dry_run(data, out, ready, options, registry)
         return
+    from bpb_core.runner import run_eval, slug
+    from bpb_core.runner.budget import command_budget
     from bpb_core.runner.run import check_simulator_for
 
     for item in ready:  # before any adapter's first call
         check_simulator_for(data, item.name, item.adapter, registry)
-    results = _run_all(data, out, ready, options, registry, kw["pilot"])
-    if kw["pilot"] is not None:
-        show_dry_run(data, out, ready, options, registry, pilot=True)
-    raise click.exceptions.Exit(_finish(results, registry, data, summary=kw["pilot"] is None))
-
-
-def _run_all(
-    data: DataFolder,
-    out: Path,
-    ready: list[Prepared],
-    options: RunOptions,
-    registry: Registry,
-    pilot: int | None,
-) -> list[RunResult]:
-    from bpb_core.runner import run_eval, slug
-    from bpb_core.runner.budget import command_budget
-
     shared = command_budget(options.max_cost, [out / slug(item.name) for item in ready])
     results = []
-    with make_bar() as bar:
+    columns = (BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[stats]}"))
+    with RichBar(TextColumn("{task.description}"), *columns, console=stderr()) as bar:
         display = RichProgress(bar)
         for item in ready:  # --max-cost is the command's; a run file's max_cost the adapter's
             results.append(
@@ -626,12 +613,14 @@ def _run_all(
                     spec=item.name,
                     flag="--adapter",
                     shared_budget=shared,
-                    pilot=pilot,
+                    pilot=kw["pilot"],
                 )
             )
             if results[-1].stopped == "interrupted":  # Ctrl-C / SIGTERM stops every adapter
                 break
-    return results
+    if kw["pilot"] is not None:
+        show_dry_run(data, out, ready, options, registry, pilot=True)
+    raise click.exceptions.Exit(_finish(results, registry, data, summary=kw["pilot"] is None))
 
 
 def _finish(
@@ -719,18 +708,6 @@ class RichProgress:
         self._bar.update(row.task_id, total=n["planned"], completed=finished, **row.fields())
 
 
-def make_bar() -> RichBar:
-    """A rich progress bar on stderr with the run's columns."""
-    return RichBar(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.fields[stats]}"),
-        console=stderr(),
-        transient=False,
-    )
-
-
 def show_dry_run(
     data: DataFolder,
     out: Path,
@@ -801,25 +778,21 @@ def show_spending(results: Iterable[RunResult]) -> None:
         budget = result.budget
         if budget.get("cap") is None and budget.get("command_cap") is None:
             continue
-        stderr().print(escape(spending_line(result.adapter, budget)), highlight=False)
-
-
-def spending_line(adapter: str, budget: dict[str, Any]) -> str:
-    """One line: spent, reserved and left under each cap, and the pairs the cap kept."""
-    parts = [f"{adapter}: spent ${budget['spent']:.4f} (all sessions)"]
-    if budget.get("cap") is not None:
-        parts.append(f"its cap ${budget['cap']:.4f}, ${budget['left']:.4f} left")
-    if budget.get("command_cap") is not None:
-        parts.append(
-            f"--max-cost ${budget['command_cap']:.4f} over the command: "
-            f"${budget['command_spent']:.4f} spent, ${budget['command_left']:.4f} left"
-        )
-    parts.append(f"reserved ${budget['reserved']:.4f}")
-    kept = budget.get("kept_by_cap") or []
-    if kept:
-        shown = ", ".join(kept[:5]) + (", ..." if len(kept) > 5 else "")
-        parts.append(f"the cap kept {len(kept)} pairs from being sent ({shown})")
-    return "; ".join(parts)
+        # one line: spent, reserved and left under each cap, and the pairs the cap kept
+        parts = [f"{result.adapter}: spent ${budget['spent']:.4f} (all sessions)"]
+        if budget.get("cap") is not None:
+            parts.append(f"its cap ${budget['cap']:.4f}, ${budget['left']:.4f} left")
+        if budget.get("command_cap") is not None:
+            parts.append(
+                f"--max-cost ${budget['command_cap']:.4f} over the command: "
+                f"${budget['command_spent']:.4f} spent, ${budget['command_left']:.4f} left"
+            )
+        parts.append(f"reserved ${budget['reserved']:.4f}")
+        kept = budget.get("kept_by_cap") or []
+        if kept:
+            shown = ", ".join(kept[:5]) + (", ..." if len(kept) > 5 else "")
+            parts.append(f"the cap kept {len(kept)} pairs from being sent ({shown})")
+        stderr().print(escape("; ".join(parts)), highlight=False)
 
 
 _NOT_SCORES = (
@@ -861,21 +834,17 @@ def _print_table(frame: pd.DataFrame) -> None:
     ]  # fmt: skip
     rows = []
     for _, row in frame.iterrows():
-        cells = [_pct(row["completeness"])]
+        cells = [pct(row["completeness"])]
         for name in names:
             answered, strict = row[f"{name}_answered"], row[name]
             if not math.isnan(float(answered)):
-                cells.append(f"{_pct(answered)} ({_pct(strict)})")
+                cells.append(f"{pct(answered)} ({pct(strict)})")
             else:  # too incomplete, or not asked (a suite with a task the run lacks)
                 cells.append("left out" if row["short"] else "–")
         cells.append(escape(str(row["short"])) or "–")
         rows.append((Name(str(row["adapter"])), cells))
     title = "bpb run: scores (answered only; strict in brackets)"
     print_fitted(stdout(), title, ["adapter", "complete", *names, "left out"], rows)
-
-
-def _pct(value: float) -> str:
-    return "–" if math.isnan(float(value)) else f"{100 * value:.1f}%"
 
 
 @click.command("prompt")
