@@ -424,15 +424,8 @@ def _on_signal(state: RunState, jobs: set[asyncio.Task[None]]) -> None:
     state.interrupts += 1
     if state.interrupts == 1:
         state.stop(INTERRUPTED)  # also wakes the calls queued for a rate-limit slot
-        state.progress.update(
-            ProgressEvent(
-                state.spec,
-                "",
-                "warning",
-                reason="interrupted: no new calls; finishing the calls in flight "
-                "(interrupt again to abandon them)",
-            )
-        )
+        again = "interrupt again to abandon them"
+        state.warn("", f"interrupted: no new calls; finishing the calls in flight ({again})")
         return
     for job in list(jobs):
         job.cancel()
@@ -471,7 +464,7 @@ async def _pair(state: RunState, ref: SceneRef, task: str, epoch: int) -> None:
     scene = await state.offload(ref.load)
     image = None if state.options.input_mode == "state" else await state.offload(ref.image)
     sha = None if image is None else hashlib.sha256(image).hexdigest()
-    tally = state.prior(ref.scene_id, task, epoch)
+    tally = state.history.prior(ref.scene_id, task, epoch)  # earlier sessions' attempts
     await PairCall(state, ref, scene, image, sha, task, epoch, tally=tally).run()
 
 

@@ -166,7 +166,7 @@ class RunState:
     dropped: set[str] = field(default_factory=set)
     unanswered_seen: set[str] = field(default_factory=set)
     config_hash: str = ""
-    history: History | None = None
+    history: History = field(default_factory=lambda: History())
     interrupts: int = 0
     stopping: asyncio.Event = field(default_factory=asyncio.Event)
     origins: dict[str, str] = field(default_factory=dict)
@@ -188,10 +188,6 @@ class RunState:
     def cot(self, task: str) -> bool:
         """Whether ``task`` asks for chain of thought in this run."""
         return self.options.cot.get(task, self.tasks[task].default_cot)
-
-    def prior(self, scene_id: str, task: str, epoch: int = 1) -> Tally:
-        """The sample's attempts and usage from earlier sessions (counted on in this one)."""
-        return Tally() if self.history is None else self.history.prior(scene_id, task, epoch)
 
     def may_send(self) -> bool:
         """False once the run must stop sending (cost cap reached, setup failed, interrupted)."""
@@ -314,15 +310,8 @@ class RunState:
         if not new:
             return
         self.dropped.update(new)
-        self.progress.update(
-            ProgressEvent(
-                self.spec,
-                task,
-                "warning",
-                reason=f"requested {', '.join(new)} not sent to the model (dropped by the "
-                "provider route); run.json and the report mark this run",
-            )
-        )
+        said = f"requested {', '.join(new)} not sent to the model (dropped by the provider route)"
+        self.warn(task, f"{said}; run.json and the report mark this run")
 
     def note_unanswered(self, task: str, kind: str, error: str) -> None:
         """Warn once per run about replies of each ``kind`` (refused, cut, empty): a cut
@@ -330,9 +319,11 @@ class RunState:
         if kind in self.unanswered_seen:
             return
         self.unanswered_seen.add(kind)
-        scored = "scored wrong, not re-asked; the report counts them per task"
-        said = f"{error} ({scored})"
-        self.progress.update(ProgressEvent(self.spec, task, "warning", reason=said))
+        self.warn(task, f"{error} (scored wrong, not re-asked; the report counts them per task)")
+
+    def warn(self, task: str, reason: str) -> None:
+        """Tell the user something about the whole run (printed above the progress bars)."""
+        self.progress.update(ProgressEvent(self.spec, task, "warning", reason=reason))
 
     def not_sent(self, task: str, pair: str = "") -> None:
         """Record a pair left unsent (cost cap or setup stop); it stays resumable. ``pair``:
