@@ -352,18 +352,10 @@ def _cot(tasks: list[str], enable: bool | None, per_task: str | None) -> dict[st
 
 
 def _plans(kw: dict[str, Any], adapters: list[str]) -> list[AdapterPlan]:
-    base = _adapter_options(kw["api_base"], kw["seed"], kw["prices"], kw["aliases"])
-    cli_args = model_args(kw["model_args"])
-    plans = [AdapterPlan(spec, replace(base, model_args=dict(cli_args))) for spec in adapters]
-    if kw["config"] is not None:
-        plans += read_run_file(kw["config"], base, cli_args)
-    return plans
-
-
-def _adapter_options(
-    api_base: str | None, seed: int, prices: Path | None, aliases: tuple[str, ...]
-) -> AdapterOptions:
-    if api_base is not None:  # checked before the rest: no adapter is built, no call sent
+    """A plan per adapter and per run-file entry, with --api-base, --prices, --alias and
+    --model-arg checked (--api-base first: no adapter is built, no call sent)."""
+    api_base, prices = kw["api_base"], kw["prices"]
+    if api_base is not None:
         check_api_base(api_base, "--api-base")
     price_table: dict[str, dict[str, float]] = {}
     if prices is not None:
@@ -373,12 +365,19 @@ def _adapter_options(
             raise BadInput(f"{prices}: --prices: not a JSON price table ({exc})") from None
         price_table = check_price_table(f"{prices}: --prices", loaded)
     alias_table = {}
-    for item in aliases:
+    for item in kw["aliases"]:
         name, sep, target = item.partition("=")
         if not sep or not name or not target:
             raise BadInput(f"--alias {item!r}: expected NAME=LITELLM_MODEL")
         alias_table[name] = target
-    return AdapterOptions(api_base=api_base, seed=seed, prices=price_table, aliases=alias_table)
+    base = AdapterOptions(
+        api_base=api_base, seed=kw["seed"], prices=price_table, aliases=alias_table
+    )
+    cli_args = model_args(kw["model_args"])
+    plans = [AdapterPlan(spec, replace(base, model_args=dict(cli_args))) for spec in adapters]
+    if kw["config"] is not None:
+        plans += read_run_file(kw["config"], base, cli_args)
+    return plans
 
 
 def _offline_adapters(registry: Registry, data: DataFolder) -> list[str]:
