@@ -39,7 +39,7 @@ Status = Literal["ok", "parse_error", "refused", "cut", "empty", "api_error"]
 declined by the model or its safety filter (``refused``), cut at the token cap (``cut``), with
 no text (``empty``); or no reply (``api_error``, resumable)."""
 NoAnswer = Literal["refused", "cut", "empty"]
-"""How a reply held no answer to parse (:mod:`bpb_core.runner.outcome`)."""
+"""How a reply held no answer to parse (:mod:`bpb_core.runner.call`)."""
 NO_ANSWER: tuple[str, ...] = get_args(NoAnswer)
 REPLIED: tuple[str, ...] = ("ok", "parse_error", *NO_ANSWER)
 """The statuses of a pair that got a reply: complete, scored (all but ``ok`` as wrong)."""

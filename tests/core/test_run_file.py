@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, strategies as st
 
-from bpb_core.cli.run_file import model_args, read_run_file
+from bpb_core.cli.run_cmd import model_args, read_run_file
 from bpb_core.errors import BadInput
 from bpb_core.model_calls import AdapterOptions
 from support.inprocess import Done, bpb

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bpb_core.cli.run_output import show_summary
+from bpb_core.cli.run_cmd import show_summary
 from bpb_core.registry import make_registry
 
 

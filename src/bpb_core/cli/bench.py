@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from bpb_core.cli.params import PATH
+from bpb_core.cli.console import PATH, load_registry, stderr, stdout
 
 if TYPE_CHECKING:
     from bpb_core.bench.sim_report import SimBench
@@ -84,7 +84,6 @@ def bench_sim(
         with_scaling,
         with_simulate_timing,
     )
-    from bpb_core.cli.console import load_registry, stderr
     from bpb_core.errors import BadInput
 
     if plot is not None:  # before the bench: a path that cannot be written would lose it
@@ -133,7 +132,6 @@ def _show(result: SimBench) -> None:
     from rich.table import Table
 
     from bpb_core.bench.sim_report import count_cell, figure, row_name
-    from bpb_core.cli.console import stderr, stdout
 
     title = f"bpb bench sim: {result.scenes} {result.family} scenes, {result.machine}, {result.day}"
     table = Table(title=title)
@@ -165,15 +163,7 @@ def _show(result: SimBench) -> None:
             f"x{s.factor:g} {s.name}: {figure(s.events_per_scene)} events/scene, "
             f"{figure(s.ms_per_scene)} ms/scene, {figure(s.us_per_event)} µs/event{lost}"
         )
-    _warn_scaling(result)
-    for label, ms in (result.simulate_ms or {}).items():
-        stdout().print(f"bpb simulate ({result.simulate_with}), {label}: {ms:.3f} ms/scene")
-
-
-def _warn_scaling(result: SimBench) -> None:
-    """One warning per ``--scaling`` simulator that failed on scaled scenes."""
-    from bpb_core.cli.console import stderr
-
+    # one warning per --scaling simulator that failed on scaled scenes
     for name in dict.fromkeys(s.name for s in result.scaling if s.failed):
         rows = [s for s in result.scaling if s.name == name and s.failed]
         where = ", ".join(f"x{s.factor:g}: {s.failed}" for s in rows)
@@ -182,6 +172,8 @@ def _warn_scaling(result: SimBench) -> None:
             f"scene(s) ({where}), left out of its figures; first: {rows[0].first_error}",
             markup=False,
         )
+    for label, ms in (result.simulate_ms or {}).items():
+        stdout().print(f"bpb simulate ({result.simulate_with}), {label}: {ms:.3f} ms/scene")
 
 
 def _relative(path: Path, base: Path) -> str:

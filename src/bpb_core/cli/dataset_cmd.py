@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import click
 
 from bpb_core.cli import console
-from bpb_core.cli.params import PATH
+from bpb_core.cli.console import PATH
 from bpb_core.errors import BadInput
 
 if TYPE_CHECKING:

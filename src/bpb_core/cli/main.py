@@ -29,9 +29,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "generate": ("dataset_cmd", "generate", "Generate a dataset (scenes, images)."),
     "export": ("dataset_cmd", "export", "Export a dataset (Hugging Face Parquet)."),
     "report": ("report_cmd", "report", "Score and compare runs; charts and HTML."),
-    "prompt": ("prompt_cmd", "prompt", "Print the exact messages sent for a scene."),
-    "human": ("web_cmd", "human", "Answer the questions in the browser (a run)."),
-    "view": ("web_cmd", "view", "Browse runs in the browser, pair by pair."),
+    "prompt": ("run_cmd", "prompt", "Print the exact messages sent for a scene."),
+    "human": ("run_cmd", "human", "Answer the questions in the browser (a run)."),
+    "view": ("report_cmd", "view", "Browse runs in the browser, pair by pair."),
     "simulate": ("simulate_cmd", "simulate", "Simulate scenes; print final.json lines."),
 }
 

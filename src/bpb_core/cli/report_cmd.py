@@ -1,4 +1,5 @@
-"""``bpb report RUN_DIR... [--out DIR] [--json]``: compare runs in the terminal, write a report.
+"""``bpb report RUN_DIR... [--out DIR] [--json]``: compare runs in the terminal, write a report;
+``bpb view``: browse them in a local web app on 127.0.0.1 (see :mod:`bpb_core.web`).
 
 A thin wrapper over :func:`bpb_core.report.build.build_report`; this module only renders tables.
 """
@@ -14,9 +15,19 @@ from typing import TYPE_CHECKING, Any
 import click
 from rich.markup import escape
 
-from bpb_core.cli.console import load_registry, stderr, stdout
-from bpb_core.cli.fit import Name, print_fitted
-from bpb_core.cli.params import PATH, FiniteFloat, counted
+from bpb_core.cli.console import (
+    PATH,
+    PORT_HELP,
+    PORTS,
+    FiniteFloat,
+    Name,
+    counted,
+    load_registry,
+    pct,
+    print_fitted,
+    stderr,
+    stdout,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -232,8 +243,8 @@ def _stable_table(tables: dict[str, pd.DataFrame], suite: str) -> None:
     for row in tables["leaderboard"].to_dict(orient="records"):
         kept = stable.get(str(row["run"]))
         cells = [
-            _pct(row[suite]),
-            "–" if kept is None else _pct(kept[suite]),
+            pct(row[suite]),
+            "–" if kept is None else pct(kept[suite]),
             "0" if kept is None else _scene_tasks(kept),
         ]
         rows.append((_name(str(row["run"]), bool(row["baseline"])), cells))
@@ -257,17 +268,25 @@ def _name(run: str, baseline: bool) -> Name:
     return Name(run, " (baseline)", "dim") if baseline else Name(run)
 
 
-def _pct(value: Any) -> str:
-    return (
-        "–"
-        if value is None or (isinstance(value, float) and math.isnan(value))
-        else f"{100 * value:.1f}%"
-    )
-
-
 def _cell(value: Any, percent: bool) -> str:
     if isinstance(value, float):
         if math.isnan(value):
             return "–"
-        return _pct(value) if percent else f"{value:.3g}"
+        return pct(value) if percent else f"{value:.3g}"
     return escape(str(value))
+
+
+@click.command("view")
+@click.argument("run_dirs", nargs=-1, required=True, type=PATH)
+@click.option("--port", default=8766, show_default=True, type=PORTS, help=PORT_HELP)
+def view(run_dirs: tuple[Path, ...], port: int) -> None:
+    """Browse runs pair by pair: image, exact prompt, every attempt, verdicts."""
+    from bpb_core.web import listen, require_web, serve, url
+
+    require_web()
+    from bpb_core.web.viewer import Viewer, viewer_app
+
+    sock = listen(port)
+    viewer = Viewer.load(list(run_dirs), load_registry())
+    stderr().print(f"bpb view: open {url(sock)} (Ctrl-C stops)")
+    serve(viewer_app(viewer), sock)

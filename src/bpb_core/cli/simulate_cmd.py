@@ -5,12 +5,12 @@ from __future__ import annotations
 import io
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from typing import Any
 
 import click
 
-from bpb_core.errors import NO_ROOM, BadInput, BpbError, WriteRefused, write_refused
+from bpb_core.errors import NO_ROOM, BadInput, WriteRefused, write_refused
 
 
 @click.command("simulate")
@@ -86,26 +86,10 @@ def simulate(
     )
     out = _Output()
     try:
-        for block in _blocks(lines):
-            out.write(block)
+        for line in lines:  # written as they come: the lines before a bad file precede its error
+            out.write(line)
     except BrokenPipeError:  # the reader left (`bpb simulate ... | head -1`): stop quietly
         raise click.exceptions.Exit(141) from None
-
-
-def _blocks(lines: Iterable[str], size: int = 512) -> Iterator[list[str]]:
-    """``lines`` in lists of up to ``size``, written at once; the lines before a bad file come
-    before its error."""
-    block: list[str] = []
-    try:
-        for line in lines:
-            block.append(line)
-            if len(block) == size:
-                yield block
-                block = []
-    except BpbError:
-        yield block
-        raise
-    yield block
 
 
 def _named_paths(paths: tuple[str, ...], from_file: str | None) -> list[str]:
@@ -148,16 +132,13 @@ class _Output:
         self.encoding = getattr(sys.stdout, "encoding", None) or "utf-8"  # None: io.StringIO
         self.errors = getattr(sys.stdout, "errors", None) or "strict"
 
-    def write(self, lines: list[str]) -> None:
-        """Write ``lines``, each ended by a newline, in standard output's encoding."""
-        if not lines:
-            return
-        text = "".join(f"{line}\n" for line in lines)
+    def write(self, line: str) -> None:
+        """Write ``line`` and a newline, in standard output's encoding."""
         if self.fd is None:
-            sys.stdout.write(text)
+            sys.stdout.write(f"{line}\n")
         else:
-            self._write_all(self.fd, text.encode(self.encoding, self.errors))
-        self.lines += len(lines)
+            self._write_all(self.fd, f"{line}\n".encode(self.encoding, self.errors))
+        self.lines += 1
 
     def _write_all(self, fd: int, data: bytes) -> None:
         left = memoryview(data)

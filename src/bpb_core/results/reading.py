@@ -326,6 +326,11 @@ class RunFolder:
         return self.adapter.startswith("baseline:")
 
     @property
+    def person(self) -> bool:
+        """Whether a person answered the run in the browser (``bpb human``: ``human:<name>``)."""
+        return self.adapter.startswith("human:")
+
+    @property
     def meta(self) -> dict[str, Any]:
         """The per-run columns of every frame row."""
         return {

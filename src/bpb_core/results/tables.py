@@ -101,6 +101,7 @@ def incomplete_lines(results: Results) -> dict[str, str]:
     calls = results.calls
     counts = calls.assign(status=_failures(calls)).groupby(["run", "status"], observed=True).size()
     live = {run.label: run.live for run in results.runs if run.live is not None}
+    people = {r.label: _person(calls[calls["run"] == r.label]) for r in results.runs if r.person}
     out: dict[str, str] = {}
     for run, row in counts.unstack(fill_value=0).iterrows():
         failed = int(row.get("api_error", 0))
@@ -108,6 +109,9 @@ def incomplete_lines(results: Results) -> dict[str, str]:
         unsent = int(row.get("missing", 0))
         setup = int(row.get("setup", 0))
         waiting = failed + rejected + unsent + setup
+        if str(run) in people and waiting:  # a person's session: scenes, not calls
+            out[str(run)] = people[str(run)]
+            continue
         if str(run) in live and waiting:
             out[str(run)] = (
                 f"still running (bpb run pid {live[str(run)]}): "
@@ -127,6 +131,19 @@ def incomplete_lines(results: Results) -> dict[str, str]:
         if line:
             out[str(run)] = f"incomplete: {line}"
     return out
+
+
+def _person(calls: pd.DataFrame) -> str:
+    """A person's session (``bpb human``) in people's terms: scenes answered of those asked and
+    the median time a scene took (its slowest task's: each task's time runs from the page being
+    shown to the task's last edit)."""
+    scenes = calls.groupby("scene_id", observed=True)
+    answered = scenes["status"].agg(lambda s: bool(s.isin(REPLIED).all()))
+    seconds = calls[calls["status"].isin(REPLIED)].groupby("scene_id", observed=True)["latency"]
+    per_scene = seconds.max().dropna()
+    took = f", {per_scene.median():.0f} s per scene (median)" if len(per_scene) else ""
+    done, total = int(answered.sum()), len(answered)
+    return f"a person's session: {done} of {total} scenes answered{took}; bpb human again resumes"
 
 
 def _failures(calls: pd.DataFrame) -> pd.Series:

@@ -3,10 +3,15 @@
 Infrastructure errors (429, 5xx, timeouts, dropped connections) are retried with exponential
 backoff and full jitter, honouring a server's Retry-After; a timeout also lengthens the next
 timeout. A malformed answer is re-asked in a fresh conversation with an escalated prompt and a
-longer timeout; a refused, cut or empty reply is recorded as such and not re-asked
-(:mod:`.outcome`). A 4xx about one request fails that pair at once. An error no retry can fix (a
+longer timeout. A 4xx about one request fails that pair at once. An error no retry can fix (a
 :class:`SetupFailure`: unknown model, invalid parameter, spent quota, refused key) stops the
 adapter at its first occurrence; so do repeated connection failures.
+
+A reply the model declined (a refusal, or one a safety filter stopped), one cut at the token
+cap and one with no text hold no answer, and asking again the same way would pay for the same
+reply: they are recorded as such (the pair's status is ``refused``, ``cut`` or ``empty``), never
+re-asked as if malformed, and scored wrong like a parse error. A cut says which cap cut it: a
+cap set too low is a setting of the run, not something the model got wrong.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import time
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,12 +36,47 @@ from bpb_core.errors import (
 from bpb_core.interfaces import PromptOptions
 from bpb_core.model_calls import ModelRequest, ModelResponse, Usage, known_cost, valid_unicode
 from bpb_core.plugin_calls import parsed_answer, prompt_messages, published_schema
-from bpb_core.run_folder import write_answer
+from bpb_core.run_folder import NoAnswer, write_answer
 from bpb_core.runner.budget import Hold, pair_name
 from bpb_core.runner.options import ProgressEvent
-from bpb_core.runner.outcome import unanswered, unanswered_error
 from bpb_core.runner.scenes import SceneRef
 from bpb_core.runner.state import NotSent, RunState, Tally, wait_unless
+
+
+def unanswered(response: ModelResponse) -> NoAnswer | None:
+    """``refused``, ``cut`` or ``empty`` for a reply that holds no answer; ``None`` for one
+    to parse. A refusal wins over a cut, a cut over an empty text (a reply whose whole cap
+    went on reasoning is cut, not empty)."""
+    if response.refusal or response.finish_reason == "content_filter":
+        return "refused"
+    if response.finish_reason == "length":
+        return "cut"
+    if not response.text.strip():
+        return "empty"
+    return None
+
+
+def _caps(sent: Mapping[str, Any]) -> Iterator[str]:
+    for key, value in sent.items():
+        if isinstance(value, Mapping):
+            yield from _caps(value)
+        elif "max" in key.lower() and "token" in key.lower():
+            yield f"{key}={value}"
+
+
+def unanswered_error(kind: NoAnswer, response: ModelResponse, asked: int | None) -> str:
+    """The one line a refused, cut or empty reply records as its error."""
+    finish = response.provider_finish or response.finish_reason
+    if kind == "refused":
+        said = f": {response.refusal}" if response.refusal else ""
+        return f"refused by the model or its safety filter (finish {finish}){said}"
+    if kind == "cut":  # the cap as sent (max_tokens=4000), else as the run asked it
+        cap = next(_caps(response.sent or {}), None) or (
+            f"max_tokens={asked}" if asked is not None else "the provider's default max tokens"
+        )
+        setting = "a setting of the run, raise --max-tokens"
+        return f"cut at the token cap ({cap}, finish {finish}): {setting}"
+    return f"empty reply (finish {finish})"
 
 
 def _parse(
@@ -202,34 +243,7 @@ class PairCall:
             value, rule = None, None
             error = unanswered_error(kind, response, self.state.options.max_tokens)
         outcome = kind or ("ok" if error is None else "parse_error")
-        await self._log_reply(response, outcome, value, rule, error)
-        self.state.note_dropped(self.task, response.dropped)
-        if error is None:
-            await self._settle("ok", value, rule)
-            return True
-        self.last_error = error
-        if kind is not None:  # asking again the same way would buy the same reply
-            self.state.note_unanswered(self.task, kind, error)
-            await self._settle(kind)
-            return True
-        if self.reasks >= self.state.options.retry.max_reasks:
-            await self._settle("parse_error")
-            return True
-        self.reasks += 1
-        self.escalation += 1
-        self.timeout *= self.state.options.retry.timeout_growth
-        self._retrying("format")
-        return False
-
-    async def _log_reply(
-        self,
-        response: ModelResponse,
-        outcome: str,
-        value: dict[str, Any] | None,
-        rule: str | None,
-        error: str | None,
-    ) -> None:
-        """Append the reply's attempt line: its outcome, text, finish and refusal, usage."""
+        # the attempt line: its outcome, text, finish and refusal, usage
         said = {"refusal": response.refusal} if response.refusal else {}
         if response.provider_finish not in (None, response.finish_reason):
             said["provider_finish"] = response.provider_finish
@@ -250,6 +264,23 @@ class PairCall:
             reasoning=response.reasoning,
             **({"metadata": response.metadata} if response.metadata else {}),
         )
+        self.state.note_dropped(self.task, response.dropped)
+        if error is None:
+            await self._settle("ok", value, rule)
+            return True
+        self.last_error = error
+        if kind is not None:  # asking again the same way would buy the same reply
+            self.state.note_unanswered(self.task, kind, error)
+            await self._settle(kind)
+            return True
+        if self.reasks >= self.state.options.retry.max_reasks:
+            await self._settle("parse_error")
+            return True
+        self.reasks += 1
+        self.escalation += 1
+        self.timeout *= self.state.options.retry.timeout_growth
+        self._retrying("format")
+        return False
 
     async def _failed(self, error: ModelError, elapsed: float) -> float | None:
         """Log a failed call; settle the pair and return None, or return the seconds to back

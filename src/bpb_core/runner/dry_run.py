@@ -28,7 +28,7 @@ from bpb_core.capabilities import Estimating
 from bpb_core.dataset.reader import check_image, dataset_family, resolve_data
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import PromptOptions
-from bpb_core.layout import INIT, MANIFEST
+from bpb_core.layout import INIT, MANIFEST, iter_scene_keys
 from bpb_core.model_calls import CallCeiling, ImagePart, Message, TextPart
 from bpb_core.plugin_calls import call_ceiling, estimated_input, prompt_messages
 from bpb_core.run_folder import COMPLETE, AnswerRecord, iter_answers
@@ -225,7 +225,8 @@ def _scene_file(scene: Path, data: Path | None) -> Path:
         if not data.is_dir():
             raise BadInput(f"{data}: --data: no such dataset folder")
         data = resolve_data(data)  # a Hugging Face export opens as the folder it came from
-        found = [p for p in sorted(data.glob(f"h*/scene_*/{INIT}")) if _id(p) == str(scene)]
+        found = [k.dir(data) / INIT for k in iter_scene_keys(data) if k.scene_id == str(scene)]
+        found = [path for path in found if path.is_file()]
         if not found:
             raise BadInput(f"{data}: --data: no scene with id {str(scene)!r} (like h1_0000)")
         return found[0]
@@ -234,11 +235,6 @@ def _scene_file(scene: Path, data: Path | None) -> Path:
     if not scene.is_file():
         raise BadInput(f"{scene}: no such scene file (give init.json, its folder, or an id)")
     return scene
-
-
-def _id(init: Path) -> str:
-    horizon, index = init.parent.parent.name, init.parent.name.removeprefix("scene_")
-    return f"{horizon}_{index}"
 
 
 def _dataset_root(init: Path) -> Path:

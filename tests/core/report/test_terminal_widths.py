@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from rich.console import Console
 
-from bpb_core.cli.fit import MIN_NAME, Name, fitted
+from bpb_core.cli.console import MIN_NAME, Name, fitted
 from support import inprocess
 from support.inprocess import Done
 

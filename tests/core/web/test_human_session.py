@@ -221,3 +221,21 @@ def test_a_second_bpb_human_on_one_run_folder_is_refused_while_the_first_serves(
         "to finish or stop it, then re-run to resume"
     ]
     assert (run / "run.json").read_bytes() == manifest
+
+
+def test_a_persons_run_is_reported_as_scenes_answered_not_calls_unsent(
+    small_dataset: Path, tmp_path: Path, registry: Registry
+) -> None:
+    from bpb_core.results import load_results
+    from bpb_core.results.tables import incomplete_lines
+
+    session = _session(small_dataset, tmp_path / "human_ann", registry)
+    client = TestClient(human_app(session), base_url=LOCAL)
+    form = _valid_form(client) | {"shown": f"{time.time() - 30:.3f}", "ms.q1": "12000"}
+    form |= {"ms.q2": "20000", "ms.q3": "25000"}
+    assert client.post("/answer", data=form, follow_redirects=False).status_code == 303
+    lines = incomplete_lines(load_results([tmp_path / "human_ann"], registry=registry))
+    said = lines["human_ann"]
+    assert said.startswith(f"a person's session: 1 of {len(session.order)} scenes answered")
+    assert "25 s per scene (median)" in said  # the slowest task's time
+    assert "never sent" not in said and "calls" not in said

@@ -25,12 +25,16 @@ example answer the prompt itself shows. It injects the faults it was told to:
 
 With ``bill_max_tokens`` the chat endpoint bills every reply the most output a call may bill
 (``completion_tokens`` = the request's ``max_completion_tokens`` or ``max_tokens``), the worst
-case a spending cap must hold against.
+case a spending cap must hold against. With ``keep_bodies`` ``GET /requests`` also gives each
+request's whole body (a batch line must be the synchronous request: a test compares them).
 
 Faults are given per ``scene/task`` key as a list consumed one per request (``{"h1_0000/TASK":
 ["429", "500"]}``; then ``ok``), and optionally as a ``schedule`` cycled over all requests.
 ``GET /stats`` returns request counts per key and arrival times per phase (``POST /phase``);
 ``GET /requests`` what the recent requests carried (parameters, headers, image blocks; no text).
+The same port serves each provider's batch API (OpenAI's Files and Batch APIs, Anthropic's
+Message Batches, Gemini's batch mode: :mod:`bpb_testing.batches`, config key ``batch``), whose
+requests are answered with the same replies and faults.
 Run it with ``python -m bpb_testing.fakeserver --port 0``; it prints ``PORT <n>`` when ready.
 """
 
@@ -48,28 +52,13 @@ from typing import Any
 
 from aiohttp import web
 
+from bpb_testing.batches import BatchStore, add_batch_routes
 from bpb_testing.fakereplies import PromptIndex, fault_reply, model_reply
-from bpb_testing.protocols import add_protocol_routes, image_blocks
+from bpb_testing.protocols import add_protocol_routes, image_blocks, prompt_text
 
 _CONVERSATION = frozenset({"messages", "contents", "input", "system", "system_instruction"})
 _KEEP_REQUESTS = 200
 _SECRET_HEADERS = frozenset({"authorization", "x-api-key", "x-goog-api-key", "api-key"})
-
-
-def prompt_text(body: dict[str, Any]) -> tuple[str, int]:
-    """All text of the request's messages and how many images they carry."""
-    texts, images = [], 0
-    for message in body.get("messages", []):
-        content = message.get("content")
-        if isinstance(content, str):
-            texts.append(content)
-            continue
-        for part in content or []:
-            if part.get("type") == "text":
-                texts.append(part.get("text", ""))
-            elif part.get("type") == "image_url":
-                images += 1
-    return "\n".join(texts), images
 
 
 class FakeOpenAI:
@@ -87,6 +76,7 @@ class FakeOpenAI:
         self.phase = "default"
         self.phases: dict[str, dict[str, Any]] = {}
         self.requests: list[dict[str, Any]] = []
+        self.batches = BatchStore(self, config.get("batch", {}))
 
     def configure(self, config: dict[str, Any]) -> None:
         """Replace the fault plan (keys ``faults``, ``schedule``, ``retry_after``, ``hang``,
@@ -97,6 +87,9 @@ class FakeOpenAI:
         self.hang = float(config.get("hang", 30.0))
         self.latency = float(config.get("latency", self.latency))
         self.bill_max_tokens = bool(config.get("bill_max_tokens", False))
+        self.keep_bodies = bool(config.get("keep_bodies", False))
+        if hasattr(self, "batches"):
+            self.batches.configure(config.get("batch", {}))
 
     def _fault(self, key: str, seen: int) -> str:
         plan = self.faults.get(key) or self.faults.get("*/" + key.split("/")[-1]) or []
@@ -112,20 +105,26 @@ class FakeOpenAI:
         phase["count"] += 1
         phase["last"] = now
 
-    async def answer(
-        self, request: web.Request, text: str, images: int, protocol: str = "openai"
-    ) -> tuple[str, str] | web.StreamResponse:
-        """The fault and correct answer for a prompt, or the reply of a transport/HTTP fault
-        (an error body in ``protocol``'s shape: ``openai``, ``anthropic`` or ``gemini``)."""
+    def plan(self, text: str, images: int) -> tuple[str, str, str]:
+        """Count one request for a prompt and give its ``scene/task`` key, its fault and the
+        correct answer (the requests of a provider batch come this way, with no HTTP request
+        of their own: :mod:`bpb_testing.batches`)."""
         self._arrive()
-        if request.headers.get("Authorization") or request.headers.get("x-api-key"):
-            self.auth_seen += 1
         self.images += images
         key, answer = self.prompts.lookup(text)
         seen = self.counts[key]
         self.counts[key] += 1
         self.total += 1
-        fault = self._fault(key, seen)
+        return key, self._fault(key, seen), answer
+
+    async def answer(
+        self, request: web.Request, text: str, images: int, protocol: str = "openai"
+    ) -> tuple[str, str] | web.StreamResponse:
+        """The fault and correct answer for a prompt, or the reply of a transport/HTTP fault
+        (an error body in ``protocol``'s shape: ``openai``, ``anthropic`` or ``gemini``)."""
+        if request.headers.get("Authorization") or request.headers.get("x-api-key"):
+            self.auth_seen += 1
+        _, fault, answer = self.plan(text, images)
         if self.latency:
             await asyncio.sleep(self.latency)
         if fault == "hang":
@@ -149,9 +148,11 @@ class FakeOpenAI:
         return web.json_response(reply)
 
     def record(self, request: web.Request, protocol: str, body: dict[str, Any]) -> None:
-        """Keep what a request carried, without its text or image bytes (``GET /requests``)."""
+        """Keep what a request carried, without its text or image bytes (``GET /requests``);
+        with ``keep_bodies``, its whole body too (``body``)."""
         self.requests.append(
             {
+                **({"body": body} if self.keep_bodies else {}),
                 "protocol": protocol,
                 "path": request.path,
                 "query": dict(request.query),
@@ -198,6 +199,7 @@ class FakeOpenAI:
         app.router.add_post("/chat/completions", self.chat)
         app.router.add_get("/stats", self.stats)
         app.router.add_get("/requests", self.requests_seen)
+        add_batch_routes(app, self)  # before the generateContent route, which would take them
         add_protocol_routes(app, self)
         app.router.add_post("/phase", self.set_phase)
         app.router.add_post("/config", self.set_config)

@@ -75,6 +75,62 @@ def _texts(body: dict[str, Any], keys: tuple[str, ...]) -> str:
     )
 
 
+def prompt_text(body: dict[str, Any]) -> tuple[str, int]:
+    """All text of a chat request's messages and how many images they carry."""
+    texts, images = [], 0
+    for message in body.get("messages", []):
+        content = message.get("content")
+        if isinstance(content, str):
+            texts.append(content)
+            continue
+        for part in content or []:
+            if part.get("type") == "text":
+                texts.append(part.get("text", ""))
+            elif part.get("type") == "image_url":
+                images += 1
+    return "\n".join(texts), images
+
+
+def request_prompt(protocol: str, body: dict[str, Any]) -> tuple[str, int]:
+    """The prompt text of a request body in ``protocol`` (``openai-chat``,
+    ``openai-responses``, ``anthropic`` or ``gemini``) and how many images it carries."""
+    if protocol == "openai-chat":
+        return prompt_text(body)
+    if protocol == "anthropic":
+        text = _texts({"s": body.get("system"), "m": body.get("messages")}, ("text",))
+    elif protocol == "gemini":
+        system = body.get("system_instruction") or body.get("systemInstruction")
+        text = _texts({"s": system, "c": body.get("contents")}, ("text",))
+    else:
+        text = _texts({"i": body.get("instructions"), "m": body.get("input")}, ("text",))
+    return text, len(image_blocks(body))
+
+
+def anthropic_body(body: dict[str, Any], fault: str, answer: str) -> dict[str, Any]:
+    """The Messages API reply to ``body`` for ``fault`` and the correct ``answer``."""
+    content, finish = reply_content(fault, answer)
+    blocks: list[dict[str, Any]] = []
+    if body.get("thinking"):
+        blocks.append({"type": "thinking", "thinking": THOUGHT, "signature": "fake-signature"})
+    if content:  # an empty reply and a refusal have no text block
+        blocks.append({"type": "text", "text": content})
+    return {
+        "id": f"msg_fake{time.time_ns()}",
+        "type": "message",
+        "role": "assistant",
+        "model": body.get("model", "fake"),
+        "content": blocks,
+        "stop_reason": _FINISH["anthropic"][finish],
+        "stop_sequence": None,
+        "usage": {
+            "input_tokens": 900,
+            "cache_read_input_tokens": 100,
+            "cache_creation_input_tokens": 0,
+            "output_tokens": 50,
+        },
+    }
+
+
 async def anthropic_messages(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
     """``POST /v1/messages``."""
     body = await request.json()
@@ -82,64 +138,37 @@ async def anthropic_messages(server: FakeOpenAI, request: web.Request) -> web.St
     rejected = anthropic_rejection(body)
     if rejected is not None:
         return anthropic_error(rejected)
-    text = _texts({"s": body.get("system"), "m": body.get("messages")}, ("text",))
-    outcome = await server.answer(request, text, len(image_blocks(body)), "anthropic")
+    outcome = await server.answer(request, *request_prompt("anthropic", body), "anthropic")
     if isinstance(outcome, web.StreamResponse):
         return outcome
-    content, finish = reply_content(*outcome)
-    blocks: list[dict[str, Any]] = []
-    if body.get("thinking"):
-        blocks.append({"type": "thinking", "thinking": THOUGHT, "signature": "fake-signature"})
-    if content:  # an empty reply and a refusal have no text block
-        blocks.append({"type": "text", "text": content})
-    return web.json_response(
-        {
-            "id": f"msg_fake{time.time_ns()}",
-            "type": "message",
-            "role": "assistant",
-            "model": body.get("model", "fake"),
-            "content": blocks,
-            "stop_reason": _FINISH["anthropic"][finish],
-            "stop_sequence": None,
-            "usage": {
-                "input_tokens": 900,
-                "cache_read_input_tokens": 100,
-                "cache_creation_input_tokens": 0,
-                "output_tokens": 50,
-            },
-        }
-    )
+    return web.json_response(anthropic_body(body, *outcome))
+
+
+def gemini_body(model: str, fault: str, answer: str) -> dict[str, Any]:
+    """The generateContent reply of ``model`` for ``fault`` and the correct ``answer``."""
+    content, finish = reply_content(fault, answer)
+    return {
+        "candidates": [_gemini_candidate(content, finish)],
+        "usageMetadata": {
+            "promptTokenCount": 1000,
+            "cachedContentTokenCount": 100,
+            "candidatesTokenCount": 30,
+            "thoughtsTokenCount": 20,
+            "totalTokenCount": 1050,
+        },
+        "modelVersion": model,
+    }
 
 
 async def gemini_generate(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
     """``POST /v1beta/models/{model}:generateContent``."""
     body = await request.json()
     server.record(request, "gemini", body)
-    text = _texts(
-        {
-            "s": body.get("system_instruction") or body.get("systemInstruction"),
-            "c": body.get("contents"),
-        },
-        ("text",),
-    )
-    outcome = await server.answer(request, text, len(image_blocks(body)), "gemini")
+    outcome = await server.answer(request, *request_prompt("gemini", body), "gemini")
     if isinstance(outcome, web.StreamResponse):
         return outcome
-    content, finish = reply_content(*outcome)
     model = request.match_info["model"].split(":")[0]
-    return web.json_response(
-        {
-            "candidates": [_gemini_candidate(content, finish)],
-            "usageMetadata": {
-                "promptTokenCount": 1000,
-                "cachedContentTokenCount": 100,
-                "candidatesTokenCount": 30,
-                "thoughtsTokenCount": 20,
-                "totalTokenCount": 1050,
-            },
-            "modelVersion": model,
-        }
-    )
+    return web.json_response(gemini_body(model, *outcome))
 
 
 def _gemini_candidate(content: str, finish: str) -> dict[str, Any]:
@@ -171,34 +200,36 @@ def _responses_output(body: dict[str, Any], content: str, finish: str) -> list[d
     return items
 
 
+def responses_body(body: dict[str, Any], fault: str, answer: str) -> dict[str, Any]:
+    """The Responses API reply to ``body`` for ``fault`` and the correct ``answer``."""
+    content, finish = reply_content(fault, answer)
+    incomplete = {"length": "max_output_tokens", "safety": "content_filter"}.get(finish)
+    return {
+        "id": f"resp_fake{time.time_ns()}",
+        "object": "response",
+        "created_at": int(time.time()),
+        "status": "incomplete" if incomplete else "completed",
+        "incomplete_details": {"reason": incomplete} if incomplete else None,
+        "model": body.get("model", "fake"),
+        "output": _responses_output(body, content, finish),
+        "usage": {
+            "input_tokens": 1000,
+            "input_tokens_details": {"cached_tokens": 100},
+            "output_tokens": 50,
+            "output_tokens_details": {"reasoning_tokens": 20},
+            "total_tokens": 1050,
+        },
+    }
+
+
 async def openai_responses(server: FakeOpenAI, request: web.Request) -> web.StreamResponse:
     """``POST /v1/responses``."""
     body = await request.json()
     server.record(request, "openai-responses", body)
-    text = _texts({"i": body.get("instructions"), "m": body.get("input")}, ("text",))
-    outcome = await server.answer(request, text, len(image_blocks(body)), "openai")
+    outcome = await server.answer(request, *request_prompt("openai-responses", body), "openai")
     if isinstance(outcome, web.StreamResponse):
         return outcome
-    content, finish = reply_content(*outcome)
-    incomplete = {"length": "max_output_tokens", "safety": "content_filter"}.get(finish)
-    return web.json_response(
-        {
-            "id": f"resp_fake{time.time_ns()}",
-            "object": "response",
-            "created_at": int(time.time()),
-            "status": "incomplete" if incomplete else "completed",
-            "incomplete_details": {"reason": incomplete} if incomplete else None,
-            "model": body.get("model", "fake"),
-            "output": _responses_output(body, content, finish),
-            "usage": {
-                "input_tokens": 1000,
-                "input_tokens_details": {"cached_tokens": 100},
-                "output_tokens": 50,
-                "output_tokens_details": {"reasoning_tokens": 20},
-                "total_tokens": 1050,
-            },
-        }
-    )
+    return web.json_response(responses_body(body, *outcome))
 
 
 def add_protocol_routes(app: web.Application, server: FakeOpenAI) -> None:
