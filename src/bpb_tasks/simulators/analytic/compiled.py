@@ -23,12 +23,11 @@ from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's table constants (``kernel_predict``'s :data:`DECEL` .. :data:`POCKET_R2`,
+    """The kernel's table constants (``kernel_predict``'s :data:`DECEL` .. :data:`POCKET_R`,
     the same arithmetic as the reference ``Predictor``) and pocket centres of ``scene``."""
     table, phys, pockets = scene.table, scene.physics, scene.pockets
     radius = phys.ball_radius
     decel = phys.mu * phys.g
-    r = pockets.radius
     prm = np.array(
         [
             decel,
@@ -41,8 +40,7 @@ def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             radius,
             table.height - radius,
             phys.wall_restitution,
-            r,
-            r * r,
+            pockets.radius,
         ]
     )
     return prm, np.array(pockets.centers, dtype=float).reshape(-1, 2)

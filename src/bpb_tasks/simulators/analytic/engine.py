@@ -73,6 +73,7 @@ from bpb_tasks.simulators.analytic.prediction import (
     WALL,
     Predictor,
 )
+from bpb_tasks.simulators.analytic.roots import sqrt
 
 KIND_NAMES = ("ball", "wall", "pocket", "stop")
 DEFAULT_MAX_EVENTS = 100_000
@@ -220,7 +221,7 @@ class _Simulation(Predictor):
         px, py, ps = motion.state(p, t)
         qx, qy, qs = motion.state(q, t)
         nx, ny = qx - px, qy - py
-        norm = self.sqrt(nx * nx + ny * ny)
+        norm = sqrt(nx * nx + ny * ny)
         nx, ny = nx / norm, ny / norm
         pvx, pvy, qvx, qvy = p.ux * ps, p.uy * ps, q.ux * qs, q.uy * qs
         vn = (pvx - qvx) * nx + (pvy - qvy) * ny

@@ -3,7 +3,7 @@
 
 A ball is a row of the float array ``st`` (columns :data:`X` .. :data:`WALL_T`) plus its version
 and alive flag in the int array ``iv``; table constants are the float array ``prm`` (columns
-:data:`DECEL` .. :data:`HORIZON`). Queue entries are the reference's
+:data:`DECEL` .. :data:`RECORD`). Queue entries are the reference's
 ``(time, kind, index, other, version, other_version)`` tuples in a list kept as a heap, so events
 pop in the same order.
 """
@@ -14,18 +14,24 @@ import heapq
 import math
 from typing import Any
 
-from bpb_tasks.simulators.analytic.kernel_roots import NO_ROOT, first_contact, jit
-from bpb_tasks.simulators.analytic.motion import point_segment_gap2
+from bpb_tasks.simulators.analytic.kernel_roots import MAX_ITER, TIME_TOL, jit
+from bpb_tasks.simulators.analytic.motion import (
+    line_contact,
+    moving_contact,
+    pocket_entry,
+    pocket_holding,
+    time_for,
+)
+from bpb_tasks.simulators.analytic.roots import NO_ROOT, Number
 
 X, Y, T0, SPEED, UX, UY, TSTOP, WALL_T = range(8)
 VERSION, ALIVE = 0, 1
-DECEL, HALF, CONTACT2, TWO_R, MARGIN, XMIN, XMAX, YMIN, YMAX, REST, POCKET_R, POCKET_R2 = range(12)
-HORIZON, RECORD = 12, 13  # a run's own: its end (no later event is queued), pieces kept
+DECEL, HALF, CONTACT2, TWO_R, MARGIN, XMIN, XMAX, YMIN, YMAX, REST, POCKET_R = range(11)
+HORIZON, RECORD = 11, 12  # a run's own: its end (no later event is queued), pieces kept
 BALL, WALL, POCKET, STOP = 0, 1, 2, 3
 TOP, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3
 INF = math.inf
 Arr = Any  # a numpy array (numba has no static types for mypy)
-gap2 = jit(point_segment_gap2)  # the reference's own code, compiled
 
 
 @jit
@@ -59,15 +65,6 @@ def advance(st: Arr, prm: Arr, i: int, t: float) -> None:
 
 
 @jit
-def time_for(prm: Arr, speed: float, s: float) -> float:
-    decel = prm[DECEL]
-    if decel == 0:
-        return float(s / speed)
-    rest = speed * speed - 2 * decel * s
-    return 2 * s / (speed + math.sqrt(rest if rest > 0 else rest * 0))
-
-
-@jit
 def push(prm: Arr, queue: Any, t: float, kind: int, i: int, k: int, ver: int, other: int) -> None:
     if t <= prm[HORIZON]:  # a later event cannot fire in this run
         heapq.heappush(queue, (t, kind, i, k, ver, other))
@@ -98,12 +95,9 @@ def predict_single(st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int)
 
 @jit
 def pocket_at_start(st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int) -> None:
-    x, y, r, r2 = st[i, X], st[i, Y], prm[POCKET_R], prm[POCKET_R2]
-    for k in range(pockets.shape[0]):
-        dx, dy = x - pockets[k, 0], y - pockets[k, 1]
-        if -r <= dx <= r and dx * dx + dy * dy <= r2:
-            push(prm, queue, st[i, T0], POCKET, i, k, iv[i, VERSION], 0)
-            return
+    k = pocket_holding(st[i, X], st[i, Y], pockets, prm[POCKET_R])
+    if k >= 0:
+        push(prm, queue, st[i, T0], POCKET, i, k, iv[i, VERSION], 0)
 
 
 @jit
@@ -112,7 +106,7 @@ def predict_wall(
 ) -> None:
     gap = gap if gap > 0 else gap * 0
     if gap < far:
-        t = st[i, T0] + time_for(prm, st[i, SPEED], gap)
+        t = st[i, T0] + time_for(prm[DECEL], st[i, SPEED], gap)
         push(prm, queue, t, WALL, i, wall, iv[i, VERSION], 0)
         st[i, WALL_T] = t if t < st[i, WALL_T] else st[i, WALL_T]
 
@@ -121,44 +115,11 @@ def predict_wall(
 def predict_pocket(
     st: Arr, iv: Arr, prm: Arr, pockets: Arr, queue: Any, i: int, far: float
 ) -> None:
-    best, found, pocket = 0.0, False, 0
     x, y, ux, uy = st[i, X], st[i, Y], st[i, UX], st[i, UY]
-    r, r2 = prm[POCKET_R], prm[POCKET_R2]
-    for k in range(pockets.shape[0]):
-        dx, dy = x - pockets[k, 0], y - pockets[k, 1]
-        along = ux * dx + uy * dy
-        if along >= 0:
-            if not (-r <= dx <= r and -r <= dy <= r and dx * dx + dy * dy <= r2):
-                continue
-            s = along * 0
-        else:
-            c = dx * dx + dy * dy - r2
-            if c <= 0:
-                s = c * 0
-            elif along * along < c:
-                continue
-            else:
-                s = c / (-along + math.sqrt(along * along - c))
-        if s <= far and (not found or s < best):
-            best, found, pocket = s, True, k
-    if found:
-        t = st[i, T0] + (time_for(prm, st[i, SPEED], best) if best > 0 else best)
+    best, pocket = pocket_entry(x, y, ux, uy, pockets, prm[POCKET_R], far)
+    if best != NO_ROOT:
+        t = st[i, T0] + (time_for(prm[DECEL], st[i, SPEED], best) if best > 0 else best)
         push(prm, queue, t, POCKET, i, pocket, iv[i, VERSION], 0)
-
-
-@jit
-def line_contact(dx: float, dy: float, ux: float, uy: float, radius2: float) -> float:
-    """Reference ``motion.line_contact``; :data:`NO_ROOT` for ``None`` (distances are >= 0)."""
-    b = ux * dx + uy * dy
-    c = dx * dx + dy * dy - radius2
-    if c <= 0:
-        return b * 0 if b < 0 else NO_ROOT
-    if b >= 0:
-        return NO_ROOT
-    disc = b * b - c
-    if disc <= 0:
-        return NO_ROOT
-    return c / (-b + math.sqrt(disc))
 
 
 @jit
@@ -181,7 +142,7 @@ def predict_pair(st: Arr, iv: Arr, prm: Arr, queue: Any, p: int, q: int, t: floa
             return
         far = ms * ms / (2 * prm[DECEL]) if prm[DECEL] > 0 else INF
         if s < far:
-            tau = time_for(prm, ms, s) if s > 0 else s
+            tau = time_for(prm[DECEL], ms, s) if s > 0 else s
             push(prm, queue, t + tau, BALL, p, q, iv[p, VERSION], iv[q, VERSION])
         return
     tau = moving_pair(st, prm, p, q, t, px, py, qx, qy, ps, qs)
@@ -202,29 +163,22 @@ def moving_pair(
     qy: float,
     ps: float,
     qs: float,
-) -> float:
+) -> Number:
     """First contact time (from ``t``) of two moving balls; :data:`NO_ROOT` if none."""
     span = min(st[p, TSTOP], st[q, TSTOP], st[p, WALL_T], st[q, WALL_T]) - t
     if span < 0:
         return NO_ROOT
-    vx, vy = st[p, UX] * ps - st[q, UX] * qs, st[p, UY] * ps - st[q, UY] * qs
     h = prm[HALF]
-    ax, ay = (st[q, UX] - st[p, UX]) * h, (st[q, UY] - st[p, UY]) * h
-    dx, dy = px - qx, py - qy
-    ex = vx * span + ax * span * span  # the reference's cheap rejection
-    ey = vy * span + ay * span * span
-    bulge = math.sqrt(ax * ax + ay * ay) * span * span / 4
-    limit = prm[TWO_R] * (1 + prm[MARGIN]) + bulge
-    if gap2(dx, dy, ex, ey) > limit * limit:
-        return NO_ROOT
-    coeffs = (
-        ax * ax + ay * ay,
-        2 * (ax * vx + ay * vy),
-        vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
-        2 * (vx * dx + vy * dy),
-        dx * dx + dy * dy - prm[CONTACT2],
+    return moving_contact(
+        (px - qx, py - qy),
+        (st[p, UX] * ps - st[q, UX] * qs, st[p, UY] * ps - st[q, UY] * qs),
+        ((st[q, UX] - st[p, UX]) * h, (st[q, UY] - st[p, UY]) * h),
+        span,
+        prm[TWO_R],
+        prm[MARGIN],
+        TIME_TOL,
+        MAX_ITER,
     )
-    return first_contact(coeffs, span)
 
 
 @jit

@@ -1,6 +1,6 @@
 """Numeric backends: the same simulator code runs on float64 or on mpmath numbers.
 
-The analytic simulator only uses ``+ - * /``, comparisons, :attr:`Numeric.sqrt` and
+The analytic simulator only uses ``+ - * /``, comparisons, ``roots.sqrt`` and
 :attr:`Numeric.num` (to lift an input float). Python floats and ``mpmath`` numbers both support
 the operators, so choosing a backend at construction is all it takes to run the identical
 algorithm in 50-digit arithmetic, which is the reference in tests and in ``bpb bench sim``.
@@ -8,7 +8,6 @@ algorithm in 50-digit arithmetic, which is the reference in tests and in ``bpb b
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -23,7 +22,6 @@ class Numeric:
     Attributes:
         name: ``float64`` or ``mpmath<digits>``.
         num: Lifts a Python float (exactly) into the backend.
-        sqrt: Square root in the backend.
         time_tol: Root refinement stops when the bracket is this narrow (seconds).
         max_iter: Upper bound on refinement iterations per root.
         speed_tol: Two touching balls whose approach speed is at most this fraction of the sum
@@ -33,13 +31,12 @@ class Numeric:
 
     name: str
     num: Callable[[float], Number]
-    sqrt: Callable[[Number], Number]
     time_tol: Number
     max_iter: int
     speed_tol: Number
 
 
-FLOAT64 = Numeric("float64", float, math.sqrt, 1e-15, 200, 1e-15)
+FLOAT64 = Numeric("float64", float, 1e-15, 200, 1e-15)
 
 
 def backend(precision: str | int | None) -> Numeric:
@@ -61,4 +58,4 @@ def backend(precision: str | int | None) -> Numeric:
     ctx = mpmath.MPContext()
     ctx.dps = digits
     tol = ctx.mpf(10) ** (-(digits - 8))
-    return Numeric(f"mpmath{digits}", ctx.mpf, ctx.sqrt, tol, 400, tol)
+    return Numeric(f"mpmath{digits}", ctx.mpf, tol, 400, tol)

@@ -12,9 +12,17 @@ import heapq
 from typing import Any
 
 from bpb_tasks.billiards.scene.model import Scene
-from bpb_tasks.simulators.analytic.motion import Body, Motion, line_contact, point_segment_gap2
+from bpb_tasks.simulators.analytic.motion import (
+    Body,
+    Motion,
+    line_contact,
+    moving_contact,
+    pocket_entry,
+    pocket_holding,
+    time_for,
+)
 from bpb_tasks.simulators.analytic.numeric import Number, Numeric
-from bpb_tasks.simulators.analytic.roots import first_contact
+from bpb_tasks.simulators.analytic.roots import NO_ROOT
 
 BALL, WALL, POCKET, STOP = 0, 1, 2, 3
 TOP, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3
@@ -26,10 +34,9 @@ class Predictor:
     def __init__(self, scene: Scene, numeric: Numeric) -> None:
         num = numeric.num
         self.numeric = numeric
-        self.sqrt = numeric.sqrt
         phys = scene.physics
         radius = num(phys.ball_radius)
-        self.motion = Motion(num(phys.mu) * num(phys.g), numeric.sqrt, num(float("inf")))
+        self.motion = Motion(num(phys.mu) * num(phys.g), num(float("inf")))
         self.contact2 = 4 * radius * radius
         self.two_r = 2 * radius
         self.margin = num(1e-9)  # relative rounding margin of the cheap rejection test
@@ -41,7 +48,6 @@ class Predictor:
         )
         self.restitution = num(phys.wall_restitution)
         self.pocket_r = num(scene.pockets.radius)
-        self.pocket_r2 = self.pocket_r * self.pocket_r
         self.pockets = [(num(cx), num(cy)) for cx, cy in scene.pockets.centers]
         balls = sorted(scene.balls, key=lambda b: b.id)
         self.bodies = [Body(i, b.id, num(b.pos[0]), num(b.pos[1])) for i, b in enumerate(balls)]
@@ -75,44 +81,22 @@ class Predictor:
 
     def pocket_at_start(self, b: Body) -> None:
         """Queue a pocket event at 0 for a resting ball placed within a pocket circle."""
-        x, y, r, r2 = b.x, b.y, self.pocket_r, self.pocket_r2
-        for k, (cx, cy) in enumerate(self.pockets):
-            dx, dy = x - cx, y - cy
-            if -r <= dx <= r and dx * dx + dy * dy <= r2:
-                self.push(b.t0, POCKET, b, k)
-                return
+        k = pocket_holding(b.x, b.y, self.pockets, self.pocket_r)
+        if k >= 0:
+            self.push(b.t0, POCKET, b, k)
 
     def predict_wall(self, b: Body, wall: int, gap: Number, reach: Number) -> None:
         gap = gap if gap > 0 else gap * 0
         if gap < reach:  # reaching the wall exactly as the ball stops is not a contact
-            t = b.t0 + self.motion.time_for(b.speed, gap)
+            t = b.t0 + time_for(self.motion.decel, b.speed, gap)
             self.push(t, WALL, b, wall)
             b.wall_t = t if t < b.wall_t else b.wall_t
 
     def predict_pocket(self, b: Body, reach: Number) -> None:
         """Queue the first pocket ``b``'s centre enters (tangency counts) before it stops."""
-        best: Number | None = None
-        pocket = 0
-        x, y, ux, uy, r, r2 = b.x, b.y, b.ux, b.uy, self.pocket_r, self.pocket_r2
-        for k, (cx, cy) in enumerate(self.pockets):
-            dx, dy = x - cx, y - cy
-            along = ux * dx + uy * dy
-            if along >= 0:  # moving away: only a centre already inside counts
-                if not (-r <= dx <= r and -r <= dy <= r and dx * dx + dy * dy <= r2):
-                    continue
-                s = along * 0
-            else:
-                c = dx * dx + dy * dy - r2
-                if c <= 0:
-                    s = c * 0  # already inside
-                elif along * along < c:
-                    continue  # the line passes outside the circle
-                else:
-                    s = c / (-along + self.sqrt(along * along - c))
-            if s <= reach and (best is None or s < best):
-                best, pocket = s, k
-        if best is not None:
-            t = b.t0 + (self.motion.time_for(b.speed, best) if best > 0 else best)
+        best, pocket = pocket_entry(b.x, b.y, b.ux, b.uy, self.pockets, self.pocket_r, reach)
+        if best != NO_ROOT:
+            t = b.t0 + (time_for(self.motion.decel, b.speed, best) if best > 0 else best)
             self.push(t, POCKET, b, pocket)
 
     def predict_pair(self, p: Body, q: Body, t: Number) -> None:
@@ -130,47 +114,38 @@ class Predictor:
             mx, my, ms, mover, rx, ry = (
                 (px, py, ps, p, qx, qy) if qs == 0 else (qx, qy, qs, q, px, py)
             )
-            s = line_contact(mx - rx, my - ry, mover.ux, mover.uy, self.contact2, self.sqrt)
-            if s is None:
+            s = line_contact(mx - rx, my - ry, mover.ux, mover.uy, self.contact2)
+            if s == NO_ROOT:
                 return
             reach = ms * ms / (2 * motion.decel) if motion.decel > 0 else motion.inf
             if s < reach:  # stopping exactly at contact distance is not a collision
-                self.push(t + (motion.time_for(ms, s) if s > 0 else s), BALL, p, q.index, q)
+                self.push(t + (time_for(motion.decel, ms, s) if s > 0 else s), BALL, p, q.index, q)
             return
         tau = self.moving_pair(p, q, t, (px, py, qx, qy), (ps, qs))
-        if tau is not None:
+        if tau != NO_ROOT:
             self.push(t + tau, BALL, p, q.index, q)
 
     def moving_pair(
         self, p: Body, q: Body, t: Number, ends: tuple[Number, ...], speeds: tuple[Number, Number]
-    ) -> Number | None:
-        """First contact time (from ``t``) of two moving balls at ``ends = (px, py, qx, qy)``."""
+    ) -> Number:
+        """First contact time (from ``t``) of two moving balls at ``ends = (px, py, qx, qy)``,
+        or :data:`NO_ROOT`."""
         span = min(p.tstop, q.tstop, p.wall_t, q.wall_t) - t
         if span < 0:
-            return None
+            return NO_ROOT
         ps, qs = speeds
         px, py, qx, qy = ends
-        vx, vy = p.ux * ps - q.ux * qs, p.uy * ps - q.uy * qs
         h = self.motion.half
-        ax, ay = (q.ux - p.ux) * h, (q.uy - p.uy) * h
-        dx, dy = px - qx, py - qy
-        # Cheap rejection: the relative position d + v t + a t^2 stays within |a| span^2 / 4 of
-        # the chord from d to its value at span; if that chord passes farther than 2R plus this
-        # bulge from the origin, no contact.
-        ex = vx * span + ax * span * span
-        ey = vy * span + ay * span * span
-        bulge = self.sqrt(ax * ax + ay * ay) * span * span / 4
-        limit = self.two_r * (1 + self.margin) + bulge
-        if point_segment_gap2(dx, dy, ex, ey) > limit * limit:
-            return None
-        coeffs = [
-            ax * ax + ay * ay,
-            2 * (ax * vx + ay * vy),
-            vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
-            2 * (vx * dx + vy * dy),
-            dx * dx + dy * dy - self.contact2,
-        ]
-        return first_contact(coeffs, span, self.numeric)
+        return moving_contact(
+            (px - qx, py - qy),
+            (p.ux * ps - q.ux * qs, p.uy * ps - q.uy * qs),
+            ((q.ux - p.ux) * h, (q.uy - p.uy) * h),
+            span,
+            self.two_r,
+            self.margin,
+            self.numeric.time_tol,
+            self.numeric.max_iter,
+        )
 
     def predict_all(self, b: Body, t: Number, skip: Body | None = None) -> None:
         """Re-predict everything involving ``b``, which changed at ``t`` (pairs with ``skip`` are
