@@ -16,6 +16,7 @@ from typing import Any
 
 from bpb_tasks.simulators.analytic.kernel_roots import MAX_ITER, TIME_TOL, jit
 from bpb_tasks.simulators.analytic.motion import (
+    heading,
     line_contact,
     moving_contact,
     pocket_entry,
@@ -37,12 +38,7 @@ Arr = Any  # a numpy array (numba has no static types for mypy)
 @jit
 def set_velocity(st: Arr, prm: Arr, i: int, t: float, vx: float, vy: float) -> None:
     st[i, T0] = t
-    speed = math.sqrt(vx * vx + vy * vy)
-    if speed > 0:
-        st[i, SPEED], st[i, UX], st[i, UY] = speed, vx / speed, vy / speed
-        st[i, TSTOP] = t + speed / prm[DECEL] if prm[DECEL] > 0 else INF
-    else:
-        st[i, SPEED], st[i, UX], st[i, UY], st[i, TSTOP] = speed * 0, speed * 0, speed * 0, t
+    st[i, SPEED], st[i, UX], st[i, UY], st[i, TSTOP] = heading(t, vx, vy, prm[DECEL])
 
 
 @jit

@@ -82,6 +82,7 @@ if _numba is not None:  # what jitted code calls of the plain modules, compiled 
         roots.quadratic_splits,
         roots.critical_points,
         roots.first_contact,
+        motion.heading,
         motion.time_for,
         motion.line_contact,
         motion.pocket_entry,

@@ -14,6 +14,7 @@ keys the kernel's cache folder as theirs do, and both engines compute the same n
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from bpb_tasks.simulators.analytic.roots import NO_ROOT, Number, first_contact, sqrt
@@ -60,23 +61,16 @@ class Body:
 
 
 class Motion:
-    """Friction law shared by all balls: deceleration ``decel`` (``inf``: the backend's
-    infinity)."""
+    """Friction law shared by all balls: deceleration ``decel``."""
 
-    def __init__(self, decel: Number, inf: Number) -> None:
+    def __init__(self, decel: Number) -> None:
         self.decel = decel
         self.half = decel / 2
-        self.inf = inf
 
     def set_velocity(self, b: Body, t: Number, vx: Number, vy: Number) -> None:
         """Give ``b`` (already at its position at ``t``) the velocity ``(vx, vy)`` from ``t``."""
         b.t0 = t
-        speed = sqrt(vx * vx + vy * vy)
-        if speed > 0:
-            b.speed, b.ux, b.uy = speed, vx / speed, vy / speed
-            b.tstop = t + speed / self.decel if self.decel > 0 else self.inf
-        else:
-            b.speed, b.ux, b.uy, b.tstop = speed * 0, speed * 0, speed * 0, t
+        b.speed, b.ux, b.uy, b.tstop = heading(t, vx, vy, self.decel)
 
     def state(self, b: Body, t: Number) -> tuple[Number, Number, Number]:
         """Position and speed of ``b`` at ``t >= b.t0`` without changing it."""
@@ -92,6 +86,15 @@ class Motion:
         x, y, speed = self.state(b, t)
         b.x, b.y = x, y
         self.set_velocity(b, t, b.ux * speed, b.uy * speed)
+
+
+def heading(t: Number, vx: Number, vy: Number, decel: Number) -> tuple[Number, ...]:
+    """Speed, unit direction and stopping time (infinite without friction) of a ball given the
+    velocity ``(vx, vy)`` at ``t``."""
+    speed = sqrt(vx * vx + vy * vy)
+    if speed > 0:
+        return speed, vx / speed, vy / speed, t + speed / decel if decel > 0 else math.inf
+    return speed * 0, speed * 0, speed * 0, t
 
 
 def time_for(decel: Number, speed: Number, s: Number) -> Number:

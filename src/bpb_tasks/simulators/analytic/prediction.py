@@ -9,6 +9,7 @@ ball's version has moved on since it was queued.
 from __future__ import annotations
 
 import heapq
+import math
 from typing import Any
 
 from bpb_tasks.billiards.scene.model import Scene
@@ -36,7 +37,7 @@ class Predictor:
         self.numeric = numeric
         phys = scene.physics
         radius = num(phys.ball_radius)
-        self.motion = Motion(num(phys.mu) * num(phys.g), num(float("inf")))
+        self.motion = Motion(num(phys.mu) * num(phys.g))
         self.contact2 = 4 * radius * radius
         self.two_r = 2 * radius
         self.margin = num(1e-9)  # relative rounding margin of the cheap rejection test
@@ -63,10 +64,10 @@ class Predictor:
     def predict_single(self, b: Body) -> None:
         """Queue ``b``'s stop, next wall contacts and pocket entry (``b`` is at ``b.t0``)."""
         motion = self.motion
-        b.wall_t = motion.inf
+        b.wall_t = math.inf
         if b.speed == 0:
             return  # a resting ball enters no pocket (one it came to rest in has taken it)
-        reach = motion.inf  # the distance ``b`` still covers: for ever without friction
+        reach = math.inf  # the distance ``b`` still covers: for ever without friction
         if motion.decel > 0:
             self.push(b.tstop, STOP, b, 0)
             reach = b.speed * b.speed / (2 * motion.decel)
@@ -117,7 +118,7 @@ class Predictor:
             s = line_contact(mx - rx, my - ry, mover.ux, mover.uy, self.contact2)
             if s == NO_ROOT:
                 return
-            reach = ms * ms / (2 * motion.decel) if motion.decel > 0 else motion.inf
+            reach = ms * ms / (2 * motion.decel) if motion.decel > 0 else math.inf
             if s < reach:  # stopping exactly at contact distance is not a collision
                 self.push(t + (time_for(motion.decel, ms, s) if s > 0 else s), BALL, p, q.index, q)
             return
