@@ -118,12 +118,12 @@ def test_without_a_writable_cache_folder_or_home_generate_writes_the_same_bytes(
     done = _generate(tmp_path / "ds", env)
     assert done.stderr == "" and _files(tmp_path / "ds") == kernel_made
     probe = subprocess.run(
-        [sys.executable, "-c", "from bpb_tasks.simulators.analytic import kernel_roots as k\n"
+        [sys.executable, "-c", "from bpb_tasks.simulators.analytic import kernel as k\n"
          "print(k.CACHE, k.__file__)"],
         capture_output=True, text=True, env={**os.environ, **env}, timeout=600,
     )  # fmt: skip
     assert probe.returncode == 0, probe.stderr
-    assert probe.stdout.split() == ["False", str(copy / "simulators/analytic/kernel_roots.py")]
+    assert probe.stdout.split() == ["False", str(copy / "simulators/analytic/kernel.py")]
     assert probe.stderr.count("KernelNotice: numba cannot cache the physics kernel") == 1
 
 

@@ -18,12 +18,11 @@ import numpy as np
 from bpb_tasks.billiards.scene.model import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic.engine import KIND_NAMES, SimulationError
-from bpb_tasks.simulators.analytic.kernel import run_arrays, run_many_arrays
-from bpb_tasks.simulators.analytic.kernel_roots import HAVE_NUMBA
+from bpb_tasks.simulators.analytic.kernel import HAVE_NUMBA, run_arrays, run_many_arrays
 
 
 def table_params(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's table constants (``kernel_predict``'s :data:`DECEL` .. :data:`POCKET_R`,
+    """The kernel's table constants (``kernel``'s :data:`DECEL` .. :data:`POCKET_R`,
     the same arithmetic as the reference ``Predictor``) and pocket centres of ``scene``."""
     table, phys, pockets = scene.table, scene.physics, scene.pockets
     radius = phys.ball_radius

@@ -145,9 +145,9 @@ class AnalyticSimulator:
             self.spent += seconds
             return False
         from bpb_tasks.simulators.analytic.compiled import kernel_failure
-        from bpb_tasks.simulators.analytic.kernel_roots import CACHE
+        from bpb_tasks.simulators.analytic.kernel import CACHE
 
-        if CACHE and not self.cached:  # else kernel_roots said it cannot cache it
+        if CACHE and not self.cached:  # else kernel said it cannot cache it
             note(
                 "compiling the physics kernel for this machine (about 20 s); cached in "
                 f"{numba_cache_dir(os.environ)} for later commands"

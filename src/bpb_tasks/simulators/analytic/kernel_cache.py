@@ -3,7 +3,7 @@
 The cache folder is keyed by bpb's version and a hash of every compiled module's source
 (:func:`cache_folder`), so an edit or upgrade of any of them, callee or caller, starts a new
 folder: numba itself checks a cached function against its own file only. Unless the user set
-``NUMBA_CACHE_DIR``, :mod:`~bpb_tasks.simulators.analytic.kernel_roots` sets it to that folder
+``NUMBA_CACHE_DIR``, :mod:`~bpb_tasks.simulators.analytic.kernel` sets it to that folder
 before it imports numba. Nothing here imports numba.
 
 :func:`use_kernel` is the engine choice: the compiled kernel when it is cached, or when the

@@ -8,7 +8,7 @@ times all come from a distance ``s`` along that line, turned into a time by the 
 (:mod:`bpb_tasks.simulators.analytic.numeric`); nothing here depends on which.
 
 The functions after :class:`Motion` are the compiled kernel's too: it compiles this very code
-with ``@jit`` (:mod:`~bpb_tasks.simulators.analytic.kernel_roots`), so this module's source
+with ``@jit`` (:mod:`~bpb_tasks.simulators.analytic.kernel`), so this module's source
 keys the kernel's cache folder as theirs do, and both engines compute the same numbers.
 """
 

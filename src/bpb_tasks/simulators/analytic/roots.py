@@ -1,6 +1,6 @@
 """Root finding of the analytic simulator, one code for the Python engine (float64 or mpmath
 numbers) and the compiled event kernel, which compiles these very functions with ``@jit``
-(:mod:`~bpb_tasks.simulators.analytic.kernel_roots`), so this module's source keys the kernel's
+(:mod:`~bpb_tasks.simulators.analytic.kernel`), so this module's source keys the kernel's
 cache folder as the kernel modules' own do.
 
 Only two moving balls need more than a closed form: their squared centre distance minus
