@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
+from bpb_tasks.simulators.analytic.engine import FLOAT64
 from bpb_tasks.simulators.analytic.roots import NO_ROOT, first_contact, quadratic_splits
 from support.phys_helpers import R, scene
 

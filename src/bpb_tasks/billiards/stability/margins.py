@@ -31,7 +31,7 @@ from collections.abc import Sequence
 
 from bpb_tasks.billiards.scene.model import TOUCH_TOLERANCE
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
+from bpb_tasks.simulators.analytic.engine import FLOAT64
 from bpb_tasks.simulators.analytic.roots import critical_points, horner
 
 Piece = tuple[float, float, tuple[float, ...]]

@@ -39,6 +39,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from bpb_tasks.simulators.analytic import motion, roots
+from bpb_tasks.simulators.analytic.engine import FLOAT64
 from bpb_tasks.simulators.analytic.kernel_cache import cache_folder, note
 from bpb_tasks.simulators.analytic.motion import (
     heading,
@@ -48,7 +49,6 @@ from bpb_tasks.simulators.analytic.motion import (
     pocket_holding,
     time_for,
 )
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
 from bpb_tasks.simulators.analytic.roots import NO_ROOT, Number
 
 F = TypeVar("F", bound=Callable[..., Any])

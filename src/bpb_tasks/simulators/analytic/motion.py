@@ -5,7 +5,7 @@ A moving ball at ``p`` with speed ``v`` along unit direction ``u`` covers the di
 ``v^2 / (2 a)``. Its path is a straight line, so wall, pocket and moving-vs-resting contact
 times all come from a distance ``s`` along that line, turned into a time by the stable form
 ``t = 2 s / (v + sqrt(v^2 - 2 a s))``. Numbers are Python floats or mpmath values
-(:mod:`bpb_tasks.simulators.analytic.numeric`); nothing here depends on which.
+(:class:`~bpb_tasks.simulators.analytic.engine.Numeric`); nothing here depends on which.
 
 The functions after :class:`Motion` are the compiled kernel's too: it compiles this very code
 with ``@jit`` (:mod:`~bpb_tasks.simulators.analytic.kernel`), so this module's source
