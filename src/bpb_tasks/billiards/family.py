@@ -327,8 +327,8 @@ class BilliardsFamily:
     ) -> dict[str, bool]:
         """Which labels survive the image's pixel grid (true centres snapped to the pixel
         each ball is drawn at, true velocities): ``pixel_ceiling_q1_set``, ``pixel_ceiling_q2``;
-        see :mod:`bpb_tasks.billiards.vision.ceiling`."""
-        from bpb_tasks.billiards.vision.ceiling import perception_ceiling
+        see :func:`bpb_tasks.billiards.vision.perceive.perception_ceiling`."""
+        from bpb_tasks.billiards.vision.perceive import perception_ceiling
 
         def truth_of(s: Scene) -> FinalState:
             return self.ground_truth(s, simulator, stability=False)

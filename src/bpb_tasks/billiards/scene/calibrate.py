@@ -72,8 +72,7 @@ def _kernel_rate(
     draws: Sequence[Draw], horizon: float, speeds: SpeedRange, config: DatasetConfig
 ) -> float:
     """:func:`collision_rate` in one compiled batch (same rounding as :func:`build_scene`)."""
-    from bpb_tasks.simulators.analytic.compiled import table_params
-    from bpb_tasks.simulators.analytic.kernel import run_many_arrays
+    from bpb_tasks.simulators.analytic.kernel import run_many_arrays, table_params
 
     places = config.decimals
     pos = np.array([[(round(x, places), round(y, places)) for x, y in d.positions] for d in draws])

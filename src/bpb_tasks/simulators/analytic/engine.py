@@ -349,8 +349,7 @@ class AnalyticSimulator:
         if not use_kernel(self.engine, self.available, self.cached, self.spent, ahead):
             self.spent += seconds
             return False
-        from bpb_tasks.simulators.analytic.compiled import kernel_failure
-        from bpb_tasks.simulators.analytic.kernel import CACHE
+        from bpb_tasks.simulators.analytic.kernel import CACHE, kernel_failure
 
         if CACHE and not self.cached:  # else kernel said it cannot cache it
             note(
@@ -375,7 +374,7 @@ class AnalyticSimulator:
         """Simulate ``scene`` to ``horizon`` (default: the scene's own horizon)."""
         end = scene.horizon if horizon is None else horizon
         if self.kernel or (self.engine == "kernel" and self.takes_kernel(scene, 1)):
-            from bpb_tasks.simulators.analytic.compiled import kernel_outcome
+            from bpb_tasks.simulators.analytic.kernel import kernel_outcome
 
             return kernel_outcome(scene, end, self.max_events)
         return _Simulation(scene, self.numeric, self.max_events).run(end)
@@ -395,10 +394,10 @@ class AnalyticSimulator:
     def run_many(self, scenes: Sequence[Scene], horizon: float | None = None) -> list[Outcome]:
         """Simulate scenes sharing one table to ``horizon`` (default: each scene's own): with
         the kernel in one compiled call
-        (:func:`~bpb_tasks.simulators.analytic.compiled.outcomes_many`: outcomes without motion
+        (:func:`~bpb_tasks.simulators.analytic.kernel.outcomes_many`: outcomes without motion
         pieces, ``segments`` empty), else :meth:`run` on each."""
         if scenes and self.takes_kernel(scenes[0], len(scenes)):
-            from bpb_tasks.simulators.analytic.compiled import outcomes_many
+            from bpb_tasks.simulators.analytic.kernel import outcomes_many
 
             ends = None if horizon is None else [horizon] * len(scenes)
             return outcomes_many(scenes, ends, self.max_events)
