@@ -337,7 +337,7 @@ class BilliardsFamily:
 
     def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
         """The scene's trajectory image (or a plain table) for the failure gallery."""
-        from bpb_tasks.billiards.render.picture import scene_picture
+        from bpb_tasks.billiards.render.images import scene_picture
 
         return scene_picture(dataset, folder, scene)
 

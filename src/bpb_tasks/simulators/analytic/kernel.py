@@ -33,7 +33,7 @@ results operation for operation.
 Without numba the kernel's functions run as plain Python (slowly), which keeps the module
 importable and testable. This is the one module that imports numba; it first points
 ``NUMBA_CACHE_DIR`` at bpb's cache folder unless the user set it
-(:mod:`~bpb_tasks.simulators.analytic.kernel_cache`).
+(:func:`~bpb_tasks.simulators.analytic.engine.cache_folder`).
 """
 
 from __future__ import annotations
@@ -50,8 +50,13 @@ import numpy as np
 from bpb_tasks.billiards.scene.model import WALLS, Ball, Scene
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
 from bpb_tasks.simulators.analytic import motion, roots
-from bpb_tasks.simulators.analytic.engine import FLOAT64, KIND_NAMES, SimulationError
-from bpb_tasks.simulators.analytic.kernel_cache import cache_folder, note
+from bpb_tasks.simulators.analytic.engine import (
+    FLOAT64,
+    KIND_NAMES,
+    SimulationError,
+    cache_folder,
+    note,
+)
 from bpb_tasks.simulators.analytic.motion import (
     heading,
     line_contact,
