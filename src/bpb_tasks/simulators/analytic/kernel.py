@@ -128,7 +128,6 @@ if _numba is not None:  # what jitted code calls of the plain modules, compiled 
         roots.quadratic_splits,
         roots.critical_points,
         roots.first_contact,
-        motion.heading,
         motion.time_for,
         motion.line_contact,
         motion.pocket_entry,
@@ -137,6 +136,7 @@ if _numba is not None:  # what jitted code calls of the plain modules, compiled 
         motion.moving_contact,
     ):
         register_jitable(_plain)
+    register_jitable(inline="always")(motion.heading)  # called per velocity change: inlined
 
 X, Y, T0, SPEED, UX, UY, TSTOP, WALL_T = range(8)
 VERSION, ALIVE = 0, 1
