@@ -14,7 +14,7 @@ import time
 from bpb_tasks.billiards.scene.config import DatasetConfig
 from bpb_tasks.billiards.scene.sampler import build_scene, draw, scene_rng
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import outcomes_many
+from bpb_tasks.simulators.analytic.kernel import outcomes_many
 
 
 def main(count: int, seed: int = 2026, chunk: int = 2000) -> None:

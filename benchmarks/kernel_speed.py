@@ -18,8 +18,12 @@ import numpy as np
 
 from bpb_tasks.billiards.bench_compare import random_scenes
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import outcomes_many, scene_arrays, table_params
-from bpb_tasks.simulators.analytic.kernel import run_many_arrays
+from bpb_tasks.simulators.analytic.kernel import (
+    outcomes_many,
+    run_many_arrays,
+    scene_arrays,
+    table_params,
+)
 
 
 def main(count: int, rounds: int) -> None:

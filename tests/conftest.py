@@ -43,7 +43,7 @@ BPB = str(Path(sys.executable).with_name("bpb"))
 def pytest_configure(config: pytest.Config) -> None:
     """One numba cache folder for the session, set before any test module imports the kernel
     (``NUMBA_CACHE_DIR`` in ``os.environ``: this process and every subprocess use it)."""
-    from bpb_tasks.simulators.analytic.kernel_cache import cache_folder
+    from bpb_tasks.simulators.analytic.engine import cache_folder
 
     folder = Path(tempfile.gettempdir()) / f"bpb-tests-numba-{os.getuid()}" / cache_folder().name
     os.environ["NUMBA_CACHE_DIR"] = str(folder)

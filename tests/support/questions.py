@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-from bpb_tasks.q1.task import Q1Task
-from bpb_tasks.q2.task import Q2Task
 from bpb_tasks.q3.task import Q3Task
-from bpb_tasks.questions.question import BilliardsQuestion
+from bpb_tasks.questions.question import BilliardsQuestion, Q1Task, Q2Task
 
 
 def questions() -> dict[str, BilliardsQuestion]:

@@ -15,7 +15,7 @@ from bpb_core.registry import Registry
 from bpb_core.report.build import build_report
 from bpb_core.results import load_results
 from bpb_core.results.tables import RUN_COLUMNS
-from bpb_tasks.q1.scorer import q1_metrics
+from bpb_tasks.questions.labels import q1_metrics
 
 
 def _answered_q1(runs: Path, registry: Registry) -> pd.DataFrame:

@@ -8,9 +8,8 @@ from typing import Any
 
 from hypothesis import given, settings, strategies as st
 
-from bpb_tasks.q1.scorer import Q1Scorer
-from bpb_tasks.q2.scorer import Q2Scorer
 from bpb_tasks.q3.scorer import Q3Scorer
+from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
 from support.questions import questions
 from support.reports_fixture import make_final, make_scene
 from support.scoring import correct_by_unit, loop_correct, synthetic_units

@@ -8,9 +8,8 @@ import pandas as pd
 import pytest
 
 from bpb_core.registry import Registry
-from bpb_tasks.q1.scorer import Q1Scorer
-from bpb_tasks.q2.scorer import Q2Scorer
 from bpb_tasks.q3.scorer import Q3Scorer
+from bpb_tasks.questions.labels import Q1Scorer, Q2Scorer
 from support.reports_fixture import make_final, make_scene
 from support.scoring import correct_by_unit, unit_frame
 

@@ -13,7 +13,14 @@ def bpb_model_adapters() -> Iterator[AdapterInfo]:
     yield AdapterInfo(
         "baseline",
         lazy("bpb_adapters.baseline.adapter:make_adapter"),
-        "Offline reference answers: stasis, straight, random, oracle; vision on request",
+        (
+            "offline reference answers: stasis says nothing happens (no contact, every ball "
+            "stays), a floor that scores high wherever most true answers are 'no', as on Q1, "
+            "where most balls are never touched; straight rolls the cue ball alone (friction, wall "
+            "bounces, no other ball); random guesses; oracle answers the ground truth (the "
+            "ceiling); vision "
+            "(on request) reads the image, then simulates"
+        ),
         models=("stasis", "straight", "random", "oracle"),
         offline=True,
         catalog=lazy("bpb_adapters.baseline.hooks:on_request"),

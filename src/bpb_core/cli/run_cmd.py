@@ -833,6 +833,7 @@ def show_summary(
     if frame is None or frame.empty:
         return
     _print_table(frame)
+    _print_footnote(frame, registry)
     for run, line in frame.attrs.get("warnings", []):
         stderr().print(f"[yellow]{escape(run)}: {escape(line)}[/]", highlight=False)
     parents = sorted({str(d.parent) for d in run_dirs})
@@ -842,6 +843,26 @@ def show_summary(
         "(charts, failure gallery, HTML)",
         highlight=False,
     )
+
+
+def _print_footnote(frame: pd.DataFrame, registry: Registry) -> None:
+    """What the columns mean, and what each offline adapter family in the table answers (its
+    summary), so a reader knows what the floors and the ceiling are."""
+    from bpb_core.results.tables import DEFAULT_MIN_COMPLETE
+
+    lines = [
+        "complete: share of the run's (scene, task) pairs answered. A task's score is its mean "
+        "over the answered pairs; in brackets the strict score, where an unanswered pair counts "
+        f"as wrong (the paper's rule). left out: tasks under {DEFAULT_MIN_COMPLETE:.0%} "
+        "answered, not scored."
+    ]
+    families = {str(a).partition(":")[0] for a in frame["adapter"]}
+    for name, entry in registry.entries("adapter").items():
+        info = entry.info
+        if name in families and getattr(info, "offline", False) and info.summary:
+            lines.append(f"{name}: {info.summary}")
+    for line in lines:
+        stdout().print(escape(line), style="dim", highlight=False)
 
 
 def _print_table(frame: pd.DataFrame) -> None:

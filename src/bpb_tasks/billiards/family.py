@@ -23,7 +23,7 @@ from bpb_core.interfaces import Simulator
 from bpb_core.picture import ScenePicture
 from bpb_core.simulator_spec import parse_spec
 from bpb_core.validated_files import validate_mapping
-from bpb_tasks.billiards import bench_compare, card
+from bpb_tasks.billiards import bench_compare
 from bpb_tasks.billiards.render.images import IMAGE_NAMES
 from bpb_tasks.billiards.scene.calibrate import Calibration, calibrate_horizon
 from bpb_tasks.billiards.scene.config import (
@@ -45,6 +45,34 @@ INDEX_COLUMNS = (
     "pocketed",
     "events",
 )
+
+# The words of a published dataset card for billiards scenes (``bpb export --format hf``).
+CARD_NAME = "BilliardPhys-Bench scenes"
+
+CARD_DESCRIPTION = """\
+Billiards scenes with physics ground truth, for testing whether multimodal models can
+predict what happens on a table: seven balls at rest, the cue ball (ball 0) struck with a
+given velocity, rolling friction, elastic collisions, six pockets. For each scene and horizon
+`t` there are three questions: **q1** which object balls the cue ball touches in `[0, t]`,
+**q2** which walls it touches, **q3** where every ball is at `t` (`null` when pocketed).
+
+The image is the scene's input image (the table, numbered balls, the cue velocity as an arrow
+with its speed). The prompts state the constants and laws, the horizon and the answer format;
+`prompt_image` goes with the image, `prompt_image_state` with the image and the initial state as
+JSON, `prompt_state` alone (text only). `target` is the correct answer in the task's JSON format;
+`stable` is false when some label flips under a small perturbation of the initial state
+(`stability.delta`, 0.1 mm by default; margins in `stability`). Scores follow the paper: q1
+per-ball accuracy, q2 exact wall-set match, q3 a ball is right within one radius of the truth;
+total = 0.3 q1 + 0.3 q2 + 0.4 q3."""
+
+CARD_CITATION = """\
+@misc{wang2026billiardphysbench,
+  title  = {BilliardPhys-Bench: Benchmarking Physical Reasoning and Visual Dynamics of
+            Multimodal LLMs},
+  author = {Wang, Ben and Li, Xiaogang and Gao, Ruochen and Xiao, Peiyao and Xu, Chengliang
+            and Wang, Zeyu and Chen, Zichao and Zhao, Bing and Wei, Hu},
+  year   = {2026}
+}"""
 
 
 @dataclass(frozen=True)
@@ -139,7 +167,14 @@ class BilliardsFamily:
 
     def dataset_card(self) -> dict[str, Any]:
         """The words of a published dataset card (``bpb export --format hf``)."""
-        return card.dataset_card()
+        return {
+            "pretty_name": CARD_NAME,
+            "description": CARD_DESCRIPTION,
+            "citation": CARD_CITATION,
+            "license": "mit",
+            "task_categories": ["visual-question-answering"],
+            "tags": ["physics", "billiards", "physical-reasoning", "multimodal", "benchmark"],
+        }
 
     def load_config(self, source: Any) -> DatasetConfig:
         """A :class:`DatasetConfig` from a config, a mapping of its fields, a JSON/TOML file or
@@ -292,8 +327,8 @@ class BilliardsFamily:
     ) -> dict[str, bool]:
         """Which labels survive the image's pixel grid (true centres snapped to the pixel
         each ball is drawn at, true velocities): ``pixel_ceiling_q1_set``, ``pixel_ceiling_q2``;
-        see :mod:`bpb_tasks.billiards.vision.ceiling`."""
-        from bpb_tasks.billiards.vision.ceiling import perception_ceiling
+        see :func:`bpb_tasks.billiards.vision.perceive.perception_ceiling`."""
+        from bpb_tasks.billiards.vision.perceive import perception_ceiling
 
         def truth_of(s: Scene) -> FinalState:
             return self.ground_truth(s, simulator, stability=False)
@@ -302,7 +337,7 @@ class BilliardsFamily:
 
     def picture(self, dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
         """The scene's trajectory image (or a plain table) for the failure gallery."""
-        from bpb_tasks.billiards.render.picture import scene_picture
+        from bpb_tasks.billiards.render.images import scene_picture
 
         return scene_picture(dataset, folder, scene)
 

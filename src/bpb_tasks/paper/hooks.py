@@ -17,22 +17,25 @@ from bpb_core.registry import (
 
 PAPER_WEIGHTS = {"q1": 0.3, "q2": 0.3, "q3": 0.4}
 
-# name: (task summary, task title, scorer summary)
+# name: (task summary, task title, scorer summary), the task's and the scorer's module
 QUESTIONS = {
     "q1": (
         "Q1: which object balls the cue ball touches (T/F per ball)",
         "Q1 ball collisions",
         "Q1 per-ball accuracy",
+        ("questions.question", "questions.labels"),
     ),
     "q2": (
         "Q2: which walls the cue ball touches (T/F per wall)",
         "Q2 wall contacts",
         "Q2 exact wall-set match",
+        ("questions.question", "questions.labels"),
     ),
     "q3": (
         "Q3: every ball's position at the horizon (null if pocketed)",
         "Q3 final positions",
         "Q3 ball within one radius of truth (both null correct)",
+        ("q3.task", "q3.scorer"),
     ),
 }
 
@@ -44,12 +47,12 @@ DIAGNOSTICS = {
         ("q1", "q2", "q3"),
     ),
     "q1_confusion": (
-        "q1.scorer:Q1Confusion",
+        "questions.labels:Q1Confusion",
         "Q1 contacts: tp/fp/fn/tn, precision, recall, F1",
         ("q1",),
     ),
     "q2_confusion": (
-        "q2.scorer:Q2Confusion",
+        "questions.labels:Q2Confusion",
         "Q2 wall contacts, pooled and per wall: tp/fp/fn/tn, precision, recall, F1",
         ("q2",),
     ),
@@ -73,17 +76,15 @@ DIAGNOSTICS = {
 
 @hookimpl
 def bpb_eval_tasks() -> Iterator[TaskInfo]:
-    for name, (summary, title, _) in QUESTIONS.items():
-        task = lazy(f"bpb_tasks.{name}.task:{name.upper()}Task")
+    for name, (summary, title, _, (where, _)) in QUESTIONS.items():
+        task = lazy(f"bpb_tasks.{where}:{name.upper()}Task")
         yield TaskInfo(name, task, summary, family="billiards", default=True, title=title)
 
 
 @hookimpl
 def bpb_scorers() -> Iterator[ScorerInfo]:
-    for name, (_, _, summary) in QUESTIONS.items():
-        yield ScorerInfo(
-            name, lazy(f"bpb_tasks.{name}.scorer:{name.upper()}Scorer"), summary, task=name
-        )
+    for name, (_, _, summary, (_, where)) in QUESTIONS.items():
+        yield ScorerInfo(name, lazy(f"bpb_tasks.{where}:{name.upper()}Scorer"), summary, task=name)
 
 
 @hookimpl

@@ -2,7 +2,9 @@
 
 A question supplies its text, JSON example, validator and ground-truth cut;
 :class:`BilliardsQuestion` turns them into the :class:`~bpb_core.interfaces.Task` methods.
-:class:`LabelQuestion` is what q1 and q2 share on top: one ``T``/``F`` per unit.
+:class:`LabelQuestion` is what q1 and q2 share on top: one ``T``/``F`` per unit; Q1
+(:class:`Q1Task`: for each object ball, did the cue ball touch it in [0, t]?) and Q2
+(:class:`Q2Task`: for each wall, did the cue ball touch it?) close this module.
 
 The common prompt, built from the scene alone, states the constants and laws of the scene's
 physics, the table coordinates, the ball radius, the pockets and the horizon (SPEC section 5);
@@ -22,7 +24,7 @@ import json
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from importlib import resources
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 from pydantic import BaseModel
 
@@ -30,9 +32,20 @@ from bpb_core.errors import BadInput, ParseFailure
 from bpb_core.interfaces import ParsedAnswer, PromptOptions
 from bpb_core.model_calls import ImagePart, Message, TextPart
 from bpb_core.reply_json import extract
-from bpb_tasks.billiards.scene.model import Scene
+from bpb_tasks.billiards.scene.model import WALLS, Scene, Wall
 from bpb_tasks.billiards.truth.final import FinalState
-from bpb_tasks.questions.answers import check_ids, load, schema_of
+from bpb_tasks.questions.answers import (
+    TF,
+    Answers,
+    BallId,
+    Item,
+    Q1Schema,
+    Q2Schema,
+    Upper,
+    check_ids,
+    load,
+    schema_of,
+)
 
 MAX_VALUE = 64  # characters of a posted form value shown in an error
 NONE = "none"  # the field of the Q1/Q2 forms' "none of them" box
@@ -281,3 +294,67 @@ class LabelQuestion(BilliardsQuestion):
     def answer_schema(self) -> dict[str, Any]:
         """The JSON Schema of the normalised answer (``docs/schemas/<name>.answer.schema.json``)."""
         return schema_of(self.schema, self.name)
+
+
+class BallAnswer(Item):
+    """Q1 item: did the cue ball touch ball ``id``."""
+
+    id: BallId
+    answer: Annotated[TF, Upper]
+
+
+class Q1Task(LabelQuestion):
+    """Cue-ball collisions with each object ball (chain of thought on by default)."""
+
+    name: ClassVar[str] = "q1"
+    title: ClassVar[str] = "Ball collisions"
+    key: ClassVar[str] = "id"
+    reader = Answers[BallAnswer]
+    schema = Q1Schema
+
+    def units(self, scene: Scene) -> list[int]:
+        """The object balls' ids, in order."""
+        return sorted(b.id for b in scene.balls if b.id != 0)
+
+    def field(self, unit: Any) -> str:
+        return f"ball{unit}"
+
+    def asked(self, scene: Scene) -> tuple[str, str]:
+        return f"object ball {self.units(scene)}", "every one of them"
+
+    def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
+        """The object balls to tick (``bpb human``)."""
+        balls = [{"id": i, "colour": colour(i)} for i in self.units(scene)]
+        return {"horizon": f"{scene.horizon:g}", "balls": balls}
+
+
+class WallAnswer(Item):
+    """Q2 item: did the cue ball touch ``wall``."""
+
+    wall: Annotated[Wall, Upper]
+    answer: Annotated[TF, Upper]
+
+
+class Q2Task(LabelQuestion):
+    """Cue-ball contacts with each wall (chain of thought on by default)."""
+
+    name: ClassVar[str] = "q2"
+    title: ClassVar[str] = "Wall contacts"
+    key: ClassVar[str] = "wall"
+    reader = Answers[WallAnswer]
+    schema = Q2Schema
+
+    def units(self, scene: Scene) -> list[Wall]:
+        """The walls: TOP, BOTTOM, LEFT, RIGHT."""
+        return list(WALLS)
+
+    def asked(self, scene: Scene) -> tuple[str, str]:
+        return "wall TOP, BOTTOM, LEFT and RIGHT", "all four walls"
+
+    def check(self, got: list[Any], units: list[Any]) -> None:
+        if len(got) != len(set(got)) or set(got) != set(WALLS):
+            raise ParseFailure(f"q2: walls must be {list(WALLS)} once each, got {got}")
+
+    def form_context(self, scene: Scene, image: bytes | None) -> dict[str, Any]:
+        """The walls to tick (``bpb human``)."""
+        return {"horizon": f"{scene.horizon:g}", "walls": list(WALLS)}

@@ -16,8 +16,7 @@ import pytest
 from PIL import Image
 
 from bpb_core.bench import sim_report
-from bpb_core.bench.comparing import bench_family, build_simulators
-from bpb_core.bench.sim import bench_simulators, with_scaling
+from bpb_core.bench.sim import bench_family, bench_simulators, build_simulators, with_scaling
 from bpb_core.bench.sim_report import SimBench, SimRow
 from bpb_core.errors import BadInput, UnknownName
 from bpb_core.hookspecs import hookimpl

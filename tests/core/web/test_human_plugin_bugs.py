@@ -24,7 +24,7 @@ from bpb_core.registry import PluginSource, make_registry
 from bpb_core.run_folder import iter_answers
 from bpb_core.runner.options import RunOptions
 from bpb_core.web.human import HumanSession, human_app
-from bpb_tasks.q2.task import Q2Task
+from bpb_tasks.questions.question import Q2Task
 
 ORIGIN = "plugin 'formless' (formless_hooks) from bpb-formless 0.2"
 TASK = "task 'badform'"

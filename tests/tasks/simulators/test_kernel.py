@@ -12,7 +12,7 @@ from bpb_tasks.billiards.scene.model import Scene
 from bpb_tasks.billiards.scene.sampler import build_scene, draw, scene_rng
 from bpb_tasks.billiards.truth.outcome import Outcome
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.compiled import outcomes_many
+from bpb_tasks.simulators.analytic.kernel import outcomes_many
 from support.phys_helpers import scene
 
 pytest.importorskip("numba")

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from bpb_tasks.simulators.analytic import kernel_cache
-from bpb_tasks.simulators.analytic.kernel_cache import (
+from bpb_tasks.simulators.analytic import engine
+from bpb_tasks.simulators.analytic.engine import (
     COMPILE_SECONDS,
     cache_folder,
     is_cached,
@@ -37,13 +37,13 @@ def test_the_cache_folder_follows_every_compiled_module_and_bpb_s_version(
     compiled function it calls: the folder is keyed by all compiled modules' sources."""
     (tmp_path / "a.py").write_text("@jit\ndef f():\n    return 1\n")
     (tmp_path / "b.py").write_text("def g():\n    return 2\n")
-    monkeypatch.setattr(kernel_cache, "__file__", str(tmp_path / "x" / "y" / "kernel_cache.py"))
+    monkeypatch.setattr(engine, "__file__", str(tmp_path / "x" / "y" / "engine.py"))
     before = sources_hash()
     (tmp_path / "b.py").write_text("def g():\n    return 3\n")  # not compiled: same folder
     assert sources_hash() == before
     (tmp_path / "a.py").write_text("@jit\ndef f():\n    return 2\n")
     assert sources_hash() != before
-    monkeypatch.setattr(kernel_cache, "__version__", "9.9.9")
+    monkeypatch.setattr(engine, "__version__", "9.9.9")
     assert cache_folder().name == f"9.9.9-{sources_hash()[:16]}"
 
 
@@ -108,7 +108,7 @@ def test_without_a_writable_cache_folder_or_home_generate_writes_the_same_bytes(
     blocked = tmp_path / "file.txt"
     blocked.write_text("")
     copy = tmp_path / "site" / "bpb_tasks"
-    shutil.copytree(Path(kernel_cache.__file__).parents[2], copy,
+    shutil.copytree(Path(engine.__file__).parents[2], copy,
                     ignore=shutil.ignore_patterns("__pycache__"))  # fmt: skip
     for folder in [copy, *(p for p in copy.rglob("*") if p.is_dir())]:
         (folder / "__pycache__").write_text("")
@@ -118,12 +118,12 @@ def test_without_a_writable_cache_folder_or_home_generate_writes_the_same_bytes(
     done = _generate(tmp_path / "ds", env)
     assert done.stderr == "" and _files(tmp_path / "ds") == kernel_made
     probe = subprocess.run(
-        [sys.executable, "-c", "from bpb_tasks.simulators.analytic import kernel_roots as k\n"
+        [sys.executable, "-c", "from bpb_tasks.simulators.analytic import kernel as k\n"
          "print(k.CACHE, k.__file__)"],
         capture_output=True, text=True, env={**os.environ, **env}, timeout=600,
     )  # fmt: skip
     assert probe.returncode == 0, probe.stderr
-    assert probe.stdout.split() == ["False", str(copy / "simulators/analytic/kernel_roots.py")]
+    assert probe.stdout.split() == ["False", str(copy / "simulators/analytic/kernel.py")]
     assert probe.stderr.count("KernelNotice: numba cannot cache the physics kernel") == 1
 
 

@@ -8,8 +8,8 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 
 from bpb_tasks.simulators.analytic import AnalyticSimulator
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
-from bpb_tasks.simulators.analytic.roots import first_contact, quadratic_roots
+from bpb_tasks.simulators.analytic.engine import FLOAT64
+from bpb_tasks.simulators.analytic.roots import NO_ROOT, first_contact, quadratic_splits
 from support.phys_helpers import R, scene
 
 
@@ -61,20 +61,22 @@ def test_first_contact_of_two_moving_balls_matches_sampling(
         assert hits and abs(hits[0] - t[inside[0]]) <= 4e-5
 
 
-def test_quadratic_roots_degenerate_cases() -> None:
-    assert quadratic_roots(0.0, 0.0, 1.0, math.sqrt) == []
-    assert quadratic_roots(0.0, 2.0, -4.0, math.sqrt) == [2.0]
-    assert sorted(quadratic_roots(1.0, -3.0, 2.0, math.sqrt)) == [1.0, 2.0]
-    assert quadratic_roots(1.0, 0.0, 1.0, math.sqrt) == []
+def test_quadratic_splits_degenerate_cases() -> None:
+    assert quadratic_splits(0.0, 0.0, 1.0, 9.0)[2] == 0
+    assert quadratic_splits(0.0, 2.0, -4.0, 9.0) == (2.0, 0.0, 1)
+    assert quadratic_splits(1.0, -3.0, 2.0, 9.0) == (1.0, 2.0, 2)
+    assert quadratic_splits(1.0, -3.0, 2.0, 1.5) == (1.0, 0.0, 1)
+    assert quadratic_splits(1.0, 0.0, 1.0, 9.0)[2] == 0
 
 
 def test_first_contact_rules() -> None:
+    tol, steps = FLOAT64.time_tol, FLOAT64.max_iter
     # g(t) = (t - 1)^2 - 0.25: falls through zero at t = 0.5 (approach), rises at 1.5.
-    assert first_contact([0.0, 0.0, 1.0, -2.0, 0.75], 3.0, FLOAT64) == 0.5
+    assert first_contact((0.0, 0.0, 1.0, -2.0, 0.75), 3.0, tol, steps) == 0.5
     # touching and approaching at 0 -> contact at 0; touching and receding -> none
-    assert first_contact([0.0, 0.0, 1.0, -1.0, 0.0], 3.0, FLOAT64) == 0.0
-    assert first_contact([0.0, 0.0, 1.0, 1.0, 0.0], 3.0, FLOAT64) is None
+    assert first_contact((0.0, 0.0, 1.0, -1.0, 0.0), 3.0, tol, steps) == 0.0
+    assert first_contact((0.0, 0.0, 1.0, 1.0, 0.0), 3.0, tol, steps) == NO_ROOT
     # tangency (double root at t = 1) is not a contact
-    assert first_contact([0.0, 0.0, 1.0, -2.0, 1.0], 3.0, FLOAT64) is None
+    assert first_contact((0.0, 0.0, 1.0, -2.0, 1.0), 3.0, tol, steps) == NO_ROOT
     # contact beyond the interval is not reported
-    assert first_contact([0.0, 0.0, 1.0, -2.0, 0.75], 0.4, FLOAT64) is None
+    assert first_contact((0.0, 0.0, 1.0, -2.0, 0.75), 0.4, tol, steps) == NO_ROOT

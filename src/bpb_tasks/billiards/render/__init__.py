@@ -1,2 +1,2 @@
-"""What the billiards family draws: ``images`` (the three scene images) on ``canvas`` and
-``palette``, encoded by ``png``; ``picture`` (the gallery picture) and ``stats_figures``."""
+"""What the billiards family draws: ``images`` (the three scene images, and the gallery picture)
+on ``canvas`` and ``palette``, encoded by ``png``; and ``stats_figures``."""

@@ -17,15 +17,23 @@ The trajectory image draws each :class:`~bpb_tasks.billiards.truth.outcome.Segme
 (friction acts along the velocity), so a path is a polyline through the segment end points.
 Ball-ball contacts are marked by a red ring at the contact point, wall contacts by a blue diamond at
 the centre, pocketings by a white cross.
+
+The failure gallery's picture of a scene (:func:`scene_picture`) is its ``trajectory.png`` (or
+``init.png``), mapped to table metres with the image geometry recorded in ``dataset.json``
+(``config.image``); when the images or the geometry are missing, a plain table is drawn instead.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Iterable
+from pathlib import Path
 
 from PIL import Image, ImageDraw
 
+from bpb_core.layout import MANIFEST
+from bpb_core.picture import ScenePicture, font as gallery_font
 from bpb_tasks.billiards.render import canvas as st
 from bpb_tasks.billiards.render.canvas import CanvasSpec
 from bpb_tasks.billiards.render.palette import (
@@ -369,3 +377,59 @@ def wall_diamond(
     ]
     ImageDraw.Draw(crop).polygon(diamond, fill=fill, outline=outline, width=width)
     img.paste(crop, box[:2])
+
+
+PLAIN_PX_PER_M = 400.0
+PLAIN_MARGIN = 40
+
+
+def scene_picture(dataset: Path, folder: Path, scene: Scene) -> ScenePicture:
+    """The scene's own image when its geometry is known, else a plain table."""
+    for name in ("trajectory.png", "init.png"):
+        path = folder / name
+        if path.is_file():
+            with Image.open(path) as img:
+                image = img.convert("RGB")
+            picture = _mapped(dataset, image)
+            if picture is not None:
+                return picture
+    return plain_table(scene)
+
+
+def _mapped(dataset: Path, image: Image.Image) -> ScenePicture | None:
+    """The mapping of the dataset's images, if ``dataset.json`` records it and the size fits."""
+    try:
+        config = json.loads((dataset / MANIFEST).read_text(encoding="utf-8"))["config"]
+        im, table = config.get("image", {}), config.get("table", {})
+        ppm = float(im.get("px_per_m", 600.0))
+        left, right = int(im.get("margin_left", 116)), int(im.get("margin_right", 48))
+        top, bottom = int(im.get("margin_top", 84)), int(im.get("margin_bottom", 96))
+        width, height = float(table.get("width", 2.0)), float(table.get("height", 1.0))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+    size = (left + round(width * ppm) + right, top + round(height * ppm) + bottom)
+    return ScenePicture(image, left, top, ppm, height) if image.size == size else None
+
+
+def plain_table(scene: Scene) -> ScenePicture:
+    """Cloth, pockets and numbered balls at their starting places."""
+    width, height = scene.table.width, scene.table.height
+    ppm, margin = PLAIN_PX_PER_M, PLAIN_MARGIN
+    size = (round(width * ppm) + 2 * margin, round(height * ppm) + 2 * margin)
+    image = Image.new("RGB", size, (245, 245, 240))
+    picture = ScenePicture(image, margin, margin, ppm, height)
+    draw = ImageDraw.Draw(image)
+    draw.rectangle((margin, margin, size[0] - margin, size[1] - margin), fill=(30, 110, 60))
+    r_pocket = scene.pockets.radius * ppm
+    for cx, cy in scene.pockets.centers:
+        px, py = picture.to_px(cx, cy)
+        box = (px - r_pocket, py - r_pocket, px + r_pocket, py + r_pocket)
+        draw.ellipse(box, fill=(20, 20, 20))
+    r = scene.physics.ball_radius * ppm
+    for ball in scene.balls:
+        px, py = picture.to_px(*ball.pos)
+        draw.ellipse((px - r, py - r, px + r, py + r), fill=(250, 250, 250), outline=(0, 0, 0))
+        draw.text(
+            (px, py), str(ball.id), fill=(0, 0, 0), anchor="mm", font=gallery_font(int(r * 1.2))
+        )
+    return picture

@@ -21,7 +21,7 @@ import numpy as np
 
 from bpb_core.errors import BadInput
 from bpb_core.interfaces import Simulator
-from bpb_tasks.billiards.scene.config import DatasetConfig, SpeedRange, horizon_key
+from bpb_tasks.billiards.scene.config import DatasetConfig, SpeedRange
 from bpb_tasks.billiards.scene.sampler import Draw, build_scene, draw, scene_rng
 
 MAX_HIGH = 64.0  # m/s; a bracket search beyond this means the target cannot be reached
@@ -72,8 +72,7 @@ def _kernel_rate(
     draws: Sequence[Draw], horizon: float, speeds: SpeedRange, config: DatasetConfig
 ) -> float:
     """:func:`collision_rate` in one compiled batch (same rounding as :func:`build_scene`)."""
-    from bpb_tasks.simulators.analytic.compiled import table_params
-    from bpb_tasks.simulators.analytic.kernel import run_many_arrays
+    from bpb_tasks.simulators.analytic.kernel import run_many_arrays, table_params
 
     places = config.decimals
     pos = np.array([[(round(x, places), round(y, places)) for x, y in d.positions] for d in draws])
@@ -156,13 +155,3 @@ def calibrate_horizon(
     found = SpeedRange(low=round(high * cal.low_ratio, 4), high=high)
     realised = collision_rate(draws, horizon, found, config, simulator)
     return Calibration(horizon, found, realised, len(draws))
-
-
-def calibrate_ranges(
-    horizons: Sequence[float],
-    config: DatasetConfig,
-    simulator: Simulator,
-    step: Callable[[], None] | None = None,
-) -> dict[str, Calibration]:
-    """Calibrate every horizon; keys are ``speed_ranges`` keys (``"3"``)."""
-    return {horizon_key(h): calibrate_horizon(h, config, simulator, step) for h in horizons}

@@ -3,7 +3,7 @@
 A config file (JSON or TOML, ``bpb generate --config FILE``) holds any subset of
 :class:`DatasetConfig`'s fields; missing fields take the defaults below, and the full resolved
 config is recorded in the dataset manifest. The default per-horizon cue-speed ranges were
-calibrated by :func:`bpb_tasks.billiards.scene.calibrate.calibrate_ranges` so that about half the
+calibrated by :func:`bpb_tasks.billiards.scene.calibrate.calibrate_horizon` so that about half the
 scenes at each horizon have a cue-ball collision.
 """
 
@@ -89,7 +89,7 @@ MAX_IMAGE_PIXELS = 30_000_000
 
 
 class CalibrationConfig(StrictModel):
-    """How :func:`~bpb_tasks.billiards.scene.calibrate.calibrate_ranges` searches speed ranges.
+    """How :func:`~bpb_tasks.billiards.scene.calibrate.calibrate_horizon` searches speed ranges.
 
     Attributes:
         target: Wanted share of scenes with a cue-ball collision.

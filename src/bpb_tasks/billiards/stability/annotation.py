@@ -212,8 +212,7 @@ def _horizon_gap(scene: Scene, horizon: float, simulator: Simulator) -> float | 
 def kernel_horizon_gap(scene: Scene, horizon: float, max_events: int) -> float | None:
     """The analytic engine's horizon gap of ``scene`` (a run to ``horizon`` + 1 s stopping
     after ``max_events`` events) from the kernel's event rows."""
-    from bpb_tasks.simulators.analytic.compiled import run_batch
-    from bpb_tasks.simulators.analytic.kernel_predict import STOP
+    from bpb_tasks.simulators.analytic.kernel import STOP, run_batch
 
     _, _, _, status, events = run_batch([scene], [horizon + 1.0], max_events, check=False)
     rows = events[:, 1:3].tolist()

@@ -15,10 +15,15 @@ import numpy as np
 from bpb_tasks.billiards.scene.model import WALLS, Scene
 from bpb_tasks.billiards.stability.annotation import Labels
 from bpb_tasks.billiards.truth.outcome import CUE_ID
-from bpb_tasks.simulators.analytic.compiled import table_params
-from bpb_tasks.simulators.analytic.kernel import buffers, run_into
-from bpb_tasks.simulators.analytic.kernel_predict import BALL, WALL, Arr
-from bpb_tasks.simulators.analytic.kernel_roots import jit
+from bpb_tasks.simulators.analytic.kernel import (
+    BALL,
+    WALL,
+    Arr,
+    buffers,
+    jit,
+    run_into,
+    table_params,
+)
 
 
 def copy_labels(

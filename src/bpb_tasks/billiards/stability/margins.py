@@ -31,7 +31,7 @@ from collections.abc import Sequence
 
 from bpb_tasks.billiards.scene.model import TOUCH_TOLERANCE
 from bpb_tasks.billiards.truth.outcome import Event, Outcome, Segment
-from bpb_tasks.simulators.analytic.numeric import FLOAT64
+from bpb_tasks.simulators.analytic.engine import FLOAT64
 from bpb_tasks.simulators.analytic.roots import critical_points, horner
 
 Piece = tuple[float, float, tuple[float, ...]]
@@ -224,14 +224,18 @@ def _pair_closest(
     at_a, at_b = _at(pa, a0, lo), _at(pb, b0, lo)
     dx, dy, vx, vy = (at_a[k] - at_b[k] for k in range(4))
     ax, ay = (pa[4] - pb[4]) / 2, (pa[5] - pb[5]) / 2
-    coeffs = [
+    coeffs = (
         ax * ax + ay * ay,
         2 * (ax * vx + ay * vy),
         vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
-    ]
-    coeffs += [2 * (vx * dx + vy * dy), dx * dx + dy * dy]
+        2 * (vx * dx + vy * dy),
+        dx * dx + dy * dy,
+    )
     span = hi - lo
-    candidates = [0.0, span, *critical_points(coeffs, span, FLOAT64)] if span > 0 else [0.0]
+    candidates = [0.0]
+    if span > 0:
+        *points, n = critical_points(coeffs, span, FLOAT64.time_tol, FLOAT64.max_iter)
+        candidates += [span, *points[:n]]
     return min(math.sqrt(max(horner(coeffs, t), 0.0)) for t in candidates)
 
 

@@ -1,8 +1,8 @@
 """The ``analytic`` simulator: exact event-driven billiards.
 
-``engine`` runs the event loop, ``prediction`` finds each pair's next event, ``motion`` holds the
-closed forms of one ball's motion, ``roots`` the polynomial root finding and ``numeric`` the
-float64 and mpmath number backends.
+``engine`` runs the event loop and finds each pair's next event on the float64 or mpmath number
+backends, ``motion`` holds the closed forms of one ball's motion and ``roots`` the polynomial
+root finding, both compiled into the numba ``kernel`` too.
 """
 
 from bpb_tasks.simulators.analytic.engine import AnalyticSimulator, SimulationError

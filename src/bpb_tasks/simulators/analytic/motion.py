@@ -5,17 +5,19 @@ A moving ball at ``p`` with speed ``v`` along unit direction ``u`` covers the di
 ``v^2 / (2 a)``. Its path is a straight line, so wall, pocket and moving-vs-resting contact
 times all come from a distance ``s`` along that line, turned into a time by the stable form
 ``t = 2 s / (v + sqrt(v^2 - 2 a s))``. Numbers are Python floats or mpmath values
-(:mod:`bpb_tasks.simulators.analytic.numeric`); nothing here depends on which.
+(:class:`~bpb_tasks.simulators.analytic.engine.Numeric`); nothing here depends on which.
 
-:func:`point_segment_gap2` is the compiled kernel's too: ``kernel_predict`` compiles this very
-code with ``@jit``, so this module's source keys the kernel's cache folder as theirs do.
+The functions after :class:`Motion` are the compiled kernel's too: it compiles this very code
+with ``@jit`` (:mod:`~bpb_tasks.simulators.analytic.kernel`), so this module's source
+keys the kernel's cache folder as theirs do, and both engines compute the same numbers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
+from typing import Any
 
-from bpb_tasks.simulators.analytic.numeric import Number
+from bpb_tasks.simulators.analytic.roots import NO_ROOT, Number, first_contact, sqrt
 
 
 class Body:
@@ -59,23 +61,16 @@ class Body:
 
 
 class Motion:
-    """Friction law shared by all balls: deceleration ``decel`` and the backend square root."""
+    """Friction law shared by all balls: deceleration ``decel``."""
 
-    def __init__(self, decel: Number, sqrt: Callable[[Number], Number], inf: Number) -> None:
+    def __init__(self, decel: Number) -> None:
         self.decel = decel
         self.half = decel / 2
-        self.sqrt = sqrt
-        self.inf = inf
 
     def set_velocity(self, b: Body, t: Number, vx: Number, vy: Number) -> None:
         """Give ``b`` (already at its position at ``t``) the velocity ``(vx, vy)`` from ``t``."""
         b.t0 = t
-        speed = self.sqrt(vx * vx + vy * vy)
-        if speed > 0:
-            b.speed, b.ux, b.uy = speed, vx / speed, vy / speed
-            b.tstop = t + speed / self.decel if self.decel > 0 else self.inf
-        else:
-            b.speed, b.ux, b.uy, b.tstop = speed * 0, speed * 0, speed * 0, t
+        b.speed, b.ux, b.uy, b.tstop = heading(t, vx, vy, self.decel)
 
     def state(self, b: Body, t: Number) -> tuple[Number, Number, Number]:
         """Position and speed of ``b`` at ``t >= b.t0`` without changing it."""
@@ -92,24 +87,27 @@ class Motion:
         b.x, b.y = x, y
         self.set_velocity(b, t, b.ux * speed, b.uy * speed)
 
-    def time_for(self, speed: Number, s: Number) -> Number:
-        """Time to cover ``s`` (less than the stopping distance) starting at ``speed``."""
-        if self.decel == 0:
-            return s / speed
-        rest = speed * speed - 2 * self.decel * s
-        return 2 * s / (speed + self.sqrt(rest if rest > 0 else rest * 0))
+
+def heading(t: Number, vx: Number, vy: Number, decel: Number) -> tuple[Number, ...]:
+    """Speed, unit direction and stopping time (infinite without friction) of a ball given the
+    velocity ``(vx, vy)`` at ``t``."""
+    speed = sqrt(vx * vx + vy * vy)
+    if speed > 0:
+        return speed, vx / speed, vy / speed, t + speed / decel if decel > 0 else math.inf
+    return speed * 0, speed * 0, speed * 0, t
 
 
-def line_contact(
-    dx: Number,
-    dy: Number,
-    ux: Number,
-    uy: Number,
-    radius2: Number,
-    sqrt: Callable[[Number], Number],
-) -> Number | None:
+def time_for(decel: Number, speed: Number, s: Number) -> Number:
+    """Time to cover ``s`` (less than the stopping distance) starting at ``speed``."""
+    if decel == 0:
+        return s / speed
+    rest = speed * speed - 2 * decel * s
+    return 2 * s / (speed + sqrt(rest if rest > 0 else rest * 0))
+
+
+def line_contact(dx: Number, dy: Number, ux: Number, uy: Number, radius2: Number) -> Number:
     """Distance ``s >= 0`` along ``u`` from offset ``d`` (mover minus target) to the first point
-    at distance ``sqrt(radius2)`` from the target while approaching; ``None`` if never.
+    at distance ``sqrt(radius2)`` from the target while approaching; :data:`NO_ROOT` if never.
 
     Starting inside the circle counts at ``s = 0`` only while moving inward; a tangent line
     (zero normal speed) does not count.
@@ -117,13 +115,51 @@ def line_contact(
     b = ux * dx + uy * dy
     c = dx * dx + dy * dy - radius2
     if c <= 0:
-        return b * 0 if b < 0 else None
+        return b * 0 if b < 0 else NO_ROOT
     if b >= 0:
-        return None
+        return NO_ROOT
     disc = b * b - c
     if disc <= 0:
-        return None
+        return NO_ROOT
     return c / (-b + sqrt(disc))
+
+
+def pocket_entry(
+    x: Number, y: Number, ux: Number, uy: Number, pockets: Any, r: Number, reach: Number
+) -> tuple[Number, int]:
+    """The distance along ``u`` from ``(x, y)`` at which the centre first enters one of the
+    ``pockets`` (centres; radius ``r``, tangency counts) within ``reach``, and that pocket's
+    index; :data:`NO_ROOT` and 0 if none."""
+    best, pocket, r2 = NO_ROOT, 0, r * r
+    for k in range(len(pockets)):
+        dx, dy = x - pockets[k][0], y - pockets[k][1]
+        along = ux * dx + uy * dy
+        if along >= 0:  # moving away: only a centre already inside counts
+            if not (-r <= dx <= r and -r <= dy <= r and dx * dx + dy * dy <= r2):
+                continue
+            s = along * 0
+        else:
+            c = dx * dx + dy * dy - r2
+            if c <= 0:
+                s = c * 0  # already inside
+            elif along * along < c:
+                continue  # the line passes outside the circle
+            else:
+                s = c / (-along + sqrt(along * along - c))
+        if s <= reach and (best == NO_ROOT or s < best):
+            best, pocket = s, k
+    return best, pocket
+
+
+def pocket_holding(x: Number, y: Number, pockets: Any, r: Number) -> int:
+    """The index of the first of the ``pockets`` (radius ``r``) whose circle holds ``(x, y)``,
+    or -1."""
+    r2 = r * r
+    for k in range(len(pockets)):
+        dx, dy = x - pockets[k][0], y - pockets[k][1]
+        if -r <= dx <= r and dx * dx + dy * dy <= r2:
+            return k
+    return -1
 
 
 def point_segment_gap2(x: Number, y: Number, dx: Number, dy: Number) -> Number:
@@ -135,3 +171,37 @@ def point_segment_gap2(x: Number, y: Number, dx: Number, dy: Number) -> Number:
             k = k if k < 1 else k * 0 + 1
             x, y = x + k * dx, y + k * dy
     return x * x + y * y
+
+
+def moving_contact(
+    d: tuple[Number, Number],
+    v: tuple[Number, Number],
+    a: tuple[Number, Number],
+    span: Number,
+    two_r: Number,
+    margin: Number,
+    tol: Number,
+    max_iter: int,
+) -> Number:
+    """First contact time in ``[0, span]`` of two moving balls whose relative position is
+    ``d + v t + a t^2`` (contact at distance ``two_r``), or :data:`NO_ROOT`."""
+    dx, dy = d
+    vx, vy = v
+    ax, ay = a
+    # Cheap rejection: the relative position stays within |a| span^2 / 4 of the chord from d to
+    # its value at span; if that chord passes farther than 2R plus this bulge from the origin
+    # (give or take the relative rounding ``margin``), no contact.
+    ex = vx * span + ax * span * span
+    ey = vy * span + ay * span * span
+    bulge = sqrt(ax * ax + ay * ay) * span * span / 4
+    limit = two_r * (1 + margin) + bulge
+    if point_segment_gap2(dx, dy, ex, ey) > limit * limit:
+        return NO_ROOT
+    coeffs = (
+        ax * ax + ay * ay,
+        2 * (ax * vx + ay * vy),
+        vx * vx + vy * vy + 2 * (ax * dx + ay * dy),
+        2 * (vx * dx + vy * dy),
+        dx * dx + dy * dy - two_r * two_r,
+    )
+    return first_contact(coeffs, span, tol, max_iter)

@@ -1,1 +1,0 @@
-"""Task Q2: which walls does the cue ball touch by the horizon."""
