@@ -401,7 +401,8 @@ def summary(units: pd.DataFrame, suites: Sequence[SuiteInfo] = (), **options: An
     epochs`` (``expected``: scene-task pairs the run should have answered, each once however
     many ``epochs`` it asked them).
     """
-    options.setdefault("scenes", scene_scores(units))
+    if options.get("scenes") is None:  # computed once for all of them
+        options["scenes"] = scene_scores(units)
     strict = leaderboard(units, suites, view="strict", **options)
     answered = leaderboard(units, suites, view="answered", **options).set_index("run")
     for name in metrics(units, suites):

@@ -223,7 +223,8 @@ def all_pairs(
     else:
         pairs = [(a, b) for i, a in enumerate(runs) for b in runs[i + 1 :]]
     pairs = [(a, b) for a, b in pairs if _datasets(units, a) == _datasets(units, b)]
-    kwargs.setdefault("scenes", scene_scores(units))
+    if kwargs.get("scenes") is None:  # computed once for all of them
+        kwargs["scenes"] = scene_scores(units)
     frames = [paired_comparison(units, a, b, suites, **kwargs) for a, b in pairs]  # type: ignore[arg-type]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
